@@ -1,0 +1,6 @@
+"""Pure numerical core of rigid_rot_sim (numpy and scipy only; never imports rclpy).
+
+Conventions everywhere: SI units; quaternions scalar-last ``(x, y, z, w)`` rotating
+body -> world (as ``scipy.spatial.transform.Rotation`` and geometry_msgs do);
+angular velocity and torque in the body frame unless a name says ``_world``.
+"""

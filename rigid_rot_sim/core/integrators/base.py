@@ -1,0 +1,109 @@
+"""The step API shared by every integrator (modelled on scipy.integrate's OdeSolver).
+
+Rules for whoever implements a method:
+
+* Subclass :class:`Integrator`, set the class attributes ``name`` (the registry key),
+  ``order`` (nominal order of accuracy) and ``fixed_step`` (False for adaptive methods,
+  which still land exactly on every multiple of ``dt``).
+* Implement ``_step_impl(self) -> None``: advance ``self.t``, ``self.q`` and
+  ``self.omega`` by ``self.dt``. State lives in the *principal* body frame: ``q`` is a
+  unit quaternion (x, y, z, w) rotating principal -> world, ``omega`` (rad/s) and the
+  torque (N*m, from ``self.torque(t, q, omega)`` or ``None`` for a free body) are in
+  principal coordinates. ``self.moments`` holds (I1, I2, I3) in kg*m^2.
+* Accept method-specific options as keyword arguments in ``__init__`` and reject
+  unknown ones with a ValueError naming them.
+* Never return NaN: :meth:`step` checks the new state and raises
+  :class:`NonFiniteStateError` naming the step number and the time.
+* ``self.torque`` may be replaced between steps (the node holds topic commands
+  piecewise constant); methods that cache anything about it must re-read it each step.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Any, ClassVar
+
+import numpy as np
+
+from rigid_rot_sim.core.torque import TorqueFunction
+
+
+class NonFiniteStateError(FloatingPointError):
+    """Raised when a step produced a non-finite state."""
+
+
+class Integrator:
+    """Advance the attitude and angular velocity of a rigid body by steps of ``dt``.
+
+    Parameters
+    ----------
+    moments : array_like, shape (3,)
+        Principal moments of inertia (I1, I2, I3), kg*m^2.
+    dt : float
+        Step length, s (> 0).
+    torque : callable or None
+        ``torque(t, q, omega) -> (3,)`` in N*m, principal body frame; None for a free body.
+    t0 : float
+        Initial time, s.
+    q0 : array_like, shape (4,)
+        Initial attitude, principal -> world, scalar-last; normalised on entry.
+    omega0 : array_like, shape (3,)
+        Initial angular velocity, rad/s, principal body frame.
+    """
+
+    name: ClassVar[str] = ""
+    order: ClassVar[int] = 0
+    fixed_step: ClassVar[bool] = True
+
+    def __init__(
+        self,
+        moments: Any,
+        dt: float,
+        torque: TorqueFunction | None = None,
+        *,
+        t0: float = 0.0,
+        q0: Any = (0.0, 0.0, 0.0, 1.0),
+        omega0: Any = (0.0, 0.0, 0.0),
+        **options: Any,
+    ) -> None:
+        if options:
+            raise ValueError(f"{self.name or type(self).__name__}: unknown option(s) {sorted(options)}")
+        self.moments = np.asarray(moments, dtype=float).reshape(3)
+        if not (math.isfinite(dt) and dt > 0.0):
+            raise ValueError(f"dt must be finite and > 0, got {dt}")
+        self.dt = float(dt)
+        self.torque = torque
+        self.n_steps = 0
+        self.set_state(t0, q0, omega0)
+
+    def set_state(self, t: float, q: Any, omega: Any) -> None:
+        """Replace the state (q is normalised; a zero or non-finite q is a ValueError)."""
+        q = np.asarray(q, dtype=float).reshape(4)
+        omega = np.asarray(omega, dtype=float).reshape(3)
+        norm = float(np.linalg.norm(q))
+        if not (math.isfinite(norm) and norm > 0.0):
+            raise ValueError(f"q must be a finite non-zero quaternion, got {q}")
+        if not np.all(np.isfinite(omega)):
+            raise ValueError(f"omega must be finite, got {omega}")
+        if not math.isfinite(t):
+            raise ValueError(f"t must be finite, got {t}")
+        self.t = float(t)
+        self.q = q / norm
+        self.omega = omega
+        self._on_state_change()
+
+    def _on_state_change(self) -> None:
+        """Hook for methods that cache quantities derived from the state."""
+
+    def step(self) -> None:
+        """Advance the state by one step of ``dt``."""
+        self._step_impl()
+        self.n_steps += 1
+        if not (np.all(np.isfinite(self.q)) and np.all(np.isfinite(self.omega))):
+            raise NonFiniteStateError(
+                f"{self.name}: non-finite state at step {self.n_steps}, t = {self.t:.9g} s "
+                f"(q = {self.q}, omega = {self.omega})"
+            )
+
+    def _step_impl(self) -> None:
+        raise NotImplementedError
