@@ -1,0 +1,186 @@
+"""Integrator choice and step-size warnings, derived from linear stability theory.
+
+The numbers here come from two sources and are cross-checked by the stability
+suite (``rigid-rot stability``, :mod:`rigid_rot_sim.analysis.stability`), whose
+bisection for the largest stable step of each explicit method is compared with
+:func:`max_stable_dt` in ``test/analysis/test_stability.py``.
+
+Theory used
+-----------
+*Gyroscopic frequency.* Linearising Euler's equations ``I1 w1' = (I2 - I3) w2 w3``
+(cyclic) about a steady spin of rate ``W`` about principal axis i gives small
+oscillations (about the major and minor axes) or exponential growth (about the
+intermediate axis) with rate::
+
+    nu_i = W * sqrt(|(Ii - Ij)(Ii - Ik)| / (Ij Ik))
+
+By the triangle inequality on the moments, ``nu_i <= W``: the free rigid body is
+never stiffer than its spin rate. :func:`gyroscopic_frequency` bounds the rate by
+``omega_max * max_i sqrt(...)``.
+
+*Explicit methods.* A method is stable on an oscillation of frequency ``nu`` when
+``i nu dt`` lies in its stability region. Classical RK4 contains the imaginary axis
+up to ``|z| = 2 sqrt(2)``; explicit Euler contains no part of it, so it amplifies
+every gyroscopic oscillation by ``sqrt(1 + (nu dt)^2)`` per step at any dt (the
+amplitude grows by a factor e in about ``2 / (nu^2 dt)`` seconds).
+
+*Structure-preserving methods.* The implicit midpoint rule conserves T and |L|
+exactly for the free body; the splittings compose exact rotations, so |L| is exact
+and |omega| <= |L| / I_min: neither can blow up at any dt. Their accuracy limit is
+the rotation per step ``|omega| dt``: beyond about pi rad per step the sampled motion
+aliases and splitting resonances appear (bounded but wrong).
+
+*Adaptive methods* (dop853, taylor) subdivide the step themselves and need no bound.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Any
+
+import numpy as np
+
+#: Extent of classical RK4's stability region along the imaginary axis.
+RK4_IMAGINARY_LIMIT = 2.0 * math.sqrt(2.0)
+
+#: Rotation per step (rad) above which sampled attitude aliases and the exp-map and
+#: splitting methods lose accuracy (still bounded).
+ROTATION_PER_STEP_LIMIT = math.pi
+
+#: ``nu * dt`` above which a 4th-order explicit method's local error (~(nu dt)^5 / 120)
+#: exceeds about 3e-4 per step; reported as an accuracy warning, not instability.
+EXPLICIT_ACCURACY_LIMIT = 0.5
+
+#: Methods bounded for any dt on a free body.
+UNCONDITIONALLY_STABLE = frozenset({"implicit_midpoint", "splitting", "exact", "exact_split"})
+ADAPTIVE = frozenset({"dop853", "taylor"})
+EXPLICIT_FIXED_STEP = frozenset({"euler", "rk4", "lie_rk4"})
+
+TORQUE_KINDS = ("none", "constant", "schedule", "topic", "gravity")
+
+
+def _validated_moments(principal_moments: Any) -> np.ndarray:
+    moments = np.asarray(principal_moments, dtype=float)
+    if moments.shape != (3,):
+        raise ValueError(f"principal_moments must have shape (3,), got {moments.shape}")
+    for i, value in enumerate(moments):
+        if not (math.isfinite(value) and value > 0.0):
+            raise ValueError(f"principal_moments[{i}] must be finite and > 0, got {value}")
+    return moments
+
+
+def _validated_positive(name: str, value: float, allow_zero: bool = False) -> float:
+    value = float(value)
+    if not math.isfinite(value) or value < 0.0 or (value == 0.0 and not allow_zero):
+        bound = ">= 0" if allow_zero else "> 0"
+        raise ValueError(f"{name} must be finite and {bound}, got {value}")
+    return value
+
+
+def gyroscopic_factor(principal_moments: Any) -> float:
+    """Dimensionless ``max_i sqrt(|(Ii - Ij)(Ii - Ik)| / (Ij Ik))`` (0 for a sphere, <= 1)."""
+    i1, i2, i3 = _validated_moments(principal_moments)
+    factors = (
+        abs((i1 - i2) * (i1 - i3)) / (i2 * i3),
+        abs((i2 - i3) * (i2 - i1)) / (i3 * i1),
+        abs((i3 - i1) * (i3 - i2)) / (i1 * i2),
+    )
+    return math.sqrt(max(factors))
+
+
+def gyroscopic_frequency(principal_moments: Any, omega_max: float) -> float:
+    """Bound on the linearised gyroscopic frequency (rad/s) for ``|omega| <= omega_max`` (rad/s)."""
+    omega_max = _validated_positive("omega_max", omega_max, allow_zero=True)
+    return omega_max * gyroscopic_factor(principal_moments)
+
+
+def max_stable_dt(method: str, principal_moments: Any, omega_max: float) -> float:
+    """Largest step (s) for which ``method`` is linearly stable at spin rates up to ``omega_max``.
+
+    ``math.inf`` for methods bounded at any step (structure-preserving, adaptive, or a
+    spherical body); 0.0 for explicit Euler on a non-spherical spinning body (unstable
+    at every step; see :func:`euler_growth_time` for how fast).
+    """
+    nu = gyroscopic_frequency(principal_moments, omega_max)
+    if method in UNCONDITIONALLY_STABLE or method in ADAPTIVE or nu == 0.0:
+        return math.inf
+    if method == "euler":
+        return 0.0
+    if method in ("rk4", "lie_rk4"):
+        return RK4_IMAGINARY_LIMIT / nu
+    raise ValueError(f"method: no stability bound known for {method!r}")
+
+
+def euler_growth_time(principal_moments: Any, omega_max: float, dt: float) -> float:
+    """Time (s) in which explicit Euler multiplies a gyroscopic oscillation by e."""
+    nu = gyroscopic_frequency(principal_moments, omega_max)
+    dt = _validated_positive("dt", dt)
+    if nu == 0.0:
+        return math.inf
+    # amplitude factor per step sqrt(1 + (nu dt)^2) -> rate ln(1 + (nu dt)^2) / (2 dt)
+    return 2.0 * dt / math.log1p((nu * dt) ** 2)
+
+
+def step_warnings(method: str, principal_moments: Any, omega_max: float, dt: float) -> list[str]:
+    """Human-readable warnings for running ``method`` at step ``dt`` (s) up to ``omega_max`` (rad/s).
+
+    Empty when the combination is stable and accurate by the criteria of this module.
+    """
+    moments = _validated_moments(principal_moments)
+    omega_max = _validated_positive("omega_max", omega_max, allow_zero=True)
+    dt = _validated_positive("dt", dt)
+    nu = gyroscopic_frequency(moments, omega_max)
+    rotation = omega_max * dt
+    warnings: list[str] = []
+    if method == "euler":
+        if nu > 0.0:
+            warnings.append(
+                f"euler is unstable on gyroscopic oscillations at any dt: at {omega_max:.3g} rad/s "
+                f"the nutation amplitude and energy grow by a factor e every "
+                f"{euler_growth_time(moments, omega_max, dt):.3g} s; use rk4 "
+                f"(dt < {RK4_IMAGINARY_LIMIT / nu:.3g} s), implicit_midpoint or exact_split"
+            )
+    elif method in ("rk4", "lie_rk4"):
+        limit = max_stable_dt(method, moments, omega_max)
+        if dt > limit:
+            warnings.append(
+                f"dt too large for this spin rate with {method}: max stable dt ≈ {limit:.3g} s "
+                f"(gyroscopic frequency {nu:.3g} rad/s, RK4 stable for nu*dt < 2*sqrt(2)); "
+                "use implicit_midpoint or exact_split"
+            )
+        elif nu * dt > EXPLICIT_ACCURACY_LIMIT:
+            warnings.append(
+                f"{method} at nu*dt = {nu * dt:.3g} is stable but inaccurate (local error ~ "
+                f"(nu*dt)^5/120 ≈ {(nu * dt) ** 5 / 120:.2g} per step); use dt < "
+                f"{EXPLICIT_ACCURACY_LIMIT / nu:.3g} s or exact_split"
+            )
+    if method not in ADAPTIVE and method != "exact" and rotation > ROTATION_PER_STEP_LIMIT:
+        warnings.append(
+            f"{method}: rotation per step {rotation:.3g} rad exceeds pi at {omega_max:.3g} rad/s; "
+            f"the sampled attitude aliases and the step error is large (bounded for "
+            f"structure-preserving methods); use dt < {ROTATION_PER_STEP_LIMIT / omega_max:.3g} s"
+            + (" or exact" if method != "exact_split" else " or taylor")
+        )
+    return warnings
+
+
+def choose_integrator(principal_moments: Any, omega_max: float, dt: float, torque_kind: str) -> str:
+    """The scene's ``auto`` integrator for a body, spin-rate bound, node step and torque kind.
+
+    * ``'none'``: ``'exact'`` (the elliptic-function flow: exact at any dt).
+    * ``'gravity'``: ``'exact_split'`` (exact free flow with exact gravity kicks: a
+      Lie-Poisson integrator, bounded at any dt and keeping the heavy top's invariants).
+    * ``'constant'``, ``'schedule'``, ``'topic'`` (torque constant over each node step):
+      ``'taylor'``, the adaptive method that expands a piecewise-constant torque exactly
+      and controls its own error, so no dt / spin-rate combination is unstable.
+    """
+    _validated_moments(principal_moments)
+    _validated_positive("omega_max", omega_max, allow_zero=True)
+    _validated_positive("dt", dt)
+    if torque_kind not in TORQUE_KINDS:
+        raise ValueError(f"torque_kind must be one of {list(TORQUE_KINDS)}, got {torque_kind!r}")
+    if torque_kind == "none":
+        return "exact"
+    if torque_kind == "gravity":
+        return "exact_split"
+    return "taylor"
