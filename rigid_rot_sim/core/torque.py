@@ -62,3 +62,33 @@ class GravityTorque:
         # world z axis expressed in the body frame: third row of R(q)
         up_body = np.array([2.0 * (x * z - w * y), 2.0 * (y * z + w * x), 1.0 - 2.0 * (x * x + y * y)])
         return np.cross(self.lever_arm, -self.weight * up_body)
+
+
+@dataclass(frozen=True)
+class PolynomialTorque:
+    """A torque polynomial in time, fixed in the principal body frame, N*m.
+
+    ``N(t) = sum_k coefficients[k] * t**k`` with t in s, so ``coefficients[k]`` (shape
+    (n, 3), n >= 1) is in N*m/s^k. It does not depend on the state, so the Taylor method
+    expands it exactly.
+    """
+
+    coefficients: np.ndarray
+
+    def __post_init__(self) -> None:
+        coefficients = np.array(self.coefficients, dtype=float)
+        if coefficients.ndim == 1 and coefficients.shape == (3,):
+            coefficients = coefficients.reshape(1, 3)
+        if coefficients.ndim != 2 or coefficients.shape[1] != 3 or coefficients.shape[0] < 1:
+            raise ValueError(f"coefficients must have shape (n, 3) with n >= 1, got {coefficients.shape}")
+        if not np.all(np.isfinite(coefficients)):
+            bad = np.argwhere(~np.isfinite(coefficients))[0]
+            raise ValueError(f"coefficients[{bad[0]}, {bad[1]}] must be finite, got {coefficients[tuple(bad)]}")
+        coefficients.setflags(write=False)
+        object.__setattr__(self, "coefficients", coefficients)
+
+    def __call__(self, t: float, q: np.ndarray, omega: np.ndarray) -> np.ndarray:
+        value = self.coefficients[-1].copy()
+        for c in self.coefficients[-2::-1]:
+            value = value * t + c
+        return value
