@@ -1,0 +1,108 @@
+"""Tests for rigid_rot_sim.core.batch (N bodies advanced at once)."""
+
+import numpy as np
+import pytest
+from scipy.integrate import solve_ivp
+from scipy.spatial.transform import Rotation
+
+from rigid_rot_sim.core import batch
+from rigid_rot_sim.core.integrators.base import NonFiniteStateError
+
+MOMENTS = np.array([1.0, 2.0, 3.0])
+OMEGA0 = np.array([1.0, 0.1, 0.5])
+IDENTITY = np.array([0.0, 0.0, 0.0, 1.0])
+
+
+def reference(moments, omega0, q0, t_end, torque=np.zeros(3)):
+    """Tight DOP853 on Euler's equations and q' = 1/2 q (x) (omega, 0), written out here."""
+
+    def rhs(t, y):
+        x, yy, z, w = y[:4]
+        wx, wy, wz = y[4:]
+        dq = 0.5 * np.array(
+            [w * wx + yy * wz - z * wy, w * wy + z * wx - x * wz, w * wz + x * wy - yy * wx, -x * wx - yy * wy - z * wz]
+        )
+        return np.concatenate([dq, (np.cross(moments * y[4:], y[4:]) + torque) / moments])
+
+    y = solve_ivp(rhs, (0, t_end), np.r_[q0, omega0], method="DOP853", rtol=1e-13, atol=1e-13).y[:, -1]
+    return y[:4] / np.linalg.norm(y[:4]), y[4:]
+
+
+def attitude_angle(q_a, q_b):
+    return (Rotation.from_quat(q_a).inv() * Rotation.from_quat(q_b)).magnitude()
+
+
+@pytest.mark.parametrize("method, order", [("rk4", 4), ("implicit_midpoint", 2)])
+def test_convergence_order_against_reference(method, order):
+    torque = np.array([0.1, -0.05, 0.02])
+    q_ref, w_ref = reference(MOMENTS, OMEGA0, IDENTITY, 5.0, torque)
+    errors = []
+    for n in (100, 200, 400):
+        q, w = batch.advance_batch(method, MOMENTS, [IDENTITY], [OMEGA0], 5.0 / n, n, torque)
+        errors.append(max(np.abs(w[0] - w_ref).max(), attitude_angle(q_ref, q[0])))
+    observed = np.log2(np.array(errors[:-1]) / np.array(errors[1:]))
+    assert np.all(np.abs(observed - order) < 0.3), observed
+
+
+def test_bodies_are_independent_and_match_single_runs():
+    rng = np.random.default_rng(7)
+    n = 5
+    moments = np.sort(rng.uniform(1.0, 2.0, size=(n, 3)), axis=1)
+    omega = rng.normal(size=(n, 3))
+    q = Rotation.random(n, random_state=3).as_quat()
+    torque = rng.normal(size=(n, 3)) * 0.1
+    for method in batch.BATCH_METHODS:
+        q_all, w_all = batch.advance_batch(method, moments, q, omega, 0.01, 50, torque)
+        for k in range(n):
+            q_one, w_one = batch.advance_batch(method, moments[k], q[k : k + 1], omega[k : k + 1], 0.01, 50, torque[k])
+            np.testing.assert_allclose(w_all[k], w_one[0], rtol=0, atol=1e-14)
+            np.testing.assert_allclose(q_all[k], q_one[0], rtol=0, atol=1e-14)
+
+
+def test_implicit_midpoint_conserves_energy_momentum_at_large_steps():
+    # 5 rad per step: far beyond any explicit method's stability limit
+    dt = 5.0 / np.linalg.norm(OMEGA0)
+    rng = np.random.default_rng(2)
+    omega = rng.normal(size=(20, 3))
+    q0 = Rotation.random(20, random_state=4).as_quat()
+    q, w = batch.advance_batch("implicit_midpoint", MOMENTS, q0, omega, dt, 200)
+    energy0 = 0.5 * np.sum(MOMENTS * omega**2, axis=1)
+    energy = 0.5 * np.sum(MOMENTS * w**2, axis=1)
+    np.testing.assert_allclose(energy, energy0, rtol=1e-12)
+    l_world0 = Rotation.from_quat(q0).apply(MOMENTS * omega)
+    l_world = Rotation.from_quat(q).apply(MOMENTS * w)
+    np.testing.assert_allclose(l_world, l_world0, rtol=0, atol=1e-12 * np.abs(l_world0).max())
+    np.testing.assert_allclose(np.linalg.norm(q, axis=1), 1.0, atol=1e-15)
+
+
+@pytest.mark.parametrize("method", batch.BATCH_METHODS)
+def test_sphere_under_constant_torque_is_linear_in_time(method):
+    moments = np.full(3, 2.5)
+    torque = np.array([0.3, -0.2, 0.1])
+    q, w = batch.advance_batch(method, moments, [IDENTITY], [OMEGA0], 0.1, 100, torque)
+    np.testing.assert_allclose(w[0], OMEGA0 + torque * 10.0 / moments, rtol=0, atol=1e-13)
+
+
+def test_rk4_blows_up_with_named_step_not_nan():
+    # rk4 beyond its stability limit (nu dt >> 2 sqrt 2) grows without bound
+    with pytest.raises(NonFiniteStateError, match="step"):
+        batch.advance_batch("rk4", MOMENTS, [IDENTITY], [[10.0, 1.0, 5.0]], 2.0, 10_000)
+
+
+@pytest.mark.parametrize(
+    "kwargs, name",
+    [
+        (dict(method="verlet"), "method"),
+        (dict(principal_moments=[1.0, 0.0, 2.0]), r"principal_moments\[0, 1\]"),
+        (dict(omega=[[1.0, np.nan, 0.0]]), r"omega\[0, 1\]"),
+        (dict(q=[[0.0, 0.0, 0.0, 0.0]]), r"q\[0\]"),
+        (dict(dt=-1.0), "dt"),
+        (dict(n_steps=2.5), "n_steps"),
+        (dict(torque_body=[1.0, 2.0]), "torque_body"),
+    ],
+)
+def test_bad_input_names_argument(kwargs, name):
+    args = dict(method="rk4", principal_moments=MOMENTS, q=[IDENTITY], omega=[OMEGA0], dt=0.1, n_steps=3)
+    args.update(kwargs)
+    with pytest.raises(ValueError, match=name):
+        batch.advance_batch(**args)
