@@ -1,0 +1,55 @@
+"""Body-steps per second of rigid_rot_sim.core.batch, per method, for N = 1 to 1e6 bodies.
+
+    .venv/bin/python benchmarks/batch_bodies.py [--max-n 1000000] [--seconds 1.0]
+
+Each figure is the best of three timed runs, each run advancing N random bodies
+(I in [1, 3] kg*m^2, |omega| ~ 1 rad/s, a constant body torque) by as many steps of
+1 ms as fill about ``--seconds / 3`` of wall-clock time. Printed, never asserted.
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import platform
+import time
+
+import numpy as np
+
+from rigid_rot_sim.core.batch import BATCH_METHODS, advance_batch
+
+
+def body_steps_per_second(method: str, n: int, seconds: float, rng: np.random.Generator) -> float:
+    moments = np.sort(rng.uniform(1.0, 3.0, size=(n, 3)), axis=1)
+    q = rng.normal(size=(n, 4))
+    omega = rng.normal(size=(n, 3))
+    torque = 0.01 * rng.normal(size=(n, 3))
+    # calibrate the number of steps on one step
+    start = time.perf_counter()
+    advance_batch(method, moments, q, omega, 1e-3, 1, torque)
+    one = time.perf_counter() - start
+    steps = max(1, int(seconds / 3.0 / max(one, 1e-7)))
+    best = float("inf")
+    for _ in range(3):
+        start = time.perf_counter()
+        advance_batch(method, moments, q, omega, 1e-3, steps, torque)
+        best = min(best, time.perf_counter() - start)
+    return n * steps / best
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--max-n", type=int, default=1_000_000)
+    parser.add_argument("--seconds", type=float, default=1.0, help="rough wall-clock budget per point")
+    args = parser.parse_args()
+    rng = np.random.default_rng(0)
+    sizes = [n for n in (1, 10, 100, 1_000, 10_000, 100_000, 1_000_000) if n <= args.max_n]
+    print(f"# {platform.processor() or platform.machine()}, {os.cpu_count()} CPUs, numpy {np.__version__}")
+    print(f"{'N':>9} " + " ".join(f"{m + ' [body-steps/s]':>32}" for m in BATCH_METHODS))
+    for n in sizes:
+        rates = [body_steps_per_second(m, n, args.seconds, rng) for m in BATCH_METHODS]
+        print(f"{n:>9} " + " ".join(f"{r:>32.3e}" for r in rates), flush=True)
+
+
+if __name__ == "__main__":
+    main()
