@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import numpy as np
 from geometry_msgs.msg import Inertia, Point, Quaternion
+from rigid_rot_msgs.srv import ComputeInertia
 
 from rigid_rot_sim.core.inertia import MassProperties, principal_orientation
 
@@ -50,7 +51,7 @@ def mass_properties_to_inertia_msg(props: MassProperties) -> Inertia:
     return msg
 
 
-def compute_inertia_request_to_arrays(request) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+def compute_inertia_request_to_arrays(request: ComputeInertia.Request) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """ComputeInertia request -> (masses (n,) kg, positions (n, 3) m, origin (3,) m).
 
     No validation here beyond the message types: mismatched lengths come out as arrays of
@@ -61,7 +62,9 @@ def compute_inertia_request_to_arrays(request) -> tuple[np.ndarray, np.ndarray, 
     return masses, positions, point_to_array(request.origin)
 
 
-def fill_compute_inertia_response(response, props: MassProperties):
+def fill_compute_inertia_response(
+    response: ComputeInertia.Response, props: MassProperties
+) -> ComputeInertia.Response:
     """Write every result field of a ComputeInertia response from ``props``; returns it.
 
     ``success`` and ``message`` are left to the caller.
@@ -76,3 +79,31 @@ def fill_compute_inertia_response(response, props: MassProperties):
     response.symmetry = props.symmetry
     response.inertia = mass_properties_to_inertia_msg(props)
     return response
+
+
+def arrays_to_compute_inertia_request(
+    masses: np.ndarray, positions: np.ndarray, origin=(0.0, 0.0, 0.0), frame_id: str = ""
+) -> ComputeInertia.Request:
+    """(masses (n,) kg, positions (n, 3) m, origin (3,) m, frame_id) -> ComputeInertia request."""
+    request = ComputeInertia.Request()
+    request.masses = [float(m) for m in np.asarray(masses, dtype=float).reshape(-1)]
+    request.positions = [array_to_point(p) for p in np.asarray(positions, dtype=float).reshape(-1, 3)]
+    request.origin = array_to_point(origin)
+    request.frame_id = frame_id
+    return request
+
+
+def compute_inertia_response_to_mass_properties(
+    response: ComputeInertia.Response, origin
+) -> MassProperties:
+    """A successful ComputeInertia response -> MassProperties (``origin`` as in the request, m)."""
+    return MassProperties(
+        total_mass=float(response.total_mass),
+        center_of_mass=point_to_array(response.center_of_mass),
+        origin=np.asarray(origin, dtype=float).reshape(3),
+        inertia_origin=row_major_to_matrix(response.inertia_origin),
+        inertia_com=row_major_to_matrix(response.inertia_com),
+        principal_moments=np.asarray(response.principal_moments, dtype=float).reshape(3),
+        principal_axes=row_major_to_matrix(response.principal_axes),
+        symmetry=str(response.symmetry),
+    )
