@@ -1,0 +1,267 @@
+"""Read recordings back, also after a crash, and rewrite a crashed file with its index.
+
+A file finished by :class:`~rigid_rot_sim.recording.writer.Recorder` has a summary and is
+read through it. A file cut short (SIGKILL, power loss, full disk) has no summary and no
+footer; :class:`BagReader` then scans it from the start and keeps every complete chunk
+whose CRC checks out, which is everything up to the last flush. :func:`repair` rewrites
+such a file with a proper summary so that every tool (``ros2 bag``, Foxglove) opens it.
+"""
+
+from __future__ import annotations
+
+import io
+import os
+import struct
+from collections import Counter
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any, Iterable, Iterator
+
+from mcap.exceptions import McapError
+from mcap.reader import make_reader
+from mcap.records import Channel, Chunk, Message, Metadata, Schema
+from mcap.stream_reader import MAGIC_SIZE, StreamReader, breakup_chunk
+
+from rigid_rot_sim.recording.definitions import dynamic_decoder
+
+_MAGIC = b"\x89MCAP0\r\n"
+_OPCODE_CHUNK = 0x06
+
+
+class BagError(ValueError):
+    """The file is not an MCAP recording this module can read."""
+
+
+@dataclass(frozen=True)
+class Topic:
+    """One recorded channel."""
+
+    name: str
+    type_name: str
+    definition: str
+    channel_metadata: dict[str, str]
+
+
+@dataclass(frozen=True)
+class RecordedMessage:
+    """One message as stored: serialised CDR bytes and the two timestamps (ns)."""
+
+    topic: str
+    type_name: str
+    log_time_ns: int
+    publish_time_ns: int
+    data: bytes
+
+
+@dataclass
+class ScanResult:
+    """What a scan of a file without summary found."""
+
+    schemas: dict[int, Schema] = field(default_factory=dict)
+    channels: dict[int, Channel] = field(default_factory=dict)
+    metadata: list[Metadata] = field(default_factory=list)
+    messages: list[Message] = field(default_factory=list)
+    chunks: int = 0
+    bad_chunks: int = 0
+    unread_bytes: int = 0
+
+
+def _valid_prefix_length(data: bytes) -> int:
+    """Length of the leading run of complete records (after the magic)."""
+    position = MAGIC_SIZE
+    while position + 9 <= len(data):
+        (length,) = struct.unpack_from("<Q", data, position + 1)
+        end = position + 9 + length
+        if end > len(data):
+            break
+        position = end
+    return position
+
+
+def scan(path: str | os.PathLike[str]) -> ScanResult:
+    """Read every complete record of an MCAP file front to back, without its summary.
+
+    Chunks whose CRC does not match (a torn write) are counted in ``bad_chunks`` and
+    skipped; a trailing partial record is counted in ``unread_bytes``.
+    """
+    data = Path(path).read_bytes()
+    if not data.startswith(_MAGIC):
+        raise BagError(f"{path}: not an MCAP file (bad magic)")
+    valid = _valid_prefix_length(data)
+    result = ScanResult(unread_bytes=len(data) - valid)
+    records = StreamReader(io.BytesIO(data[:valid]), emit_chunks=True).records
+    pending: list[Any] = []
+    try:
+        for record in records:
+            if isinstance(record, Chunk):
+                result.chunks += 1
+                try:
+                    pending.extend(breakup_chunk(record, validate_crc=True))
+                except (McapError, ValueError, struct.error):
+                    result.bad_chunks += 1
+            else:
+                pending.append(record)
+    except (McapError, struct.error, EOFError):
+        pass  # the stream ends without a footer: that is what a crash leaves
+    for record in pending:
+        if isinstance(record, Schema):
+            result.schemas[record.id] = record
+        elif isinstance(record, Channel):
+            result.channels[record.id] = record
+        elif isinstance(record, Metadata):
+            result.metadata.append(record)
+        elif isinstance(record, Message):
+            result.messages.append(record)
+    return result
+
+
+class BagReader:
+    """Messages, topics and metadata records of one MCAP recording.
+
+    ``complete`` tells whether the file has its summary; when it does not, the file
+    is scanned (see :func:`scan`) and everything up to the last complete chunk is read.
+    """
+
+    def __init__(self, path: str | os.PathLike[str]) -> None:
+        self.path = Path(path)
+        if not self.path.is_file():
+            raise FileNotFoundError(f"no such recording: {self.path}")
+        self.complete = self._has_summary()
+        self._scan: ScanResult | None = None if self.complete else scan(self.path)
+        self.topics: dict[str, Topic] = {}
+        self.metadata: dict[str, dict[str, str]] = {}
+        if self.complete:
+            with open(self.path, "rb") as stream:
+                reader = make_reader(stream)
+                summary = reader.get_summary()
+                assert summary is not None
+                schemas, channels = summary.schemas, summary.channels
+                metadata = list(reader.iter_metadata())
+        else:
+            assert self._scan is not None
+            schemas, channels, metadata = self._scan.schemas, self._scan.channels, self._scan.metadata
+        self._channels = channels
+        for channel in channels.values():
+            schema = schemas.get(channel.schema_id)
+            self.topics[channel.topic] = Topic(
+                name=channel.topic,
+                type_name=schema.name if schema else "",
+                definition=schema.data.decode("utf-8") if schema else "",
+                channel_metadata=dict(channel.metadata),
+            )
+        for record in metadata:
+            self.metadata[record.name] = dict(record.metadata)
+
+    def _has_summary(self) -> bool:
+        size = self.path.stat().st_size
+        with open(self.path, "rb") as stream:
+            if stream.read(len(_MAGIC)) != _MAGIC:
+                raise BagError(f"{self.path}: not an MCAP file (bad magic)")
+            if size < 2 * len(_MAGIC) + 9:
+                return False
+            stream.seek(size - len(_MAGIC))
+            if stream.read(len(_MAGIC)) != _MAGIC:
+                return False
+            stream.seek(0)
+            try:
+                summary = make_reader(stream).get_summary()
+            except (McapError, struct.error, ValueError):
+                return False
+        return summary is not None and summary.statistics is not None
+
+    def messages(self, topics: Iterable[str] | None = None) -> Iterator[RecordedMessage]:
+        """Messages in log-time order (file order among equal times)."""
+        wanted = None if topics is None else set(topics)
+        if self.complete:
+            with open(self.path, "rb") as stream:
+                reader = make_reader(stream)
+                for schema, channel, message in reader.iter_messages(
+                    topics=None if wanted is None else sorted(wanted), log_time_order=True
+                ):
+                    yield RecordedMessage(
+                        channel.topic, schema.name if schema else "", message.log_time,
+                        message.publish_time, bytes(message.data),
+                    )
+            return
+        assert self._scan is not None
+        ordered = sorted(self._scan.messages, key=lambda m: m.log_time)
+        for message in ordered:
+            channel = self._channels.get(message.channel_id)
+            if channel is None or (wanted is not None and channel.topic not in wanted):
+                continue
+            yield RecordedMessage(
+                channel.topic, self.topics[channel.topic].type_name, message.log_time,
+                message.publish_time, bytes(message.data),
+            )
+
+    def decoded(self, topics: Iterable[str] | None = None) -> Iterator[tuple[RecordedMessage, Any]]:
+        """Messages with their content decoded from the definitions stored in the file."""
+        for message in self.messages(topics):
+            topic = self.topics[message.topic]
+            yield message, dynamic_decoder(topic.type_name, topic.definition)(message.data)
+
+    def counts(self) -> Counter[str]:
+        """Messages per topic (from a pass over the messages, not from the summary)."""
+        return Counter(m.topic for m in self.messages())
+
+
+@dataclass(frozen=True)
+class RepairReport:
+    """What :func:`repair` did."""
+
+    output: Path
+    messages: int
+    chunks: int
+    bad_chunks: int
+    unread_bytes: int
+    backup: Path | None
+    already_complete: bool
+
+
+def repair(
+    path: str | os.PathLike[str],
+    output: str | os.PathLike[str] | None = None,
+    *,
+    backup: bool = True,
+) -> RepairReport:
+    """Rewrite a recording cut short by a crash, with summary, indexes and rosbag2 record.
+
+    Without ``output`` the file is replaced in place and the original kept as
+    ``<file>.crashed`` (unless ``backup`` is False). A file that already has its
+    summary is left alone (``already_complete``).
+    """
+    from rigid_rot_sim.recording.writer import Recorder
+
+    source = Path(path)
+    reader = BagReader(source)
+    if reader.complete:
+        return RepairReport(Path(output or source), 0, 0, 0, 0, None, True)
+    result = reader._scan
+    assert result is not None
+    target = Path(output) if output is not None else source.with_name(source.name + ".repairing")
+    with Recorder(target) as recorder:
+        for topic in reader.topics.values():
+            recorder.add_topic(
+                topic.name,
+                topic.type_name,
+                definition=topic.definition,
+                type_hash=topic.channel_metadata.get("topic_type_hash", ""),
+                offered_qos_profiles=topic.channel_metadata.get("offered_qos_profiles", ""),
+            )
+        for name, data in reader.metadata.items():
+            if name != "rosbag2":
+                recorder.add_metadata(name, data)
+        count = 0
+        for message in reader.messages():
+            recorder.write(message.topic, message.data, message.log_time_ns, message.publish_time_ns)
+            count += 1
+    if recorder.error is not None:
+        raise recorder.error
+    kept: Path | None = None
+    if output is None:
+        if backup:
+            kept = source.with_name(source.name + ".crashed")
+            os.replace(source, kept)
+        os.replace(target, source)
+        target = source
+    return RepairReport(target, count, result.chunks, result.bad_chunks, result.unread_bytes, kept, False)
