@@ -1,0 +1,291 @@
+"""Tests of the high-order Taylor method (rigid_rot_sim/core/integrators/taylor.py).
+
+References are independent of the method under test: closed forms, conservation laws,
+and scipy's DOP853 on a right-hand side assembled from core/dynamics.py and the torque
+models' own ``__call__``.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+from scipy.integrate import solve_ivp
+
+from rigid_rot_sim.core import dynamics
+from rigid_rot_sim.core.integrators.base import NonFiniteStateError
+from rigid_rot_sim.core.integrators.taylor import Taylor, derivative_map, order_for_tolerance, taylor_coefficients
+from rigid_rot_sim.core.torque import ConstantTorque, GravityTorque, PolynomialTorque
+
+MOMENTS = np.array([1.0, 2.0, 3.0])
+OMEGA0 = np.array([1.0, 0.1, 0.5])
+Q0 = np.array([0.1, -0.2, 0.3, 0.9]) / np.linalg.norm([0.1, -0.2, 0.3, 0.9])
+
+
+def reference_rhs(moments, torque):
+    """d(omega, q)/dt from core/dynamics.py and the torque callable, for solve_ivp."""
+
+    def rhs(t, y):
+        omega, q = y[:3], y[3:]
+        n = np.zeros(3) if torque is None else torque(t, q / np.linalg.norm(q), omega)
+        return np.concatenate([dynamics.euler_rhs(moments, omega, n), dynamics.quaternion_derivative(q, omega)])
+
+    return rhs
+
+
+def reference_solution(moments, omega0, q0, torque, t_end):
+    sol = solve_ivp(
+        reference_rhs(moments, torque),
+        (0.0, t_end),
+        np.concatenate([omega0, q0]),
+        method="DOP853",
+        rtol=1e-13,
+        atol=1e-14,
+    )
+    assert sol.success
+    omega, q = sol.y[:3, -1], sol.y[3:, -1]
+    return omega, q / np.linalg.norm(q)
+
+
+def run(moments, dt, n_steps, torque=None, omega0=OMEGA0, q0=Q0, **options):
+    integrator = Taylor(moments, dt, torque, omega0=omega0, q0=q0, **options)
+    for _ in range(n_steps):
+        integrator.step()
+    return integrator
+
+
+def quaternion_distance(p, q):
+    """Smallest |p -/+ q| (q and -q are the same rotation)."""
+    return min(np.linalg.norm(p - q), np.linalg.norm(p + q))
+
+
+# -- the recurrence -----------------------------------------------------------------------
+
+
+@pytest.mark.parametrize(
+    "torque",
+    [
+        None,
+        ConstantTorque([0.1, -0.05, 0.02]),
+        PolynomialTorque([[0.1, -0.05, 0.02], [0.3, 0.0, -0.1], [0.0, 0.02, 0.01]]),
+        GravityTorque(lever_arm=[0.05, -0.02, 0.3], weight=9.81 * 2.0),
+    ],
+    ids=["free", "constant", "polynomial", "gravity"],
+)
+def test_first_coefficients_are_the_equations_of_motion(torque):
+    """X1 = f(x0) and 2 X2 = f'(x0) f(x0) against core/dynamics and the torque's own call."""
+    moments = np.array([1.3, 2.1, 2.9])
+    integrator = Taylor(moments, 0.1, torque, t0=0.7)
+    rng = np.random.default_rng(1)
+    for _ in range(5):
+        omega = rng.normal(size=3)
+        q = rng.normal(size=4)
+        q /= np.linalg.norm(q)
+        x0 = np.concatenate([omega, q])
+        c, b = derivative_map(moments, torque if isinstance(torque, GravityTorque) else None)
+        scaled = integrator._forcing(0.7)  # b(0.7 + s) coefficients, pre-divided by k + 1
+        forcing = scaled * np.arange(1, len(scaled) + 1)[:, None]
+        coeffs = taylor_coefficients(x0, 3, c, forcing if len(forcing) else None)
+        rhs = reference_rhs(moments, torque)
+        np.testing.assert_allclose(coeffs[1], rhs(0.7, x0), rtol=1e-13, atol=1e-14)
+        # second coefficient: half the time derivative of f along the flow (central difference)
+        eps = 1e-5
+        f_plus = rhs(0.7 + eps, x0 + eps * rhs(0.7, x0))
+        f_minus = rhs(0.7 - eps, x0 - eps * rhs(0.7, x0))
+        np.testing.assert_allclose(2.0 * coeffs[2], (f_plus - f_minus) / (2 * eps), rtol=1e-7, atol=1e-8)
+
+
+def test_in_place_recurrence_matches_reference_form():
+    torque = GravityTorque(lever_arm=[0.0, 0.0, 0.4], weight=5.0)
+    integrator = Taylor(MOMENTS, 1.0, torque, tol=1e-12)
+    x0 = np.concatenate([OMEGA0, Q0])
+    c, _ = derivative_map(MOMENTS, torque)
+    forcing = integrator._forcing(0.0)
+    h, x = integrator._substep(0.0, x0, 0.3)
+    coeffs = taylor_coefficients(x0, integrator.series_order, c, forcing)
+    expected = np.polynomial.polynomial.polyval(h, coeffs)
+    expected[3:] /= np.linalg.norm(expected[3:])
+    np.testing.assert_allclose(x, expected, rtol=0, atol=1e-15)
+
+
+def test_order_from_tolerance():
+    assert order_for_tolerance(1e-2) == 10
+    assert order_for_tolerance(1e-10) == math.ceil(10 * math.log(10))
+    assert order_for_tolerance(1e-300) == 30
+    assert Taylor(MOMENTS, 1.0, tol=1e-12).series_order == 28
+    assert Taylor(MOMENTS, 1.0, tol=1e-12, order=12).series_order == 12
+
+
+# -- accuracy -----------------------------------------------------------------------------
+
+
+@pytest.mark.parametrize("order", [3, 4, 6])
+def test_observed_order_of_truncated_series(order):
+    """Fixed order, fixed step (tol=None): global error ~ h^order."""
+    t_end = 4.0
+    omega_ref, _ = reference_solution(MOMENTS, OMEGA0, Q0, None, t_end)
+    steps = [0.2, 0.1, 0.05]
+    errors = []
+    for dt in steps:
+        integrator = run(MOMENTS, dt, round(t_end / dt), tol=None, order=order)
+        errors.append(np.max(np.abs(integrator.omega - omega_ref)))
+    slopes = np.diff(np.log(errors)) / np.diff(np.log(steps))
+    assert np.all(np.abs(slopes - order) < 0.3), (errors, slopes)
+
+
+def test_error_falls_with_tolerance_and_tracks_it():
+    """P2 (constant body torque, 20 s) in one API step: the error follows tol."""
+    torque = ConstantTorque([0.1, -0.05, 0.02])
+    omega_ref, q_ref = reference_solution(MOMENTS, OMEGA0, Q0, torque, 20.0)
+    errors = []
+    for tol in (1e-6, 1e-9, 1e-12):
+        integrator = run(MOMENTS, 20.0, 1, torque, tol=tol)
+        assert integrator.t == 20.0
+        assert integrator.n_substeps > 5  # large but several internal steps
+        error = np.max(np.abs(integrator.omega - omega_ref))
+        assert error < 100.0 * tol + 1e-12, (tol, error)
+        assert quaternion_distance(integrator.q, q_ref) < 100.0 * tol + 1e-12
+        errors.append(error)
+    assert errors[0] > errors[1] > errors[2]
+
+
+def test_polynomial_torque_on_spherical_body_integrates_exactly():
+    """Spherical body: I omega' = N(t), so omega = omega0 + (integral of N) / I, over many steps."""
+    inertia = 2.5
+    coeffs = np.array([[0.3, -0.1, 0.2], [0.05, 0.2, -0.4], [-0.01, 0.0, 0.03]])
+    integrator = run([inertia] * 3, 0.25, 12, PolynomialTorque(coeffs), tol=1e-12)
+    t = integrator.t
+    integral = sum(coeffs[k] * t ** (k + 1) / (k + 1) for k in range(3))
+    np.testing.assert_allclose(integrator.omega, OMEGA0 + integral / inertia, rtol=1e-14, atol=1e-14)
+
+
+def test_constant_torque_on_spherical_body_is_exact():
+    inertia = 0.7
+    torque = np.array([0.3, -0.2, 0.05])
+    integrator = Taylor([inertia] * 3, 0.5, ConstantTorque(torque), omega0=OMEGA0, q0=Q0, tol=1e-10)
+    for n in range(1, 9):
+        integrator.step()
+        t = 0.5 * n
+        assert integrator.t == t
+        np.testing.assert_allclose(integrator.omega, OMEGA0 + torque * t / inertia, rtol=1e-15, atol=2e-15)
+
+
+def test_torque_replaced_between_steps_takes_effect():
+    inertia = 2.0
+    integrator = Taylor([inertia] * 3, 1.0, ConstantTorque([1.0, 0.0, 0.0]), omega0=np.zeros(3))
+    integrator.step()
+    integrator.torque = ConstantTorque([0.0, 2.0, 0.0])
+    integrator.step()
+    integrator.torque = None
+    integrator.step()
+    np.testing.assert_allclose(integrator.omega, [0.5, 1.0, 0.0], atol=1e-15)
+
+
+def test_torque_free_invariants_over_one_long_step():
+    """T and |L| conserved to ~tol over 100 s (P1), and the attitude matches DOP853."""
+    integrator = run(MOMENTS, 100.0, 1, None, tol=1e-12)
+    e0 = dynamics.kinetic_energy(MOMENTS, OMEGA0)
+    l0 = dynamics.angular_momentum_world(MOMENTS, Q0, OMEGA0)
+    assert abs(dynamics.kinetic_energy(MOMENTS, integrator.omega) / e0 - 1.0) < 1e-11
+    l1 = dynamics.angular_momentum_world(MOMENTS, integrator.q, integrator.omega)
+    assert np.linalg.norm(l1 - l0) / np.linalg.norm(l0) < 1e-11  # L_world, not just |L|
+    assert abs(np.linalg.norm(integrator.q) - 1.0) < 1e-15
+
+
+def test_basilisk_case_conserves_energy_and_momentum_at_1ms():
+    """I = diag(500, 200, 300), omega0 = (0.5, -0.4, 0.7), 1 ms steps for 10 s."""
+    moments = np.array([500.0, 200.0, 300.0])
+    omega0 = np.array([0.5, -0.4, 0.7])
+    integrator = run(moments, 1e-3, 10_000, None, omega0=omega0, tol=1e-13)
+    assert integrator.t == pytest.approx(10.0, abs=1e-12)
+    e0 = dynamics.kinetic_energy(moments, omega0)
+    l0 = np.linalg.norm(moments * omega0)
+    assert abs(dynamics.kinetic_energy(moments, integrator.omega) / e0 - 1.0) < 1e-12
+    assert abs(np.linalg.norm(moments * integrator.omega) / l0 - 1.0) < 1e-12
+    # short API steps lower the series order instead of running it in full
+    assert integrator.n_substeps == 10_000
+
+
+def test_heavy_top_matches_dop853_and_conserves_energy():
+    """Gravity torque expanded in the recurrence against DOP853 on GravityTorque's own call."""
+    moments = np.array([0.8, 0.8, 0.3])  # about the pivot
+    gravity = GravityTorque(lever_arm=[0.0, 0.0, 0.25], weight=1.5 * 9.81)
+    omega0 = np.array([0.4, -0.3, 20.0])
+    q0 = np.array([np.sin(0.5), 0.0, 0.0, np.cos(0.5)])  # tilted 1 rad about x
+    t_end = 5.0
+    integrator = run(moments, t_end, 1, gravity, omega0=omega0, q0=q0, tol=1e-12)
+    omega_ref, q_ref = reference_solution(moments, omega0, q0, gravity, t_end)
+    assert np.max(np.abs(integrator.omega - omega_ref)) < 1e-9
+    assert quaternion_distance(integrator.q, q_ref) < 1e-10
+
+    def energy(q, omega):
+        up_body = dynamics.world_to_body(q, [0.0, 0.0, 1.0])
+        return dynamics.kinetic_energy(moments, omega) + gravity.weight * gravity.lever_arm @ up_body
+
+    assert abs(energy(integrator.q, integrator.omega) - energy(q0, omega0)) < 1e-10 * abs(energy(q0, omega0))
+
+
+# -- torque refusal, validation, blow-up -----------------------------------------------------
+
+
+def test_arbitrary_callable_torque_is_refused_with_alternatives():
+    with pytest.raises(ValueError, match="dop853") as info:
+        Taylor(MOMENTS, 0.1, lambda t, q, w: np.array([0.0, 0.0, 0.1]))
+    message = str(info.value)
+    for name in ("ConstantTorque", "PolynomialTorque", "GravityTorque", "rk4"):
+        assert name in message
+
+
+def test_callable_swapped_in_between_steps_is_refused():
+    integrator = Taylor(MOMENTS, 0.1, None, omega0=OMEGA0)
+    integrator.step()
+    integrator.torque = lambda t, q, w: np.zeros(3)
+    with pytest.raises(ValueError, match="unsupported torque"):
+        integrator.step()
+
+
+@pytest.mark.parametrize(
+    "options, match",
+    [
+        ({"tol": 0.0}, "tol"),
+        ({"tol": float("nan")}, "tol"),
+        ({"order": 1}, "order"),
+        ({"order": 2.5}, "order"),
+        ({"tol": None}, "order"),
+        ({"max_step": 0.0}, "max_step"),
+        ({"rtol": 1e-9}, "rtol"),
+    ],
+)
+def test_bad_options_are_value_errors_naming_them(options, match):
+    with pytest.raises(ValueError, match=match):
+        Taylor(MOMENTS, 0.1, **options)
+
+
+@pytest.mark.filterwarnings("ignore:overflow encountered:RuntimeWarning", "ignore:invalid value encountered:RuntimeWarning")
+def test_blow_up_raises_instead_of_returning_nan():
+    integrator = Taylor(MOMENTS, 1.0, None, omega0=[1e200, 1e200, 1e200])
+    with pytest.raises(NonFiniteStateError, match="step 1"):
+        integrator.step()
+    huge = Taylor([1.0] * 3, 1.0, PolynomialTorque([[0.0, 0.0, 0.0]] + [[1e300, 1e300, 1e300]] * 4))
+    with pytest.raises(NonFiniteStateError):
+        for _ in range(5):
+            huge.step()
+
+
+def test_max_step_bounds_the_internal_step():
+    integrator = run(MOMENTS, 10.0, 1, None, tol=1e-8, max_step=0.5)
+    assert integrator.n_substeps >= 20
+    free = run(MOMENTS, 10.0, 1, None, tol=1e-8)
+    np.testing.assert_allclose(integrator.omega, free.omega, atol=1e-7)
+
+
+def test_fast_spin_stays_finite_and_accurate():
+    """omega*dt = 50 rad per API step: the internal steps adapt, the state stays finite."""
+    moments = np.array([1.0, 2.0, 3.0])
+    omega0 = np.array([100.0, 1.0, 5.0])
+    integrator = run(moments, 0.5, 4, None, omega0=omega0, tol=1e-12)
+    omega_ref, q_ref = reference_solution(moments, omega0, Q0, None, 2.0)
+    assert np.all(np.isfinite(integrator.omega)) and np.all(np.isfinite(integrator.q))
+    assert np.max(np.abs(integrator.omega - omega_ref)) < 1e-8 * 100.0
+    assert quaternion_distance(integrator.q, q_ref) < 1e-8
