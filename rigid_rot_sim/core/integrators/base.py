@@ -16,6 +16,10 @@ Rules for whoever implements a method:
   :class:`NonFiniteStateError` naming the step number and the time.
 * ``self.torque`` may be replaced between steps (the node holds topic commands
   piecewise constant); methods that cache anything about it must re-read it each step.
+  Likewise ``self.dt`` may be changed between steps (``simulate`` shortens the last one).
+* Change the state only through :meth:`set_state` (methods may keep it in a faster form).
+* :meth:`advance` takes many steps; methods may override it with a faster loop that
+  keeps the same per-step semantics and non-finite check.
 """
 
 from __future__ import annotations
@@ -104,6 +108,11 @@ class Integrator:
                 f"{self.name}: non-finite state at step {self.n_steps}, t = {self.t:.9g} s "
                 f"(q = {self.q}, omega = {self.omega})"
             )
+
+    def advance(self, n: int) -> None:
+        """Take ``n`` steps of ``dt`` (same result as calling :meth:`step` n times)."""
+        for _ in range(n):
+            self.step()
 
     def _step_impl(self) -> None:
         raise NotImplementedError

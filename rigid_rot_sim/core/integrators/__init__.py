@@ -1,0 +1,40 @@
+"""The integrator registry: every method by name, all with the step API of ``base.py``.
+
+>>> from rigid_rot_sim.core.integrators import get_method
+>>> get_method("rk4").order
+4
+"""
+
+from __future__ import annotations
+
+from rigid_rot_sim.core.integrators.adaptive import DOP853Integrator
+from rigid_rot_sim.core.integrators.base import Integrator, NonFiniteStateError
+from rigid_rot_sim.core.integrators.explicit import RK4, Euler
+from rigid_rot_sim.core.integrators.implicit import ImplicitMidpoint
+from rigid_rot_sim.core.integrators.lie import LieRK4
+from rigid_rot_sim.core.integrators.splitting import Splitting
+
+METHODS: dict[str, type[Integrator]] = {
+    "euler": Euler,
+    "rk4": RK4,
+    "dop853": DOP853Integrator,
+    "implicit_midpoint": ImplicitMidpoint,
+    "lie_rk4": LieRK4,
+    "splitting": Splitting,
+}
+
+# Methods in their own modules register here, one line each:
+# METHODS["taylor"] = ...          (integrators/taylor.py)
+# METHODS["exact"] = ...           (integrators/exact_flow.py)
+# METHODS["exact_split"] = ...     (integrators/exact_flow.py)
+
+
+def get_method(name: str) -> type[Integrator]:
+    """The integrator class registered as ``name``; ValueError listing the valid names."""
+    try:
+        return METHODS[name]
+    except (KeyError, TypeError):
+        raise ValueError(f"unknown integrator {name!r}; valid methods: {', '.join(sorted(METHODS))}") from None
+
+
+__all__ = ["METHODS", "Integrator", "NonFiniteStateError", "get_method"]
