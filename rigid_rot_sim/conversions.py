@@ -6,11 +6,28 @@ messages carry SI units (REP 103) and quaternions are (x, y, z, w) on both sides
 
 from __future__ import annotations
 
+from typing import TYPE_CHECKING
+
 import numpy as np
-from geometry_msgs.msg import Inertia, Point, Quaternion
+from builtin_interfaces.msg import Time
+from geometry_msgs.msg import (
+    Inertia,
+    InertiaStamped,
+    Point,
+    Quaternion,
+    QuaternionStamped,
+    TransformStamped,
+    Vector3,
+    Vector3Stamped,
+)
+from rigid_rot_msgs.msg import HeavyTopState, RejectedCommand, RigidBodyState
 from rigid_rot_msgs.srv import ComputeInertia
+from rosgraph_msgs.msg import Clock
 
 from rigid_rot_sim.core.inertia import MassProperties, principal_orientation
+
+if TYPE_CHECKING:
+    from rigid_rot_sim.core.simulator import StateSnapshot
 
 
 def point_to_array(point: Point) -> np.ndarray:
@@ -107,3 +124,163 @@ def compute_inertia_response_to_mass_properties(
         principal_axes=row_major_to_matrix(response.principal_axes),
         symmetry=str(response.symmetry),
     )
+
+
+# --------------------------------------------------------------------- simulator (issue 4)
+# Sim time is a float of seconds in the core and builtin_interfaces/Time on the wire; the
+# conversion is exact to the nanosecond and deterministic (same float -> same stamp).
+
+
+def seconds_to_time(seconds: float) -> Time:
+    """Sim time (s, >= 0) -> builtin_interfaces/Time, rounded to the nanosecond."""
+    total_ns = int(round(float(seconds) * 1e9))
+    return Time(sec=total_ns // 1_000_000_000, nanosec=total_ns % 1_000_000_000)
+
+
+def time_to_seconds(stamp) -> float:
+    """builtin_interfaces/Time (or Duration) -> seconds (float)."""
+    return float(stamp.sec) + float(stamp.nanosec) * 1e-9
+
+
+def vector3_to_array(vector) -> np.ndarray:
+    """geometry_msgs/Vector3 -> ndarray (3,)."""
+    return np.array([vector.x, vector.y, vector.z], dtype=float)
+
+
+def array_to_vector3(values) -> Vector3:
+    """ndarray (3,) -> geometry_msgs/Vector3."""
+    x, y, z = (float(value) for value in np.asarray(values, dtype=float).reshape(3))
+    return Vector3(x=x, y=y, z=z)
+
+
+def quaternion_to_array(q) -> np.ndarray:
+    """geometry_msgs/Quaternion -> ndarray (4,) scalar-last (no renormalisation)."""
+    return np.array([q.x, q.y, q.z, q.w], dtype=float)
+
+
+def torque_command_from_msg(msg) -> tuple[np.ndarray, np.ndarray | None, str, float]:
+    """WrenchStamped or Vector3Stamped -> (torque N*m, force N or None, frame_id, stamp s).
+
+    A Vector3Stamped carries the torque itself; a WrenchStamped its ``wrench.torque`` and
+    ``wrench.force`` (the simulator rejects a non-zero force). Values are passed through
+    unvalidated: the simulator names what is wrong.
+    """
+    if hasattr(msg, "wrench"):
+        torque = vector3_to_array(msg.wrench.torque)
+        force = vector3_to_array(msg.wrench.force)
+    else:
+        torque = vector3_to_array(msg.vector)
+        force = None
+    return torque, force, msg.header.frame_id, time_to_seconds(msg.header.stamp)
+
+
+def fill_rigid_body_state(msg: RigidBodyState, snapshot: StateSnapshot, world_frame: str, body_frame: str) -> RigidBodyState:
+    """Write every field of a RigidBodyState from a snapshot (stamp: sim time); returns it."""
+    msg.header.stamp = seconds_to_time(snapshot.t)
+    msg.header.frame_id = world_frame
+    msg.child_frame_id = body_frame
+    msg.orientation = array_to_quaternion(snapshot.orientation)
+    msg.angular_velocity_body = array_to_vector3(snapshot.angular_velocity_body)
+    msg.angular_velocity_world = array_to_vector3(snapshot.angular_velocity_world)
+    msg.angular_momentum_body = array_to_vector3(snapshot.angular_momentum_body)
+    msg.angular_momentum_world = array_to_vector3(snapshot.angular_momentum_world)
+    msg.torque_body = array_to_vector3(snapshot.torque_body)
+    msg.kinetic_energy = float(snapshot.kinetic_energy)
+    msg.potential_energy = float(snapshot.potential_energy)
+    msg.energy_drift = float(snapshot.energy_drift)
+    msg.angular_momentum_drift = float(snapshot.angular_momentum_drift)
+    return msg
+
+
+def snapshot_to_state(snapshot: StateSnapshot, world_frame: str, body_frame: str) -> RigidBodyState:
+    """StateSnapshot -> rigid_rot_msgs/RigidBodyState."""
+    return fill_rigid_body_state(RigidBodyState(), snapshot, world_frame, body_frame)
+
+
+def state_to_arrays(msg: RigidBodyState) -> dict[str, np.ndarray | float]:
+    """RigidBodyState -> {t, orientation (4,), angular_velocity_body (3,), ...} (clients, tests)."""
+    return {
+        "t": time_to_seconds(msg.header.stamp),
+        "orientation": quaternion_to_array(msg.orientation),
+        "angular_velocity_body": vector3_to_array(msg.angular_velocity_body),
+        "angular_velocity_world": vector3_to_array(msg.angular_velocity_world),
+        "angular_momentum_body": vector3_to_array(msg.angular_momentum_body),
+        "angular_momentum_world": vector3_to_array(msg.angular_momentum_world),
+        "torque_body": vector3_to_array(msg.torque_body),
+        "kinetic_energy": float(msg.kinetic_energy),
+        "potential_energy": float(msg.potential_energy),
+        "energy_drift": float(msg.energy_drift),
+        "angular_momentum_drift": float(msg.angular_momentum_drift),
+    }
+
+
+def snapshot_to_orientation(snapshot: StateSnapshot, world_frame: str) -> QuaternionStamped:
+    """Attitude body -> world, header frame_id = world frame."""
+    msg = QuaternionStamped(quaternion=array_to_quaternion(snapshot.orientation))
+    msg.header.stamp = seconds_to_time(snapshot.t)
+    msg.header.frame_id = world_frame
+    return msg
+
+
+def vector_stamped(values, t: float, frame_id: str) -> Vector3Stamped:
+    """ndarray (3,) at sim time t (s) in frame_id -> Vector3Stamped."""
+    msg = Vector3Stamped(vector=array_to_vector3(values))
+    msg.header.stamp = seconds_to_time(t)
+    msg.header.frame_id = frame_id
+    return msg
+
+
+def snapshot_to_top_state(snapshot: StateSnapshot, world_frame: str) -> HeavyTopState:
+    """Heavy-top Euler angles (z-x-z, rad) and conserved momenta of a gravity scene's snapshot."""
+    if snapshot.euler_zxz is None:
+        raise ValueError("snapshot has no heavy-top quantities (not a gravity scene)")
+    phi, theta, psi = (float(v) for v in snapshot.euler_zxz)
+    msg = HeavyTopState(
+        precession=phi,
+        nutation=theta,
+        spin=psi,
+        p_phi=float(snapshot.p_phi),
+        p_psi=float(snapshot.p_psi),
+        energy=float(snapshot.energy),
+    )
+    msg.header.stamp = seconds_to_time(snapshot.t)
+    msg.header.frame_id = world_frame
+    return msg
+
+
+def inertia_stamped(mass: float, center_of_mass, inertia_com, t: float, body_frame: str) -> InertiaStamped:
+    """Mass (kg; 0 when the scene gives none), centre of mass (m, body frame) and tensor about it."""
+    tensor = np.asarray(inertia_com, dtype=float)
+    msg = InertiaStamped()
+    msg.header.stamp = seconds_to_time(t)
+    msg.header.frame_id = body_frame
+    msg.inertia.m = float(mass)
+    msg.inertia.com.x, msg.inertia.com.y, msg.inertia.com.z = (float(v) for v in np.asarray(center_of_mass).reshape(3))
+    msg.inertia.ixx, msg.inertia.ixy, msg.inertia.ixz = float(tensor[0, 0]), float(tensor[0, 1]), float(tensor[0, 2])
+    msg.inertia.iyy, msg.inertia.iyz, msg.inertia.izz = float(tensor[1, 1]), float(tensor[1, 2]), float(tensor[2, 2])
+    return msg
+
+
+def clock_message(t: float) -> Clock:
+    """rosgraph_msgs/Clock at sim time t (s)."""
+    return Clock(clock=seconds_to_time(t))
+
+
+def transform_stamped(snapshot: StateSnapshot, world_frame: str, body_frame: str) -> TransformStamped:
+    """world -> body transform of the attitude (no translation: the body turns about a fixed point)."""
+    msg = TransformStamped()
+    msg.header.stamp = seconds_to_time(snapshot.t)
+    msg.header.frame_id = world_frame
+    msg.child_frame_id = body_frame
+    msg.transform.rotation = array_to_quaternion(snapshot.orientation)
+    return msg
+
+
+def rejected_command(source: str, reason: str, t: float, frame_id: str, torque) -> RejectedCommand:
+    """RejectedCommand at sim time t (s); ``torque`` as received (non-finite values kept)."""
+    msg = RejectedCommand(source=source, reason=reason)
+    msg.header.stamp = seconds_to_time(t)
+    msg.header.frame_id = frame_id
+    values = np.asarray(torque, dtype=float).reshape(3)
+    msg.torque = Vector3(x=float(values[0]), y=float(values[1]), z=float(values[2]))
+    return msg
