@@ -26,6 +26,7 @@ from scipy.spatial.transform import Rotation
 
 from rigid_rot_sim.core import quaternion as quat
 from rigid_rot_sim.core import validation
+from rigid_rot_sim.core.inertia import principal_frame, principal_orientation
 
 
 def euler_rhs_components(
@@ -154,11 +155,9 @@ class RigidBody:
         if not np.any(tensor - np.diag(np.diag(tensor))):
             moments = validation.principal_moments(f"diag({name})", np.diag(tensor))
             return cls(moments, np.array(quat.IDENTITY), tensor)
-        eigenvalues, vectors = np.linalg.eigh(tensor)
-        if np.linalg.det(vectors) < 0.0:
-            vectors[:, 2] = -vectors[:, 2]
+        eigenvalues, axes = principal_frame(tensor)
         moments = validation.principal_moments(f"eigenvalues of {name}", eigenvalues)
-        return cls(moments, Rotation.from_matrix(vectors).as_quat(), tensor)
+        return cls(moments, principal_orientation(axes), tensor)
 
     @property
     def is_principal(self) -> bool:

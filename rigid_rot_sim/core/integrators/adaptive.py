@@ -82,18 +82,35 @@ class DOP853Integrator(Integrator):
         )
 
     def _step_impl(self) -> None:
+        self._advance_to(self.t + self.dt)
+
+    def advance(self, n: int) -> None:
+        """Take ``n`` steps of ``dt``: one pass of the solver to the last of them."""
+        if n > 0:
+            self._advance_to(self.t + n * self.dt)
+            self.n_steps += n
+
+    def _advance_to(self, target: float) -> None:
         solver = self._solver
         if solver is None or self.torque is not self._torque_source:
             solver = self._solver = self._start()
-        target = self.t + self.dt
+            self._dense = None
         while solver.t < target:
             message = solver.step()
             if solver.status == "failed" or not np.all(np.isfinite(solver.y)):
                 self._solver = None
+                step = self.n_steps + max(1, math.ceil((solver.t - self.t) / self.dt))
                 raise NonFiniteStateError(
-                    f"{self.name}: solver failed at step {self.n_steps + 1}, t = {solver.t:.9g} s: {message}"
+                    f"{self.name}: non-finite state or solver failure at step {step}, t = {solver.t:.9g} s: {message}"
                 )
-        y = solver.y if solver.t == target else solver.dense_output()(target)
+            self._dense = None
+        if solver.t == target:
+            y = solver.y
+        else:
+            # one interpolant per solver step, however many multiples of dt it covers
+            if self._dense is None:
+                self._dense = solver.dense_output()
+            y = self._dense(target)
         q = y[:4]
         self.q = q / math.sqrt(float(q @ q))
         self.omega = y[4:].copy()

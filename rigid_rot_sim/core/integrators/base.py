@@ -114,5 +114,16 @@ class Integrator:
         for _ in range(n):
             self.step()
 
+    def advance_saving(self, n_saves: int, save_every: int) -> tuple[np.ndarray, np.ndarray]:
+        """Take ``n_saves * save_every`` steps; return q (n_saves, 4) and omega (n_saves, 3)
+        after every ``save_every``-th step (principal frame). Methods may override it."""
+        q = np.empty((n_saves, 4))
+        omega = np.empty((n_saves, 3))
+        for k in range(n_saves):
+            self.advance(save_every)
+            q[k] = self.q
+            omega[k] = self.omega
+        return q, omega
+
     def _step_impl(self) -> None:
         raise NotImplementedError

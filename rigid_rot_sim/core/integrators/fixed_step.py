@@ -79,6 +79,15 @@ class FixedStepIntegrator(Integrator):
 
         On any error the state is left at the last good step.
         """
+        self._run(n, 0)
+
+    def advance_saving(self, n_saves: int, save_every: int) -> tuple[np.ndarray, np.ndarray]:
+        """Take ``n_saves * save_every`` steps, saving (q, omega) after every ``save_every``-th."""
+        saved = self._run(n_saves * save_every, save_every)
+        states = np.array(saved, dtype=float).reshape(n_saves, 7)
+        return states[:, :4], states[:, 4:]
+
+    def _run(self, n: int, save_every: int) -> list:
         kernel = self.kernel
         torque, attitude_torque = self._float_torque()
         moments = self._moments
@@ -86,6 +95,8 @@ class FixedStepIntegrator(Integrator):
         t0 = self.t
         state = self._state
         isfinite = math.isfinite
+        saved = []
+        countdown = save_every
         for k in range(n):
             try:
                 new = kernel(t0 + k * dt, state, dt, moments, torque, attitude_torque)
@@ -100,7 +111,13 @@ class FixedStepIntegrator(Integrator):
                     f"(q = {new[:4]}, omega = {new[4:]})"
                 )
             state = new
+            if save_every:
+                countdown -= 1
+                if not countdown:
+                    saved.append(state)
+                    countdown = save_every
         self._commit(state, t0, n)
+        return saved
 
     def _commit(self, state: State, t0: float, steps: int) -> None:
         if steps:

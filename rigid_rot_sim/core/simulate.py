@@ -1,0 +1,199 @@
+"""``simulate``: integrate one rigid body over [0, t_end] and return its trajectory.
+
+Frames: everything in and out is in the *user body frame* (the frame the inertia was
+given in) and the world frame; the integration itself runs in the principal frame
+(see :class:`rigid_rot_sim.core.dynamics.RigidBody`).
+
+Time grid: ``n = floor(t_end / dt)`` full steps (a ratio within 1e-9 of an integer
+counts as that integer), then, if ``t_end`` is not a multiple of ``dt``, one last
+shorter step that lands on ``t_end`` exactly. Samples are taken at ``t = 0`` and after
+every ``save_every``-th full step, ``t = k * save_every * dt``, and always at ``t_end``.
+
+Example
+-------
+>>> traj = simulate((1.0, 2.0, 3.0), (1.0, 0.1, 0.5), t_end=1.0, dt=0.01, method="rk4")
+>>> float(traj.t[-1]), traj.q.shape
+(1.0, (101, 4))
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from rigid_rot_sim.core import quaternion as quat
+from rigid_rot_sim.core import validation
+from rigid_rot_sim.core.dynamics import RigidBody, angular_momentum_world, kinetic_energy
+from rigid_rot_sim.core.integrators import get_method
+from rigid_rot_sim.core.torque import ConstantTorque, GravityTorque, PolynomialTorque
+
+# t_end / dt within this relative distance of an integer m means m full steps
+_GRID_RTOL = 1e-9
+
+
+@dataclass(frozen=True)
+class Trajectory:
+    """Sampled solution of :func:`simulate` (user body frame).
+
+    Attributes
+    ----------
+    t : ndarray, shape (n,)
+        Sample times, s.
+    q : ndarray, shape (n, 4)
+        Attitude, unit quaternion (x, y, z, w) rotating body -> world.
+    omega : ndarray, shape (n, 3)
+        Angular velocity, rad/s, body frame.
+    energy : ndarray, shape (n,)
+        Rotational kinetic energy T = 1/2 omega . L, J.
+    L_world : ndarray, shape (n, 3)
+        Angular momentum in the world frame, kg*m^2/s.
+    method : str
+        Integrator name.
+    """
+
+    t: np.ndarray
+    q: np.ndarray
+    omega: np.ndarray
+    energy: np.ndarray
+    L_world: np.ndarray
+    method: str
+
+
+def step_grid(t_end: float, dt: float) -> tuple[int, float]:
+    """Number of full steps of ``dt`` in [0, t_end] and the length of the last partial step (0 if none)."""
+    ratio = t_end / dt
+    n = round(ratio)
+    if n > 0 and abs(ratio - n) <= _GRID_RTOL * n:
+        return n, 0.0
+    n = math.floor(ratio)
+    return n, t_end - n * dt
+
+
+def principal_torque(body: RigidBody, torque: Any) -> Any:
+    """A user body-frame torque (None, vector, torque model or callable) as a principal-frame model."""
+    if torque is None:
+        return None
+    if not callable(torque):
+        torque = ConstantTorque(validation.finite_vector("torque", torque))
+    if body.is_principal:
+        return torque
+    to_principal = body.vector_to_principal
+    if isinstance(torque, ConstantTorque):
+        return ConstantTorque(to_principal(torque.value))
+    if isinstance(torque, PolynomialTorque):
+        return PolynomialTorque(to_principal(torque.coefficients))
+    if isinstance(torque, GravityTorque):
+        # the gravity torque is covariant: rotating the lever arm rotates the torque
+        return GravityTorque(to_principal(torque.lever_arm), torque.weight)
+    return _UserFrameTorque(torque, tuple(body.body_from_principal.tolist()))
+
+
+@dataclass(frozen=True)
+class _UserFrameTorque:
+    """Calls a user body-frame ``torque(t, q_body, omega_body)`` from the principal frame."""
+
+    torque: Any
+    body_from_principal: tuple[float, float, float, float]
+
+    def __call__(self, t: float, q: np.ndarray, omega: np.ndarray) -> np.ndarray:
+        bp = self.body_from_principal
+        q_body = quat.multiply(q, quat.conjugate(bp))
+        omega_body = quat.rotate(bp, omega)
+        n_body = np.asarray(self.torque(t, np.array(q_body), np.array(omega_body)), dtype=float).reshape(3)
+        return np.array(quat.rotate_inverse(bp, n_body.tolist()))
+
+
+def simulate(
+    inertia: Any,
+    omega0: Any,
+    t_end: float,
+    dt: float,
+    method: str,
+    q0: Any = (0.0, 0.0, 0.0, 1.0),
+    torque: Any = None,
+    *,
+    save_every: int = 1,
+    **options: Any,
+) -> Trajectory:
+    """Integrate a rigid body's rotation from t = 0 to ``t_end``.
+
+    Parameters
+    ----------
+    inertia : array_like, shape (3,) or (3, 3)
+        Principal moments (I1, I2, I3) or the inertia tensor, kg*m^2, body frame.
+    omega0 : array_like, shape (3,)
+        Initial angular velocity, rad/s, body frame.
+    t_end : float
+        Final time, s (>= 0).
+    dt : float
+        Step, s (> 0); for adaptive methods, the output interval.
+    method : str
+        A name in ``rigid_rot_sim.core.integrators.METHODS``.
+    q0 : array_like, shape (4,)
+        Initial attitude (x, y, z, w), body -> world; normalised.
+    torque : None, array_like (3,), or callable
+        None (free body), a constant body-frame torque (N*m), or
+        ``torque(t, q, omega) -> (3,)`` in N*m with q, omega and the result in the body frame.
+    save_every : int
+        Keep every ``save_every``-th step (>= 1).
+    **options
+        Method options (e.g. ``order`` for ``splitting``, ``rtol``/``atol`` for ``dop853``).
+
+    Raises
+    ------
+    ValueError
+        Naming the argument: non-finite inputs, non-positive moments or moments breaking the
+        triangle inequality, dt <= 0, t_end < 0, an unknown method or option.
+    NonFiniteStateError
+        A step produced a non-finite state (names the step and the time).
+    """
+    body = RigidBody.from_inertia(inertia, "inertia")
+    omega0 = validation.finite_vector("omega0", omega0)
+    q0 = validation.quaternion("q0", q0)
+    t_end = validation.nonnegative_scalar("t_end", t_end)
+    dt = validation.positive_scalar("dt", dt)
+    if isinstance(save_every, bool) or not isinstance(save_every, (int, np.integer)) or save_every < 1:
+        raise ValueError(f"save_every must be an integer >= 1, got {save_every!r}")
+    save_every = int(save_every)
+    integrator_class = get_method(method)
+
+    q0_p = body.attitude_to_principal(q0)
+    omega0_p = body.vector_to_principal(omega0)
+    integrator = integrator_class(
+        body.principal_moments, dt, principal_torque(body, torque), q0=q0_p, omega0=omega0_p, **options
+    )
+
+    n_full, last = step_grid(t_end, dt)
+    n_saves = n_full // save_every
+    q_saved, omega_saved = integrator.advance_saving(n_saves, save_every)
+    times = [np.arange(n_saves + 1) * (save_every * dt)]
+    q_parts = [q0_p.reshape(1, 4), q_saved]
+    omega_parts = [omega0_p.reshape(1, 3), omega_saved]
+    rest = n_full - n_saves * save_every
+    if rest:
+        integrator.advance(rest)
+    if last > 0.0:
+        integrator.dt = last
+        integrator.step()
+    if rest or last > 0.0:
+        times.append(np.array([t_end]))
+        q_parts.append(integrator.q.reshape(1, 4))
+        omega_parts.append(integrator.omega.reshape(1, 3))
+    elif n_full:
+        times[0][-1] = t_end  # the grid's last point is t_end up to rounding; report it exactly
+
+    t = np.concatenate(times)
+    q_p = np.concatenate(q_parts)
+    omega_p = np.concatenate(omega_parts)
+    moments = body.principal_moments
+    energy = kinetic_energy(moments, omega_p)
+    L_world = angular_momentum_world(moments, q_p, omega_p)
+    if body.is_principal:
+        q_body, omega_body = q_p, omega_p
+    else:
+        q_body = body.attitude_from_principal(q_p)
+        omega_body = body.vector_from_principal(omega_p)
+    return Trajectory(t=t, q=q_body, omega=omega_body, energy=energy, L_world=L_world, method=method)
