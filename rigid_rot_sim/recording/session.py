@@ -1,0 +1,198 @@
+"""One simulation run recorded to MCAP: the node's side of the recording.
+
+:class:`RunRecorder` wraps :class:`~rigid_rot_sim.recording.writer.Recorder` with what a
+run of the simulator records:
+
+* MCAP metadata records written first (so a crashed file keeps them): ``scene`` (the
+  scene file as given: ``file``, ``text``), ``parameters`` (resolved node parameters,
+  JSON values), ``integrator`` (``method`` after ``auto`` was resolved, ``dt``,
+  ``options`` as JSON), ``versions`` (packages and dependencies), ``rigid_rot_sim`` (the
+  recorded topics by role, for resim and plot);
+* the messages the node publishes and receives (rclpy objects, ``rclpy.serialization``);
+* ``/tf`` (world -> body) encoded from the embedded TFMessage definition;
+* the simulation event log (:mod:`.events`) on ``~/sim_events``.
+
+Log times are wall-clock ns (what rosbag2 records as receive time), made strictly
+increasing within the run so that events and states keep the order in which the node
+produced them, even across a clock step.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import threading
+import time
+from typing import Any, Callable, Mapping
+
+from rigid_rot_sim.recording.events import EVENT_TYPE, event_fields
+from rigid_rot_sim.recording.provenance import package_versions
+from rigid_rot_sim.recording.writer import QosProfile, Recorder, RecorderError
+
+TF_TOPIC = "/tf"
+TF_TYPE = "tf2_msgs/msg/TFMessage"
+
+__all__ = ["RunRecorder", "RecorderError", "type_name_of"]
+
+
+def type_name_of(msg_type: type) -> str:
+    """``pkg/msg/Type`` of a generated rclpy message class."""
+    package = msg_type.__module__.split(".", 1)[0]
+    return f"{package}/msg/{msg_type.__name__}"
+
+
+def _qos(profile: Any) -> QosProfile:
+    if profile is None:
+        return QosProfile()
+    if isinstance(profile, QosProfile):
+        return profile
+    return QosProfile.from_rclpy(profile)
+
+
+class RunRecorder:
+    """Record one run of the simulator.
+
+    Parameters
+    ----------
+    path : str or PathLike
+        Output .mcap file. RecorderError if it cannot be created.
+    scene_text, scene_file : str
+        The scene YAML as given and where it came from.
+    parameters : mapping
+        Resolved node parameters ({name: JSON-serialisable value}).
+    integrator : mapping
+        ``method`` (resolved), ``dt`` (s), ``options`` (dict).
+    events_topic : str
+        Fully qualified name of the event log topic (``/<node>/sim_events``).
+    on_error : callable
+        Called once with the RecorderError if recording stops (full disk, ...).
+    """
+
+    def __init__(
+        self,
+        path: str | os.PathLike[str],
+        *,
+        scene_text: str,
+        scene_file: str,
+        parameters: Mapping[str, Any],
+        integrator: Mapping[str, Any],
+        events_topic: str,
+        on_error: Callable[[RecorderError], None] | None = None,
+        flush_period: float = 1.0,
+    ) -> None:
+        self.recorder = Recorder(path, on_error=on_error, flush_period=flush_period)
+        self.path = self.recorder.path
+        self.events_topic = events_topic
+        self._roles: dict[str, str] = {"events": events_topic, "tf": TF_TOPIC}
+        self._clock_lock = threading.Lock()
+        self._last_ns = 0
+        self.recorder.add_metadata("scene", {"file": scene_file, "text": scene_text})
+        self.recorder.add_metadata(
+            "parameters", {name: json.dumps(value) for name, value in sorted(parameters.items())}
+        )
+        self.recorder.add_metadata(
+            "integrator",
+            {
+                "method": str(integrator["method"]),
+                "dt": repr(float(integrator["dt"])),
+                "options": json.dumps(dict(integrator.get("options") or {}), sort_keys=True),
+            },
+        )
+        self.recorder.add_metadata("versions", package_versions())
+        self.recorder.add_topic(events_topic, EVENT_TYPE, QosProfile(depth=100))
+        self.recorder.add_topic(TF_TOPIC, TF_TYPE, QosProfile(depth=100))
+
+    # -- state -----------------------------------------------------------------------
+
+    @property
+    def active(self) -> bool:
+        """True while recording (not closed, no error)."""
+        return self.recorder.active
+
+    @property
+    def error(self) -> RecorderError | None:
+        """Why recording stopped, or None."""
+        return self.recorder.error
+
+    def log_time_ns(self) -> int:
+        """Now (wall clock, ns), strictly after every log time handed out before."""
+        with self._clock_lock:
+            self._last_ns = max(time.time_ns(), self._last_ns + 1)
+            return self._last_ns
+
+    # -- topics ----------------------------------------------------------------------
+
+    def add_topic(self, topic: str, msg_type: type | str, qos: Any = None, role: str | None = None) -> None:
+        """Register a topic with its message class (or type name) and offered QoS profile.
+
+        ``role`` (e.g. ``state``, ``torque``, ``rejected``) is written to the
+        ``rigid_rot_sim`` metadata record when the run is closed and tells resim and
+        plot which topic is which.
+        """
+        type_name = msg_type if isinstance(msg_type, str) else type_name_of(msg_type)
+        self.recorder.add_topic(topic, type_name, _qos(qos))
+        if role is not None:
+            key = role if role not in self._roles else f"{role}:{topic}"
+            self._roles[key] = topic
+
+    def record(self, topic: str, msg: Any, log_time_ns: int | None = None) -> None:
+        """Record an rclpy message object published or received on ``topic``."""
+        self.recorder.write_message(topic, msg, self.log_time_ns() if log_time_ns is None else log_time_ns)
+
+    def record_tf(self, stamp_sec: int, stamp_nanosec: int, orientation: Any, world_frame: str, body_frame: str) -> None:
+        """Record the world -> body transform (rotation only) on ``/tf``."""
+        x, y, z, w = (float(v) for v in orientation)
+        fields = {
+            "transforms": [
+                {
+                    "header": {"stamp": {"sec": int(stamp_sec), "nanosec": int(stamp_nanosec)}, "frame_id": world_frame},
+                    "child_frame_id": body_frame,
+                    "transform": {
+                        "translation": {"x": 0.0, "y": 0.0, "z": 0.0},
+                        "rotation": {"x": x, "y": y, "z": z, "w": w},
+                    },
+                }
+            ]
+        }
+        self.recorder.write_fields(TF_TOPIC, fields, self.log_time_ns())
+
+    # -- events ----------------------------------------------------------------------
+
+    def record_event(self, kind: str, step: int, summary: str, **values: Any) -> None:
+        """Record one simulation event (see :mod:`.events`)."""
+        self.recorder.write_fields(self.events_topic, event_fields(kind, step, summary, **values), self.log_time_ns())
+
+    def record_torque(self, topic: str, msg: Any, receive_ns: int, command: Any, step: int) -> None:
+        """Record a torque command as received and the event it became.
+
+        ``command`` is the :class:`~rigid_rot_sim.core.simulator.TorqueCommand` the
+        simulator returned; ``step`` its step index at receipt.
+        """
+        self.recorder.write_message(topic, msg, self._at_least(receive_ns))
+        self.record_event(
+            "torque", step,
+            f"{command.source}: {command.torque} N*m in {command.frame} from t = {command.effective_time:.9g} s",
+            source=command.source, frame=command.frame, torque=tuple(float(v) for v in command.torque),
+            effective_time=float(command.effective_time), receipt_time=command.receipt_time, stamp=command.stamp,
+        )
+
+    def _at_least(self, ns: int) -> int:
+        with self._clock_lock:
+            self._last_ns = max(int(ns), self._last_ns + 1)
+            return self._last_ns
+
+    # -- end -------------------------------------------------------------------------
+
+    def close(self) -> None:
+        """Write the topic roles, the summary and close the file (idempotent)."""
+        if self.recorder.active:
+            self.recorder.add_metadata("rigid_rot_sim", dict(self._roles))
+        self.recorder.finish()
+
+    finish = close
+
+    def __enter__(self) -> "RunRecorder":
+        return self
+
+    def __exit__(self, *exc_info: object) -> None:
+        self.close()
