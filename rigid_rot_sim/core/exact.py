@@ -389,6 +389,22 @@ def torque_free_solution(moments: Any, omega0: Any, q0: Any = (0.0, 0.0, 0.0, 1.
     omega0 = validation.finite_vector("omega0", omega0)
     q0 = validation.quaternion("q0", q0)
     t0 = validation.finite_scalar("t0", t0)
+    return _solution(moments, omega0, q0, t0)
+
+
+def torque_free_flow(moments: np.ndarray, q: Any, omega: Any, tau: float) -> tuple[np.ndarray, np.ndarray]:
+    """Exact free flow over tau (s) from (q, omega): ``(q(tau), omega(tau))``.
+
+    The same as ``torque_free_solution(moments, omega, q).state(tau)`` without the input
+    checks, for integrators that call it every step with a state they already checked
+    (``moments`` a float array (3,), q a unit quaternion).
+    """
+    solution = _solution(moments, np.asarray(omega, dtype=float), np.asarray(q, dtype=float), 0.0)
+    q_new, omega_new = solution._flow.evaluate(np.array([float(tau)]))
+    return q_new[0], omega_new[0]
+
+
+def _solution(moments: np.ndarray, omega0: np.ndarray, q0: np.ndarray, t0: float) -> TorqueFreeSolution:
     idx = [int(i) for i in np.argsort(moments, kind="stable")]
     i_min, i_mid, i_max = idx
     tol = _EQUAL_MOMENTS_ULPS * _EPS * float(moments[i_max])
