@@ -9,6 +9,7 @@ from __future__ import annotations
 
 from rigid_rot_sim.core.integrators.adaptive import DOP853Integrator
 from rigid_rot_sim.core.integrators.base import Integrator, NonFiniteStateError
+from rigid_rot_sim.core.integrators.exact_flow import ExactFlow, ExactSplit
 from rigid_rot_sim.core.integrators.explicit import RK4, Euler
 from rigid_rot_sim.core.integrators.implicit import ImplicitMidpoint
 from rigid_rot_sim.core.integrators.lie import LieRK4
@@ -27,6 +28,7 @@ METHODS: dict[str, type[Integrator]] = {
 # METHODS["taylor"] = ...          (integrators/taylor.py)
 # METHODS["exact"] = ...           (integrators/exact_flow.py)
 # METHODS["exact_split"] = ...     (integrators/exact_flow.py)
+METHODS.update(exact=ExactFlow, exact_split=ExactSplit)
 
 
 def get_method(name: str) -> type[Integrator]:
