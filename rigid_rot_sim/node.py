@@ -1,34 +1,487 @@
-"""The rigid_rot_sim ROS 2 node.
+"""The rigid_rot_sim ROS 2 node: a scene simulated by :class:`~rigid_rot_sim.core.simulator.Simulator`.
+
+The node only wires ROS interfaces to the core: physics happens in
+``rigid_rot_sim.core`` (the Simulator), message conversions in ``rigid_rot_sim.conversions``.
+It builds only what the scene needs and logs one start-up line saying what was built
+and what was left out. Without a ``scene`` parameter it serves ``~/compute_inertia`` only.
+
+Topics (names relative to the node; QoS in the README, section "The simulation node")
+-----------------------------------------------------------------------------------
+~/state (rigid_rot_msgs/RigidBodyState), ~/orientation (geometry_msgs/QuaternionStamped),
+~/angular_velocity (Vector3Stamped, body frame), ~/angular_momentum (Vector3Stamped,
+world frame), ~/mass_properties (geometry_msgs/InertiaStamped, transient local, once),
+~/top_state (rigid_rot_msgs/HeavyTopState, gravity scenes), ~/rejected
+(rigid_rot_msgs/RejectedCommand), /tf (when tf2_msgs imports), /clock (sim time).
+Every header stamp is sim time. Torque inputs: the scene's topics (WrenchStamped or
+Vector3Stamped).
 
 Services
 --------
-~/compute_inertia (rigid_rot_msgs/srv/ComputeInertia)
-    Mass properties of point masses (core: :mod:`rigid_rot_sim.core.inertia`). An invalid
-    request is answered with ``success = false`` and the reason in ``message``.
+~/compute_inertia, ~/set_state, ~/reset, ~/pause (std_srvs/SetBool), ~/step (while
+paused; replies after the steps are done: they run in the service callback itself, so a
+single-threaded executor cannot deadlock), ~/apply_torque. A bad request gets
+``success = false`` and the reason; nothing raises out of a callback.
 
-The node only wires ROS interfaces to the core: numbers are computed in
-``rigid_rot_sim.core`` and converted in ``rigid_rot_sim.conversions``.
+Pacing
+------
+``real_time_factor`` r > 0: a wall-clock timer advances the simulation to
+``r * (wall time since the anchor)`` each tick (at most ``MAX_TICK_WALL`` of work per
+tick, so commands and services are served in between); r = 0: as fast as possible, in
+batches of at most ``MAX_TICK_WALL`` wall time per tick. The states do not depend on r
+or on the publish rates (see the Simulator's determinism notes).
 """
 
 from __future__ import annotations
 
+import math
+import time
+from typing import Any
+
 import rclpy
-from rclpy.executors import ExternalShutdownException
+from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
 from rclpy.node import Node
-from rigid_rot_msgs.srv import ComputeInertia
+from rclpy.parameter import Parameter
+from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
+from rcl_interfaces.msg import FloatingPointRange, ParameterDescriptor, SetParametersResult
+from geometry_msgs.msg import InertiaStamped, QuaternionStamped, Vector3Stamped, WrenchStamped
+from rigid_rot_msgs.msg import HeavyTopState, RejectedCommand, RigidBodyState
+from rigid_rot_msgs.srv import ApplyTorque, ComputeInertia, Reset, SetState, StepSimulation
+from rosgraph_msgs.msg import Clock
+from std_srvs.srv import SetBool
 
 from rigid_rot_sim import conversions
-from rigid_rot_sim.core.inertia import mass_properties
+from rigid_rot_sim.core.inertia import mass_properties, parallel_axis_shift
+from rigid_rot_sim.core.integrators import get_method
+from rigid_rot_sim.core.scene import OUTPUT_NAMES, Scene, load_scene
+from rigid_rot_sim.core.simulator import CommandRejected, Simulator
+
+try:  # never required: /tf exists only where tf2_msgs is installed
+    from tf2_msgs.msg import TFMessage
+except ImportError:  # pragma: no cover - depends on the installation
+    TFMessage = None
+
+NODE_NAME = "rigid_rot_sim"
+
+#: Most wall time (s) one timer tick spends stepping, so the executor serves commands between.
+MAX_TICK_WALL = 0.02
+#: Most steps between two checks of the wall-clock deadline.
+MAX_CHUNK = 256
+#: Wall-clock timer period bounds (s).
+MIN_TICK = 0.001
+MAX_TICK = 0.02
+#: At r > 0, a backlog beyond this much wall time is dropped (the run re-anchors), with a warning.
+MAX_BACKLOG_WALL = 0.5
+#: Seconds between two warnings about rejected commands from the same source.
+REJECT_WARN_PERIOD = 2.0
+
+# QoS (documented in the README): state-like topics reliable, keep last 10, volatile.
+STATE_QOS = QoSProfile(depth=10, reliability=ReliabilityPolicy.RELIABLE, durability=DurabilityPolicy.VOLATILE)
+LATCHED_QOS = QoSProfile(depth=1, reliability=ReliabilityPolicy.RELIABLE, durability=DurabilityPolicy.TRANSIENT_LOCAL)
+REJECTED_QOS = QoSProfile(depth=50, reliability=ReliabilityPolicy.RELIABLE, durability=DurabilityPolicy.VOLATILE)
+COMMAND_QOS = QoSProfile(depth=10, reliability=ReliabilityPolicy.RELIABLE, durability=DurabilityPolicy.VOLATILE)
+TF_QOS = QoSProfile(depth=100, reliability=ReliabilityPolicy.RELIABLE, durability=DurabilityPolicy.VOLATILE)
+CLOCK_QOS = QoSProfile(depth=1, reliability=ReliabilityPolicy.RELIABLE, durability=DurabilityPolicy.VOLATILE)
+
+_OUTPUT_TYPES = {
+    "state": RigidBodyState,
+    "orientation": QuaternionStamped,
+    "angular_velocity": Vector3Stamped,
+    "angular_momentum": Vector3Stamped,
+    "top_state": HeavyTopState,
+}
+
+
+def _float_range(low: float, high: float) -> list[FloatingPointRange]:
+    return [FloatingPointRange(from_value=low, to_value=high, step=0.0)]
 
 
 class RigidRotSimNode(Node):
     """Node ``rigid_rot_sim``; keyword arguments go to :class:`rclpy.node.Node`."""
 
-    def __init__(self, **kwargs) -> None:
-        super().__init__("rigid_rot_sim", **kwargs)
+    def __init__(self, **kwargs: Any) -> None:
+        super().__init__(NODE_NAME, **kwargs)
+        log = self.get_logger()
         self.compute_inertia_service = self.create_service(
             ComputeInertia, "~/compute_inertia", self.compute_inertia_callback
         )
+        self.finished = False
+        self.sim: Simulator | None = None
+        self.recorder = None  # the recording wiring (rigid_rot_sim.recording) sets this
+        scene_path = self.declare_parameter(
+            "scene",
+            "",
+            ParameterDescriptor(description="Path of the scene YAML file; empty: serve ~/compute_inertia only", read_only=True),
+        ).value
+        if not scene_path:
+            log.info("no scene parameter: serving ~/compute_inertia only (rigid-rot run SCENE starts a simulation)")
+            return
+        scene = load_scene(scene_path)  # SceneError names the file, key and problem
+        self.scene = scene
+        self._declare_parameters(scene)
+        params = {name: self.get_parameter(name).value for name in ("integrator", "dt", "real_time_factor", "duration")}
+        self.sim = Simulator(scene, method=params["integrator"], dt=params["dt"])
+        self.real_time_factor = float(params["real_time_factor"])
+        self.duration = float(params["duration"]) if params["duration"] > 0.0 else None
+        self.record_path = self.get_parameter("record_path").value or None
+        self.frames = scene.frames
+        built: list[str] = [f"integrator {self.sim.method} (dt {self.sim.dt:g} s{', auto' if params['integrator'] == 'auto' else ''})"]
+        left_out: list[str] = []
+
+        # --- outputs: only those with a rate > 0, and the heavy-top one only for top scenes
+        self.publishers_by_output: dict[str, Any] = {}
+        self.output_periods: dict[str, int] = {}
+        for name in OUTPUT_NAMES:
+            rate = self.get_parameter(f"rates.{name}").value if self.has_parameter(f"rates.{name}") else 0.0
+            if name == "top_state" and not scene.is_top:
+                continue  # listed with gravity below
+            if name == "tf" and TFMessage is None:
+                left_out.append("/tf (tf2_msgs not installed)")
+                continue
+            if rate <= 0.0:
+                left_out.append(f"{self._output_topic(name)} (rate 0)")
+                continue
+            if name == "tf":
+                publisher = self.create_publisher(TFMessage, "/tf", TF_QOS)
+            elif name == "clock":
+                publisher = self.create_publisher(Clock, "/clock", CLOCK_QOS)
+            else:
+                publisher = self.create_publisher(_OUTPUT_TYPES[name], f"~/{name}", STATE_QOS)
+            self.publishers_by_output[name] = publisher
+            self.output_periods[name] = self._period_steps(rate)
+            built.append(f"{self._output_topic(name)} {rate:g} Hz")
+        self.mass_properties_publisher = self.create_publisher(InertiaStamped, "~/mass_properties", LATCHED_QOS)
+        self.rejected_publisher = self.create_publisher(RejectedCommand, "~/rejected", REJECTED_QOS)
+        built += ["~/mass_properties (transient local)", "~/rejected"]
+
+        # --- torque inputs: one subscription per topic input, none for a torque-free scene
+        self.torque_subscriptions = []
+        self._reject_warned: dict[str, tuple[float, int]] = {}
+        for spec in scene.topic_inputs:
+            msg_type = WrenchStamped if spec.message_type == "WrenchStamped" else Vector3Stamped
+            subscription = self.create_subscription(
+                msg_type, spec.topic, lambda msg, source=spec.topic: self.torque_callback(msg, source), COMMAND_QOS
+            )
+            self.torque_subscriptions.append(subscription)
+            hold = "hold until replaced" if spec.timeout is None else f"zero {spec.timeout:g} s after the last command"
+            built.append(f"torque input {subscription.topic_name} ({spec.message_type}, frame {spec.frame}, {hold})")
+            if spec.message_type == "WrenchStamped":
+                log.info(
+                    f"{subscription.topic_name}: only wrench.torque acts on the body; "
+                    "a command with a non-zero wrench.force is rejected"
+                )
+        if not scene.topic_inputs:
+            left_out.append("torque subscriptions (no topic input)")
+        if scene.schedules:
+            built.append(f"{len(scene.schedules)} torque schedule(s)")
+        if scene.gravity is None:
+            left_out.append("gravity (no potential energy, no ~/top_state)")
+        else:
+            built.append(f"gravity {scene.gravity.acceleration:g} m/s^2 about the pivot")
+
+        # --- services
+        self.set_state_service = self.create_service(SetState, "~/set_state", self.set_state_callback)
+        self.reset_service = self.create_service(Reset, "~/reset", self.reset_callback)
+        self.pause_service = self.create_service(SetBool, "~/pause", self.pause_callback)
+        self.step_service = self.create_service(StepSimulation, "~/step", self.step_callback)
+        self.apply_torque_service = self.create_service(ApplyTorque, "~/apply_torque", self.apply_torque_callback)
+
+        if self.record_path:
+            built.append(f"recording to {self.record_path}")
+        else:
+            left_out.append("recorder (nothing recorded)")
+
+        self.add_on_set_parameters_callback(self.validate_parameters_callback)
+        self.add_post_set_parameters_callback(self.apply_parameters_callback)
+
+        self._anchor()
+        self.timer = self.create_timer(self._tick_period(), self.timer_callback)
+        log.info(
+            f"scene {scene.name!r} ({scene.source}), rtf {self.real_time_factor:g}, "
+            f"duration {'unbounded' if self.duration is None else f'{self.duration:g} s'}; "
+            f"built: {'; '.join(built)}; left out: {'; '.join(left_out) or 'nothing'}"
+        )
+        for warning in self.sim.warnings():
+            log.warning(warning)
+        self._publish_mass_properties()
+        self._publish_due(force=True)
+
+    # ------------------------------------------------------------------ set-up helpers
+
+    def _declare_parameters(self, scene: Scene) -> None:
+        """Declare every parameter once, with the scene's values as defaults."""
+        self.declare_parameter(
+            "integrator",
+            scene.integrator.method,
+            ParameterDescriptor(description="Integrator name from the registry, or 'auto' (the scene's choice)"),
+        )
+        self.declare_parameter(
+            "dt",
+            scene.integrator.dt,
+            ParameterDescriptor(description="Physics step, s of sim time", floating_point_range=_float_range(1e-7, 10.0)),
+        )
+        self.declare_parameter(
+            "real_time_factor",
+            scene.real_time_factor,
+            ParameterDescriptor(
+                description="Sim seconds per wall second; 0 = as fast as possible",
+                floating_point_range=_float_range(0.0, 1000.0),
+            ),
+        )
+        self.declare_parameter(
+            "duration",
+            scene.duration if scene.duration is not None else 0.0,
+            ParameterDescriptor(
+                description="Sim time (s) after which the node stops and exits; 0 = unbounded",
+                floating_point_range=_float_range(0.0, 1e9),
+            ),
+        )
+        self.declare_parameter(
+            "record_path",
+            scene.recording or "",
+            ParameterDescriptor(description="MCAP file to record the run to; empty = no recording", read_only=True),
+        )
+        for name, rate in scene.outputs.as_dict().items():
+            self.declare_parameter(
+                f"rates.{name}",
+                float(rate),
+                ParameterDescriptor(
+                    description=f"Publish rate of {self._output_topic(name)}, Hz of sim time (rounded to whole steps); "
+                    "0 = not built (set at start-up)",
+                    floating_point_range=_float_range(0.0, 1e6),
+                ),
+            )
+
+    @staticmethod
+    def _output_topic(name: str) -> str:
+        return {"tf": "/tf", "clock": "/clock"}.get(name, f"~/{name}")
+
+    def _period_steps(self, rate: float) -> int:
+        assert self.sim is not None
+        return max(1, int(round(1.0 / (rate * self.sim.dt))))
+
+    def _tick_period(self) -> float:
+        if self.real_time_factor <= 0.0:
+            return MIN_TICK
+        assert self.sim is not None
+        return min(max(self.sim.dt / self.real_time_factor, MIN_TICK), MAX_TICK)
+
+    def _anchor(self) -> None:
+        """Restart wall-clock pacing from the current step."""
+        assert self.sim is not None
+        self._anchor_wall = time.monotonic()
+        self._anchor_t = self.sim.t
+
+    # ------------------------------------------------------------------ stepping
+
+    def timer_callback(self) -> None:
+        sim = self.sim
+        if sim is None or sim.paused or self.finished:
+            return
+        now = time.monotonic()
+        deadline = now + MAX_TICK_WALL
+        if self.real_time_factor > 0.0:
+            target_t = self._anchor_t + (now - self._anchor_wall) * self.real_time_factor
+            behind_wall = (target_t - sim.t) / self.real_time_factor
+            if behind_wall > MAX_BACKLOG_WALL:
+                self.get_logger().warning(
+                    f"cannot keep up with real_time_factor {self.real_time_factor:g} "
+                    f"({behind_wall:.2f} s of wall time behind): dropping the backlog",
+                    throttle_duration_sec=5.0,
+                )
+                self._anchor_wall = now - MAX_TICK_WALL * 0.5
+                self._anchor_t = sim.t
+                target_t = sim.t + MAX_TICK_WALL * 0.5 * self.real_time_factor
+            target = max(sim.step_at_or_before(target_t), sim.step_index)
+        else:
+            target = None
+        self._run(target, deadline)
+
+    def _run(self, target: int | None, deadline: float | None) -> None:
+        """Step (publishing what is due) up to step ``target`` (None: unbounded) or the wall deadline."""
+        sim = self.sim
+        assert sim is not None
+        end_step = sim.step_at_or_after(self.duration) if self.duration is not None else None
+        while True:
+            k = sim.step_index
+            if end_step is not None and k >= end_step:
+                self._finish()
+                return
+            stop = min(self._next_due(k), k + MAX_CHUNK)
+            if target is not None:
+                stop = min(stop, target)
+            if end_step is not None:
+                stop = min(stop, end_step)
+            if stop <= k:
+                break
+            sim.advance_to(stop)
+            if sim.failure is not None:
+                self.get_logger().error(f"simulation paused: {sim.failure} (reset or set_state to continue)")
+                self._publish_due(force=True)
+                return
+            self._publish_due()
+            if deadline is not None and time.monotonic() >= deadline:
+                break
+
+    def _next_due(self, k: int) -> int:
+        """The first step after k at which some output is due (k + 10**9 if none)."""
+        periods = self.output_periods.values()
+        return min(((k // n) + 1) * n for n in periods) if periods else k + 10**9
+
+    def _finish(self) -> None:
+        assert self.sim is not None
+        self._publish_due(force=True)
+        self.finished = True
+        self.get_logger().info(
+            f"duration reached: t = {self.sim.t:.9g} s after {self.sim.step_index} steps; stopping"
+        )
+
+    # ------------------------------------------------------------------ publishing
+
+    def _publish_due(self, force: bool = False) -> None:
+        """Publish the outputs due at the current step (all of them when ``force``)."""
+        sim = self.sim
+        assert sim is not None
+        k = sim.step_index
+        due = [name for name, n in self.output_periods.items() if force or k % n == 0]
+        if not due:
+            return
+        snapshot = sim.snapshot()
+        world, body = self.frames.world, self.frames.body
+        for name in due:
+            publisher = self.publishers_by_output[name]
+            if name == "state":
+                msg = conversions.snapshot_to_state(snapshot, world, body)
+            elif name == "orientation":
+                msg = conversions.snapshot_to_orientation(snapshot, world)
+            elif name == "angular_velocity":
+                msg = conversions.vector_stamped(snapshot.angular_velocity_body, snapshot.t, body)
+            elif name == "angular_momentum":
+                msg = conversions.vector_stamped(snapshot.angular_momentum_world, snapshot.t, world)
+            elif name == "top_state":
+                msg = conversions.snapshot_to_top_state(snapshot, world)
+            elif name == "tf":
+                msg = TFMessage(transforms=[conversions.transform_stamped(snapshot, world, body)])
+            else:
+                msg = conversions.clock_message(snapshot.t)
+            publisher.publish(msg)
+
+    def _publish_mass_properties(self) -> None:
+        assert self.sim is not None
+        body = self.scene.body
+        tensor = body.inertia_array
+        mass = body.mass or 0.0
+        com = body.center_of_mass or (0.0, 0.0, 0.0)
+        if self.scene.gravity is not None:
+            # the scene's tensor is about the pivot; the message wants it about the centre of mass
+            tensor = tensor - parallel_axis_shift(tensor * 0.0, mass, com)
+        self.mass_properties_publisher.publish(conversions.inertia_stamped(mass, com, tensor, self.sim.t, self.frames.body))
+
+    def _reject(self, source: str, reason: str, frame_id: str, torque: Any) -> None:
+        """Publish a RejectedCommand and warn (at most every REJECT_WARN_PERIOD s per source)."""
+        assert self.sim is not None
+        self.rejected_publisher.publish(conversions.rejected_command(source, reason, self.sim.t, frame_id, torque))
+        now = time.monotonic()
+        last, suppressed = self._reject_warned.get(source, (-math.inf, 0))
+        if now - last >= REJECT_WARN_PERIOD:
+            more = f" ({suppressed} more rejected since the last warning)" if suppressed else ""
+            self.get_logger().warning(f"rejected command on {source}: {reason}{more}")
+            self._reject_warned[source] = (now, 0)
+        else:
+            self._reject_warned[source] = (last, suppressed + 1)
+
+    # ------------------------------------------------------------------ callbacks
+
+    def torque_callback(self, msg: Any, source: str) -> None:
+        assert self.sim is not None
+        torque, force, frame_id, stamp = conversions.torque_command_from_msg(msg)
+        try:
+            self.sim.receive_torque(source, torque, frame_id, stamp, force)
+        except CommandRejected as exc:
+            self._reject(self.resolve_topic_name(source), exc.reason, frame_id, torque)
+
+    def set_state_callback(self, request, response):
+        return self._serve(response, "~/set_state", lambda: self._set_state(request))
+
+    def _set_state(self, request) -> str:
+        sim = self.sim
+        sim.set_state(conversions.quaternion_to_array(request.orientation), conversions.vector3_to_array(request.angular_velocity))
+        self._publish_due(force=True)
+        return f"state set at t = {sim.t:.9g} s"
+
+    def reset_callback(self, request, response):
+        return self._serve(response, "~/reset", self._reset)
+
+    def _reset(self) -> str:
+        self.sim.reset()
+        self.finished = False
+        self._anchor()
+        self._publish_due(force=True)
+        return "reset to the scene's initial state at t = 0"
+
+    def pause_callback(self, request, response):
+        return self._serve(response, "~/pause", lambda: self._pause(bool(request.data)))
+
+    def _pause(self, paused: bool) -> str:
+        sim = self.sim
+        if not paused and sim.failure is not None:
+            raise ValueError(f"cannot resume after a failure ({sim.failure}); reset or set_state first")
+        sim.pause(paused)
+        if not paused:
+            self._anchor()
+        return f"{'paused' if paused else 'running'} at t = {sim.t:.9g} s"
+
+    def step_callback(self, request, response):
+        def step() -> str:
+            sim = self.sim
+            if not sim.paused:
+                raise ValueError("not paused: call ~/pause with data=true first")
+            if request.steps < 1:
+                raise ValueError("steps must be >= 1")
+            start = sim.step_index
+            # the steps run here, in the callback: the reply comes after they are done
+            self._run(start + int(request.steps), None)
+            snapshot = sim.snapshot()
+            conversions.fill_rigid_body_state(response.state, snapshot, self.frames.world, self.frames.body)
+            if sim.failure is not None:
+                raise ValueError(f"stopped after {sim.step_index - start} steps: {sim.failure}")
+            return f"{sim.step_index - start} steps done, t = {sim.t:.9g} s"
+
+        return self._serve(response, "~/step", step)
+
+    def apply_torque_callback(self, request, response):
+        def apply() -> str:
+            torque = conversions.vector3_to_array(request.torque)
+            duration = conversions.time_to_seconds(request.duration)
+            try:
+                command = self.sim.apply_torque(torque, request.frame_id, duration)
+            except CommandRejected as exc:
+                self._reject(self.resolve_service_name("~/apply_torque"), exc.reason, request.frame_id, torque)
+                raise ValueError(exc.reason) from None
+            return (
+                f"torque {list(command.torque)} N*m ({command.frame} frame) from t = {command.effective_time:.9g} s "
+                f"for {duration:g} s"
+            )
+
+        return self._serve(response, "~/apply_torque", apply)
+
+    def _serve(self, response, name: str, action) -> Any:
+        """Run a service action: success with its message, or success=false with the reason."""
+        if self.sim is None:
+            response.success = False
+            response.message = "no scene loaded"
+            return response
+        try:
+            response.message = action()
+            response.success = True
+        except ValueError as exc:
+            response.success = False
+            response.message = str(exc)
+            self.get_logger().warning(f"{name} refused: {exc}")
+        except Exception as exc:  # a callback must never raise: the node keeps serving
+            response.success = False
+            response.message = f"internal error: {exc!r}"
+            self.get_logger().error(f"{name} failed: {exc!r}")
+        return response
 
     def compute_inertia_callback(self, request, response):
         try:
@@ -36,36 +489,93 @@ class RigidRotSimNode(Node):
             props = mass_properties(masses, positions, origin)
             conversions.fill_compute_inertia_response(response, props)
         except ValueError as exc:
-            return self._reject(response, f"invalid request: {exc}")
+            return self._reject_inertia(response, f"invalid request: {exc}")
         except Exception as exc:  # a callback must never raise: the node keeps serving
             self.get_logger().error(f"compute_inertia failed: {exc!r}")
-            return self._reject(response, f"internal error: {exc!r}")
+            return self._reject_inertia(response, f"internal error: {exc!r}")
         response.success = True
-        response.message = (
-            f"{len(masses)} masses, {props.total_mass:.6g} kg, {props.symmetry}"
-        )
+        response.message = f"{len(masses)} masses, {props.total_mass:.6g} kg, {props.symmetry}"
         return response
 
-    def _reject(self, response, message: str):
+    def _reject_inertia(self, response, message: str):
         self.get_logger().warning(message)
         response.success = False
         response.message = message
         return response
 
+    # ------------------------------------------------------------------ parameters
 
-def main(args=None) -> None:
+    def validate_parameters_callback(self, parameters: list[Parameter]) -> SetParametersResult:
+        """Refuse bad values with a reason; nothing changes then (applied after, if all are valid)."""
+        values = {p.name: p.value for p in parameters}
+        sim = self.sim
+        try:
+            if "integrator" in values or "dt" in values:
+                method = values.get("integrator", self.get_parameter("integrator").value)
+                dt = values.get("dt", sim.dt)
+                if not isinstance(dt, float) or not (math.isfinite(dt) and dt > 0.0):
+                    raise ValueError(f"dt must be a finite number > 0 s, got {dt!r}")
+                if method != "auto":
+                    get_method(method)
+            for name, value in values.items():
+                if name.startswith("rates."):
+                    output = name[len("rates."):]
+                    if value > 0.0 and output not in self.output_periods:
+                        raise ValueError(f"{self._output_topic(output)} was not built at start-up; restart with {name} > 0")
+                    if value <= 0.0 and output in self.output_periods:
+                        raise ValueError(f"{name} must be > 0 for a built output (publishers are not destroyed at run time)")
+        except ValueError as exc:
+            return SetParametersResult(successful=False, reason=str(exc))
+        return SetParametersResult(successful=True)
+
+    def apply_parameters_callback(self, parameters: list[Parameter]) -> None:
+        values = {p.name: p.value for p in parameters}
+        sim = self.sim
+        if "integrator" in values or "dt" in values:
+            try:
+                sim.set_integrator(
+                    method=values.get("integrator", self.get_parameter("integrator").value), dt=values.get("dt", sim.dt)
+                )
+            except ValueError as exc:  # e.g. a method that cannot take this scene's torque
+                self.get_logger().error(f"integrator unchanged ({sim.method}, dt {sim.dt:g} s): {exc}")
+            else:
+                self.get_logger().info(f"integrator {sim.method}, dt {sim.dt:g} s from t = {sim.t:.9g} s")
+                for warning in sim.warnings():
+                    self.get_logger().warning(warning)
+            for output in self.output_periods:
+                self.output_periods[output] = self._period_steps(self.get_parameter(f"rates.{output}").value)
+        if "real_time_factor" in values:
+            self.real_time_factor = float(values["real_time_factor"])
+            self.timer.timer_period_ns = int(self._tick_period() * 1e9)
+            self._anchor()
+        if "duration" in values:
+            self.duration = values["duration"] if values["duration"] > 0.0 else None
+        for name, value in values.items():
+            if name.startswith("rates.") and name[len("rates."):] in self.output_periods:
+                self.output_periods[name[len("rates."):]] = self._period_steps(value)
+
+
+def main(args: list[str] | None = None) -> int:
+    """Run the node until shut down or until the scene's duration is reached (exit code 0)."""
     rclpy.init(args=args)
     node = None
     try:
         node = RigidRotSimNode()
-        rclpy.spin(node)
+        executor = SingleThreadedExecutor()
+        executor.add_node(node)
+        while rclpy.ok() and not node.finished:
+            executor.spin_once(timeout_sec=0.1)
     except (KeyboardInterrupt, ExternalShutdownException):
         pass
+    except ValueError as exc:  # SceneError, or a scene the integrator cannot run
+        print(f"rigid_rot_sim_node: {exc}", flush=True)
+        return 2
     finally:
         if node is not None:
             node.destroy_node()
         rclpy.try_shutdown()
+    return 0
 
 
 if __name__ == "__main__":
-    main()
+    raise SystemExit(main())

@@ -278,6 +278,10 @@ class Simulator:
         k = self._k_epoch + math.ceil((t - self._t_epoch) / self.dt - _BOUNDARY_SLACK)
         return max(k, self._k)
 
+    def step_at_or_before(self, t: float) -> int:
+        """The last step boundary at or before sim time t (s) (may be in the past)."""
+        return self._k_epoch + math.floor((t - self._t_epoch) / self.dt + _BOUNDARY_SLACK)
+
     # ------------------------------------------------------------------ commands
 
     def resolve_frame(self, source: str, frame_id: str, policy: str) -> str:
@@ -505,17 +509,23 @@ class Simulator:
                 stop = self._k + 1
             else:
                 stop = min(end, self._next_event)
-            while self._k < stop:
-                good = (integrator.t, integrator.q, integrator.omega)
-                try:
-                    integrator.step()
-                except NonFiniteStateError as exc:
-                    integrator.set_state(*good)
-                    self.failure = str(exc)
-                    self.paused = True
-                    return done
-                self._k += 1
-                done += 1
+            chunk = stop - self._k
+            start = (integrator.t, integrator.q, integrator.omega, integrator.n_steps)
+            try:
+                integrator.advance(chunk)
+            except NonFiniteStateError as exc:
+                good = integrator.n_steps - start[3]
+                if good < chunk and np.all(np.isfinite(integrator.q)) and np.all(np.isfinite(integrator.omega)):
+                    self._k += good  # the method stopped at its last good step
+                    done += good
+                else:
+                    integrator.set_state(*start[:3])
+                    integrator.n_steps = start[3]
+                self.failure = str(exc)
+                self.paused = True
+                return done
+            self._k += chunk
+            done += chunk
         return done
 
     def advance_to(self, k: int) -> int:
@@ -586,39 +596,39 @@ class Simulator:
         """The state at the current step boundary (user body frame; see :class:`StateSnapshot`)."""
         integrator = self._integrator
         assert integrator is not None
-        body = self.body
-        moments = body.principal_moments
-        q_principal = np.asarray(integrator.q, dtype=float)
-        omega_principal = np.asarray(integrator.omega, dtype=float)
-        q = body.attitude_from_principal(q_principal)
+        # plain floats and the quaternion helpers: this runs at every publication
+        i1, i2, i3 = (float(v) for v in self.body.principal_moments)
+        q_principal = tuple(float(v) for v in integrator.q)
+        w1, w2, w3 = (float(v) for v in integrator.omega)
+        body_from_principal = self._body_from_principal
+        q = quat.multiply(q_principal, self._principal_from_body)
         if q[3] < 0.0:
-            q = -q  # same rotation; w >= 0 keeps published quaternions continuous near identity
-        rotation = Rotation.from_quat(q)
-        omega_body = body.vector_from_principal(omega_principal)
-        momentum_body = body.vector_from_principal(moments * omega_principal)
-        momentum_world = rotation.apply(momentum_body)
-        kinetic = 0.5 * float(omega_principal @ (moments * omega_principal))
-        torque_body = np.array(self._step_torque_body, dtype=float)
+            q = (-q[0], -q[1], -q[2], -q[3])  # same rotation; w >= 0 keeps outputs continuous near identity
+        omega_body = quat.rotate(body_from_principal, (w1, w2, w3))
+        momentum_body = quat.rotate(body_from_principal, (i1 * w1, i2 * w2, i3 * w3))
+        momentum_world = quat.rotate(q, momentum_body)
+        kinetic = 0.5 * (i1 * w1 * w1 + i2 * w2 * w2 + i3 * w3 * w3)
+        torque_body = self._step_torque_body
         potential = 0.0
         euler = p_phi = p_psi = None
         if self.gravity is not None:
-            com_world = rotation.apply(self._com_body)
-            potential = self._weight * float(com_world[2])
-            torque_body = torque_body + body.vector_from_principal(self.gravity(0.0, q_principal, omega_principal))
-            euler = (rotation * self._body_from_top).as_euler("ZXZ")
-            p_phi = float(momentum_world[2])
-            p_psi = float(momentum_body @ self._symmetry_axis)
+            potential = self._weight * quat.rotate(q, self._com_body)[2]
+            gravity = quat.rotate(body_from_principal, self.gravity(0.0, np.array(q_principal), np.array((w1, w2, w3))))
+            torque_body = tuple(a + b for a, b in zip(torque_body, gravity))
+            euler = (Rotation.from_quat(q) * self._body_from_top).as_euler("ZXZ")
+            p_phi = momentum_world[2]
+            p_psi = float(np.dot(momentum_body, self._symmetry_axis))
         energy = kinetic + potential
-        momentum = float(np.linalg.norm(momentum_world))
+        momentum = math.sqrt(momentum_world[0] ** 2 + momentum_world[1] ** 2 + momentum_world[2] ** 2)
         return StateSnapshot(
             t=self.t,
             step=self._k,
-            orientation=q,
-            angular_velocity_body=omega_body,
-            angular_velocity_world=rotation.apply(omega_body),
-            angular_momentum_body=momentum_body,
-            angular_momentum_world=momentum_world,
-            torque_body=torque_body,
+            orientation=np.array(q),
+            angular_velocity_body=np.array(omega_body),
+            angular_velocity_world=np.array(quat.rotate(q, omega_body)),
+            angular_momentum_body=np.array(momentum_body),
+            angular_momentum_world=np.array(momentum_world),
+            torque_body=np.array(torque_body, dtype=float),
             kinetic_energy=kinetic,
             potential_energy=potential,
             energy_drift=_relative_change(energy, self._energy_ref),
