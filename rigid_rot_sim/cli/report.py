@@ -1,0 +1,48 @@
+"""``rigid-rot report``: work-precision diagrams of every integrator against scipy's solve_ivp.
+
+Writes report.md, results.json and one PNG per problem into ``--out`` (default
+``out/report``). ``--quick`` runs coarser sweeps with shorter timing budgets (under two
+minutes on two cores); the full run takes several minutes.
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+
+
+def add_parser(subparsers) -> None:
+    parser = subparsers.add_parser(
+        "report",
+        help="work-precision report: error against run time for every integrator and scipy",
+        description=__doc__.split("\n\n")[0],
+    )
+    parser.add_argument("--out", default="out/report", metavar="DIR", help="output directory (default: out/report)")
+    parser.add_argument("--quick", action="store_true", help="coarse sweeps and short timing budgets (< 2 min)")
+    parser.add_argument(
+        "--problems", nargs="+", metavar="KEY", help="only these problems (default: all; e.g. P1 P2)"
+    )
+    parser.add_argument("--no-progress", action="store_true", help="no progress bar")
+    parser.set_defaults(handler=run)
+
+
+def run(args: argparse.Namespace) -> int:
+    from rigid_rot_sim.analysis.workprecision import TARGETS, run_report, summary
+
+    command = "rigid-rot report" + (" --quick" if args.quick else "") + f" --out {args.out}"
+    if args.problems:
+        command += " --problems " + " ".join(args.problems)
+    results, paths = run_report(
+        args.out, quick=args.quick, problem_keys=args.problems, command=command, progress=not args.no_progress
+    )
+    for result in results:
+        for row in summary(result, TARGETS):
+            ours, theirs = row["ours"], row["scipy"]
+            text = f"{result.problem} at ω error <= {row['target']:g} rad/s: "
+            text += "ours not reached" if ours is None else f"{ours['label']} {ours['seconds']:.3e} s"
+            text += "; scipy not reached" if theirs is None else f"; scipy {theirs['label']} {theirs['seconds']:.3e} s"
+            if row["speedup"]:
+                text += f"; speed-up {row['speedup']:.1f}x"
+            print(text)
+    print(f"wrote {paths['report.md']}, {paths['results.json']} and {len(results)} plots", file=sys.stderr)
+    return 0
