@@ -27,7 +27,7 @@ import sys
 from typing import Sequence
 
 #: Subcommand modules of rigid_rot_sim.cli, in the order ``--help`` lists them.
-SUBCOMMANDS = ["inertia"]
+SUBCOMMANDS = ["inertia", "report"]
 
 PROG = "rigid-rot"
 
