@@ -100,6 +100,9 @@ class FixedStepIntegrator(Integrator):
         for k in range(n):
             try:
                 new = kernel(t0 + k * dt, state, dt, moments, torque, attitude_torque)
+            except NonFiniteStateError as error:
+                self._commit(state, t0, k)
+                raise type(error)(f"{self.name}: step {self.n_steps + 1}, t = {t0 + (k + 1) * dt:.9g} s: {error}") from error
             except BaseException:
                 self._commit(state, t0, k)
                 raise

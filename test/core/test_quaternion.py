@@ -1,0 +1,104 @@
+"""Quaternion helpers against scipy's Rotation (scalar-last, body -> world) and identities."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+from scipy.spatial.transform import Rotation
+
+from rigid_rot_sim.core import quaternion as quat
+
+finite = st.floats(-10.0, 10.0, allow_nan=False)
+vectors = st.tuples(finite, finite, finite)
+quaternions = st.tuples(finite, finite, finite, finite).filter(lambda q: math.fsum(x * x for x in q) > 1e-6)
+
+
+def unit(q):
+    return np.asarray(q) / np.linalg.norm(q)
+
+
+def same_rotation(p, q, atol=1e-12):
+    """Equal as rotations (q and -q are the same rotation)."""
+    p, q = np.asarray(p), np.asarray(q)
+    return np.allclose(p, q, atol=atol) or np.allclose(p, -q, atol=atol)
+
+
+@settings(max_examples=200, deadline=None)
+@given(quaternions, quaternions)
+def test_multiply_is_scipy_composition(p, q):
+    p, q = unit(p), unit(q)
+    expected = (Rotation.from_quat(p) * Rotation.from_quat(q)).as_quat()
+    assert same_rotation(quat.multiply(p, q), expected)
+
+
+def test_multiply_is_the_hamilton_product():
+    i, j, k, one = (1, 0, 0, 0), (0, 1, 0, 0), (0, 0, 1, 0), (0, 0, 0, 1)
+    assert quat.multiply(i, j) == k
+    assert quat.multiply(j, k) == i
+    assert quat.multiply(k, i) == j
+    assert quat.multiply(i, i) == (0, 0, 0, -1)
+    assert quat.multiply(one, (1.0, 2.0, 3.0, 4.0)) == (1.0, 2.0, 3.0, 4.0)
+
+
+@settings(max_examples=100, deadline=None)
+@given(quaternions)
+def test_conjugate_is_inverse(q):
+    q = unit(q)
+    assert np.allclose(quat.multiply(q, quat.conjugate(q)), quat.IDENTITY, atol=1e-15)
+    assert same_rotation(quat.conjugate(q), Rotation.from_quat(q).inv().as_quat())
+
+
+@settings(max_examples=200, deadline=None)
+@given(vectors)
+def test_exp_rotation_vector_is_scipy_from_rotvec(v):
+    expected = Rotation.from_rotvec(v).as_quat()
+    got = quat.exp_rotation_vector(v)
+    assert same_rotation(got, expected, atol=1e-14)
+    assert math.isclose(math.fsum(x * x for x in got), 1.0, rel_tol=0, abs_tol=1e-15)
+
+
+@pytest.mark.parametrize("angle", [0.0, 1e-300, 1e-12, 1e-9, 1e-8, 1.0001e-8, 1e-6, 1e-3])
+def test_exp_rotation_vector_small_angles(angle):
+    v = angle * np.array([0.6, -0.8, 0.0])
+    got = np.array(quat.exp_rotation_vector(v))
+    expected = np.array([*(math.sin(angle / 2) * np.array([0.6, -0.8, 0.0])), math.cos(angle / 2)])
+    assert np.allclose(got, expected, rtol=1e-15, atol=1e-300)
+    assert np.all(np.isfinite(got))
+
+
+@settings(max_examples=100, deadline=None)
+@given(vectors)
+def test_cayley_is_the_matrix_cayley_transform(v):
+    v = np.asarray(v)
+    hat = np.array([[0.0, -v[2], v[1]], [v[2], 0.0, -v[0]], [-v[1], v[0], 0.0]])
+    eye = np.eye(3)
+    expected = np.linalg.solve(eye - hat / 2, eye + hat / 2)
+    got = Rotation.from_quat(quat.cayley(v)).as_matrix()
+    assert np.allclose(got, expected, atol=1e-12 * max(1.0, np.linalg.norm(v)))
+
+
+@settings(max_examples=200, deadline=None)
+@given(quaternions, vectors)
+def test_rotate_is_body_to_world(q, v):
+    q = unit(q)
+    r = Rotation.from_quat(q)
+    assert np.allclose(quat.rotate(q, v), r.apply(v), atol=1e-12)
+    assert np.allclose(quat.rotate_inverse(q, v), r.apply(v, inverse=True), atol=1e-12)
+    assert np.allclose(quat.rotate_inverse(q, quat.rotate(q, v)), v, atol=1e-12)
+
+
+def test_rotate_convention_quarter_turn_about_z():
+    q = (0.0, 0.0, math.sin(math.pi / 4), math.cos(math.pi / 4))  # +90 deg about z, body -> world
+    assert np.allclose(quat.rotate(q, (1.0, 0.0, 0.0)), (0.0, 1.0, 0.0), atol=1e-15)
+
+
+@settings(max_examples=50, deadline=None)
+@given(quaternions)
+def test_normalize(q):
+    n = quat.normalize(q)
+    assert math.isclose(math.fsum(x * x for x in n), 1.0, abs_tol=1e-15)
+    assert np.allclose(np.asarray(n) * np.linalg.norm(q), q, rtol=1e-14, atol=1e-14)
