@@ -69,29 +69,38 @@ class ExactFlow(Integrator):
         return self._solution
 
     def _step_impl(self) -> None:
-        self._advance_to(1)
+        self._advance_saving(1, 1)
 
-    def _advance_to(self, steps: int) -> None:
+    def _advance_saving(self, n_saves: int, save_every: int) -> tuple[np.ndarray, np.ndarray]:
+        """Evaluate the solution after every save_every-th of n_saves * save_every steps at once."""
         solution = self._anchor()
-        k = self._anchor_k + steps
-        t = self._anchor_t + k * self._anchor_dt
-        q, omega = solution.state(t)
-        self.q, self.omega, self.t, self._anchor_k = q, omega, t, k
+        k = self._anchor_k + save_every * np.arange(1, n_saves + 1)
+        q, omega = solution.state(self._anchor_t + k * self._anchor_dt)
+        good = np.isfinite(q).all(axis=1) & np.isfinite(omega).all(axis=1)
+        if not good.all():
+            first = int(np.argmin(good))
+            raise NonFiniteStateError(
+                f"{self.name}: non-finite state at step {self.n_steps + (first + 1) * save_every}, "
+                f"t = {self._anchor_t + k[first] * self._anchor_dt:.9g} s (q = {q[first]}, omega = {omega[first]})"
+            )
+        self.q, self.omega = q[-1], omega[-1]
+        self.t = self._anchor_t + int(k[-1]) * self._anchor_dt
+        self._anchor_k = int(k[-1])
+        return q, omega
 
     def advance(self, n: int) -> None:
         """Take n steps in one evaluation (the same state as n calls of :meth:`step`)."""
-        if n <= 0:
-            return
-        q, omega, t, k = self.q, self.omega, self.t, getattr(self, "_anchor_k", 0)
-        self._advance_to(n)
-        self.n_steps += n
-        if not (np.all(np.isfinite(self.q)) and np.all(np.isfinite(self.omega))):
-            bad_q, bad_omega = self.q, self.omega
-            self.q, self.omega, self.t, self._anchor_k = q, omega, t, k
-            raise NonFiniteStateError(
-                f"{self.name}: non-finite state at step {self.n_steps}, t = {self._anchor_t + (k + n) * self.dt:.9g} s "
-                f"(q = {bad_q}, omega = {bad_omega})"
-            )
+        if n > 0:
+            self._advance_saving(1, n)
+            self.n_steps += n
+
+    def advance_saving(self, n_saves: int, save_every: int) -> tuple[np.ndarray, np.ndarray]:
+        """The states after every save_every-th step, all evaluated in one vectorised call."""
+        if n_saves <= 0:
+            return np.empty((0, 4)), np.empty((0, 3))
+        q, omega = self._advance_saving(n_saves, save_every)
+        self.n_steps += n_saves * save_every
+        return q, omega
 
 
 def _make_kernel(coefficients: tuple[float, ...]):
