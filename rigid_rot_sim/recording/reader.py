@@ -265,3 +265,51 @@ def repair(
         os.replace(target, source)
         target = source
     return RepairReport(target, count, result.chunks, result.bad_chunks, result.unread_bytes, kept, False)
+
+
+def info(path: str | os.PathLike[str]) -> str:
+    """A human-readable summary of a recording (like ``ros2 bag info``)."""
+    import yaml
+
+    reader = BagReader(path)
+    counts = reader.counts()
+    times = [(m.log_time_ns) for m in reader.messages()]
+    size = reader.path.stat().st_size
+    lines = [
+        f"File:       {reader.path}",
+        f"Size:       {size / 1e6:.3f} MB",
+        f"Index:      {'complete (summary, statistics, chunk and message indexes)' if reader.complete else 'MISSING (crashed recording: run `rigid-rot bag repair`)'}",
+    ]
+    if times:
+        start, end = min(times), max(times)
+        lines.append(f"Duration:   {(end - start) / 1e9:.3f} s (wall clock)")
+        lines.append(f"Start:      {start / 1e9:.6f} s since epoch")
+    lines.append(f"Messages:   {sum(counts.values())}")
+    lines.append("Topics:")
+    width = max((len(name) for name in reader.topics), default=0)
+    for name, topic in sorted(reader.topics.items()):
+        qos_text = topic.channel_metadata.get("offered_qos_profiles", "")
+        qos = ""
+        try:
+            profiles = yaml.safe_load(qos_text) if qos_text else None
+            if profiles:
+                p = profiles[0]
+                reliability = {1: "reliable", 2: "best_effort"}.get(p.get("reliability"), str(p.get("reliability")))
+                durability = {1: "transient_local", 2: "volatile"}.get(p.get("durability"), str(p.get("durability")))
+                qos = f"  [{reliability}, {durability}, depth {p.get('depth')}]"
+        except yaml.YAMLError:
+            qos = "  [unreadable QoS]"
+        lines.append(f"  {name:<{width}}  {counts.get(name, 0):>8}  {topic.type_name}{qos}")
+    scene = reader.metadata.get("scene", {})
+    integrator = reader.metadata.get("integrator", {})
+    if scene:
+        lines.append(f"Scene:      {scene.get('file', '?')}")
+    if integrator:
+        lines.append(f"Integrator: {integrator.get('method', '?')}, dt = {integrator.get('dt', '?')} s")
+    versions = reader.metadata.get("versions", {})
+    if versions:
+        lines.append(f"Recorded by rigid_rot_sim {versions.get('rigid_rot_sim', '?')} "
+                     f"(numpy {versions.get('numpy', '?')}, scipy {versions.get('scipy', '?')}, "
+                     f"rclpy {versions.get('ros-rclpy', '?')})")
+    lines.append(f"Metadata:   {', '.join(sorted(reader.metadata)) or 'none'}")
+    return "\n".join(lines)

@@ -1,0 +1,189 @@
+"""Pictures of a recorded run: PNGs a person reads at a glance (matplotlib, Agg backend).
+
+* ``omega.png``: the body-frame angular velocity components and |ω| over sim time;
+* ``drift.png``: relative change of the total energy and of |L| since the first state;
+  for a free body both measure the integrator's error, with torque they show the work
+  and the angular impulse the torques delivered;
+* ``torque.png``: the torque applied (body frame, total over each step), with the
+  effective times of the recorded torque commands;
+* ``polhode.png``: the path of ω on the energy ellipsoid ω·Iω = 2T in the principal
+  frame (the polhode), coloured by time.
+"""
+
+from __future__ import annotations
+
+import os
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from rigid_rot_sim.recording.events import EVENT_TYPE, decode_event
+from rigid_rot_sim.recording.reader import BagReader
+from rigid_rot_sim.recording.resim import STATE_TYPE, _topic_of_type
+
+_AXIS_COLOURS = ("tab:red", "tab:green", "tab:blue")
+
+
+@dataclass(frozen=True)
+class StateSeries:
+    """The recorded states as arrays over time (sim time, s)."""
+
+    t: np.ndarray
+    omega_body: np.ndarray
+    momentum_body: np.ndarray
+    momentum_world: np.ndarray
+    torque_body: np.ndarray
+    energy: np.ndarray
+
+
+def load_states(reader: BagReader) -> StateSeries:
+    """Every RigidBodyState of the recording, in log order; ValueError if there is none."""
+    topic = _topic_of_type(reader, STATE_TYPE, "state")
+    if topic is None:
+        raise ValueError(f"{reader.path}: no {STATE_TYPE} topic recorded: nothing to plot")
+    rows = []
+    for _, msg in reader.decoded([topic]):
+        t = float(msg.header.stamp.sec) + float(msg.header.stamp.nanosec) * 1e-9
+        vectors = [msg.angular_velocity_body, msg.angular_momentum_body, msg.angular_momentum_world, msg.torque_body]
+        rows.append([t, *(c for v in vectors for c in (v.x, v.y, v.z)), msg.kinetic_energy + msg.potential_energy])
+    if not rows:
+        raise ValueError(f"{reader.path}: topic {topic} holds no messages: nothing to plot")
+    data = np.array(rows, dtype=float)
+    return StateSeries(data[:, 0], data[:, 1:4], data[:, 4:7], data[:, 7:10], data[:, 10:13], data[:, 13])
+
+
+def principal_frame(reader: BagReader, series: StateSeries) -> tuple[np.ndarray, np.ndarray]:
+    """Principal moments (ascending, kg*m^2) and the matrix whose columns are the principal axes.
+
+    From the recorded scene when present; otherwise fitted to the recorded pairs
+    L_body = I ω (least squares over all states), which needs ω to span three directions.
+    """
+    scene = reader.metadata.get("scene", {})
+    if "text" in scene:
+        from rigid_rot_sim.core.scene import parse_scene_text
+
+        inertia = parse_scene_text(scene["text"], source=scene.get("file", "<recorded scene>")).body.inertia_array
+        tensor = np.asarray(inertia, dtype=float)
+        tensor = np.diag(tensor) if tensor.ndim == 1 else tensor
+    else:
+        w, big_l = series.omega_body, series.momentum_body
+        # unknowns (Ixx, Iyy, Izz, Ixy, Ixz, Iyz): L = I w, three equations per state
+        rows = []
+        for (wx, wy, wz) in w:
+            rows += [[wx, 0, 0, wy, wz, 0], [0, wy, 0, wx, 0, wz], [0, 0, wz, 0, wx, wy]]
+        sol, *_ = np.linalg.lstsq(np.array(rows), big_l.reshape(-1), rcond=None)
+        ixx, iyy, izz, ixy, ixz, iyz = sol
+        tensor = np.array([[ixx, ixy, ixz], [ixy, iyy, iyz], [ixz, iyz, izz]])
+    moments, axes = np.linalg.eigh(tensor)
+    return moments, axes
+
+
+def _title(reader: BagReader, what: str) -> str:
+    scene = reader.metadata.get("scene", {}).get("file", "")
+    method = reader.metadata.get("integrator", {}).get("method", "")
+    name = Path(scene).stem if scene else reader.path.stem
+    return f"{what} - {name}" + (f" ({method})" if method else "")
+
+
+def plot_run(path: str | os.PathLike[str], out_dir: str | os.PathLike[str] | None = None) -> list[Path]:
+    """Write the four PNGs for the recording at ``path``; returns their paths.
+
+    ``out_dir`` defaults to ``<recording stem>_plots`` next to the recording.
+    """
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    reader = BagReader(path)
+    series = load_states(reader)
+    out = Path(out_dir) if out_dir is not None else reader.path.with_name(reader.path.stem + "_plots")
+    out.mkdir(parents=True, exist_ok=True)
+    t = series.t
+    written: list[Path] = []
+
+    def save(fig, name: str) -> None:
+        fig.tight_layout()
+        target = out / name
+        fig.savefig(target, dpi=110)
+        plt.close(fig)
+        written.append(target)
+
+    # ω components
+    fig, ax = plt.subplots(figsize=(9, 4.5))
+    for i, axis in enumerate("xyz"):
+        ax.plot(t, series.omega_body[:, i], color=_AXIS_COLOURS[i], label=f"ω_{axis}")
+    ax.plot(t, np.linalg.norm(series.omega_body, axis=1), color="black", linestyle="--", linewidth=1, label="|ω|")
+    ax.set(xlabel="sim time (s)", ylabel="angular velocity, body frame (rad/s)", title=_title(reader, "Angular velocity"))
+    ax.grid(True, alpha=0.3)
+    ax.legend(loc="upper right", ncols=4)
+    save(fig, "omega.png")
+
+    # relative drift of energy and |L|
+    energy0 = series.energy[0]
+    l_norm = np.linalg.norm(series.momentum_world, axis=1)
+    energy_rel = (series.energy - energy0) / abs(energy0) if energy0 != 0.0 else np.zeros_like(t)
+    l_rel = (l_norm - l_norm[0]) / l_norm[0] if l_norm[0] != 0.0 else np.zeros_like(t)
+    driven = bool(np.any(series.torque_body[:, :] != 0.0))
+    fig, ax = plt.subplots(figsize=(9, 4.5))
+    ax.plot(t, energy_rel, color="tab:orange", label=f"(E - E0)/|E0|   max |.| = {np.max(np.abs(energy_rel)):.2e}")
+    ax.plot(t, l_rel, color="tab:purple", label=f"(|L| - |L0|)/|L0|   max |.| = {np.max(np.abs(l_rel)):.2e}")
+    ax.axhline(0.0, color="black", linewidth=0.8)
+    ax.ticklabel_format(axis="y", style="sci", scilimits=(-3, 3))
+    note = "torque applied: changes include the torques' work and impulse" if driven else "torque-free: any change is integrator error"
+    ax.set(xlabel="sim time (s)", ylabel="relative change (1)", title=_title(reader, "Energy and |L| drift") + f"\n{note}")
+    ax.grid(True, alpha=0.3)
+    ax.legend(loc="best")
+    save(fig, "drift.png")
+
+    # torque applied, with command times
+    fig, ax = plt.subplots(figsize=(9, 4.5))
+    for i, axis in enumerate("xyz"):
+        ax.step(t, series.torque_body[:, i], where="pre", color=_AXIS_COLOURS[i], label=f"τ_{axis}")
+    command_times = _command_times(reader)
+    for j, effective in enumerate(command_times):
+        ax.axvline(effective, color="grey", linewidth=0.6, linestyle=":", label="command takes effect" if j == 0 else None)
+    ax.set(xlabel="sim time (s)", ylabel="torque, body frame (N*m)",
+           title=_title(reader, "Torque applied") + f"\n{len(command_times)} torque commands recorded")
+    ax.grid(True, alpha=0.3)
+    ax.legend(loc="upper right")
+    save(fig, "torque.png")
+
+    # polhode on the energy ellipsoid, principal frame
+    moments, axes = principal_frame(reader, series)
+    omega_p = series.omega_body @ axes  # components along the principal axes
+    energy_twice = float(np.einsum("ij,j,ij->i", omega_p[:1], moments, omega_p[:1])[0])
+    fig = plt.figure(figsize=(7.5, 7))
+    ax3 = fig.add_subplot(projection="3d")
+    if energy_twice > 0.0:
+        u, v = np.meshgrid(np.linspace(0, 2 * np.pi, 40), np.linspace(0, np.pi, 20))
+        a, b, c = np.sqrt(energy_twice / moments)
+        ax3.plot_wireframe(a * np.cos(u) * np.sin(v), b * np.sin(u) * np.sin(v), c * np.cos(v),
+                           color="lightgrey", linewidth=0.5)
+    points = ax3.scatter(omega_p[:, 0], omega_p[:, 1], omega_p[:, 2], c=t, cmap="viridis", s=4)
+    ax3.plot(omega_p[:, 0], omega_p[:, 1], omega_p[:, 2], color="black", linewidth=0.4, alpha=0.5)
+    span = float(np.max(np.abs(omega_p))) * 1.1 or 1.0
+    if energy_twice > 0.0:
+        span = max(span, float(np.max(np.sqrt(energy_twice / moments))) * 1.05)
+    ax3.set(xlim=(-span, span), ylim=(-span, span), zlim=(-span, span),
+            xlabel=f"ω1 (rad/s), I1 = {moments[0]:.4g}", ylabel=f"ω2 (rad/s), I2 = {moments[1]:.4g}",
+            zlabel=f"ω3 (rad/s), I3 = {moments[2]:.4g}")
+    ax3.set_box_aspect((1, 1, 1))
+    fig.colorbar(points, ax=ax3, shrink=0.6, label="sim time (s)")
+    ax3.set_title(_title(reader, "Polhode on the energy ellipsoid (principal frame)")
+                  + ("\nellipsoid of the initial energy; torques move ω off it" if driven else ""))
+    save(fig, "polhode.png")
+    return written
+
+
+def _command_times(reader: BagReader) -> list[float]:
+    topic = _topic_of_type(reader, EVENT_TYPE, "events")
+    if topic is None:
+        return []
+    times = []
+    for _, status in reader.decoded([topic]):
+        event = decode_event(status)
+        if event.kind in ("torque", "apply_torque"):
+            times.append(event.number("effective_time"))
+    return times
