@@ -289,3 +289,33 @@ def test_fast_spin_stays_finite_and_accurate():
     assert np.all(np.isfinite(integrator.omega)) and np.all(np.isfinite(integrator.q))
     assert np.max(np.abs(integrator.omega - omega_ref)) < 1e-8 * 100.0
     assert quaternion_distance(integrator.q, q_ref) < 1e-8
+
+
+# -- registry and simulate ------------------------------------------------------------------
+
+
+def test_registered_and_driven_by_simulate_in_one_api_step():
+    from rigid_rot_sim.core.integrators import METHODS
+    from rigid_rot_sim.core.simulate import simulate
+
+    assert METHODS["taylor"] is Taylor
+    torque = (0.1, -0.05, 0.02)
+    traj = simulate(MOMENTS, OMEGA0, t_end=20.0, dt=20.0, method="taylor", q0=Q0, torque=torque, tol=1e-12)
+    assert traj.t.tolist() == [0.0, 20.0]
+    omega_ref, q_ref = reference_solution(MOMENTS, OMEGA0, Q0, ConstantTorque(torque), 20.0)
+    assert np.max(np.abs(traj.omega[-1] - omega_ref)) < 1e-10
+    assert quaternion_distance(traj.q[-1], q_ref) < 1e-10
+
+
+def test_simulate_with_a_full_inertia_tensor_matches_dop853():
+    """A non-diagonal tensor: simulate rotates the body and the torque into principal axes."""
+    from rigid_rot_sim.core.simulate import simulate
+
+    tensor = np.array([[2.0, 0.3, -0.1], [0.3, 1.5, 0.2], [-0.1, 0.2, 3.0]])
+    torque = (0.05, 0.02, -0.04)
+    kwargs = dict(t_end=6.0, dt=1.5, q0=Q0, torque=torque)
+    taylor = simulate(tensor, OMEGA0, method="taylor", tol=1e-13, **kwargs)
+    dop = simulate(tensor, OMEGA0, method="dop853", rtol=1e-13, atol=1e-13, **kwargs)
+    np.testing.assert_allclose(taylor.t, dop.t, rtol=0, atol=0)
+    assert np.max(np.abs(taylor.omega - dop.omega)) < 1e-10
+    assert max(quaternion_distance(a, b) for a, b in zip(taylor.q, dop.q)) < 1e-10

@@ -14,6 +14,7 @@ from rigid_rot_sim.core.integrators.explicit import RK4, Euler
 from rigid_rot_sim.core.integrators.implicit import ImplicitMidpoint
 from rigid_rot_sim.core.integrators.lie import LieRK4
 from rigid_rot_sim.core.integrators.splitting import Splitting
+from rigid_rot_sim.core.integrators.taylor import Taylor
 
 METHODS: dict[str, type[Integrator]] = {
     "euler": Euler,
@@ -22,10 +23,10 @@ METHODS: dict[str, type[Integrator]] = {
     "implicit_midpoint": ImplicitMidpoint,
     "lie_rk4": LieRK4,
     "splitting": Splitting,
+    "taylor": Taylor,
 }
 
 # Methods in their own modules register here, one line each:
-# METHODS["taylor"] = ...          (integrators/taylor.py)
 # METHODS["exact"] = ...           (integrators/exact_flow.py)
 # METHODS["exact_split"] = ...     (integrators/exact_flow.py)
 METHODS.update(exact=ExactFlow, exact_split=ExactSplit)

@@ -276,56 +276,55 @@ class Taylor(Integrator):
                 )
             t += h
         self.t = target
-        self.omega = x[:3]
-        self.q = x[3:]
+        self.omega = x[:3].copy()
+        self.q = x[3:].copy()
 
     def _substep(self, t0: float, x0: np.ndarray, h_cap: float) -> tuple[float, np.ndarray]:
         """One Taylor step from (t0, x0) of length <= h_cap; returns (h, x(t0 + h))."""
         p = self.series_order
         tol = self.tol
-        scale = max(1.0, float(np.max(np.abs(x0))))
+        scale = max(1.0, float(np.abs(x0).max()))
         if not math.isfinite(scale):
             raise NonFiniteStateError(f"{self.name}: non-finite state at step {self.n_steps + 1}, t = {t0:.9g} s")
-        if tol is not None and self._rho is not None and h_cap < self._rho:
-            # Enough order for the shorter step: scale*(h/rho)^n <= tol*scale.
-            needed = math.ceil(math.log(tol) / math.log(h_cap / self._rho)) + 1 if h_cap > 0 else 2
+        rho = self._rho
+        if tol is not None and rho is not None and h_cap < rho:
+            # Enough order for the shorter step: scale * (h / rho)^n <= tol * scale.
+            needed = math.ceil(math.log(tol) / math.log(h_cap / rho)) + 1 if h_cap > 0.0 else 2
             p = min(p, max(needed, 4))
         coeffs = self._coeffs
         coeffs_t = self._coeffs_t
         maps = self._maps
         coeffs[0] = x0
         forcing = self._forcing(t0)
-        n_forcing = len(forcing)
-        for k in range(p):
-            products = coeffs_t[:, : k + 1] @ coeffs[k::-1]
-            np.dot(maps[k], products.ravel(), out=coeffs[k + 1])
-            if k < n_forcing:
-                coeffs[k + 1] += forcing[k]
+        n_forced = min(len(forcing), p)
+        # The hot loop: two numpy calls per order (see the module docstring).
+        for k in range(n_forced):
+            np.dot(maps[k], np.dot(coeffs_t[:, : k + 1], coeffs[k::-1]).ravel(), out=coeffs[k + 1])
+            coeffs[k + 1] += forcing[k]
+        for k in range(n_forced, p):
+            np.dot(maps[k], np.dot(coeffs_t[:, : k + 1], coeffs[k::-1]).ravel(), out=coeffs[k + 1])
 
-        if tol is None:
-            h = h_cap
-        else:
-            last = np.max(np.abs(coeffs[p - 1 : p + 1]), axis=1)
-            a_prev, a_last = float(last[0]), float(last[1])
+        h = h_cap
+        if tol is not None:
+            a_prev, a_last = np.abs(coeffs[p - 1 : p + 1]).max(axis=1).tolist()
             if not (math.isfinite(a_prev) and math.isfinite(a_last)):
                 raise NonFiniteStateError(
                     f"{self.name}: non-finite Taylor coefficients at step {self.n_steps + 1}, t = {t0:.9g} s "
                     f"(omega = {x0[:3]})"
                 )
-            h = h_cap
             rho = math.inf
             if a_prev > 0.0:
-                h = min(h, (tol * scale / a_prev) ** (1.0 / (p - 1)))
-                rho = min(rho, (scale / a_prev) ** (1.0 / (p - 1)))
+                rho = (scale / a_prev) ** (1.0 / (p - 1))
+                h = min(h, rho * tol ** (1.0 / (p - 1)))
             if a_last > 0.0:
-                h = min(h, (tol * scale / a_last) ** (1.0 / p))
-                rho = min(rho, (scale / a_last) ** (1.0 / p))
+                rho_last = (scale / a_last) ** (1.0 / p)
+                rho = min(rho, rho_last)
+                h = min(h, rho_last * tol ** (1.0 / p))
             if p == self.series_order or h < h_cap:
                 self._rho = rho
-        powers = np.power(h, self._exponents[: p + 1])
-        x = powers @ coeffs[: p + 1]
+        x = np.power(h, self._exponents[: p + 1]) @ coeffs[: p + 1]
         q = x[3:]
-        x[3:] = q / math.sqrt(float(q @ q))
+        q *= 1.0 / math.sqrt(float(q @ q))
         return h, x
 
 
