@@ -139,6 +139,10 @@ class RunRecorder:
         """Record an rclpy message object published or received on ``topic``."""
         self.recorder.write_message(topic, msg, self.log_time_ns() if log_time_ns is None else log_time_ns)
 
+    def record_serialized(self, topic: str, data: bytes, log_time_ns: int | None = None) -> None:
+        """Record already serialised CDR bytes (e.g. the bytes the node just published)."""
+        self.recorder.write(topic, data, self.log_time_ns() if log_time_ns is None else log_time_ns)
+
     def record_tf(self, stamp_sec: int, stamp_nanosec: int, orientation: Any, world_frame: str, body_frame: str) -> None:
         """Record the world -> body transform (rotation only) on ``/tf``."""
         x, y, z, w = (float(v) for v in orientation)
