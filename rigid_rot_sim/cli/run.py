@@ -1,0 +1,160 @@
+"""``rigid-rot run SCENE``: start the simulation node on a scene from the shell.
+
+    rigid-rot run config/scenes/free_tumble.yaml --duration 3 --echo 0.5
+    rigid-rot run torque_driven --realtime-factor 0 --record out.mcap
+    rigid-rot run heavy_top --ros-args --params-file config/params/example.yaml
+
+SCENE is a path, or the name of a scene shipped in config/scenes. The options become
+node parameters (``scene``, ``duration``, ``real_time_factor``, ``integrator``, ``dt``,
+``record_path``); anything after ``--ros-args`` goes to ROS unchanged, so a params file,
+``-p`` or remappings work as with ``ros2 run`` (and win over the options). ``--echo PERIOD`` adds a subscriber
+in the same process that prints the received ~/state every PERIOD s of sim time: what
+the node published, through DDS. Exit code 0 when the duration is reached or on Ctrl-C.
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+import os
+import sys
+from pathlib import Path
+
+
+def scene_search_dirs() -> list[Path]:
+    """Where scene names are looked up: the source tree's and the installed config/scenes."""
+    source_tree = Path(__file__).resolve().parents[2] / "config" / "scenes"
+    installed = Path(sys.prefix) / "share" / "rigid_rot_sim" / "config" / "scenes"
+    return [source_tree, installed]
+
+
+def resolve_scene(scene: str) -> str:
+    """A scene path (returned absolute) or a shipped scene's name; ValueError if neither exists."""
+    if os.path.isfile(scene):
+        return os.path.abspath(scene)
+    name = scene if scene.endswith(".yaml") else scene + ".yaml"
+    for directory in scene_search_dirs():
+        candidate = directory / name
+        if candidate.is_file():
+            return str(candidate)
+    shipped = sorted({p.stem for d in scene_search_dirs() if d.is_dir() for p in d.glob("*.yaml")})
+    raise ValueError(f"scene {scene!r} not found (a path, or one of: {', '.join(shipped) or 'none shipped'})")
+
+
+def _nonnegative(text: str) -> float:
+    value = float(text)
+    if not (math.isfinite(value) and value >= 0.0):
+        raise argparse.ArgumentTypeError(f"must be a finite number >= 0, got {text}")
+    return value
+
+
+def _positive(text: str) -> float:
+    value = float(text)
+    if not (math.isfinite(value) and value > 0.0):
+        raise argparse.ArgumentTypeError(f"must be a finite number > 0, got {text}")
+    return value
+
+
+def add_parser(subparsers) -> None:
+    parser = subparsers.add_parser(
+        "run",
+        help="run the simulation node on a scene",
+        description=__doc__.split("\n\n")[0],
+    )
+    parser.add_argument("scene", help="scene YAML path, or a shipped scene name (e.g. free_tumble)")
+    parser.add_argument("--duration", type=_nonnegative, help="sim seconds to run, then exit 0 (0 = unbounded)")
+    parser.add_argument(
+        "--realtime-factor", type=_nonnegative, dest="real_time_factor", help="1 = wall-clock pace, 0 = as fast as possible"
+    )
+    parser.add_argument("--integrator", help="integrator name from the registry, or auto")
+    parser.add_argument("--dt", type=_positive, help="physics step, s")
+    parser.add_argument("--record", metavar="OUT.mcap", help="record the run to this MCAP file")
+    parser.add_argument("--echo", type=_positive, metavar="PERIOD", help="print the received ~/state every PERIOD s of sim time")
+    parser.add_argument(
+        "--ros-args", nargs=argparse.REMAINDER, dest="ros_args", metavar="ARG",
+        help="everything after it goes to ROS as with ros2 run (e.g. --params-file FILE, -p name:=value)",
+    )
+    parser.set_defaults(handler=run)
+
+
+def node_arguments(args: argparse.Namespace) -> list[str]:
+    """The argv for the node: ``--ros-args -p name:=value ...`` plus the pass-through arguments."""
+    params = {"scene": resolve_scene(args.scene)}
+    if args.duration is not None:
+        params["duration"] = repr(float(args.duration))
+    if args.real_time_factor is not None:
+        params["real_time_factor"] = repr(float(args.real_time_factor))
+    if args.integrator is not None:
+        params["integrator"] = args.integrator
+    if args.dt is not None:
+        params["dt"] = repr(float(args.dt))
+    if args.record is not None:
+        params["record_path"] = os.path.abspath(args.record)
+    argv = ["rigid_rot_sim_node", "--ros-args"]
+    for name, value in params.items():
+        argv += ["-p", f"{name}:={value}"]
+    # after ours, so that a params file or -p given here overrides the options above
+    return argv + list(args.ros_args or [])
+
+
+def run(args: argparse.Namespace) -> int:
+    argv = node_arguments(args)  # ValueError for an unknown scene, before ROS starts
+    if args.echo is None:
+        from rigid_rot_sim.node import main
+
+        return main(argv)
+    return _run_with_echo(argv, args.echo)
+
+
+def _run_with_echo(argv: list[str], period: float) -> int:
+    """The node plus a subscriber to its ~/state in one executor, printing every ``period`` s."""
+    import rclpy
+    from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
+    from rigid_rot_msgs.msg import RigidBodyState
+
+    from rigid_rot_sim import conversions
+    from rigid_rot_sim.node import STATE_QOS, RigidRotSimNode
+
+    rclpy.init(args=argv)
+    node = echo = None
+    try:
+        node = RigidRotSimNode()
+        echo = rclpy.create_node("rigid_rot_echo")
+        state_topic = node.resolve_topic_name("~/state")
+        next_print = [0.0]
+        received = [0]
+
+        def on_state(msg: RigidBodyState) -> None:
+            received[0] += 1
+            s = conversions.state_to_arrays(msg)
+            if s["t"] + 1e-9 < next_print[0]:
+                return
+            next_print[0] = s["t"] + period
+            q, w = s["orientation"], s["angular_velocity_body"]
+            print(
+                f"t={s['t']:8.3f} s  q=({q[0]:+.4f} {q[1]:+.4f} {q[2]:+.4f} {q[3]:+.4f})  "
+                f"w_body=({w[0]:+.4f} {w[1]:+.4f} {w[2]:+.4f}) rad/s  "
+                f"|L|={float(sum(v * v for v in s['angular_momentum_world'])) ** 0.5:.6f}  "
+                f"E={s['kinetic_energy'] + s['potential_energy']:.6f} J  "
+                f"drift E={s['energy_drift']:+.1e} |L|={s['angular_momentum_drift']:+.1e}",
+                flush=True,
+            )
+
+        echo.create_subscription(RigidBodyState, state_topic, on_state, STATE_QOS)
+        print(f"echo: printing {state_topic} every {period:g} s of sim time", flush=True)
+        executor = SingleThreadedExecutor()
+        executor.add_node(node)
+        executor.add_node(echo)
+        while rclpy.ok() and not node.finished:
+            executor.spin_once(timeout_sec=0.1)
+        for _ in range(20):  # let the last states arrive
+            executor.spin_once(timeout_sec=0.01)
+        print(f"echo: {received[0]} messages received on {state_topic}", flush=True)
+    except (KeyboardInterrupt, ExternalShutdownException):
+        pass
+    finally:
+        for n in (echo, node):
+            if n is not None:
+                n.destroy_node()
+        rclpy.try_shutdown()
+    return 0

@@ -1,0 +1,104 @@
+"""``rigid-rot torque X Y Z``: publish torque commands (geometry_msgs/WrenchStamped) to a running node.
+
+    rigid-rot torque 0 0 0.01                       # once, body frame
+    rigid-rot torque 0 0 0.01 --duration 2 --rate 50 --frame world
+    rigid-rot torque --zero                         # clear: publish a zero torque
+
+The simplest client of the simulation node (ros2cli is not always installed). X Y Z are
+the torque in N*m, expressed in ``--frame`` (header.frame_id: the scene's body or world
+frame name, default ``body``); the force is zero and the stamp is left zero, so the node
+applies each command at the sim time it arrives. With ``--duration S`` the command is
+repeated at ``--rate`` Hz (wall clock) for S seconds and followed by a zero torque, which
+also keeps inputs with a hold timeout alive meanwhile. Waits up to ``--wait`` s for the
+node's subscription first; exit code 1 when nobody subscribes.
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+import time
+
+DEFAULT_TOPIC = "/rigid_rot_sim/torque"
+
+
+def _finite(text: str) -> float:
+    value = float(text)
+    if not math.isfinite(value):
+        raise argparse.ArgumentTypeError(f"must be finite, got {text}")
+    return value
+
+
+def _positive(text: str) -> float:
+    value = _finite(text)
+    if value <= 0.0:
+        raise argparse.ArgumentTypeError(f"must be > 0, got {text}")
+    return value
+
+
+def add_parser(subparsers) -> None:
+    parser = subparsers.add_parser(
+        "torque", help="publish WrenchStamped torque commands to a running node", description=__doc__.split("\n\n")[0]
+    )
+    parser.add_argument("torque", nargs="*", type=_finite, metavar="X Y Z", help="torque, N*m (omit with --zero)")
+    parser.add_argument("--frame", default="body", help="header.frame_id: the scene's body or world frame (default body)")
+    parser.add_argument("--duration", type=_positive, help="repeat for this many wall seconds, then send zero")
+    parser.add_argument("--rate", type=_positive, default=20.0, help="repeat rate with --duration, Hz (default 20)")
+    parser.add_argument("--topic", default=DEFAULT_TOPIC, help=f"command topic (default {DEFAULT_TOPIC})")
+    parser.add_argument("--zero", action="store_true", help="publish a zero torque (clears a held command)")
+    parser.add_argument("--wait", type=_positive, default=5.0, help="seconds to wait for a subscriber (default 5)")
+    parser.set_defaults(handler=run)
+
+
+def run(args: argparse.Namespace) -> int:
+    if args.zero:
+        if args.torque and any(args.torque):
+            raise ValueError("--zero takes no torque values")
+        torque = (0.0, 0.0, 0.0)
+    elif len(args.torque) != 3:
+        raise ValueError(f"give three torque components X Y Z (N*m), got {len(args.torque)}")
+    else:
+        torque = tuple(args.torque)
+
+    import rclpy
+    from geometry_msgs.msg import WrenchStamped
+
+    from rigid_rot_sim.conversions import array_to_vector3
+    from rigid_rot_sim.node import COMMAND_QOS
+
+    def message(values) -> WrenchStamped:
+        msg = WrenchStamped()
+        msg.header.frame_id = args.frame
+        msg.wrench.torque = array_to_vector3(values)
+        return msg
+
+    rclpy.init()
+    node = rclpy.create_node("rigid_rot_torque")
+    try:
+        publisher = node.create_publisher(WrenchStamped, args.topic, COMMAND_QOS)
+        deadline = time.monotonic() + args.wait
+        while publisher.get_subscription_count() == 0:
+            if time.monotonic() > deadline:
+                print(f"rigid-rot torque: no subscriber on {args.topic} after {args.wait:g} s (is the node running?)")
+                return 1
+            rclpy.spin_once(node, timeout_sec=0.05)
+        sent = 0
+        if args.duration is None:
+            publisher.publish(message(torque))
+            sent = 1
+        else:
+            period = 1.0 / args.rate
+            start = time.monotonic()
+            while time.monotonic() - start < args.duration:
+                publisher.publish(message(torque))
+                sent += 1
+                time.sleep(max(0.0, start + sent * period - time.monotonic()))
+            publisher.publish(message((0.0, 0.0, 0.0)))
+        # reliable delivery: give the middleware a moment before the process goes away
+        publisher.wait_for_all_acked(rclpy.duration.Duration(seconds=2.0))
+        print(f"rigid-rot torque: {sent} command(s) {list(torque)} N*m in frame {args.frame!r} on {args.topic}"
+              + (", then zero" if args.duration is not None else ""))
+        return 0
+    finally:
+        node.destroy_node()
+        rclpy.try_shutdown()
