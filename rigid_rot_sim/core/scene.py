@@ -373,11 +373,8 @@ def _parse_initial(ctx: _Ctx, raw: Any) -> InitialState:
         raise ctx.error("initial", "give orientation or euler_zxz, not both")
     orientation = (0.0, 0.0, 0.0, 1.0)
     if "orientation" in initial:
-        q = np.array(_vector(ctx, initial["orientation"], "initial.orientation", 4))
-        norm = float(np.linalg.norm(q))
-        if norm < 1e-12:
-            raise ctx.error("initial.orientation", "must be a non-zero quaternion (x, y, z, w)")
-        orientation = tuple(float(v) for v in q / norm)
+        q = ctx.checked(validation.quaternion, "initial.orientation", _vector(ctx, initial["orientation"], "initial.orientation", 4))
+        orientation = tuple(float(v) for v in q)
     elif "euler_zxz" in initial:
         angles = _vector(ctx, initial["euler_zxz"], "initial.euler_zxz", 3)
         orientation = tuple(float(v) for v in Rotation.from_euler("ZXZ", angles).as_quat())
