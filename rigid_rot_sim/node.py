@@ -186,7 +186,12 @@ class RigidRotSimNode(Node):
         self.apply_torque_service = self.create_service(ApplyTorque, "~/apply_torque", self.apply_torque_callback)
 
         if self.record_path:
-            built.append(f"recording to {self.record_path}")
+            from rigid_rot_sim.recording.node_recording import attach  # imported only when recording
+
+            # wraps self.sim and the publishers so that what changes the run and what is published
+            # is recorded; None (error logged) when the file cannot be created: the run goes on
+            self.recorder = attach(self, self.record_path)
+            built.append(f"recording to {self.record_path}" if self.recorder else "no recording (file error)")
         else:
             left_out.append("recorder (nothing recorded)")
 
@@ -393,11 +398,14 @@ class RigidRotSimNode(Node):
 
     def torque_callback(self, msg: Any, source: str) -> None:
         assert self.sim is not None
+        received_ns = time.time_ns()
         torque, force, frame_id, stamp = conversions.torque_command_from_msg(msg)
         try:
             self.sim.receive_torque(source, torque, frame_id, stamp, force)
         except CommandRejected as exc:
             self._reject(self.resolve_topic_name(source), exc.reason, frame_id, torque)
+        if self.recorder is not None:
+            self.recorder.record_command(self.resolve_topic_name(source), msg, received_ns)
 
     def set_state_callback(self, request, response):
         return self._serve(response, "~/set_state", lambda: self._set_state(request))
@@ -503,6 +511,11 @@ class RigidRotSimNode(Node):
         response.message = message
         return response
 
+    def destroy_node(self) -> None:
+        if self.recorder is not None:
+            self.recorder.close()  # summary and indexes: the file is complete (also on SIGINT / SIGTERM)
+        super().destroy_node()
+
     # ------------------------------------------------------------------ parameters
 
     def validate_parameters_callback(self, parameters: list[Parameter]) -> SetParametersResult:
@@ -567,6 +580,11 @@ def main(args: list[str] | None = None) -> int:
             executor.spin_once(timeout_sec=0.1)
     except (KeyboardInterrupt, ExternalShutdownException):
         pass
+    except RuntimeError:
+        if rclpy.ok():
+            raise
+        # SIGTERM / SIGINT shut the context down while spin_once was waiting (an RCLError):
+        # a normal stop, and the finally below still closes the node (and its recording)
     except ValueError as exc:  # SceneError, or a scene the integrator cannot run
         print(f"rigid_rot_sim_node: {exc}", flush=True)
         return 2
