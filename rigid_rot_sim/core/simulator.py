@@ -39,7 +39,7 @@ from rigid_rot_sim.core import advice
 from rigid_rot_sim.core import quaternion as quat
 from rigid_rot_sim.core.dynamics import RigidBody
 from rigid_rot_sim.core.integrators import get_method
-from rigid_rot_sim.core.integrators.base import Integrator, NonFiniteStateError
+from rigid_rot_sim.core.integrators.base import Integrator
 from rigid_rot_sim.core.scene import Scene, TopicInput
 from rigid_rot_sim.core.torque import ConstantTorque, GravityTorque
 from rigid_rot_sim.core import validation
@@ -513,7 +513,8 @@ class Simulator:
             start = (integrator.t, integrator.q, integrator.omega, integrator.n_steps)
             try:
                 integrator.advance(chunk)
-            except NonFiniteStateError as exc:
+            except (ArithmeticError, ValueError) as exc:
+                # NonFiniteStateError, or a math error on the way to it (sin(inf), overflow)
                 good = integrator.n_steps - start[3]
                 if good < chunk and np.all(np.isfinite(integrator.q)) and np.all(np.isfinite(integrator.omega)):
                     self._k += good  # the method stopped at its last good step
@@ -521,7 +522,7 @@ class Simulator:
                 else:
                     integrator.set_state(*start[:3])
                     integrator.n_steps = start[3]
-                self.failure = str(exc)
+                self.failure = f"{type(exc).__name__}: {exc}"
                 self.paused = True
                 return done
             self._k += chunk
@@ -590,7 +591,7 @@ class Simulator:
         self._momentum_ref = 0.0
         reference = self.snapshot()
         self._energy_ref = reference.energy
-        self._momentum_ref = float(np.linalg.norm(reference.angular_momentum_world))
+        self._momentum_ref = math.hypot(*reference.angular_momentum_world)
 
     def snapshot(self) -> StateSnapshot:
         """The state at the current step boundary (user body frame; see :class:`StateSnapshot`)."""
@@ -619,7 +620,7 @@ class Simulator:
             p_phi = momentum_world[2]
             p_psi = float(np.dot(momentum_body, self._symmetry_axis))
         energy = kinetic + potential
-        momentum = math.sqrt(momentum_world[0] ** 2 + momentum_world[1] ** 2 + momentum_world[2] ** 2)
+        momentum = math.hypot(*momentum_world)
         return StateSnapshot(
             t=self.t,
             step=self._k,
