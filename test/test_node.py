@@ -1,0 +1,250 @@
+"""In-process tests of the simulation node: what it builds, parameters, services, rejections.
+
+Each test creates the node with ``parameter_overrides`` in an rclpy context of its own
+(domain id private to this test run, localhost discovery) and talks to it from a client
+node in the same executor.
+"""
+
+import math
+import os
+import time
+from pathlib import Path
+
+import pytest
+
+os.environ.setdefault("ROS_DOMAIN_ID", str(os.getpid() % 100 + 1))
+os.environ.setdefault("ROS_AUTOMATIC_DISCOVERY_RANGE", "LOCALHOST")
+
+import rclpy  # noqa: E402
+from builtin_interfaces.msg import Duration  # noqa: E402
+from geometry_msgs.msg import Vector3, WrenchStamped  # noqa: E402
+from rclpy.executors import SingleThreadedExecutor  # noqa: E402
+from rclpy.parameter import Parameter  # noqa: E402
+from rigid_rot_msgs.msg import RejectedCommand, RigidBodyState  # noqa: E402
+from rigid_rot_msgs.srv import ApplyTorque, ComputeInertia, Reset, SetState, StepSimulation  # noqa: E402
+from std_srvs.srv import SetBool  # noqa: E402
+
+from rigid_rot_sim.node import COMMAND_QOS, REJECTED_QOS, STATE_QOS, RigidRotSimNode  # noqa: E402
+
+ROOT = Path(__file__).resolve().parents[1]
+SCENES = ROOT / "config" / "scenes"
+
+
+@pytest.fixture
+def context():
+    ctx = rclpy.Context()
+    rclpy.init(context=ctx)
+    yield ctx
+    rclpy.shutdown(context=ctx)
+
+
+class Harness:
+    """The node under test, a client node and one executor for both."""
+
+    def __init__(self, ctx, scene: str | None, **params):
+        overrides = [Parameter(name, value=value) for name, value in params.items()]
+        if scene is not None:
+            overrides.insert(0, Parameter("scene", value=str(SCENES / f"{scene}.yaml")))
+        self.node = RigidRotSimNode(context=ctx, parameter_overrides=overrides)
+        self.client = rclpy.create_node("test_client", context=ctx)
+        self.executor = SingleThreadedExecutor(context=ctx)
+        self.executor.add_node(self.node)
+        self.executor.add_node(self.client)
+
+    def call(self, srv_type, name: str, request, timeout: float = 10.0):
+        client = self.client.create_client(srv_type, f"/rigid_rot_sim/{name}")
+        assert client.wait_for_service(timeout_sec=timeout)
+        future = client.call_async(request)
+        self.executor.spin_until_future_complete(future, timeout_sec=timeout)
+        assert future.done(), f"{name}: no reply in {timeout} s"
+        return future.result()
+
+    def spin_until(self, condition, timeout: float = 10.0) -> bool:
+        deadline = time.monotonic() + timeout
+        while time.monotonic() < deadline:
+            if condition():
+                return True
+            self.executor.spin_once(timeout_sec=0.02)
+        return condition()
+
+    def published_topics(self) -> dict[str, list[str]]:
+        return dict(self.client.get_publisher_names_and_types_by_node("rigid_rot_sim", "/"))
+
+    def close(self):
+        self.executor.shutdown()
+        self.client.destroy_node()
+        self.node.destroy_node()
+
+
+@pytest.fixture
+def harness(context):
+    made = []
+
+    def make(scene, **params):
+        h = Harness(context, scene, **params)
+        made.append(h)
+        return h
+
+    yield make
+    for h in made:
+        h.close()
+
+
+def test_without_scene_only_compute_inertia_is_served(harness):
+    h = harness(None)
+    assert h.node.sim is None
+    request = ComputeInertia.Request(masses=[1.0, 1.0])
+    request.positions = [_point(0.5, 0, 0), _point(-0.5, 0, 0)]
+    response = h.call(ComputeInertia, "compute_inertia", request)
+    assert response.success and response.symmetry == "linear"
+    services = dict(h.client.get_service_names_and_types_by_node("rigid_rot_sim", "/"))
+    assert "/rigid_rot_sim/compute_inertia" in services and "/rigid_rot_sim/set_state" not in services
+
+
+def _point(x, y, z):
+    from geometry_msgs.msg import Point
+
+    return Point(x=float(x), y=float(y), z=float(z))
+
+
+def test_torque_free_scene_builds_no_subscription_and_picks_exact(harness):
+    h = harness("free_tumble", real_time_factor=0.0)
+    assert h.node.sim.method == "exact"
+    assert h.node.torque_subscriptions == []
+    subscriptions = dict(h.client.get_subscriber_names_and_types_by_node("rigid_rot_sim", "/"))
+    assert not any("torque" in topic for topic in subscriptions)
+    assert h.spin_until(lambda: "/rigid_rot_sim/state" in h.published_topics())
+    topics = h.published_topics()
+    for topic in ("/rigid_rot_sim/state", "/rigid_rot_sim/orientation", "/rigid_rot_sim/angular_velocity",
+                  "/rigid_rot_sim/angular_momentum", "/rigid_rot_sim/mass_properties", "/rigid_rot_sim/rejected", "/clock"):
+        assert topic in topics, topic
+    assert "/rigid_rot_sim/top_state" not in topics
+    assert h.node.recorder is None
+
+
+def test_top_scene_builds_top_state_and_torque_scene_subscribes(harness):
+    top = harness("heavy_top", real_time_factor=0.0)
+    assert top.spin_until(lambda: "/rigid_rot_sim/top_state" in top.published_topics())
+    assert top.node.sim.method == "exact_split"
+    top.close()
+    driven = harness("torque_driven", real_time_factor=0.0)
+    assert [s.topic_name for s in driven.node.torque_subscriptions] == ["/rigid_rot_sim/torque"]
+    assert driven.node.sim.method == "taylor"
+
+
+def test_parameters_are_validated_and_applied(harness):
+    h = harness("torque_driven", real_time_factor=0.0)
+    node = h.node
+    refused = node.set_parameters([Parameter("integrator", value="magic")])[0]
+    assert not refused.successful and "unknown integrator 'magic'" in refused.reason
+    assert node.sim.method == "taylor" and node.get_parameter("integrator").value == "auto"
+    for bad_dt in (-0.001, 0.0):
+        result = node.set_parameters([Parameter("dt", value=bad_dt)])[0]
+        assert not result.successful and result.reason
+    assert node.sim.dt == 0.001
+    assert not node.set_parameters([Parameter("scene", value="other.yaml")])[0].successful
+    refused_rate = node.set_parameters([Parameter("rates.top_state", value=10.0)])[0]
+    assert not refused_rate.successful and "not built" in refused_rate.reason
+    ok = node.set_parameters([Parameter("integrator", value="rk4"), Parameter("dt", value=0.002)])[0]
+    assert ok.successful
+    assert node.sim.method == "rk4" and node.sim.dt == 0.002
+    assert node.set_parameters([Parameter("real_time_factor", value=2.0)])[0].successful
+    assert node.real_time_factor == 2.0
+    assert node.set_parameters([Parameter("rates.state", value=25.0)])[0].successful
+    assert node.output_periods["state"] == 20  # 25 Hz at dt = 2 ms
+    # the run continues
+    k = node.sim.step_index
+    assert h.spin_until(lambda: node.sim.step_index > k + 100)
+
+
+def test_params_file_overrides_the_scene(context, tmp_path):
+    params = tmp_path / "params.yaml"
+    params.write_text(
+        "rigid_rot_sim:\n  ros__parameters:\n"
+        f"    scene: {SCENES / 'torque_driven.yaml'}\n    integrator: rk4\n    dt: 0.0005\n"
+        "    real_time_factor: 0.0\n    rates:\n      state: 200.0\n      clock: 0.0\n"
+    )
+    node = RigidRotSimNode(context=context, cli_args=["--ros-args", "--params-file", str(params)])
+    try:
+        assert node.sim.method == "rk4" and node.sim.dt == 0.0005 and node.real_time_factor == 0.0
+        assert node.output_periods["state"] == 10 and "clock" not in node.output_periods
+    finally:
+        node.destroy_node()
+
+
+def test_pause_step_reset_set_state_services(harness):
+    h = harness("free_tumble", real_time_factor=1.0)
+    states = []
+    h.client.create_subscription(RigidBodyState, "/rigid_rot_sim/state", states.append, STATE_QOS)
+    refused = h.call(StepSimulation, "step", StepSimulation.Request(steps=5))
+    assert not refused.success and "not paused" in refused.message
+    assert h.call(SetBool, "pause", SetBool.Request(data=True)).success
+    k = h.node.sim.step_index
+    h.spin_until(lambda: False, timeout=0.2)
+    assert h.node.sim.step_index == k  # paused: no steps
+    zero = h.call(StepSimulation, "step", StepSimulation.Request(steps=0))
+    assert not zero.success
+    stepped = h.call(StepSimulation, "step", StepSimulation.Request(steps=25))
+    assert stepped.success and h.node.sim.step_index == k + 25
+    t = stepped.state.header.stamp.sec + stepped.state.header.stamp.nanosec * 1e-9
+    assert t == pytest.approx((k + 25) * 0.01, abs=1e-9)
+    request = SetState.Request()
+    request.orientation.w = 2.0  # normalised by the simulator
+    request.angular_velocity = Vector3(x=0.0, y=0.0, z=1.5)
+    assert h.call(SetState, "set_state", request).success
+    snap = h.node.sim.snapshot()
+    assert snap.orientation.tolist() == [0.0, 0.0, 0.0, 1.0] and snap.angular_velocity_body.tolist() == [0.0, 0.0, 1.5]
+    bad = SetState.Request()
+    bad.orientation.w = 0.0  # all-zero quaternion (the message default is w = 1)
+    response = h.call(SetState, "set_state", bad)
+    assert not response.success and "orientation" in response.message
+    bad_omega = SetState.Request()
+    bad_omega.orientation.w = 1.0
+    bad_omega.angular_velocity.x = math.nan
+    assert not h.call(SetState, "set_state", bad_omega).success
+    assert h.call(Reset, "reset", Reset.Request()).success
+    assert h.node.sim.step_index == 0
+    assert h.node.sim.snapshot().angular_velocity_body.tolist() == [0.3, 0.2, 2.0]
+    assert h.call(SetBool, "pause", SetBool.Request(data=False)).success
+    assert h.spin_until(lambda: h.node.sim.step_index > 5)
+
+
+def test_apply_torque_service_and_rejections(harness):
+    h = harness("torque_driven", real_time_factor=0.0, integrator="rk4")
+    rejected = []
+    h.client.create_subscription(RejectedCommand, "/rigid_rot_sim/rejected", rejected.append, REJECTED_QOS)
+    request = ApplyTorque.Request(torque=Vector3(z=0.004), frame_id="", duration=Duration(sec=0, nanosec=100_000_000))
+    response = h.call(ApplyTorque, "apply_torque", request)
+    assert response.success, response.message
+    bad = ApplyTorque.Request(torque=Vector3(z=0.004), frame_id="map", duration=Duration(sec=1))
+    response = h.call(ApplyTorque, "apply_torque", bad)
+    assert not response.success and "neither the body frame" in response.message
+    zero = ApplyTorque.Request(torque=Vector3(z=0.004), duration=Duration())
+    assert not h.call(ApplyTorque, "apply_torque", zero).success
+    # bad topic commands: published on ~/rejected with the reason, no effect on the state
+    publisher = h.client.create_publisher(WrenchStamped, "/rigid_rot_sim/torque", COMMAND_QOS)
+    assert h.spin_until(lambda: publisher.get_subscription_count() > 0)
+    nan_cmd = WrenchStamped()
+    nan_cmd.header.frame_id = "body"
+    nan_cmd.wrench.torque.x = math.nan
+    force_cmd = WrenchStamped()
+    force_cmd.header.frame_id = "body"
+    force_cmd.wrench.torque.z = 1.0
+    force_cmd.wrench.force.x = 2.0
+    publisher.publish(nan_cmd)
+    publisher.publish(force_cmd)
+    assert h.spin_until(lambda: len(rejected) >= 4)
+    reasons = [r.reason for r in rejected]
+    sources = {r.source for r in rejected}
+    assert any("neither the body frame" in r for r in reasons)
+    assert any("non-finite torque.x" in r for r in reasons) and any("non-zero force" in r for r in reasons)
+    assert sources == {"/rigid_rot_sim/apply_torque", "/rigid_rot_sim/torque"}
+    assert h.spin_until(lambda: h.node.sim.t > 0.5)
+    # only the 0.1 s applied torque acted: omega_z = 0.004 * 0.1 / 0.04
+    assert h.node.sim.snapshot().angular_velocity_body[2] == pytest.approx(0.01, rel=1e-9)
+
+
+def test_duration_reached_finishes(harness):
+    h = harness("free_tumble", real_time_factor=0.0, duration=0.5)
+    assert h.spin_until(lambda: h.node.finished)
+    assert h.node.sim.t == pytest.approx(0.5, abs=1e-12) and h.node.sim.step_index == 50
