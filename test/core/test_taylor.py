@@ -102,7 +102,7 @@ def test_in_place_recurrence_matches_reference_form():
     x0 = np.concatenate([OMEGA0, Q0])
     c, _ = derivative_map(MOMENTS, torque)
     forcing = integrator._forcing(0.0)
-    h, x = integrator._substep(0.0, x0, 0.3)
+    h, _, x = integrator._substep(0.0, x0, 0.3, 0.3)
     coeffs = taylor_coefficients(x0, integrator.series_order, c, forcing)
     expected = np.polynomial.polynomial.polyval(h, coeffs)
     expected[3:] /= np.linalg.norm(expected[3:])
@@ -203,8 +203,43 @@ def test_basilisk_case_conserves_energy_and_momentum_at_1ms():
     l0 = np.linalg.norm(moments * omega0)
     assert abs(dynamics.kinetic_energy(moments, integrator.omega) / e0 - 1.0) < 1e-12
     assert abs(np.linalg.norm(moments * integrator.omega) / l0 - 1.0) < 1e-12
-    # short API steps lower the series order instead of running it in full
-    assert integrator.n_substeps == 10_000
+    # dense output: the internal steps do not follow the 1 ms API steps
+    assert integrator.n_substeps < 100
+
+
+def test_dense_output_matches_reference_at_every_api_step():
+    """P2 with 0.1 s API steps: each output is the series evaluated inside a large internal step."""
+    torque = ConstantTorque([0.1, -0.05, 0.02])
+    integrator = Taylor(MOMENTS, 0.1, torque, omega0=OMEGA0, q0=Q0, tol=1e-12)
+    sol = solve_ivp(
+        reference_rhs(MOMENTS, torque), (0.0, 5.0), np.concatenate([OMEGA0, Q0]), method="DOP853",
+        rtol=1e-13, atol=1e-14, dense_output=True,
+    )
+    worst_omega = worst_q = 0.0
+    for n in range(1, 51):
+        integrator.step()
+        assert integrator.t == pytest.approx(0.1 * n, rel=1e-15)
+        y = sol.sol(integrator.t)
+        worst_omega = max(worst_omega, np.max(np.abs(integrator.omega - y[:3])))
+        worst_q = max(worst_q, quaternion_distance(integrator.q, y[3:] / np.linalg.norm(y[3:])))
+        assert abs(np.linalg.norm(integrator.q) - 1.0) < 1e-15
+    assert worst_omega < 1e-11 and worst_q < 1e-11
+    assert integrator.n_substeps < 20  # far fewer internal steps than API steps
+
+
+def test_torque_commands_at_the_step_rate_land_on_each_step():
+    """A new ConstantTorque every step (a controller): exact on a spherical body, short steps."""
+    inertia = 1.5
+    integrator = Taylor([inertia] * 3, 0.01, None, omega0=OMEGA0, q0=Q0, tol=1e-12)
+    expected = OMEGA0.copy()
+    rng = np.random.default_rng(3)
+    for _ in range(200):
+        command = rng.normal(size=3)
+        integrator.torque = ConstantTorque(command)
+        integrator.step()
+        expected = expected + command * 0.01 / inertia
+    np.testing.assert_allclose(integrator.omega, expected, rtol=0, atol=1e-13)
+    assert 200 <= integrator.n_substeps <= 210  # one (rarely two) internal steps per command
 
 
 def test_heavy_top_matches_dop853_and_conserves_energy():

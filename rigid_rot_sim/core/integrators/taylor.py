@@ -256,31 +256,61 @@ class Taylor(Integrator):
 
     def _on_state_change(self) -> None:
         self._rho = None
+        self._series = None
 
     def _step_impl(self) -> None:
+        # Dense output: the series of the last internal step covers [t0, t0 + h]; an API
+        # step ending inside it is one polynomial evaluation, so short API steps cost
+        # little and the internal steps do not depend on dt (as scipy's dense output).
+        # When the torque was just replaced (commands arriving at the step rate) or step
+        # control is off, the internal steps land on the API step instead.
+        target = self.t + self.dt
+        landing = self.tol is None
         if self.torque is not self._torque_seen:
             self._configure_torque()
-        x = np.concatenate([self.omega, self.q])
-        t = self.t
-        target = self.t + self.dt
-        while True:
-            remaining = target - t
-            h, x = self._substep(t, x, min(remaining, self.max_step))
-            self.n_substeps += 1
-            if h >= remaining:
-                break
-            if t + h == t:
-                raise NonFiniteStateError(
-                    f"{self.name}: step size underflow at step {self.n_steps + 1}, t = {t:.9g} s "
-                    f"(h = {h:.3g} s; omega = {x[:3]})"
-                )
-            t += h
+            self._series = None
+            landing = True
+        series = self._series
+        if series is not None and target <= series[0] + series[1]:
+            x = self._evaluate(target - series[0], series[2])
+        else:
+            if series is None:
+                t, x = self.t, np.concatenate([self.omega, self.q])
+            else:
+                t, x = series[0] + series[1], series[3]
+            while True:
+                remaining = target - t
+                land = min(remaining, self.max_step)
+                h, p, x_end = self._substep(t, x, land if landing else self.max_step, land)
+                self.n_substeps += 1
+                if h >= remaining:
+                    break
+                if t + h == t:
+                    raise NonFiniteStateError(
+                        f"{self.name}: step size underflow at step {self.n_steps + 1}, t = {t:.9g} s "
+                        f"(h = {h:.3g} s; omega = {x_end[:3]})"
+                    )
+                t += h
+                x = x_end
+            self._series = (t, h, p, x_end)
+            x = x_end if h == remaining else self._evaluate(remaining, p)
         self.t = target
         self.omega = x[:3].copy()
         self.q = x[3:].copy()
 
-    def _substep(self, t0: float, x0: np.ndarray, h_cap: float) -> tuple[float, np.ndarray]:
-        """One Taylor step from (t0, x0) of length <= h_cap; returns (h, x(t0 + h))."""
+    def _evaluate(self, s: float, p: int) -> np.ndarray:
+        """The last series (order p) at s from its start, with the quaternion renormalised."""
+        x = np.power(s, self._exponents[: p + 1]) @ self._coeffs[: p + 1]
+        q = x[3:]
+        q *= 1.0 / math.sqrt(float(q @ q))
+        return x
+
+    def _substep(self, t0: float, x0: np.ndarray, h_cap: float, h_fallback: float) -> tuple[float, int, np.ndarray]:
+        """One Taylor step from (t0, x0) of length <= h_cap; returns (h, order, x(t0 + h)).
+
+        ``h_fallback`` is taken when the series gives no bound (all its last coefficients
+        vanish, as for a body at rest) and h_cap is infinite.
+        """
         p = self.series_order
         tol = self.tol
         scale = max(1.0, float(np.abs(x0).max()))
@@ -322,10 +352,9 @@ class Taylor(Integrator):
                 h = min(h, rho_last * tol ** (1.0 / p))
             if p == self.series_order or h < h_cap:
                 self._rho = rho
-        x = np.power(h, self._exponents[: p + 1]) @ coeffs[: p + 1]
-        q = x[3:]
-        q *= 1.0 / math.sqrt(float(q @ q))
-        return h, x
+        if math.isinf(h):
+            h = h_fallback
+        return h, p, self._evaluate(h, p)
 
 
 class _Unset:
