@@ -12,6 +12,11 @@
    every step or every 10th; recording on writes all three to MCAP (flush thread running).
    This is the node's work per step without DDS, so the difference is the recorder's.
 
+3. The node itself (rclpy, in-process, no subscriber): torque_driven scene, rk4 at
+   1 kHz, real-time factor 0, every output at its scene rate (100 Hz), spun like
+   ``rigid_rot_sim.node.main`` until ``--sim-seconds`` of sim time are done, with
+   ``record_path`` unset and set.
+
 Figures are printed, never asserted.
 """
 
@@ -132,10 +137,40 @@ def loop_rate(steps: int, record: bool, publish_every: int) -> float:
     return steps / best
 
 
+def node_rate(sim_seconds: float, record: Path | None) -> float:
+    """Physics steps per wall second of the real node at real-time factor 0."""
+    import rclpy
+    from rclpy.executors import SingleThreadedExecutor
+    from rclpy.parameter import Parameter
+
+    from rigid_rot_sim.node import RigidRotSimNode
+
+    scene = SCENE.with_name("torque_driven.yaml")
+    context = rclpy.Context()
+    rclpy.init(context=context, domain_id=(os.getpid() % 100) + 1)
+    overrides = [Parameter("scene", value=str(scene)), Parameter("integrator", value="rk4"),
+                 Parameter("real_time_factor", value=0.0), Parameter("duration", value=float(sim_seconds))]
+    if record is not None:
+        overrides.append(Parameter("record_path", value=str(record)))
+    node = RigidRotSimNode(context=context, parameter_overrides=overrides)
+    executor = SingleThreadedExecutor(context=context)
+    executor.add_node(node)
+    start = time.perf_counter()
+    while not node.finished:
+        executor.spin_once(timeout_sec=0.1)
+    elapsed = time.perf_counter() - start
+    steps = node.sim.step_index
+    executor.shutdown()
+    node.destroy_node()
+    rclpy.try_shutdown(context=context)
+    return steps / elapsed
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--messages", type=int, default=50_000, help="messages per throughput run")
     parser.add_argument("--steps", type=int, default=20_000, help="steps per loop-rate run")
+    parser.add_argument("--sim-seconds", type=float, default=10.0, help="sim time per node run (1 kHz steps)")
     args = parser.parse_args()
     print(f"python {platform.python_version()}, {os.cpu_count()} CPUs, {platform.platform()}")
     writer_throughput(args.messages)
@@ -145,6 +180,12 @@ def main() -> None:
         off = loop_rate(args.steps, record=False, publish_every=every)
         on = loop_rate(args.steps, record=True, publish_every=every)
         print(f"   {label:<28} {off:>14,.0f} {on:>14,.0f} {(off / on - 1.0) * 100:>8.0f}%")
+    print(f"3. The node (torque_driven, rk4 at 1 kHz, rtf 0, outputs at 100 Hz, {args.sim_seconds:g} s of sim time; best of 3)")
+    with tempfile.TemporaryDirectory() as tmp:
+        off = max(node_rate(args.sim_seconds, None) for _ in range(3))
+        on = max(node_rate(args.sim_seconds, Path(tmp) / f"node{i}.mcap") for i in range(3))
+    print(f"   recording off: {off:>10,.0f} steps/s")
+    print(f"   recording on:  {on:>10,.0f} steps/s  ({(off / on - 1.0) * 100:.0f} % slower)")
 
 
 if __name__ == "__main__":

@@ -27,6 +27,8 @@ import time
 from pathlib import Path
 from typing import Any
 
+from rclpy.serialization import serialize_message
+
 from rigid_rot_sim.recording.session import RunRecorder
 from rigid_rot_sim.recording.writer import QosProfile, RecorderError
 
@@ -41,11 +43,15 @@ class RecordingPublisher:
         self._topic = publisher.topic_name
 
     def publish(self, msg: Any) -> None:
-        self._publisher.publish(msg)
-        if self._recording.active:
-            self._recording.run.record(self._topic, msg)
-            if self._after is not None:
-                self._after(msg)
+        if not self._recording.active:
+            self._publisher.publish(msg)
+            return
+        # serialise once: the same CDR bytes go on the wire (publish_raw) and into the file
+        data = serialize_message(msg)
+        self._publisher.publish(data)
+        self._recording.run.record_serialized(self._topic, data)
+        if self._after is not None:
+            self._after(msg)
 
     def __getattr__(self, name: str) -> Any:
         return getattr(self._publisher, name)
