@@ -71,6 +71,15 @@ def run_taylor(tol: float, torque, t_end: float, order: int | None = None) -> np
     return integrator.omega
 
 
+def run_registered(method: str, t_end: float, **options) -> np.ndarray:
+    """Another method of the registry, one API step of length T (for context)."""
+    from rigid_rot_sim.core.integrators import METHODS
+
+    integrator = METHODS[method](MOMENTS, t_end, None, omega0=OMEGA0, q0=Q0, **options)
+    integrator.step()
+    return integrator.omega
+
+
 def best_time(fn: Callable[[], np.ndarray], repeats: int, budget: float = 1.5) -> tuple[float, np.ndarray]:
     """Best wall-clock time of ``repeats`` calls (fewer if one call exceeds the budget)."""
     best = math.inf
@@ -106,7 +115,10 @@ def sweep(name: str, spec: dict, repeats: int, quick: bool) -> dict[str, list[tu
     omega_ref, what, spread = reference(name, torque, t_end)
     print(f"\n== {name}: {spec['title']}")
     print(f"   reference: {what}; second method differs by {spread:.1e} rad/s")
-    taylor_tols = [1e-6, 1e-8, 1e-10, 1e-11, 1e-12, 1e-13, 1e-14] if not quick else [1e-8, 1e-11, 1e-13]
+    taylor_tols = [1e-6, 1e-8, 1e-9, 1e-10, 3e-11, 1e-11, 3e-12, 1e-12, 1e-13, 1e-14]
+    scipy_rtols = [1e-6, 1e-8, 1e-9, 1e-10, 3e-11, 1e-11, 3e-12, 1e-12, 1e-13]
+    if quick:
+        taylor_tols, scipy_rtols = [1e-8, 1e-11, 1e-13], [1e-8, 1e-11, 1e-13]
     runs: dict[str, list[tuple[str, Callable[[], np.ndarray]]]] = {
         "taylor": [(f"tol={tol:.0e}", lambda tol=tol: run_taylor(tol, torque, t_end)) for tol in taylor_tols],
         "taylor p=-ln(tol)/2": [
@@ -118,13 +130,15 @@ def sweep(name: str, spec: dict, repeats: int, quick: bool) -> dict[str, list[tu
         ],
         "scipy DOP853": [
             (f"rtol={r:.0e}", lambda r=r: run_scipy("DOP853", r, torque, t_end))
-            for r in ([1e-6, 1e-8, 1e-10, 1e-11, 1e-12, 1e-13] if not quick else [1e-8, 1e-11, 1e-13])
+            for r in scipy_rtols
         ],
         "scipy RK45": [
             (f"rtol={r:.0e}", lambda r=r: run_scipy("RK45", r, torque, t_end))
-            for r in ([1e-6, 1e-8, 1e-10, 1e-11, 1e-12] if not quick else [1e-8, 1e-10])
+            for r in scipy_rtols[:-1]
         ],
     }
+    if not any(torque):
+        runs["exact (context)"] = [("", lambda: run_registered("exact", t_end))]
     results: dict[str, list[tuple[str, float, float]]] = {}
     print(f"   {'method':22s} {'setting':12s} {'time/ms':>9s} {'omega error':>12s}")
     for method, settings in runs.items():
@@ -138,8 +152,19 @@ def sweep(name: str, spec: dict, repeats: int, quick: bool) -> dict[str, list[tu
 
 
 def fastest_reaching(points: list[tuple[str, float, float]], target: float) -> tuple[str, float] | None:
+    """(setting, time) of the fastest measured run with error <= target."""
     ok = [(elapsed, label) for label, elapsed, error in points if error <= target]
     return (min(ok)[1], min(ok)[0]) if ok else None
+
+
+def interpolated_time(points: list[tuple[str, float, float]], target: float) -> float | None:
+    """Run time at error = target, log-log interpolated between the two sweep points around it."""
+    ordered = sorted(points, key=lambda p: -p[2])  # loosest first
+    for (_, t_a, e_a), (_, t_b, e_b) in zip(ordered, ordered[1:]):
+        if e_a > target >= e_b and e_b > 0.0:
+            w = math.log(e_a / target) / math.log(e_a / e_b)
+            return math.exp((1.0 - w) * math.log(t_a) + w * math.log(t_b))
+    return None
 
 
 def main() -> None:
@@ -157,9 +182,12 @@ def main() -> None:
             if found and (best_scipy is None or found[1] < best_scipy[2]):
                 best_scipy = (method, found[0], found[1])
         best_taylor = fastest_reaching(results["taylor"], TARGET)
-        summary.append((name, best_taylor, best_scipy))
+        interp_scipy = [interpolated_time(results[m], TARGET) for m in ("scipy DOP853", "scipy RK45")]
+        interp_scipy = min((t for t in interp_scipy if t is not None), default=None)
+        interp_taylor = interpolated_time(results["taylor"], TARGET)
+        summary.append((name, best_taylor, best_scipy, interp_taylor, interp_scipy))
     print(f"\n== fastest run reaching omega error <= {TARGET:.0e} rad/s (best of {repeats} repeats)")
-    for name, best_taylor, best_scipy in summary:
+    for name, best_taylor, best_scipy, interp_taylor, interp_scipy in summary:
         if best_taylor is None or best_scipy is None:
             print(f"   {name}: target not reached (taylor: {best_taylor}, scipy: {best_scipy})")
             continue
@@ -168,6 +196,11 @@ def main() -> None:
             f"   {name}: taylor {best_taylor[0]} {best_taylor[1] * 1e3:.2f} ms; "
             f"{best_scipy[0]} {best_scipy[1]} {best_scipy[2] * 1e3:.2f} ms; ratio {ratio:.1f}x"
         )
+        if interp_taylor and interp_scipy:
+            print(
+                f"       interpolated to exactly {TARGET:.0e}: taylor {interp_taylor * 1e3:.2f} ms, "
+                f"fastest scipy {interp_scipy * 1e3:.2f} ms; ratio {interp_scipy / interp_taylor:.1f}x"
+            )
 
 
 if __name__ == "__main__":

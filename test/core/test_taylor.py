@@ -354,3 +354,8 @@ def test_simulate_with_a_full_inertia_tensor_matches_dop853():
     np.testing.assert_allclose(taylor.t, dop.t, rtol=0, atol=0)
     assert np.max(np.abs(taylor.omega - dop.omega)) < 1e-10
     assert max(quaternion_distance(a, b) for a, b in zip(taylor.q, dop.q)) < 1e-10
+
+
+def test_class_order_is_the_default_series_order():
+    assert Taylor.order == Taylor(MOMENTS, 1.0).series_order == order_for_tolerance(1e-12)
+    assert Taylor.fixed_step is False
