@@ -117,7 +117,7 @@ def plot_run(path: str | os.PathLike[str], out_dir: str | os.PathLike[str] | Non
     ax.plot(t, np.linalg.norm(series.omega_body, axis=1), color="black", linestyle="--", linewidth=1, label="|ω|")
     ax.set(xlabel="sim time (s)", ylabel="angular velocity, body frame (rad/s)", title=_title(reader, "Angular velocity"))
     ax.grid(True, alpha=0.3)
-    ax.legend(loc="upper right", ncols=4)
+    ax.legend(loc="best", ncols=4)
     save(fig, "omega.png")
 
     # relative drift of energy and |L|
@@ -147,7 +147,7 @@ def plot_run(path: str | os.PathLike[str], out_dir: str | os.PathLike[str] | Non
     ax.set(xlabel="sim time (s)", ylabel="torque, body frame (N*m)",
            title=_title(reader, "Torque applied") + f"\n{len(command_times)} torque commands recorded")
     ax.grid(True, alpha=0.3)
-    ax.legend(loc="upper right")
+    ax.legend(loc="best")
     save(fig, "torque.png")
 
     # polhode on the energy ellipsoid, principal frame
