@@ -266,3 +266,14 @@ def test_rigid_rot_run_record_writes_a_complete_bag(tmp_path):
     stamps = {round(msg.header.stamp.sec + msg.header.stamp.nanosec * 1e-9, 6) for _, msg in reader.decoded([STATE_TOPIC])}
     assert stamps == {round(0.02 * i, 6) for i in range(26)}  # 50 Hz over 0.5 s, both ends included
     assert resimulate(bag).identical
+
+
+def test_unwritable_record_path_is_reported_and_the_simulation_runs_on(tmp_path, launch_node, ros_node):
+    blocker = tmp_path / "a_file"
+    blocker.write_text("not a directory")
+    node = launch_node(*node_args(write_scene(tmp_path), blocker / "run.mcap"), name="unwritable")
+    t0 = first_state_time(ros_node, node)
+    assert t0 >= 0.0
+    node.check_alive()
+    assert f"cannot record to {blocker / 'run.mcap'}" in node.log()
+    assert "without recording" in node.log()

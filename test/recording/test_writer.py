@@ -191,3 +191,28 @@ def test_topic_type_conflict_is_a_value_error(tmp_path):
         recorder.add_topic("/x", "geometry_msgs/WrenchStamped")  # same type, no-op
         with pytest.raises(ValueError, match="/x"):
             recorder.add_topic("/x", "geometry_msgs/msg/Vector3Stamped")
+
+
+def test_rosbag2_metadata_has_every_key_the_version_8_decoder_reads(tmp_path):
+    # rosbag2_storage/yaml.hpp decodes, for version 8: version, storage_identifier, duration,
+    # starting_time, message_count, topics_with_message_count (name, type,
+    # serialization_format, offered_qos_profiles >= v4, type_description_hash >= v7),
+    # relative_file_paths, compression_* (>= v3), files (>= v5), custom_data (>= v6),
+    # ros_distro (>= v8). A missing key makes `ros2 bag info` throw.
+    path = tmp_path / "keys.mcap"
+    record_synthetic(path, n=3)
+    bag = yaml.safe_load(BagReader(path).metadata["rosbag2"]["serialized_metadata"])
+    assert {"version", "storage_identifier", "duration", "starting_time", "message_count",
+            "topics_with_message_count", "relative_file_paths", "compression_format",
+            "compression_mode", "files", "custom_data", "ros_distro"} <= set(bag)
+    assert bag["storage_identifier"] == "mcap" and bag["relative_file_paths"] == ["keys.mcap"]
+    assert set(bag["duration"]) == {"nanoseconds"} and set(bag["starting_time"]) == {"nanoseconds_since_epoch"}
+    (file_info,) = bag["files"]
+    assert set(file_info) == {"path", "starting_time", "duration", "message_count"}
+    assert file_info["message_count"] == bag["message_count"] == 7
+    for topic in bag["topics_with_message_count"]:
+        meta = topic["topic_metadata"]
+        assert set(meta) == {"name", "type", "serialization_format", "offered_qos_profiles", "type_description_hash"}
+        assert isinstance(meta["offered_qos_profiles"], str)  # a YAML string inside the YAML, as rosbag2 writes it
+        assert yaml.safe_load(meta["offered_qos_profiles"])[0]["reliability"] == 1
+    assert isinstance(bag["custom_data"], dict)
