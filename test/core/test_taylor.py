@@ -14,6 +14,7 @@ import pytest
 from scipy.integrate import solve_ivp
 
 from rigid_rot_sim.core import dynamics
+from rigid_rot_sim.core import quaternion as quat
 from rigid_rot_sim.core.integrators.base import NonFiniteStateError
 from rigid_rot_sim.core.integrators.taylor import Taylor, derivative_map, order_for_tolerance, taylor_coefficients
 from rigid_rot_sim.core.torque import ConstantTorque, GravityTorque, PolynomialTorque
@@ -180,6 +181,23 @@ def test_torque_replaced_between_steps_takes_effect():
     integrator.torque = None
     integrator.step()
     np.testing.assert_allclose(integrator.omega, [0.5, 1.0, 0.0], atol=1e-15)
+
+
+def test_spherical_body_rotates_about_fixed_omega():
+    """Torque-free sphere: omega constant and q(t) = q0 (x) exp(omega t) (body-frame rate)."""
+    omega0 = np.array([0.7, -1.1, 0.4])
+    integrator = run([2.0] * 3, 1.7, 3, None, omega0=omega0, tol=1e-13)
+    t = integrator.t
+    expected = np.array(quat.multiply(Q0, quat.exp_rotation_vector(omega0 * t)))
+    np.testing.assert_array_equal(integrator.omega, omega0)
+    assert quaternion_distance(integrator.q, expected) < 1e-13
+
+
+def test_body_at_rest_stays_at_rest():
+    integrator = run(MOMENTS, 0.5, 4, None, omega0=np.zeros(3), tol=1e-12)
+    assert integrator.t == 2.0
+    np.testing.assert_array_equal(integrator.omega, np.zeros(3))
+    np.testing.assert_allclose(integrator.q, Q0, rtol=0, atol=1e-16)
 
 
 def test_torque_free_invariants_over_one_long_step():
