@@ -277,3 +277,42 @@ def test_unwritable_record_path_is_reported_and_the_simulation_runs_on(tmp_path,
     node.check_alive()
     assert f"cannot record to {blocker / 'run.mcap'}" in node.log()
     assert "without recording" in node.log()
+
+
+def test_disk_full_mid_run_stops_the_recording_and_the_simulation_runs_on(tmp_path, ros_env, ros_node):
+    import resource
+
+    def limit_file_size() -> None:  # in the child: writes past 35 kB fail (EFBIG), like a full disk
+        signal.signal(signal.SIGXFSZ, signal.SIG_IGN)
+        resource.setrlimit(resource.RLIMIT_FSIZE, (35_000, 35_000))
+
+    bag = tmp_path / "full.mcap"
+    log_path = tmp_path / "full.log"
+    with open(log_path, "wb") as log:
+        process = subprocess.Popen(
+            [sys.executable, "-m", "rigid_rot_sim.node", *node_args(write_scene(tmp_path), bag)],
+            stdout=log, stderr=subprocess.STDOUT, env=ros_env, preexec_fn=limit_file_size,
+        )
+
+    class Proc:  # what first_state_time needs of a NodeProcess
+        def check_alive(self):
+            assert process.poll() is None, log_path.read_text()
+
+        def log(self):
+            return log_path.read_text()
+
+    try:
+        first_state_time(ros_node, Proc())
+        deadline = time.monotonic() + 30.0
+        while "stopped after" not in log_path.read_text() and time.monotonic() < deadline:
+            Proc().check_alive()
+            time.sleep(0.1)
+        text = log_path.read_text()
+        assert f"recording to {bag} stopped after" in text and "File too large" in text
+        assert "the simulation continues without recording" in text
+        later = first_state_time(ros_node, Proc())  # still simulating and publishing
+        assert later > 1.0
+    finally:
+        process.send_signal(signal.SIGINT)
+        assert process.wait(timeout=20) == 0, log_path.read_text()
+    assert len(BagReader(bag).counts()) > 0  # what was flushed before the error is readable
