@@ -377,3 +377,24 @@ def test_simulate_with_a_full_inertia_tensor_matches_dop853():
 def test_class_order_is_the_default_series_order():
     assert Taylor.order == Taylor(MOMENTS, 1.0).series_order == order_for_tolerance(1e-12)
     assert Taylor.fixed_step is False
+
+
+def test_internal_steps_do_not_depend_on_the_api_step():
+    """Dense output: 200 steps of 0.1 s and one step of 20 s share their internal steps."""
+    torque = ConstantTorque([0.1, -0.05, 0.02])
+    fine = run(MOMENTS, 0.1, 200, torque, tol=1e-10)
+    coarse = run(MOMENTS, 20.0, 1, torque, tol=1e-10)
+    assert fine.n_substeps == coarse.n_substeps
+    assert np.max(np.abs(fine.omega - coarse.omega)) < 1e-13
+    assert quaternion_distance(fine.q, coarse.q) < 1e-13
+
+
+def test_set_state_restarts_from_the_new_state():
+    integrator = run(MOMENTS, 0.5, 3, ConstantTorque([0.1, 0.0, 0.0]), tol=1e-12)
+    integrator.set_state(10.0, Q0, OMEGA0)
+    integrator.step()
+    fresh = Taylor(MOMENTS, 0.5, ConstantTorque([0.1, 0.0, 0.0]), t0=10.0, q0=Q0, omega0=OMEGA0, tol=1e-12)
+    fresh.step()
+    assert integrator.t == fresh.t == 10.5
+    np.testing.assert_array_equal(integrator.omega, fresh.omega)
+    np.testing.assert_array_equal(integrator.q, fresh.q)
