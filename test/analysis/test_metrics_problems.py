@@ -1,0 +1,60 @@
+"""Error metrics and the work-precision problems' references."""
+
+import math
+
+import numpy as np
+import pytest
+from scipy.spatial.transform import Rotation
+
+from rigid_rot_sim.analysis import metrics, problems
+
+
+@pytest.mark.parametrize("angle", [1e-15, 1e-9, 1e-4, 0.5, 3.0, math.pi])
+def test_attitude_error_angle_is_accurate_for_tiny_and_large_angles(angle):
+    q_ref = Rotation.from_rotvec([0.3, -1.2, 0.7]).as_quat()
+    axis = np.array([1.0, 2.0, -2.0]) / 3.0
+    q = (Rotation.from_quat(q_ref) * Rotation.from_rotvec(angle * axis)).as_quat()
+    assert metrics.attitude_error_angle(q_ref, q) == pytest.approx(angle, rel=1e-9, abs=1e-16)
+    # the sign of a quaternion does not change the rotation
+    assert metrics.attitude_error_angle(-q_ref, q) == pytest.approx(angle, rel=1e-9, abs=1e-16)
+
+
+def test_omega_error_and_relative_change():
+    assert metrics.omega_error([1.0, 2.0, 3.0], [1.0, 2.5, 2.0]) == 1.0
+    assert metrics.relative_change(2.0, 2.5) == 0.25
+    assert metrics.relative_change(0.0, 1e-3) == 1e-3
+
+
+@pytest.mark.parametrize("key", ["P1", "P1b", "P4"])
+def test_exact_references_conserve_energy_and_momentum(key):
+    problem = problems.get_problem(key)
+    ref = problem.reference()
+    e0 = problem.energy(problem.q0, problem.omega0)
+    assert problem.energy(ref.q, ref.omega) == pytest.approx(e0, rel=1e-13)
+    l0 = Rotation.from_quat(problem.q0).apply(problem.moments * problem.omega0)
+    l_end = Rotation.from_quat(ref.q).apply(problem.moments * ref.omega)
+    np.testing.assert_allclose(l_end, l0, atol=1e-12 * np.linalg.norm(l0))
+
+
+def test_p1b_reference_has_flipped_about_the_intermediate_axis():
+    # near the intermediate axis the body flips: omega_2 changes sign along the way
+    from rigid_rot_sim.core.exact import torque_free_solution
+
+    p = problems.get_problem("P1b")
+    w2 = torque_free_solution(p.moments, p.omega0, p.q0).omega(np.linspace(0, p.t_end, 4001))[:, 1]
+    assert np.any(w2 < -1.9) and np.any(w2 > 1.9)
+
+
+def test_p2_reference_is_certified_and_obeys_angular_impulse():
+    p = problems.get_problem("P2")
+    ref = p.reference()
+    assert 0.0 < ref.certified_to <= problems.CERTIFY_TOL
+    # world-frame dL/dt = R(q) N: the change of L_world is the integral of the world torque,
+    # so |L| cannot change by more than |N| t_end
+    l0 = p.momentum_norm(p.omega0)
+    assert abs(p.momentum_norm(ref.omega) - l0) <= np.linalg.norm(p.torque.value) * p.t_end
+
+
+def test_unknown_problem_lists_valid_keys():
+    with pytest.raises(ValueError, match="P1"):
+        problems.get_problem("P9")

@@ -1,0 +1,119 @@
+"""The work-precision report: structure of its outputs and the physics of its numbers.
+
+Runs a cut-down quick mode (two problems, short budgets); timings are never asserted.
+"""
+
+import json
+import math
+
+import pytest
+
+from rigid_rot_sim.analysis import workprecision as wp
+from rigid_rot_sim.cli import main
+from rigid_rot_sim.core.integrators import METHODS
+
+TINY = dict(repeats=1, budget_seconds=0.03, max_step_points=4, tolerances=(1e-3, 1e-6, 1e-9))
+
+
+@pytest.fixture(scope="module")
+def report(tmp_path_factory):
+    out = tmp_path_factory.mktemp("report")
+    settings = wp.Settings.quick_mode(**TINY)
+    results, paths = wp.run_report(out, problem_keys=["P1", "P2"], settings=settings, progress=False)
+    return out, {r.problem: r for r in results}, paths
+
+
+def test_outputs_exist_and_are_readable(report):
+    out, results, paths = report
+    for name in ("report.md", "results.json", "P1.png", "P2.png"):
+        path = out / name
+        assert path.is_file() and path.stat().st_size > 1000, name
+    assert (out / "P1.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    data = json.loads((out / "results.json").read_text())
+    assert {"cpu", "python", "numpy", "scipy", "matplotlib"} <= set(data["machine"])
+    assert [p["key"] for p in data["problems"]] == ["P1", "P2"]
+    for problem in data["problems"]:
+        assert [row["target"] for row in problem["summary"]] == list(wp.TARGETS)
+        for point in problem["points"]:
+            assert point["status"] in ("ok", "unstable", "refused")
+            if point["status"] == "ok":
+                assert point["seconds"] > 0 and math.isfinite(point["omega_error"])
+            else:
+                assert point["message"]  # a failure always says why
+
+
+def test_every_method_and_scipy_baseline_appears(report):
+    _, results, _ = report
+    for result in results.values():
+        methods = {p.method for p in result.points if p.family == "ours"}
+        assert methods == set(METHODS)
+        assert {p.method for p in result.points if p.family == "scipy"} == set(wp.SCIPY_METHODS)
+
+
+def test_summary_table_in_markdown(report):
+    out, _, _ = report
+    text = (out / "report.md").read_text()
+    assert "## Summary" in text and "![P1](P1.png)" in text
+    for key in ("P1", "P2"):
+        for target in ("1e-06", "1e-10"):
+            assert f"| {key} | {target} |" in text
+
+
+def test_fixed_step_errors_fall_as_step_shrinks(report):
+    _, results, _ = report
+    for result in results.values():
+        labels = {p.label for p in result.points if p.parameter == "dt" and p.family == "ours"}
+        for label in labels:
+            ok = [p for p in result.points if p.label == label and p.status == "ok"]
+            if len(ok) < 2 or min(p.omega_error for p in ok) < 1e-12:
+                continue  # a single point, or already at the reference's accuracy
+            assert wp.errors_fall_with_step(result.points, label), (result.problem, label)
+
+
+def test_scipy_errors_fall_with_tolerance(report):
+    _, results, _ = report
+    for result in results.values():
+        for method in wp.SCIPY_METHODS:
+            errs = [p.omega_error for p in result.points if p.method == method and p.family == "scipy" and p.status == "ok"]
+            assert errs[-1] < errs[0], (result.problem, method, errs)
+
+
+def test_structure_preserving_methods_conserve_on_free_body(report):
+    _, results, _ = report
+    for p in results["P1"].points:
+        if p.status != "ok":
+            continue
+        if p.method in ("implicit_midpoint", "exact"):
+            assert p.energy_drift < 1e-12 and p.momentum_drift < 1e-12, p
+        if p.method == "splitting":
+            assert p.momentum_drift < 1e-12, p  # compositions of exact rotations keep |L|
+        if p.method == "exact":
+            assert p.omega_error < 1e-12 and p.attitude_error < 1e-11
+
+
+def test_fastest_at_target_is_cheapest_point_meeting_it():
+    pts = [
+        wp.Point("a", "ours", "a", "dt", 0.1, "ok", seconds=1.0, omega_error=1e-7),
+        wp.Point("b", "ours", "b", "dt", 0.1, "ok", seconds=0.5, omega_error=1e-5),
+        wp.Point("c", "ours", "c", "dt", 0.1, "ok", seconds=2.0, omega_error=1e-11),
+        wp.Point("s", "scipy", "s", "tol", 1e-8, "ok", seconds=4.0, omega_error=1e-7),
+        wp.Point("u", "ours", "u", "dt", 1.0, "unstable", message="boom"),
+    ]
+    assert wp.fastest_at(pts, 1e-6, "ours").label == "a"
+    assert wp.fastest_at(pts, 1e-10, "ours").label == "c"
+    assert wp.fastest_at(pts, 1e-10, "scipy") is None
+    result = wp.ProblemResult("X", "x", 1.0, "ref", 0.0, pts)
+    rows = wp.summary(result, (1e-6,))
+    assert rows[0]["speedup"] == pytest.approx(4.0)
+
+
+def test_cli_quick_on_one_problem(tmp_path, capsys):
+    code = main(["report", "--quick", "--out", str(tmp_path), "--problems", "P4", "--no-progress"])
+    assert code == 0
+    assert (tmp_path / "report.md").is_file() and (tmp_path / "P4.png").is_file()
+    assert "P4 at ω error <= 1e-10 rad/s" in capsys.readouterr().out
+
+
+def test_cli_rejects_unknown_problem(tmp_path, capsys):
+    assert main(["report", "--out", str(tmp_path), "--problems", "P9", "--no-progress"]) == 2
+    assert "P9" in capsys.readouterr().err
