@@ -190,7 +190,7 @@ class _EllipticFlow:
         return q, w @ self.perm
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, eq=False)
 class TorqueFreeSolution:
     """Exact motion of a torque-free rigid body from (q0, omega0) at t0.
 
@@ -257,6 +257,30 @@ def zxz_to_quaternion(phi: Any, theta: Any, psi: Any) -> np.ndarray:
     return np.stack(
         (sh * np.cos(half_diff), sh * np.sin(half_diff), ch * np.sin(half_sum), ch * np.cos(half_sum)), axis=-1
     )
+
+
+def quaternion_to_zxz(q: Any) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """z-x-z Euler angles ``(phi, theta, psi)`` (rad) with ``R(q) = Rz(phi) Rx(theta) Rz(psi)``.
+
+    theta in [0, pi]; phi and psi in (-pi, pi]. Computed from the half-angle form of
+    :func:`zxz_to_quaternion` (``phi + psi = 2 atan2(z, w)``, ``phi - psi = 2 atan2(y, x)``),
+    so every angle is finite for every unit q: at theta = 0 only phi + psi is defined and
+    the split reported is phi = psi; at theta = pi, phi = -psi. For output only: nothing
+    divides by sin(theta). q: (..., 4) scalar-last, sign irrelevant.
+    """
+    q = np.asarray(q, dtype=float)
+    x, y, z, w = q[..., 0], q[..., 1], q[..., 2], q[..., 3]
+    theta = 2.0 * np.arctan2(np.hypot(x, y), np.hypot(z, w))
+    half_sum = np.arctan2(z, w)
+    half_diff = np.arctan2(y, x)
+    phi = _wrap_angle(half_sum + half_diff)
+    psi = _wrap_angle(half_sum - half_diff)
+    return phi, theta, psi
+
+
+def _wrap_angle(a: np.ndarray) -> np.ndarray:
+    """a reduced to (-pi, pi]."""
+    return np.pi - np.mod(np.pi - a, 2.0 * np.pi)
 
 
 def _proper_permutation(order: tuple[int, int, int]) -> np.ndarray:
