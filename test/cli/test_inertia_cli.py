@@ -1,5 +1,6 @@
 """The rigid-rot dispatcher and its inertia subcommand (no ROS: the library path only)."""
 
+import argparse
 import importlib
 import json
 import subprocess
@@ -32,13 +33,28 @@ def sample_expected():
 # --- the dispatcher -------------------------------------------------------------------------
 
 
+def parsers_without_handler(parser, path):
+    """Paths of parsers that can be reached but set no handler (nested subcommands allowed)."""
+    if callable(parser.get_default("handler")):
+        return []
+    nested = [a for a in parser._actions if isinstance(a, argparse._SubParsersAction)]
+    if not nested:
+        return [path]
+    return [
+        missing
+        for action in nested
+        for name, child in action.choices.items()
+        for missing in parsers_without_handler(child, f"{path} {name}")
+    ]
+
+
 @pytest.mark.parametrize("name", cli.SUBCOMMANDS)
 def test_every_registered_subcommand_has_a_parser_and_handler(name):
-    module = importlib.import_module(f"rigid_rot_sim.cli.{name}")
+    importlib.import_module(f"rigid_rot_sim.cli.{name}")
     parser = cli.build_parser(only=name)
     subparsers = next(a for a in parser._actions if a.dest == "command")
     assert name in subparsers.choices
-    assert callable(subparsers.choices[name].get_default("handler")), f"{module.__name__} sets no handler"
+    assert parsers_without_handler(subparsers.choices[name], name) == []
 
 
 def test_full_parser_lists_every_subcommand(capsys):
