@@ -23,7 +23,6 @@ simulation runs on unrecorded.
 from __future__ import annotations
 
 import json
-import time
 from pathlib import Path
 from typing import Any
 
@@ -141,7 +140,7 @@ class NodeRecording:
     def record_command(self, topic: str, msg: Any, received_ns: int) -> None:
         """Record a torque command message as received (log time = receive time, ns)."""
         if self.active:
-            self.run.record(topic, msg, self.run._at_least(received_ns))
+            self.run.record(topic, msg, self.run.log_time_at_least(received_ns))
 
     def close(self) -> None:
         """Finish the file (idempotent); logs where it is and how to inspect it."""
@@ -241,8 +240,3 @@ def _jsonable(value: Any) -> Any:
         return value
     except TypeError:
         return list(value) if hasattr(value, "__iter__") else str(value)
-
-
-def now_ns() -> int:
-    """The receive time the node stamps a command with (wall clock, ns)."""
-    return time.time_ns()

@@ -20,7 +20,7 @@ import numpy as np
 
 from rigid_rot_sim.recording.events import EVENT_TYPE, decode_event
 from rigid_rot_sim.recording.reader import BagReader
-from rigid_rot_sim.recording.resim import STATE_TYPE, _topic_of_type
+from rigid_rot_sim.recording.resim import STATE_TYPE
 
 _AXIS_COLOURS = ("tab:red", "tab:green", "tab:blue")
 
@@ -39,7 +39,7 @@ class StateSeries:
 
 def load_states(reader: BagReader) -> StateSeries:
     """Every RigidBodyState of the recording, in log order; ValueError if there is none."""
-    topic = _topic_of_type(reader, STATE_TYPE, "state")
+    topic = reader.find_topic("state", STATE_TYPE)
     if topic is None:
         raise ValueError(f"{reader.path}: no {STATE_TYPE} topic recorded: nothing to plot")
     rows = []
@@ -178,7 +178,7 @@ def plot_run(path: str | os.PathLike[str], out_dir: str | os.PathLike[str] | Non
 
 
 def _command_times(reader: BagReader) -> list[float]:
-    topic = _topic_of_type(reader, EVENT_TYPE, "events")
+    topic = reader.find_topic("events", EVENT_TYPE)
     if topic is None:
         return []
     times = []

@@ -200,6 +200,21 @@ class BagReader:
             topic = self.topics[message.topic]
             yield message, dynamic_decoder(topic.type_name, topic.definition)(message.data)
 
+    def find_topic(self, role: str, type_name: str) -> str | None:
+        """The topic playing ``role`` (``state``, ``events``, ...), or None.
+
+        From the ``rigid_rot_sim`` metadata record written when the run was closed; for a
+        repaired crash (no such record) the single topic of ``type_name`` (for ``events``:
+        the one ending in ``sim_events``).
+        """
+        roles = self.metadata.get("rigid_rot_sim", {})
+        if role in roles and roles[role] in self.topics:
+            return roles[role]
+        matches = [t.name for t in self.topics.values() if t.type_name == type_name]
+        if role == "events":
+            matches = [m for m in matches if m.endswith("sim_events")]
+        return matches[0] if len(matches) == 1 else None
+
     def counts(self) -> Counter[str]:
         """Messages per topic (from a pass over the messages, not from the summary)."""
         return Counter(m.topic for m in self.messages())

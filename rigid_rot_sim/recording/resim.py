@@ -104,16 +104,6 @@ def attitude_angle(q_a: np.ndarray, q_b: np.ndarray) -> float:
     return 2.0 * math.atan2(math.sqrt(x * x + y * y + z * z), abs(w))
 
 
-def _topic_of_type(reader: BagReader, type_name: str, role: str) -> str | None:
-    roles = reader.metadata.get("rigid_rot_sim", {})
-    if role in roles and roles[role] in reader.topics:
-        return roles[role]
-    matches = [t.name for t in reader.topics.values() if t.type_name == type_name]
-    if role == "events":
-        matches = [m for m in matches if m.endswith("sim_events")]
-    return matches[0] if len(matches) == 1 else None
-
-
 def _recorded_vector(msg: Any, name: str) -> np.ndarray:
     v = getattr(msg, name)
     return np.array([v.x, v.y, v.z], dtype=float)
@@ -166,8 +156,8 @@ def resimulate(path: str | os.PathLike[str], method: str | None = None) -> Resim
     sim = Simulator(scene, method=chosen, dt=dt, options=options if chosen == recorded_method else {})
     override = None if chosen == recorded_method else chosen
 
-    state_topic = _topic_of_type(reader, STATE_TYPE, "state")
-    events_topic = _topic_of_type(reader, EVENT_TYPE, "events")
+    state_topic = reader.find_topic("state", STATE_TYPE)
+    events_topic = reader.find_topic("events", EVENT_TYPE)
     if events_topic is None:
         raise ValueError(f"{path}: no simulation event log (~/sim_events) in the recording")
     topics = [events_topic] + ([state_topic] if state_topic else [])

@@ -166,21 +166,8 @@ class RunRecorder:
         """Record one simulation event (see :mod:`.events`)."""
         self.recorder.write_fields(self.events_topic, event_fields(kind, step, summary, **values), self.log_time_ns())
 
-    def record_torque(self, topic: str, msg: Any, receive_ns: int, command: Any, step: int) -> None:
-        """Record a torque command as received and the event it became.
-
-        ``command`` is the :class:`~rigid_rot_sim.core.simulator.TorqueCommand` the
-        simulator returned; ``step`` its step index at receipt.
-        """
-        self.recorder.write_message(topic, msg, self._at_least(receive_ns))
-        self.record_event(
-            "torque", step,
-            f"{command.source}: {command.torque} N*m in {command.frame} from t = {command.effective_time:.9g} s",
-            source=command.source, frame=command.frame, torque=tuple(float(v) for v in command.torque),
-            effective_time=float(command.effective_time), receipt_time=command.receipt_time, stamp=command.stamp,
-        )
-
-    def _at_least(self, ns: int) -> int:
+    def log_time_at_least(self, ns: int) -> int:
+        """``ns`` (e.g. a receive time taken earlier), moved after every log time handed out before."""
         with self._clock_lock:
             self._last_ns = max(int(ns), self._last_ns + 1)
             return self._last_ns

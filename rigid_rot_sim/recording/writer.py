@@ -28,7 +28,6 @@ from __future__ import annotations
 import contextlib
 import os
 import threading
-import time
 from collections import Counter
 from dataclasses import dataclass
 from pathlib import Path
@@ -465,8 +464,3 @@ class Recorder:
             pass  # a full disk may refuse the final buffer as well
         if self._on_error is not None:
             self._on_error(self._error)
-
-
-def now_ns() -> int:
-    """Wall-clock time in ns since the Unix epoch (the receive time rosbag2 records)."""
-    return time.time_ns()
