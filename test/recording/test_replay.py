@@ -89,3 +89,30 @@ def test_qos_is_rebuilt_from_the_recorded_profile():
     jazzy_form = "- history: keep_last\n  depth: 5\n  reliability: best_effort\n  durability: volatile\n"
     qos = qos_from_metadata(jazzy_form)
     assert (qos.depth, qos.reliability) == (5, ReliabilityPolicy.BEST_EFFORT)
+
+
+def test_clock_follows_the_bag_time_at_the_replay_rate(tmp_path, ros_context):
+    from rosgraph_msgs.msg import Clock
+
+    bag = tmp_path / "cmds.mcap"
+    timed_bag(bag, [0.0, 0.3, 0.3])  # log times 1.0, 1.3, 1.6 s since the epoch
+    listener = rclpy.create_node("clock_listener", context=ros_context)
+    publisher_node = rclpy.create_node("clock_replayer", context=ros_context)
+    clocks = []
+    listener.create_subscription(WrenchStamped, "/robot/torque_cmd", lambda m: None, 10)
+    listener.create_subscription(Clock, "/clock", lambda m: clocks.append(m.clock.sec + m.clock.nanosec * 1e-9), 10)
+    executor = SingleThreadedExecutor(context=ros_context)
+    executor.add_node(listener)
+    spinner = threading.Thread(target=executor.spin, daemon=True)
+    spinner.start()
+    try:
+        report = replay(bag, rate=2.0, clock=True, node=publisher_node, wait_for_subscribers=10.0)
+        time.sleep(0.2)
+    finally:
+        executor.shutdown()
+        listener.destroy_node()
+        publisher_node.destroy_node()
+    assert report.published == {"/robot/torque_cmd": 3}
+    assert len(clocks) >= 5
+    assert clocks == sorted(clocks)
+    assert 1.0 <= clocks[0] < 1.1 and 1.5 <= clocks[-1] <= 1.7  # bag time, 0.6 s of it in 0.3 s of wall time
