@@ -340,8 +340,8 @@ def test_fast_spin_stays_finite_and_accurate():
     integrator = run(moments, 0.5, 4, None, omega0=omega0, tol=1e-12)
     omega_ref, q_ref = reference_solution(moments, omega0, Q0, None, 2.0)
     assert np.all(np.isfinite(integrator.omega)) and np.all(np.isfinite(integrator.q))
-    assert np.max(np.abs(integrator.omega - omega_ref)) < 1e-8 * 100.0
-    assert quaternion_distance(integrator.q, q_ref) < 1e-8
+    assert np.max(np.abs(integrator.omega - omega_ref)) < 1e-11 * 100.0  # omega: relative to |omega|
+    assert quaternion_distance(integrator.q, q_ref) < 1e-10  # attitude: absolute, not loosened by the spin
 
 
 # -- registry and simulate ------------------------------------------------------------------

@@ -26,8 +26,9 @@ by means of high-order Taylor methods", Experimental Mathematics 14 (2005) 99-11
 the coefficients of an analytic solution decay like ``|X_k| ~ s * rho^-k`` with rho the
 distance to the nearest complex singularity. The step is the largest h for which the
 last two terms of the series stay below the tolerance,
-``h = min_{k in {p-1, p}} (tol * s / |X_k|_inf)^(1/k)`` with ``s = max(1, |x|_inf)``
-(relative for large states, absolute for small ones), hence h ~ rho * tol^(1/p).
+``h = min_{k in {p-1, p}} (tol / |W X_k|_inf)^(1/k)``, hence h ~ rho * tol^(1/p), where the
+weights W take omega relative to ``max(1 rad/s, |omega|_inf)`` and the unit quaternion
+absolutely (a fast spin must not loosen the attitude tolerance).
 Per unit time the cost is ~ p / h (constant cost per order), minimised at
 ``p = -ln(tol)`` with h ~ rho / e; Jorba and Zou's ``p = -ln(tol) / 2`` (h ~ rho / e^2)
 minimises arithmetic ~ p^2 / h instead, which is not our cost model. The default is
@@ -156,8 +157,8 @@ class Taylor(Integrator):
     Options
     -------
     tol : float or None
-        Local error tolerance per internal step, relative to ``max(1, |x|_inf)`` with
-        x = (omega in rad/s, q); default 1e-12. Sets the order (ceil(-ln tol) in 10..30)
+        Local error tolerance per internal step: absolute on the unit quaternion, on omega
+        relative to ``max(1 rad/s, |omega|_inf)``; default 1e-12. Sets the order (ceil(-ln tol) in 10..30)
         and the step. ``None`` switches step control off: one internal step of the
         given ``order`` per ``min(dt, max_step)`` (for convergence studies).
     order : int or None
@@ -206,6 +207,7 @@ class Taylor(Integrator):
 
         p = self.series_order
         self._coeffs = np.zeros((p + 1, _STATE_SIZE))
+        self._weights = np.ones(_STATE_SIZE)
         self._prod = np.zeros((_STATE_SIZE, _STATE_SIZE))
         self._prod_flat = self._prod.reshape(-1)
         self._coeffs_t = self._coeffs.T  # a view: column slices are the coefficient rows
@@ -321,12 +323,13 @@ class Taylor(Integrator):
         """
         p = self.series_order
         tol = self.tol
-        scale = max(1.0, float(np.abs(x0).max()))
-        if not math.isfinite(scale):
+        w1, w2, w3 = x0[:3].tolist()
+        omega_scale = max(1.0, abs(w1), abs(w2), abs(w3))
+        if not math.isfinite(omega_scale):
             raise NonFiniteStateError(f"{self.name}: non-finite state at step {self.n_steps + 1}, t = {t0:.9g} s")
         rho = self._rho
         if tol is not None and rho is not None and h_cap < rho:
-            # Enough order for the shorter step: scale * (h / rho)^n <= tol * scale.
+            # Enough order for the shorter step: (h / rho)^n <= tol.
             needed = math.ceil(math.log(tol) / math.log(h_cap / rho)) + 1 if h_cap > 0.0 else 2
             p = min(p, max(needed, 4))
         coeffs = self._coeffs
@@ -349,7 +352,10 @@ class Taylor(Integrator):
 
         h = h_cap
         if tol is not None:
-            a_prev, a_last = np.abs(coeffs[p - 1 : p + 1]).max(axis=1).tolist()
+            # omega relative to max(1 rad/s, |omega|), the unit quaternion absolutely
+            weights = self._weights
+            weights[:3] = 1.0 / omega_scale
+            a_prev, a_last = (np.abs(coeffs[p - 1 : p + 1]) * weights).max(axis=1).tolist()
             if not (math.isfinite(a_prev) and math.isfinite(a_last)):
                 raise NonFiniteStateError(
                     f"{self.name}: non-finite Taylor coefficients at step {self.n_steps + 1}, t = {t0:.9g} s "
@@ -357,10 +363,10 @@ class Taylor(Integrator):
                 )
             rho = math.inf
             if a_prev > 0.0:
-                rho = (scale / a_prev) ** (1.0 / (p - 1))
+                rho = (1.0 / a_prev) ** (1.0 / (p - 1))
                 h = min(h, rho * tol ** (1.0 / (p - 1)))
             if a_last > 0.0:
-                rho_last = (scale / a_last) ** (1.0 / p)
+                rho_last = (1.0 / a_last) ** (1.0 / p)
                 rho = min(rho, rho_last)
                 h = min(h, rho_last * tol ** (1.0 / p))
             if p == self.series_order or h < h_cap:
