@@ -28,7 +28,13 @@ from scipy.integrate import solve_ivp
 
 from rigid_rot_sim.core import quaternion as quat
 from rigid_rot_sim.core.dynamics import euler_rhs_components, kinetic_energy
-from rigid_rot_sim.core.torque import ConstantTorque, GravityTorque
+from rigid_rot_sim.core.heavy_top import (
+    HeavyTop,
+    heavy_top_reference,
+    separatrix_solution,
+    separatrix_state,
+)
+from rigid_rot_sim.core.torque import ConstantTorque
 
 IDENTITY = (0.0, 0.0, 0.0, 1.0)
 
@@ -66,6 +72,7 @@ class Problem:
     torque: Any = None
     torque_kind: str = "none"
     reference_note: str = ""
+    top: Any = None  # the HeavyTop of a heavy-top problem (moments are its pivot moments)
 
     @property
     def moments(self) -> np.ndarray:
@@ -77,11 +84,9 @@ class Problem:
 
     def energy(self, q: Any, omega: Any) -> float:
         """Total energy, J: kinetic, plus gravity's potential for a heavy top (pivot at height 0)."""
-        energy = float(kinetic_energy(self.moments, omega))
-        if isinstance(self.torque, GravityTorque):
-            # height of the centre of mass above the pivot: z of R(q) lever_arm
-            energy += self.torque.weight * quat.rotate(q, self.torque.lever_arm)[2]
-        return energy
+        if self.top is not None:
+            return float(self.top.invariants(np.asarray(q, dtype=float), omega)[0])
+        return float(kinetic_energy(self.moments, omega))
 
     def momentum_norm(self, omega: Any) -> float:
         """|L| = |I omega|, kg m^2/s."""
@@ -193,6 +198,82 @@ P2 = Problem(
     reference_note="scipy DOP853 at rtol = atol = 1e-14, certified against taylor at tol = 1e-15",
 )
 
+#: The heavy top of P3 and P3b: 0.5 kg, centre of mass 5 cm above the pivot,
+#: moments about the centre of mass (4, 4, 6) g m^2 (pivot moments (5.25, 5.25, 6) g m^2).
+TOP = HeavyTop(mass=0.5, gravity=9.81, com_distance=0.05, com_moments=(0.004, 0.004, 0.006))
+
+
+def _separatrix_reference(problem: Problem) -> Reference:
+    """Closed form 1/cos(theta) = 1 + 1/cosh(gamma t), with the angle rates it implies."""
+    top = problem.top
+    i1, _, i3 = top.pivot_moments
+    mgl = top.mass * top.gravity * top.com_distance
+    gamma = math.sqrt(mgl / i1)
+    p_psi = math.sqrt(3.0 * i1 * mgl)
+    t = problem.t_end
+    theta, phi, psi = (float(x) for x in separatrix_solution(top, t))
+    u = math.cos(theta)
+    sech = 1.0 / math.cosh(gamma * t)
+    # u = 1 / (1 + sech(gamma t))  =>  u' = gamma sech tanh / (1 + sech)^2;  theta' = -u' / sin(theta)
+    u_dot = gamma * sech * math.tanh(gamma * t) / (1.0 + sech) ** 2
+    phi_dot = p_psi / (i1 * (1.0 + u))  # (p_phi - p_psi u) / (I1 (1 - u^2)) with p_phi = p_psi
+    psi_dot = p_psi / i3 - u * phi_dot
+    q, omega = top.state_from_euler(theta, phi, psi, -u_dot / math.sin(theta), phi_dot, psi_dot)
+    return Reference(np.asarray(q, float), np.asarray(omega, float), "closed-form separatrix (core/heavy_top.py)")
+
+
+def _general_top_reference(problem: Problem) -> Reference:
+    """u = cos(theta) by Jacobi functions, phi and psi by quadrature (core/heavy_top.py)."""
+    from scipy.special import ellipj
+
+    top = problem.top
+    ref = heavy_top_reference(top, problem.q0, problem.omega0)
+    t = problem.t_end
+    theta, phi, psi = (float(np.asarray(x).reshape(-1)[0]) for x in ref.euler_angles(t))
+    u1, u2 = ref.turning_points
+    sn, cn, dn, _ = ellipj(ref.nu * t + ref.w0, ref.k2)
+    u_dot = 2.0 * (u2 - u1) * ref.nu * sn * cn * dn  # d/dt of u1 + (u2 - u1) sn^2(nu t + w0)
+    i1, _, i3 = top.pivot_moments
+    u = math.cos(theta)
+    phi_dot = (ref.p_phi - ref.p_psi * u) / (i1 * (1.0 - u * u))
+    psi_dot = ref.p_psi / i3 - u * phi_dot
+    q, omega = top.state_from_euler(theta, phi, psi, -u_dot / math.sin(theta), phi_dot, psi_dot)
+    return Reference(np.asarray(q, float), np.asarray(omega, float), "Jacobi u(t) + quadrature of phi, psi", 1e-12)
+
+
+_SEPARATRIX_Q0, _SEPARATRIX_OMEGA0 = separatrix_state(TOP)
+# theta0 = pi/3 with theta0' = 1 rad/s: mid-nutation (starting at a turning point would make
+# the reference phase sensitive to the rounding of the roots of f(u), as sqrt of it)
+_TOP_Q0, _TOP_OMEGA0 = TOP.state_from_euler(math.pi / 3.0, 0.0, 0.0, 1.0, 0.0, 30.0)
+
+P3 = Problem(
+    key="P3",
+    title="heavy top on its separatrix (axis creeping up to the vertical)",
+    principal_moments=tuple(TOP.pivot_moments.tolist()),
+    omega0=tuple(_SEPARATRIX_OMEGA0.tolist()),
+    q0=tuple(_SEPARATRIX_Q0.tolist()),
+    t_end=1.0,
+    torque=TOP.torque,
+    torque_kind="gravity",
+    top=TOP,
+    reference_factory=_separatrix_reference,
+    reference_note="closed form 1/cos(theta) = 1 + 1/cosh(gamma t); theta(1 s) = 0.066 rad",
+)
+
+P3B = Problem(
+    key="P3b",
+    title="general heavy top (fast spin, nutation)",
+    principal_moments=tuple(TOP.pivot_moments.tolist()),
+    omega0=tuple(_TOP_OMEGA0.tolist()),
+    q0=tuple(_TOP_Q0.tolist()),
+    t_end=2.0,
+    torque=TOP.torque,
+    torque_kind="gravity",
+    top=TOP,
+    reference_factory=_general_top_reference,
+    reference_note="u = cos(theta) in Jacobi functions, phi and psi by adaptive quadrature",
+)
+
 P4 = Problem(
     key="P4",
     title="Basilisk's case",
@@ -203,8 +284,8 @@ P4 = Problem(
     reference_note="exact elliptic-function solution (core/exact.py)",
 )
 
-#: Problems by key, in report order (the heavy-top problems are added by heavy_top_cases).
-PROBLEMS: dict[str, Problem] = {p.key: p for p in (P1, P1B, P2, P4)}
+#: Problems by key, in report order.
+PROBLEMS: dict[str, Problem] = {p.key: p for p in (P1, P1B, P2, P3, P3B, P4)}
 
 
 def get_problem(key: str) -> Problem:
