@@ -23,6 +23,8 @@ from __future__ import annotations
 
 import argparse
 import math
+import os
+import platform
 import time
 from typing import Callable
 
@@ -173,6 +175,13 @@ def main() -> None:
     parser.add_argument("--repeats", type=int, default=None, help="repeats per point (best is kept)")
     args = parser.parse_args()
     repeats = args.repeats or (3 if args.quick else 9)
+    import scipy
+
+    load = ", ".join(f"{v:.1f}" for v in os.getloadavg())
+    print(
+        f"python {platform.python_version()}, numpy {np.__version__}, scipy {scipy.__version__}, "
+        f"{os.cpu_count()} cpus, load average {load} (timings on a busy machine are inflated)"
+    )
     summary = []
     for name, spec in PROBLEMS.items():
         results = sweep(name, spec, repeats, args.quick)

@@ -290,7 +290,7 @@ class Taylor(Integrator):
                 t, x = series[0] + series[1], series[3]
             while True:
                 remaining = target - t
-                land = min(remaining, self.max_step)
+                land = max(0.0, min(remaining, self.max_step))  # >= 0 despite rounding
                 h, p, x_end = self._substep(t, x, land if landing else self.max_step, land)
                 self.n_substeps += 1
                 if h >= remaining:
