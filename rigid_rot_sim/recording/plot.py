@@ -76,7 +76,9 @@ def principal_frame(reader: BagReader, series: StateSeries) -> tuple[np.ndarray,
         ixx, iyy, izz, ixy, ixz, iyz = sol
         tensor = np.array([[ixx, ixy, ixz], [ixy, iyy, iyz], [ixz, iyz, izz]])
     moments, axes = np.linalg.eigh(tensor)
-    return moments, axes
+    # eigenvectors come with arbitrary signs: make each axis point along its largest body component
+    signs = np.sign(axes[np.argmax(np.abs(axes), axis=0), np.arange(3)])
+    return moments, axes * signs
 
 
 def _title(reader: BagReader, what: str) -> str:
@@ -104,7 +106,8 @@ def plot_run(path: str | os.PathLike[str], out_dir: str | os.PathLike[str] | Non
     written: list[Path] = []
 
     def save(fig, name: str) -> None:
-        fig.tight_layout()
+        if fig.get_layout_engine() is None:
+            fig.tight_layout()
         target = out / name
         fig.savefig(target, dpi=110)
         plt.close(fig)
@@ -120,21 +123,31 @@ def plot_run(path: str | os.PathLike[str], out_dir: str | os.PathLike[str] | Non
     ax.legend(loc="best", ncols=4)
     save(fig, "omega.png")
 
-    # relative drift of energy and |L|
+    # relative drift of energy and |L| (absolute values when the run starts at rest)
     energy0 = series.energy[0]
     l_norm = np.linalg.norm(series.momentum_world, axis=1)
-    energy_rel = (series.energy - energy0) / abs(energy0) if energy0 != 0.0 else np.zeros_like(t)
-    l_rel = (l_norm - l_norm[0]) / l_norm[0] if l_norm[0] != 0.0 else np.zeros_like(t)
-    driven = bool(np.any(series.torque_body[:, :] != 0.0))
-    fig, ax = plt.subplots(figsize=(9, 4.5))
-    ax.plot(t, energy_rel, color="tab:orange", label=f"(E - E0)/|E0|   max |.| = {np.max(np.abs(energy_rel)):.2e}")
-    ax.plot(t, l_rel, color="tab:purple", label=f"(|L| - |L0|)/|L0|   max |.| = {np.max(np.abs(l_rel)):.2e}")
-    ax.axhline(0.0, color="black", linewidth=0.8)
-    ax.ticklabel_format(axis="y", style="sci", scilimits=(-3, 3))
+    driven = bool(np.any(series.torque_body != 0.0))
     note = "torque applied: changes include the torques' work and impulse" if driven else "torque-free: any change is integrator error"
-    ax.set(xlabel="sim time (s)", ylabel="relative change (1)", title=_title(reader, "Energy and |L| drift") + f"\n{note}")
+    fig, ax = plt.subplots(figsize=(9, 4.5))
+    if energy0 != 0.0 and l_norm[0] != 0.0:
+        energy_rel = (series.energy - energy0) / abs(energy0)
+        l_rel = (l_norm - l_norm[0]) / l_norm[0]
+        ax.plot(t, energy_rel, color="tab:orange", label=f"(E - E0)/|E0|   max |.| = {np.max(np.abs(energy_rel)):.2e}")
+        ax.plot(t, l_rel, color="tab:purple", label=f"(|L| - |L0|)/|L0|   max |.| = {np.max(np.abs(l_rel)):.2e}")
+        ax.axhline(0.0, color="black", linewidth=0.8)
+        ax.ticklabel_format(axis="y", style="sci", scilimits=(-3, 3))
+        ax.set(ylabel="relative change (1)", title=_title(reader, "Energy and |L| drift") + f"\n{note}")
+        ax.legend(loc="best")
+    else:  # a relative change from zero is undefined: show the quantities themselves
+        ax.plot(t, series.energy, color="tab:orange", label="E (J)")
+        ax.set_ylabel("energy E (J)", color="tab:orange")
+        twin = ax.twinx()
+        twin.plot(t, l_norm, color="tab:purple", label="|L| (kg*m^2/s)")
+        twin.set_ylabel("|L| (kg*m^2/s)", color="tab:purple")
+        ax.set_title(_title(reader, "Energy and |L|") + "\nstarts at rest (relative change undefined); " + note.split(":")[0])
+        ax.legend(handles=ax.get_lines() + twin.get_lines(), loc="best")
+    ax.set_xlabel("sim time (s)")
     ax.grid(True, alpha=0.3)
-    ax.legend(loc="best")
     save(fig, "drift.png")
 
     # torque applied, with command times
@@ -154,8 +167,8 @@ def plot_run(path: str | os.PathLike[str], out_dir: str | os.PathLike[str] | Non
     moments, axes = principal_frame(reader, series)
     omega_p = series.omega_body @ axes  # components along the principal axes
     energy_twice = float(np.einsum("ij,j,ij->i", omega_p[:1], moments, omega_p[:1])[0])
-    fig = plt.figure(figsize=(7.5, 7))
-    ax3 = fig.add_subplot(projection="3d")
+    fig = plt.figure(figsize=(13, 6.5), layout="constrained")
+    ax3 = fig.add_subplot(1, 2, 1, projection="3d")
     if energy_twice > 0.0:
         u, v = np.meshgrid(np.linspace(0, 2 * np.pi, 40), np.linspace(0, np.pi, 20))
         a, b, c = np.sqrt(energy_twice / moments)
@@ -170,9 +183,23 @@ def plot_run(path: str | os.PathLike[str], out_dir: str | os.PathLike[str] | Non
             xlabel=f"ω1 (rad/s), I1 = {moments[0]:.4g}", ylabel=f"ω2 (rad/s), I2 = {moments[1]:.4g}",
             zlabel=f"ω3 (rad/s), I3 = {moments[2]:.4g}")
     ax3.set_box_aspect((1, 1, 1))
-    fig.colorbar(points, ax=ax3, shrink=0.6, label="sim time (s)")
-    ax3.set_title(_title(reader, "Polhode on the energy ellipsoid (principal frame)")
-                  + ("\nellipsoid of the initial energy; torques move ω off it" if driven else ""))
+    ax3.set_title("on the energy ellipsoid ω·Iω = 2T0"
+                  + ("\n(initial energy; torques move ω off it)" if driven else ""))
+    # the same path seen along the principal axis ω stays closest to: the polhode's shape
+    along = int(np.argmax(np.mean(np.abs(omega_p), axis=0)))
+    i, j = [k for k in range(3) if k != along]
+    ax2 = fig.add_subplot(1, 2, 2)
+    ax2.scatter(omega_p[:, i], omega_p[:, j], c=t, cmap="viridis", s=4)
+    ax2.plot(omega_p[:, i], omega_p[:, j], color="black", linewidth=0.4, alpha=0.5)
+    ax2.plot(omega_p[0, i], omega_p[0, j], marker="o", color="tab:red", label="start")
+    ax2.plot(omega_p[-1, i], omega_p[-1, j], marker="s", color="tab:blue", label="end")
+    ax2.set_aspect("equal", adjustable="datalim")
+    ax2.set(xlabel=f"ω{i + 1} (rad/s)", ylabel=f"ω{j + 1} (rad/s)",
+            title=f"seen along principal axis {along + 1} (I{along + 1} = {moments[along]:.4g} kg*m^2)")
+    ax2.grid(True, alpha=0.3)
+    ax2.legend(loc="best")
+    fig.colorbar(points, ax=ax2, shrink=0.8, label="sim time (s)")
+    fig.suptitle(_title(reader, "Polhode: path of ω in the principal frame"))
     save(fig, "polhode.png")
     return written
 
