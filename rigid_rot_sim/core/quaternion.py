@@ -59,6 +59,8 @@ def exp_rotation_vector(v: Sequence[float]) -> Quaternion:
     """
     vx, vy, vz = v
     angle = math.sqrt(vx * vx + vy * vy + vz * vz)
+    if not angle < math.inf:  # math.sin(inf) raises; report a non-finite state instead
+        return (math.nan, math.nan, math.nan, math.nan)
     if angle < _SMALL_ANGLE:
         s = 0.5 - angle * angle / 48.0
         c = 1.0 - angle * angle / 8.0

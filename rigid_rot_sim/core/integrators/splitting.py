@@ -1,20 +1,25 @@
 """``splitting``: symplectic splitting of the free rigid body into exact rotations.
 
-Dullweber, Leimkuhler and McLachlan, J. Chem. Phys. 107 (1997). The kinetic energy
-``H = sum_i L_i^2 / (2 I_i)`` (L in the principal frame) is split into its three terms.
-The flow of ``L_i^2 / (2 I_i)`` for a time tau is exact: L_i and omega_i = L_i / I_i are
-constant, the body rotates about principal axis i by ``phi = omega_i tau``
-(``q <- q (x) exp(phi e_i)``) and L_body rotates about e_i by ``-phi`` (L_world stays
-fixed). The free step is the symmetric (Strang) product
+After Dullweber, Leimkuhler and McLachlan, J. Chem. Phys. 107 (1997): the kinetic energy
+(L in the principal frame) is a sum of terms whose flows are exact rotations. Written
+with the Casimir |L|^2 separated out (k: the axis of the median moment, i and j the others),
 
-    X1(h/2) X2(h/2) X3(h) X2(h/2) X1(h/2)       (order 2)
+    H = |L|^2 / (2 I_k) + L_i^2 / 2 (1/I_i - 1/I_k) + L_j^2 / 2 (1/I_j - 1/I_k),
 
-and orders 4 and 6 are its symmetric compositions (option ``order``): Yoshida's
-triple jump (Phys. Lett. A 150, 1990) for 4, and Yoshida's seven-stage solution A for 6.
+* the Casimir term C leaves L_body fixed and turns the body about L:
+  ``q <- q (x) exp(tau L / I_k)``;
+* the term X_i keeps L_i and turns L_body about e_i by ``-phi`` and the body by
+  ``q <- q (x) exp(phi e_i)``, with ``phi = (1/I_i - 1/I_k) L_i tau``.
+
+The free step is the symmetric (Strang) product ``X_i(h/2) X_j(h/2) C(h) X_j(h/2) X_i(h/2)``
+(order 2). A term with I_i = I_k vanishes, so the step is the exact flow for symmetric
+and spherical bodies, and the splitting error of a near-symmetric body is proportional
+to its asymmetry. Orders 4 and 6 are symmetric compositions of the step (option ``order``):
+Yoshida's triple jump (Phys. Lett. A 150, 1990) for 4, Yoshida's seven-stage solution A for 6.
 
 Every sub-flow is an exact rotation, so |L| (and L_world) change only by round-off and
-the attitude stays a rotation; T is not a sum of invariants of the sub-flows, so it is
-conserved only to O(h^order) (bounded oscillation, no drift: the method is symplectic).
+the attitude stays a rotation; T is not conserved by each sub-flow, so it is kept only to
+O(h^order) (a bounded oscillation, no drift: the method is symplectic).
 
 Torque enters as kicks around each free step: ``omega += h/2 N(t) / I`` (explicit)
 before, free flow, and after it the adjoint kick ``omega' = omega + h/2 N(t+h, q, omega') / I``
@@ -27,6 +32,7 @@ from __future__ import annotations
 import math
 from typing import Any
 
+from rigid_rot_sim.core import quaternion as quat
 from rigid_rot_sim.core.integrators.base import NonFiniteStateError
 from rigid_rot_sim.core.integrators.fixed_step import FixedStepIntegrator
 
@@ -44,32 +50,55 @@ COMPOSITIONS: dict[int, tuple[float, ...]] = {
 _KICK_ITERATIONS = 50
 
 
+def _axis_flow(axis, phi, qx, qy, qz, qw, w1, w2, w3, i1, i2, i3):
+    """Turn the body by phi about principal axis ``axis`` and L_body by -phi about it."""
+    half = 0.5 * phi
+    s, c = math.sin(half), math.cos(half)
+    sn, cs = 2.0 * s * c, 1.0 - 2.0 * s * s  # sin, cos of phi
+    if axis == 0:
+        w2, w3 = cs * w2 + sn * (i3 / i2) * w3, cs * w3 - sn * (i2 / i3) * w2
+        qx, qy, qz, qw = qw * s + qx * c, qy * c + qz * s, qz * c - qy * s, qw * c - qx * s
+    elif axis == 1:
+        w3, w1 = cs * w3 + sn * (i1 / i3) * w1, cs * w1 - sn * (i3 / i1) * w3
+        qx, qy, qz, qw = qx * c - qz * s, qw * s + qy * c, qz * c + qx * s, qw * c - qy * s
+    else:
+        w1, w2 = cs * w1 + sn * (i2 / i1) * w2, cs * w2 - sn * (i1 / i2) * w1
+        qx, qy, qz, qw = qx * c + qy * s, qy * c - qx * s, qw * s + qz * c, qw * c - qz * s
+    return qx, qy, qz, qw, w1, w2, w3
+
+
+_PLANS: dict[tuple[float, float, float], tuple] = {}
+
+
+def _plan(i1: float, i2: float, i3: float) -> tuple:
+    """For moments (i1, i2, i3): the X terms as (axis, phi / (tau omega_axis)) and I / I_k."""
+    key = (i1, i2, i3)
+    plan = _PLANS.get(key)
+    if plan is None:
+        k = sorted(range(3), key=key.__getitem__)[1]
+        ik = key[k]
+        terms = tuple((a, 1.0 - key[a] / ik) for a in range(3) if a != k and key[a] != ik)
+        plan = (terms, tuple(reversed(terms)), i1 / ik, i2 / ik, i3 / ik)
+        if len(_PLANS) > 256:
+            _PLANS.clear()
+        _PLANS[key] = plan
+    return plan
+
+
 def _free_strang(qx, qy, qz, qw, w1, w2, w3, h, i1, i2, i3):
-    """X1(h/2) X2(h/2) X3(h) X2(h/2) X1(h/2) on (q, omega) in the principal frame."""
+    """``X_i(h/2) X_j(h/2) C(h) X_j(h/2) X_i(h/2)`` on (q, omega) in the principal frame."""
+    if not math.isfinite(w1 + w2 + w3):
+        nan = math.nan
+        return nan, nan, nan, nan, nan, nan, nan
+    terms, reverse, c1, c2, c3 = _plan(i1, i2, i3)
     hh = 0.5 * h
-    r23, r32 = i2 / i3, i3 / i2
-    r31, r13 = i3 / i1, i1 / i3
-    r12, r21 = i1 / i2, i2 / i1
-    for axis, tau in ((1, hh), (2, hh), (3, h), (2, hh), (1, hh)):
-        if axis == 1:
-            half = 0.5 * tau * w1
-            s, c = math.sin(half), math.cos(half)
-            sn, cs = 2.0 * s * c, 1.0 - 2.0 * s * s  # sin, cos of the full angle
-            # L2, L3 rotate by -phi about e1
-            w2, w3 = cs * w2 + sn * r32 * w3, cs * w3 - sn * r23 * w2
-            qx, qy, qz, qw = qw * s + qx * c, qy * c + qz * s, qz * c - qy * s, qw * c - qx * s
-        elif axis == 2:
-            half = 0.5 * tau * w2
-            s, c = math.sin(half), math.cos(half)
-            sn, cs = 2.0 * s * c, 1.0 - 2.0 * s * s
-            w3, w1 = cs * w3 + sn * r13 * w1, cs * w1 - sn * r31 * w3
-            qx, qy, qz, qw = qx * c - qz * s, qw * s + qy * c, qz * c + qx * s, qw * c - qy * s
-        else:
-            half = 0.5 * tau * w3
-            s, c = math.sin(half), math.cos(half)
-            sn, cs = 2.0 * s * c, 1.0 - 2.0 * s * s
-            w1, w2 = cs * w1 + sn * r21 * w2, cs * w2 - sn * r12 * w1
-            qx, qy, qz, qw = qx * c + qy * s, qy * c - qx * s, qw * s + qz * c, qw * c - qz * s
+    for axis, rate in terms:
+        phi = rate * hh * (w1 if axis == 0 else w2 if axis == 1 else w3)
+        qx, qy, qz, qw, w1, w2, w3 = _axis_flow(axis, phi, qx, qy, qz, qw, w1, w2, w3, i1, i2, i3)
+    qx, qy, qz, qw = quat.multiply((qx, qy, qz, qw), quat.exp_rotation_vector((h * c1 * w1, h * c2 * w2, h * c3 * w3)))
+    for axis, rate in reverse:
+        phi = rate * hh * (w1 if axis == 0 else w2 if axis == 1 else w3)
+        qx, qy, qz, qw, w1, w2, w3 = _axis_flow(axis, phi, qx, qy, qz, qw, w1, w2, w3, i1, i2, i3)
     return qx, qy, qz, qw, w1, w2, w3
 
 
