@@ -13,9 +13,10 @@ from rigid_rot_sim.recording.reader import BagReader  # noqa: E402
 from rigid_rot_sim.recording.writer import Recorder  # noqa: E402
 
 
-def test_plot_writes_four_pngs(tmp_path):
+@pytest.mark.parametrize("scene, commands", [("torque_driven", COMMANDS), ("free_tumble", {})])
+def test_plot_writes_four_pngs(tmp_path, scene, commands):
     bag = tmp_path / "run.mcap"
-    record_like_the_node(bag, "torque_driven", 600, 10, COMMANDS)
+    record_like_the_node(bag, scene, 600, 10, commands)
     written = plot_run(bag, tmp_path / "plots")
     assert [p.name for p in written] == ["omega.png", "drift.png", "torque.png", "polhode.png"]
     import matplotlib.image
