@@ -59,9 +59,11 @@ the middle axis (or a body at rest), labelled 'separatrix' because L^2 = 2 E I2 
 
 from __future__ import annotations
 
-import dataclasses
+import functools
 import math
 from dataclasses import dataclass, field
+from fractions import Fraction
+from types import SimpleNamespace
 from typing import Any
 
 import numpy as np
@@ -78,31 +80,56 @@ _EPS = np.finfo(float).eps
 _EQUAL_MOMENTS_ULPS = 4.0
 # |L^2 - 2 E I2| within this many ulps of its two (opposite-sign) terms is the separatrix.
 _SEPARATRIX_ULPS = 8.0
+# Below this fraction of its terms, L^2 - 2 E I2 is evaluated exactly (float subtraction
+# would lose more than 7 bits of it).
+_EXACT_SEPARATRIX_DISTANCE = 1e-2
 
 
-@dataclass(frozen=True)
+# Elementary functions for the two evaluation paths: plain floats (one time, the
+# integrators' per-step path, where math is ~10x cheaper than numpy on scalars) and arrays.
+_SCALAR_FUNCTIONS = SimpleNamespace(
+    sin=math.sin, cos=math.cos, asin=math.asin, atan=math.atan, atan2=math.atan2, sqrt=math.sqrt,
+    hypot=math.hypot, tanh=math.tanh, exp=math.exp, abs=abs, floor=math.floor, fmod2=lambda j: j % 2.0,
+)
+_ARRAY_FUNCTIONS = SimpleNamespace(
+    sin=np.sin, cos=np.cos, asin=np.arcsin, atan=np.arctan, atan2=np.arctan2, sqrt=np.sqrt,
+    hypot=np.hypot, tanh=np.tanh, exp=np.exp, abs=np.abs, floor=np.floor, fmod2=lambda j: np.mod(j, 2.0),
+)
+
+
 class _RigidRotation:
     """omega constant in the body; q(t) = exp(tau omega_world) q0."""
 
-    omega: np.ndarray
-    omega_world: np.ndarray
-    q0: np.ndarray
+    def __init__(self, omega: np.ndarray, q0: np.ndarray) -> None:
+        self.omega = omega
+        self.q0 = q0
+        self.omega_world = Rotation.from_quat(q0).apply(omega)
+        self._omega_tuple = tuple(omega.tolist())
+        self._omega_world_tuple = tuple(self.omega_world.tolist())
+        self._q0_tuple = tuple(q0.tolist())
 
     def evaluate(self, tau: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         rot = Rotation.from_rotvec(tau[:, None] * self.omega_world[None, :]) * Rotation.from_quat(self.q0)
         return rot.as_quat(), np.broadcast_to(self.omega, (tau.size, 3)).copy()
 
+    def evaluate_scalar(self, tau: float) -> tuple[tuple, tuple]:
+        wx, wy, wz = self._omega_world_tuple
+        return quat.multiply(quat.exp_rotation_vector((tau * wx, tau * wy, tau * wz)), self._q0_tuple), self._omega_tuple
 
-@dataclass(frozen=True)
+
 class _SymmetricFlow:
     """I_a = I_b = i_perp != I_d: commuting rotations about L_world and the body axis d."""
 
-    moments: np.ndarray
-    axis: int
-    rate_world: np.ndarray  # L_world / i_perp, rad/s
-    beta: float  # (1/I_d - 1/i_perp) L_d, rad/s
-    l_body0: np.ndarray
-    q0: np.ndarray
+    def __init__(self, moments: np.ndarray, axis: int, q0: np.ndarray, omega0: np.ndarray) -> None:
+        i_perp = float(moments[(axis + 1) % 3])
+        l_body = moments * omega0
+        self.moments = moments
+        self.axis = axis
+        self.rate_world = Rotation.from_quat(q0).apply(l_body) / i_perp  # rad/s
+        self.beta = float((1.0 / moments[axis] - 1.0 / i_perp) * l_body[axis])  # rad/s
+        self.l_body0 = l_body
+        self.q0 = q0
+        self._tuples = tuple(tuple(x.tolist()) for x in (moments, self.rate_world, l_body, q0))
 
     def evaluate(self, tau: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         body_rotvec = np.zeros((tau.size, 3))
@@ -112,82 +139,90 @@ class _SymmetricFlow:
         l_body = spin.apply(self.l_body0, inverse=True)
         return rot.as_quat(), l_body / self.moments
 
+    def evaluate_scalar(self, tau: float) -> tuple[tuple, tuple]:
+        moments, rate, l_body, q0 = self._tuples
+        body_rotvec = [0.0, 0.0, 0.0]
+        body_rotvec[self.axis] = tau * self.beta
+        spin = quat.exp_rotation_vector(body_rotvec)
+        q = quat.multiply(quat.multiply(quat.exp_rotation_vector([tau * r for r in rate]), q0), spin)
+        l_now = quat.rotate_inverse(spin, l_body)
+        return q, tuple(l / i for l, i in zip(l_now, moments))
 
-@dataclass(frozen=True)
+
 class _EllipticFlow:
-    """The triaxial body (generic or separatrix) in the relabelled principal frame."""
+    """The triaxial body (generic or separatrix) in the relabelled principal frame.
 
-    perm: np.ndarray  # (3, 3) proper signed permutation, x' = perm @ x
-    moments: np.ndarray  # relabelled (I1', I2', I3')
-    amplitude: np.ndarray  # (A1, A2, A3), rad/s
-    signs: tuple[float, float, float]  # (s1, sigma, s3)
-    psi_scale: tuple[float, float]  # (s1 I1 alpha1, sigma I2 alpha2): psi = atan2(c1 cn, c2 sn)
-    lam: float
-    u0: float
-    m1: float  # 1 - m (0 on the separatrix)
-    n: float
-    l_norm: float
-    agm_a: tuple[float, ...]
-    agm_c: tuple[float, ...]
-    quarter_period: float  # K (inf on the separatrix)
-    half_period_pi_excess: float  # 2 (Pi(n|m) - K)
-    phase0: tuple[float, float]  # (j0, n/3 sn0^3 R_J(...)) or (atan term) on the separatrix
-    compose: np.ndarray  # (4, 4): q_world<-body = compose @ q_zxz
+    Attributes (set by :func:`_elliptic_flow`): ``order`` and ``axis_signs`` (the proper
+    signed permutation: omega'_k = axis_signs[k] * omega[order[k]]), the relabelled
+    ``moments`` (I1', I2', I3'), ``amplitude`` (A1, A2, A3), ``signs`` (s1, sigma, s3),
+    ``psi_scale``, ``lam``, ``u0``, ``m1`` (1 - m; 0 on the separatrix), ``n``, ``l_norm``,
+    the AGM tables ``agm_a``/``agm_c``, ``quarter_period`` K, ``half_period_pi_excess``
+    = 2 (Pi(n|m) - K), ``phase0`` = (j0, g0) and the constant quaternions ``q_wl`` (L frame
+    -> world) and ``q_perm`` (body -> relabelled body).
+    """
 
     @property
     def separatrix(self) -> bool:
         return self.m1 == 0.0
 
-    def jacobi(self, r: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    def jacobi(self, r: Any, f: SimpleNamespace = _ARRAY_FUNCTIONS) -> tuple[Any, Any, Any]:
         """sn, cn, dn of r (|r| <= K) by the descending AGM (Abramowitz & Stegun 16.4)."""
         a, c = self.agm_a, self.agm_c
         levels = len(a) - 1
         phi = (2.0**levels * a[levels]) * r
         for i in range(levels, 0, -1):
-            phi = 0.5 * (phi + np.arcsin(c[i] * np.sin(phi) / a[i]))
-        sn = np.sin(phi)
-        cn = np.cos(phi)
-        dn = np.sqrt(cn * cn + self.m1 * sn * sn)
-        return sn, cn, dn
+            phi = 0.5 * (phi + f.asin(c[i] * f.sin(phi) / a[i]))
+        sn = f.sin(phi)
+        cn = f.cos(phi)
+        return sn, cn, f.sqrt(cn * cn + self.m1 * sn * sn)
 
-    def phase(self, u: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    def phase(self, u: Any, f: SimpleNamespace = _ARRAY_FUNCTIONS) -> tuple[Any, Any, Any, Any, Any]:
         """sn, cn, dn at u and the two parts of Pi(n; am u | m) beyond u: (j, g)."""
         if self.separatrix:
-            sn = np.tanh(u)
-            e = np.exp(-np.abs(u))
+            sn = f.tanh(u)
+            e = f.exp(-f.abs(u))
             cn = 2.0 * e / (1.0 + e * e)
             a = math.sqrt(-self.n)
-            return sn, cn, cn, np.zeros_like(u), a * np.arctan(a * sn)
+            return sn, cn, cn, 0.0 * u, a * f.atan(a * sn)
         k = self.quarter_period
-        j = np.floor((u + k) / (2.0 * k))
+        j = f.floor((u + k) / (2.0 * k))
         r = u - 2.0 * k * j
-        sn, cn, dn = self.jacobi(r)
+        sn, cn, dn = self.jacobi(r, f)
         s2 = sn * sn
         g = (self.n / 3.0) * sn * s2 * elliprj(cn * cn, dn * dn, 1.0, 1.0 - self.n * s2)
         # sn and cn change sign over each half period 2K (dn does not)
-        parity = 1.0 - 2.0 * np.mod(j, 2.0)
+        parity = 1.0 - 2.0 * f.fmod2(j)
         return parity * sn, parity * cn, dn, j, g
 
-    def evaluate(self, tau: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    def components(self, tau: Any, f: SimpleNamespace) -> tuple[tuple, list]:
+        """Quaternion and omega components at tau (s) (floats or arrays alike)."""
         i1, i2, i3 = self.moments
         a1, a2, a3 = self.amplitude
         s1, sigma, s3 = self.signs
         u = self.lam * tau + self.u0
-        sn, cn, dn, j, g = self.phase(u)
+        sn, cn, dn, j, g = self.phase(u, f)
         j0, g0 = self.phase0
         coeff = self.l_norm * (i3 - i1) / (i1 * i3 * self.lam)
         if self.separatrix:
             phi = self.l_norm * tau / i3 + coeff * (self.lam * tau + (g - g0)) / (1.0 - self.n)
         else:
             phi = self.l_norm * tau / i1 + coeff * ((j - j0) * self.half_period_pi_excess + (g - g0))
-        w = np.stack((s1 * a1 * cn, sigma * a2 * sn, s3 * a3 * dn), axis=-1)
-        l1 = i1 * w[:, 0]
-        l2 = i2 * w[:, 1]
-        theta = np.arctan2(np.hypot(l1, l2), i3 * w[:, 2])
-        psi = np.arctan2(self.psi_scale[0] * cn, self.psi_scale[1] * sn)
-        q_zxz = zxz_to_quaternion(phi, theta, psi)
-        q = q_zxz @ self.compose.T
-        return q, w @ self.perm
+        w = (s1 * a1 * cn, sigma * a2 * sn, s3 * a3 * dn)
+        theta = f.atan2(f.hypot(i1 * w[0], i2 * w[1]), i3 * w[2])
+        psi = f.atan2(self.psi_scale[0] * cn, self.psi_scale[1] * sn)
+        q = quat.multiply(quat.multiply(self.q_wl, _zxz_components(phi, theta, psi, f)), self.q_perm)
+        omega = [0.0, 0.0, 0.0]
+        for k in range(3):
+            omega[self.order[k]] = self.axis_signs[k] * w[k]
+        return q, omega
+
+    def evaluate(self, tau: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        q, omega = self.components(tau, _ARRAY_FUNCTIONS)
+        return np.stack(q, axis=-1), np.stack(omega, axis=-1)
+
+    def evaluate_scalar(self, tau: float) -> tuple[tuple, tuple]:
+        q, omega = self.components(tau, _SCALAR_FUNCTIONS)
+        return tuple(float(x) for x in q), tuple(float(x) for x in omega)
 
 
 @dataclass(frozen=True, eq=False)
@@ -219,6 +254,12 @@ class TorqueFreeSolution:
 
     def state(self, t: Any) -> tuple[np.ndarray, np.ndarray]:
         """``(quaternion(t), omega(t))`` evaluated together (shapes (..., 4) and (..., 3))."""
+        if isinstance(t, (float, int)) and not isinstance(t, bool):
+            # one time: the float path (an order of magnitude cheaper than 1-element arrays)
+            if not math.isfinite(t):
+                raise ValueError(f"t must be finite, got {t}")
+            q, w = self._flow.evaluate_scalar(float(t) - self.t0)
+            return np.array(q), np.array(w)
         tau = np.asarray(t, dtype=float) - self.t0
         if not np.all(np.isfinite(tau)):
             raise ValueError(f"t must be finite, got {t}")
@@ -250,13 +291,16 @@ def zxz_to_quaternion(phi: Any, theta: Any, psi: Any) -> np.ndarray:
     Equals ``Rotation.from_euler('ZXZ', [phi, theta, psi]).as_quat()`` up to sign;
     vectorised over the (broadcast) angle arrays.
     """
-    half_sum = 0.5 * (np.asarray(phi) + np.asarray(psi))
-    half_diff = 0.5 * (np.asarray(phi) - np.asarray(psi))
-    ch = np.cos(0.5 * np.asarray(theta))
-    sh = np.sin(0.5 * np.asarray(theta))
-    return np.stack(
-        (sh * np.cos(half_diff), sh * np.sin(half_diff), ch * np.sin(half_sum), ch * np.cos(half_sum)), axis=-1
-    )
+    broadcast = np.broadcast_arrays(*(np.asarray(a, dtype=float) for a in (phi, theta, psi)))
+    return np.stack(_zxz_components(*broadcast, _ARRAY_FUNCTIONS), axis=-1)
+
+
+def _zxz_components(phi: Any, theta: Any, psi: Any, f: SimpleNamespace) -> tuple[Any, Any, Any, Any]:
+    half_sum = 0.5 * (phi + psi)
+    half_diff = 0.5 * (phi - psi)
+    ch = f.cos(0.5 * theta)
+    sh = f.sin(0.5 * theta)
+    return (sh * f.cos(half_diff), sh * f.sin(half_diff), ch * f.sin(half_sum), ch * f.cos(half_sum))
 
 
 def quaternion_to_zxz(q: Any) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -283,13 +327,18 @@ def _wrap_angle(a: np.ndarray) -> np.ndarray:
     return np.pi - np.mod(np.pi - a, 2.0 * np.pi)
 
 
-def _proper_permutation(order: tuple[int, int, int]) -> np.ndarray:
+@functools.lru_cache(maxsize=None)
+def _relabelling(order: tuple[int, int, int]) -> tuple[tuple[float, float, float], tuple[float, ...]]:
+    """Signs and quaternion of the proper signed permutation x'_k = sign_k x[order[k]].
+
+    The quaternion rotates body -> relabelled body coordinates (det = +1 by flipping axis 2).
+    """
     perm = np.zeros((3, 3))
     for k, i in enumerate(order):
         perm[k, i] = 1.0
-    if np.linalg.det(perm) < 0.0:
-        perm[1] *= -1.0  # keep the relabelled frame right-handed
-    return perm
+    signs = (1.0, -1.0 if np.linalg.det(perm) < 0.0 else 1.0, 1.0)
+    perm[1] *= signs[1]  # keep the relabelled frame right-handed
+    return signs, tuple(Rotation.from_matrix(perm).as_quat().tolist())
 
 
 def _sign(x: float) -> float:
@@ -309,33 +358,28 @@ def _agm_tables(m: float, m1: float) -> tuple[tuple[float, ...], tuple[float, ..
     return tuple(a), tuple(c)
 
 
-def _composition_matrix(left: Any, right: Any) -> np.ndarray:
-    """4x4 matrix M with ``M @ q = left (x) q (x) right`` (both products are linear in q)."""
-    basis = np.eye(4)
-    return np.column_stack([quat.multiply(quat.multiply(left, e), right) for e in basis])
-
-
-def _elliptic_flow(moments: np.ndarray, omega: np.ndarray, q0: np.ndarray, order: tuple[int, int, int]) -> _EllipticFlow:
-    perm = _proper_permutation(order)
+def _elliptic_flow(
+    moments: list, omega: list, q0: np.ndarray, order: tuple[int, int, int], d: float
+) -> _EllipticFlow:
+    """Build the flow; ``d`` = L^2 - 2 E I2 (0 on the separatrix), computed by the caller."""
+    flow = _EllipticFlow()
+    axis_signs, q_perm = _relabelling(order)
     i1, i2, i3 = (float(moments[k]) for k in order)
-    w1, w2, w3 = (float(x) for x in perm @ omega)
+    w1, w2, w3 = (axis_signs[k] * float(omega[order[k]]) for k in range(3))
     eps = _sign(i3 - i2)
     d31, d32, d21 = i3 - i1, i3 - i2, i2 - i1
     a1 = math.sqrt(w1 * w1 + i2 * d32 / (i1 * d31) * w2 * w2)
     a2 = math.sqrt(i1 * d31 / (i2 * d32) * w1 * w1 + w2 * w2)
     a3 = math.sqrt(i2 * d21 / (i3 * d31) * w2 * w2 + w3 * w3)
-    # D = L^2 - 2 E I2 from its two terms of opposite sign
-    t_in, t_out = i3 * d32 * w3 * w3, i1 * d21 * w1 * w1
     big = i3 * d32 * a3 * a3
-    separatrix = abs(t_in - t_out) <= _SEPARATRIX_ULPS * _EPS * (abs(t_in) + abs(t_out))
-    m1 = 0.0 if separatrix else (t_in - t_out) / big
+    separatrix = d == 0.0
+    m1 = d / big
     m = i1 * d21 * a1 * a1 / big
     lam = math.sqrt(d32 * d31 * a3 * a3 / (i1 * i2))
     n = -i3 * d21 / (i1 * d32)
     s3 = _sign(w3)
     s1 = _sign(w1) if separatrix else 1.0
     sigma = eps * s1 * s3
-    l_norm = math.sqrt((i1 * w1) ** 2 + (i2 * w2) ** 2 + (i3 * w3) ** 2)
     alpha1 = 1.0 / math.sqrt(i1 * abs(d31))
     alpha2 = 1.0 / math.sqrt(i2 * abs(d32))
     # phase u0 from sn u0 = sigma w2 / A2, cn u0 = s1 w1 / A1 (normalised against rounding)
@@ -353,33 +397,24 @@ def _elliptic_flow(moments: np.ndarray, omega: np.ndarray, q0: np.ndarray, order
         excess = (2.0 * n / 3.0) * float(elliprj(0.0, m1, 1.0, 1.0 - n))
         f = sn0 * float(elliprf(cn0 * cn0, cn0 * cn0 + m1 * sn0 * sn0, 1.0))
         u0 = f if cn0 >= 0.0 else math.copysign(2.0 * k, sn0) - f
-    flow = _EllipticFlow(
-        perm=perm,
-        moments=np.array([i1, i2, i3]),
-        amplitude=np.array([a1, a2, a3]),
-        signs=(s1, sigma, s3),
-        psi_scale=(s1 * i1 * alpha1, sigma * i2 * alpha2),
-        lam=lam,
-        u0=u0,
-        m1=m1,
-        n=n,
-        l_norm=l_norm,
-        agm_a=agm_a,
-        agm_c=agm_c,
-        quarter_period=k,
-        half_period_pi_excess=excess,
-        phase0=(0.0, 0.0),
-        compose=np.eye(4),
-    )
-    _, _, _, j0, g0 = flow.phase(np.array([u0]))
-    flow = dataclasses.replace(flow, phase0=(float(j0[0]), float(g0[0])))
-    # theta, psi at tau = 0 from the flow itself so that q(t0) = q0 to rounding
-    q_zxz0 = flow.evaluate(np.zeros(1))[0][0]  # compose = identity: q_zxz(0, theta0, psi0)
-    q_perm = Rotation.from_matrix(perm).as_quat()
-    # q_world<-body = q_WL (x) q_zxz (x) q_perm with q_WL = q0 (x) q_perm^-1 (x) q_zxz(0)^-1
-    q_wl = quat.multiply(quat.multiply(q0, quat.conjugate(q_perm)), quat.conjugate(q_zxz0))
-    compose = _composition_matrix(q_wl, q_perm)
-    return dataclasses.replace(flow, compose=compose)
+    flow.order, flow.axis_signs = order, axis_signs
+    flow.moments = (i1, i2, i3)
+    flow.amplitude = (a1, a2, a3)
+    flow.signs = (s1, sigma, s3)
+    flow.psi_scale = (s1 * i1 * alpha1, sigma * i2 * alpha2)
+    flow.lam, flow.u0, flow.m1, flow.n = lam, u0, m1, n
+    flow.l_norm = math.sqrt((i1 * w1) ** 2 + (i2 * w2) ** 2 + (i3 * w3) ** 2)
+    flow.agm_a, flow.agm_c = agm_a, agm_c
+    flow.quarter_period, flow.half_period_pi_excess = k, excess
+    _, _, _, j0, g0 = flow.phase(u0, _SCALAR_FUNCTIONS)
+    flow.phase0 = (float(j0), float(g0))
+    # q_world<-body = q_WL (x) q_zxz(t) (x) q_perm; q_WL from q(t0) = q0, with q_zxz(t0)
+    # evaluated by the flow itself so that the two agree to rounding
+    flow.q_wl, flow.q_perm = (0.0, 0.0, 0.0, 1.0), (0.0, 0.0, 0.0, 1.0)
+    q_zxz0 = flow.evaluate_scalar(0.0)[0]
+    flow.q_wl = quat.multiply(quat.multiply(tuple(q0.tolist()), quat.conjugate(q_perm)), quat.conjugate(q_zxz0))
+    flow.q_perm = q_perm
+    return flow
 
 
 def torque_free_solution(moments: Any, omega0: Any, q0: Any = (0.0, 0.0, 0.0, 1.0), t0: float = 0.0) -> TorqueFreeSolution:
@@ -416,47 +451,53 @@ def torque_free_solution(moments: Any, omega0: Any, q0: Any = (0.0, 0.0, 0.0, 1.
     return _solution(moments, omega0, q0, t0)
 
 
-def torque_free_flow(moments: np.ndarray, q: Any, omega: Any, tau: float) -> tuple[np.ndarray, np.ndarray]:
-    """Exact free flow over tau (s) from (q, omega): ``(q(tau), omega(tau))``.
+def torque_free_flow(moments: np.ndarray, q: Any, omega: Any, tau: float) -> tuple[tuple, tuple]:
+    """Exact free flow over tau (s) from (q, omega): ``(q(tau), omega(tau))`` as float tuples.
 
     The same as ``torque_free_solution(moments, omega, q).state(tau)`` without the input
     checks, for integrators that call it every step with a state they already checked
     (``moments`` a float array (3,), q a unit quaternion).
     """
     solution = _solution(moments, np.asarray(omega, dtype=float), np.asarray(q, dtype=float), 0.0)
-    q_new, omega_new = solution._flow.evaluate(np.array([float(tau)]))
-    return q_new[0], omega_new[0]
+    return solution._flow.evaluate_scalar(float(tau))
+
+
+def _separatrix_distance(moments: list, omega: list, i_min: int, i_mid: int, i_max: int) -> float:
+    """``L^2 - 2 E I2`` from its two terms of opposite sign; 0.0 within rounding of the separatrix."""
+    d_above = float(moments[i_max] * (moments[i_max] - moments[i_mid]) * omega[i_max] ** 2)
+    d_below = float(moments[i_min] * (moments[i_mid] - moments[i_min]) * omega[i_min] ** 2)
+    scale = d_above + d_below
+    if abs(d_above - d_below) > _EXACT_SEPARATRIX_DISTANCE * scale:
+        return d_above - d_below
+    # The terms cancel: evaluate exactly in rational arithmetic (a rounded D would decide the
+    # case wrongly at the separatrix and cost digits in the phase and precession next to it).
+    i1, i2, i3, w1, w3 = (
+        Fraction(float(x)) for x in (moments[i_min], moments[i_mid], moments[i_max], omega[i_min], omega[i_max])
+    )
+    d = float(i3 * (i3 - i2) * w3 * w3 - i1 * (i2 - i1) * w1 * w1)
+    return 0.0 if abs(d) <= _SEPARATRIX_ULPS * _EPS * scale else d
 
 
 def _solution(moments: np.ndarray, omega0: np.ndarray, q0: np.ndarray, t0: float) -> TorqueFreeSolution:
-    idx = [int(i) for i in np.argsort(moments, kind="stable")]
-    i_min, i_mid, i_max = idx
-    tol = _EQUAL_MOMENTS_ULPS * _EPS * float(moments[i_max])
-    low_equal = moments[i_mid] - moments[i_min] <= tol
-    high_equal = moments[i_max] - moments[i_mid] <= tol
-    l_body = moments * omega0
+    m = moments.tolist()
+    i_min, i_mid, i_max = sorted(range(3), key=m.__getitem__)
+    tol = _EQUAL_MOMENTS_ULPS * _EPS * m[i_max]
+    low_equal = m[i_mid] - m[i_min] <= tol
+    high_equal = m[i_max] - m[i_mid] <= tol
     if low_equal and high_equal:
         case = "spherical"
-        flow: Any = _RigidRotation(omega0.copy(), Rotation.from_quat(q0).apply(omega0), q0)
+        flow: Any = _RigidRotation(omega0.copy(), q0)
     elif low_equal or high_equal:
         case = "symmetric"
-        axis = i_max if low_equal else i_min
-        i_perp = float(moments[i_mid])
-        l_world = Rotation.from_quat(q0).apply(l_body)
-        beta = (1.0 / moments[axis] - 1.0 / i_perp) * l_body[axis]
-        flow = _SymmetricFlow(moments.copy(), axis, l_world / i_perp, float(beta), l_body, q0)
+        flow = _SymmetricFlow(moments.copy(), i_max if low_equal else i_min, q0, omega0)
     else:
-        d_above = moments[i_max] * (moments[i_max] - moments[i_mid]) * omega0[i_max] ** 2
-        d_below = moments[i_min] * (moments[i_mid] - moments[i_min]) * omega0[i_min] ** 2
-        scale = d_above + d_below
-        if abs(d_above - d_below) <= _SEPARATRIX_ULPS * _EPS * scale:
-            case = "separatrix"
-        else:
-            case = "above_separatrix" if d_above > d_below else "below_separatrix"
-        if scale == 0.0:
+        w = omega0.tolist()
+        d = _separatrix_distance(m, w, i_min, i_mid, i_max)
+        case = "separatrix" if d == 0.0 else ("above_separatrix" if d > 0.0 else "below_separatrix")
+        if not (w[i_min] or w[i_max]):
             # at rest, or a stationary spin about the middle axis
-            flow = _RigidRotation(omega0.copy(), Rotation.from_quat(q0).apply(omega0), q0)
+            flow = _RigidRotation(omega0.copy(), q0)
         else:
-            order = (i_min, i_mid, i_max) if case != "below_separatrix" else (i_max, i_mid, i_min)
-            flow = _elliptic_flow(moments, omega0, q0, order)
+            order = (i_max, i_mid, i_min) if d < 0.0 else (i_min, i_mid, i_max)
+            flow = _elliptic_flow(m, w, q0, order, d)
     return TorqueFreeSolution(moments, omega0, q0, t0, case, flow)

@@ -68,8 +68,26 @@ class ExactFlow(Integrator):
             self._anchor_t, self._anchor_dt, self._anchor_k = self.t, self.dt, 0
         return self._solution
 
+    def step(self) -> None:
+        """Advance the state by one step of ``dt``."""
+        self.advance(1)
+
     def _step_impl(self) -> None:
-        self._advance_saving(1, 1)
+        self._advance_by(1)
+        self.n_steps -= 1  # base.step() counts this step
+
+    def _advance_by(self, steps: int) -> None:
+        """One evaluation, on floats, at ``steps`` steps past the current state."""
+        solution = self._anchor()
+        k = self._anchor_k + steps
+        t = self._anchor_t + k * self._anchor_dt
+        q, omega = solution._flow.evaluate_scalar(t - solution.t0)
+        if not math.isfinite(sum(q) + sum(omega)):
+            raise NonFiniteStateError(
+                f"{self.name}: non-finite state at step {self.n_steps + steps}, t = {t:.9g} s (q = {q}, omega = {omega})"
+            )
+        self.q, self.omega, self.t, self._anchor_k = np.array(q), np.array(omega), t, k
+        self.n_steps += steps
 
     def _advance_saving(self, n_saves: int, save_every: int) -> tuple[np.ndarray, np.ndarray]:
         """Evaluate the solution after every save_every-th of n_saves * save_every steps at once."""
@@ -86,21 +104,19 @@ class ExactFlow(Integrator):
         self.q, self.omega = q[-1], omega[-1]
         self.t = self._anchor_t + int(k[-1]) * self._anchor_dt
         self._anchor_k = int(k[-1])
+        self.n_steps += n_saves * save_every
         return q, omega
 
     def advance(self, n: int) -> None:
         """Take n steps in one evaluation (the same state as n calls of :meth:`step`)."""
         if n > 0:
-            self._advance_saving(1, n)
-            self.n_steps += n
+            self._advance_by(n)
 
     def advance_saving(self, n_saves: int, save_every: int) -> tuple[np.ndarray, np.ndarray]:
         """The states after every save_every-th step, all evaluated in one vectorised call."""
         if n_saves <= 0:
             return np.empty((0, 4)), np.empty((0, 3))
-        q, omega = self._advance_saving(n_saves, save_every)
-        self.n_steps += n_saves * save_every
-        return q, omega
+        return self._advance_saving(n_saves, save_every)
 
 
 def _make_kernel(coefficients: tuple[float, ...]):
@@ -111,7 +127,7 @@ def _make_kernel(coefficients: tuple[float, ...]):
         moments_array = np.array(moments)
         if torque is None:
             q_new, w_new = torque_free_flow(moments_array, q, (w1, w2, w3), h)
-            return (*q_new.tolist(), *w_new.tolist())
+            return (*q_new, *w_new)
         n1, n2, n3 = torque(t, q, (w1, w2, w3))
         for gamma in coefficients:
             tau = gamma * h
@@ -119,9 +135,7 @@ def _make_kernel(coefficients: tuple[float, ...]):
             w1 += hk * n1 / i1
             w2 += hk * n2 / i2
             w3 += hk * n3 / i3
-            q_new, w_new = torque_free_flow(moments_array, q, (w1, w2, w3), tau)
-            q = tuple(q_new.tolist())
-            w1, w2, w3 = w_new.tolist()
+            q, (w1, w2, w3) = torque_free_flow(moments_array, q, (w1, w2, w3), tau)
             t += tau
             w1, w2, w3, n1, n2, n3 = _adjoint_kick(torque, t, q, w1, w2, w3, hk, i1, i2, i3)
         qx, qy, qz, qw = q
