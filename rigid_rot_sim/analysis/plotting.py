@@ -116,3 +116,29 @@ def stability_plot(cases: Sequence[dict[str, Any]], methods: Sequence[str], path
     fig.savefig(path)
     plt.close(fig)
     return path
+
+
+def long_horizon_plot(rows: Sequence[dict[str, Any]], path: str | Path) -> Path:
+    """Bar chart: relative energy error over the first and the last tenth of the long run, per method."""
+    import numpy as np
+
+    fig, ax = plt.subplots(figsize=(9, 5), dpi=110)
+    labels = [r["method"] for r in rows]
+    x = np.arange(len(rows))
+    first = [max(r["first_tenth_max"], 1e-17) if math.isfinite(r["first_tenth_max"]) else np.nan for r in rows]
+    last = [max(r["last_tenth_mean"], 1e-17) if math.isfinite(r["last_tenth_mean"]) else np.nan for r in rows]
+    ax.bar(x - 0.2, first, 0.4, label="max over the first tenth")
+    ax.bar(x + 0.2, last, 0.4, label="mean over the last tenth")
+    ax.set_yscale("log")
+    ax.set_xticks(x, labels=[f"{m}\n({'secular' if r['secular'] else 'bounded'})" for m, r in zip(labels, rows)],
+                  fontsize=8)
+    steps = rows[0]["steps"] if rows else 0
+    ax.set_ylabel("relative energy error |E − E0| / E0 [-]")
+    ax.set_title(f"Long horizon: {steps:.0e} steps of dt = {rows[0]['dt'] if rows else 0:g} s on P1's body")
+    ax.legend(fontsize=8)
+    ax.grid(True, axis="y", alpha=0.3)
+    fig.tight_layout()
+    path = Path(path)
+    fig.savefig(path)
+    plt.close(fig)
+    return path
