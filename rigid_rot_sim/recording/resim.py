@@ -22,6 +22,7 @@ import numpy as np
 from rigid_rot_sim.core.scene import parse_scene_text
 from rigid_rot_sim.core.simulator import Simulator, StateSnapshot
 from rigid_rot_sim.recording.events import EVENT_TYPE, SimEvent, decode_event
+from rigid_rot_sim.recording.provenance import core_fingerprint
 from rigid_rot_sim.recording.reader import BagReader
 
 STATE_TYPE = "rigid_rot_msgs/msg/RigidBodyState"
@@ -56,6 +57,7 @@ class ResimReport:
     max_energy_error: float
     identical: bool
     first_difference_t: float | None
+    core_changed: bool | None = None
 
     @property
     def verdict(self) -> str:
@@ -65,7 +67,14 @@ class ResimReport:
         if self.identical:
             return f"BIT-EXACT: all {self.states} states reproduced bit for bit"
         same = self.method == self.recorded_method
-        label = "MISMATCH (same integrator, expected bit-exact)" if same else f"DIFFERS ({self.method} vs recorded {self.recorded_method})"
+        if same and self.core_changed:
+            label = "DIFFERS (same integrator, but the numerical core changed since the recording)"
+        elif same and self.core_changed is None:
+            label = "MISMATCH (same integrator; the recording does not say which core made it)"
+        elif same:
+            label = "MISMATCH (same integrator and core, expected bit-exact)"
+        else:
+            label = f"DIFFERS ({self.method} vs recorded {self.recorded_method})"
         return (
             f"{label}: max attitude {self.max_attitude_error:.3e} rad, "
             f"max |dω| {self.max_omega_error:.3e} rad/s, max |dL| {self.max_momentum_error:.3e} kg*m^2/s"
@@ -73,18 +82,23 @@ class ResimReport:
 
     def format(self) -> str:
         """A short multi-line report for the terminal."""
-        first = "" if self.first_difference_t is None else f"\n  first difference at t = {self.first_difference_t:.9g} s"
-        return (
-            f"{self.path}\n"
-            f"  integrator: {self.method} (recorded: {self.recorded_method}), dt = {self.dt:g} s\n"
-            f"  compared {self.states} states over {self.duration:.6g} s of sim time, replayed {self.events} events\n"
-            f"  max attitude deviation  {self.max_attitude_error:.3e} rad\n"
-            f"  max |ω| deviation       {self.max_omega_error:.3e} rad/s (body frame)\n"
-            f"  max |L| deviation       {self.max_momentum_error:.3e} kg*m^2/s (world frame)\n"
-            f"  max energy deviation    {self.max_energy_error:.3e} J"
-            f"{first}\n"
-            f"  verdict: {self.verdict}"
-        )
+        lines = [
+            self.path,
+            f"  integrator: {self.method} (recorded: {self.recorded_method}), dt = {self.dt:g} s",
+        ]
+        if self.core_changed:
+            lines.append("  note: rigid_rot_sim.core changed since the recording (source fingerprint differs)")
+        lines += [
+            f"  compared {self.states} states over {self.duration:.6g} s of sim time, replayed {self.events} events",
+            f"  max attitude deviation  {self.max_attitude_error:.3e} rad",
+            f"  max |ω| deviation       {self.max_omega_error:.3e} rad/s (body frame)",
+            f"  max |L| deviation       {self.max_momentum_error:.3e} kg*m^2/s (world frame)",
+            f"  max energy deviation    {self.max_energy_error:.3e} J",
+        ]
+        if self.first_difference_t is not None:
+            lines.append(f"  first difference at t = {self.first_difference_t:.9g} s")
+        lines.append(f"  verdict: {self.verdict}")
+        return "\n".join(lines)
 
 
 def attitude_angle(q_a: np.ndarray, q_b: np.ndarray) -> float:
@@ -190,7 +204,9 @@ def resimulate(path: str | os.PathLike[str], method: str | None = None) -> Resim
         if differs and identical:
             identical = False
             first_difference = t
+    recorded_core = reader.metadata.get("versions", {}).get("rigid_rot_sim.core_sha256")
     return ResimReport(
+        core_changed=None if recorded_core is None else recorded_core != core_fingerprint(),
         path=str(path), method=sim.method, recorded_method=recorded_method, dt=dt, states=states,
         events=events, duration=0.0 if t_first is None else t_last - t_first,
         max_attitude_error=max_att, max_omega_error=max_omega, max_momentum_error=max_l,

@@ -107,3 +107,13 @@ def test_attitude_angle_is_accurate_for_tiny_and_large_rotations():
         q2 = (Rotation.from_quat(q) * dq).as_quat()
         assert attitude_angle(q, q2) == pytest.approx(angle, rel=1e-6)
         assert attitude_angle(q, -q2) == pytest.approx(angle, rel=1e-6)  # sign-blind
+
+
+def test_report_says_when_the_numerical_core_changed_since_the_recording(tmp_path, monkeypatch):
+    path = tmp_path / "run.mcap"
+    record_like_the_node(path, "torque_driven", 200, 10, COMMANDS)
+    assert resimulate(path).core_changed is False
+    monkeypatch.setattr("rigid_rot_sim.recording.resim.core_fingerprint", lambda: "another core")
+    report = resimulate(path)
+    assert report.core_changed is True
+    assert "changed since the recording" in report.format()
