@@ -242,7 +242,9 @@ class TorqueFreeSolution:
     case : str
         One of ``CASES``: 'spherical', 'symmetric', or for a triaxial body
         'above_separatrix' (L^2 > 2 E I2, circulation about the largest-moment axis),
-        'below_separatrix' (about the smallest) or 'separatrix' (within rounding).
+        'below_separatrix' (about the smallest) or 'separatrix' (L^2 = 2 E I2 to within
+        8 ulps of its terms). The motion computed is the exact one for the omega0 given
+        either way: a state a few ulps off the separatrix leaves the saddle after a while.
     """
 
     moments: np.ndarray
@@ -463,7 +465,7 @@ def torque_free_flow(moments: np.ndarray, q: Any, omega: Any, tau: float) -> tup
 
 
 def _separatrix_distance(moments: list, omega: list, i_min: int, i_mid: int, i_max: int) -> float:
-    """``L^2 - 2 E I2`` from its two terms of opposite sign; 0.0 within rounding of the separatrix."""
+    """``L^2 - 2 E I2`` from its two terms of opposite sign (exact where they cancel)."""
     d_above = float(moments[i_max] * (moments[i_max] - moments[i_mid]) * omega[i_max] ** 2)
     d_below = float(moments[i_min] * (moments[i_mid] - moments[i_min]) * omega[i_min] ** 2)
     scale = d_above + d_below
@@ -474,8 +476,7 @@ def _separatrix_distance(moments: list, omega: list, i_min: int, i_mid: int, i_m
     i1, i2, i3, w1, w3 = (
         Fraction(float(x)) for x in (moments[i_min], moments[i_mid], moments[i_max], omega[i_min], omega[i_max])
     )
-    d = float(i3 * (i3 - i2) * w3 * w3 - i1 * (i2 - i1) * w1 * w1)
-    return 0.0 if abs(d) <= _SEPARATRIX_ULPS * _EPS * scale else d
+    return float(i3 * (i3 - i2) * w3 * w3 - i1 * (i2 - i1) * w1 * w1)
 
 
 def _solution(moments: np.ndarray, omega0: np.ndarray, q0: np.ndarray, t0: float) -> TorqueFreeSolution:
@@ -493,7 +494,13 @@ def _solution(moments: np.ndarray, omega0: np.ndarray, q0: np.ndarray, t0: float
     else:
         w = omega0.tolist()
         d = _separatrix_distance(m, w, i_min, i_mid, i_max)
-        case = "separatrix" if d == 0.0 else ("above_separatrix" if d > 0.0 else "below_separatrix")
+        # The label allows for rounding in the caller's omega0; the flow itself is the exact
+        # solution for the omega0 given (the separatrix closed form only when d is exactly 0).
+        scale = m[i_max] * (m[i_max] - m[i_mid]) * w[i_max] ** 2 + m[i_min] * (m[i_mid] - m[i_min]) * w[i_min] ** 2
+        if abs(d) <= _SEPARATRIX_ULPS * _EPS * scale:
+            case = "separatrix"
+        else:
+            case = "above_separatrix" if d > 0.0 else "below_separatrix"
         if not (w[i_min] or w[i_max]):
             # at rest, or a stationary spin about the middle axis
             flow = _RigidRotation(omega0.copy(), q0)

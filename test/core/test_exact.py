@@ -205,3 +205,32 @@ def test_non_finite_time_is_rejected():
     sol = torque_free_solution((1.0, 2.0, 3.0), (1.0, 0.1, 0.5))
     with pytest.raises(ValueError, match="t must be finite"):
         sol.omega([0.0, np.nan])
+
+
+@pytest.mark.parametrize("ulps", [-3, -1, 1, 3, 1000])
+def test_within_ulps_of_the_separatrix(ulps):
+    """A few ulps off the separatrix: labelled 'separatrix' within 8 ulps, else by the sign of
+    L^2 - 2 E I2; the solution stays finite and correct (ill-conditioned there: short horizon)."""
+    w3 = 0.5
+    for _ in range(abs(ulps)):
+        w3 = np.nextafter(w3, np.inf if ulps > 0 else -np.inf)
+    omega0 = np.array([1.0, 0.3, w3])
+    sol = torque_free_solution((3.0, 4.0, 6.0), omega0, Q0)
+    # L^2 - 2 E I2 = 6 * 2 * w3^2 - 3 * 1 * 1^2 = 12 w3^2 - 3 has the sign of ulps
+    assert sol.case == ("separatrix" if abs(ulps) <= 3 else "above_separatrix")
+    t = np.linspace(0.0, 10.0, 6)
+    q_ref, w_ref = reference(np.array([3.0, 4.0, 6.0]), omega0, Q0, t)
+    q, w = sol.state(t)
+    assert np.all(np.isfinite(q)) and np.all(np.isfinite(w))
+    assert np.max(np.abs(w - w_ref)) < 1e-11
+    assert np.max(rotation_distance(q, q_ref)) < 1e-11
+
+
+def test_scalar_and_array_evaluation_agree():
+    for moments, omega0 in [((1.0, 2.0, 3.0), (1.0, 0.1, 0.5)), ((3.0, 4.0, 6.0), (1.0, 0.3, 0.5)),
+                            ((2.0, 2.0, 3.0), (0.3, 0.4, 0.5)), ((2.0, 2.0, 2.0), (0.3, 0.4, 0.5))]:
+        sol = torque_free_solution(moments, omega0, Q0)
+        q_arr, w_arr = sol.state(np.array([123.25]))
+        q, w = sol.state(123.25)
+        np.testing.assert_allclose(w, w_arr[0], rtol=0, atol=1e-14)
+        assert rotation_distance(q, q_arr[0]) < 1e-14
