@@ -31,6 +31,18 @@ the rotation per step ``|omega| dt``: beyond about pi rad per step the sampled m
 aliases and splitting resonances appear (bounded but wrong).
 
 *Adaptive methods* (dop853, taylor) subdivide the step themselves and need no bound.
+
+Measured by the stability suite's bisection (``rigid-rot stability``; 1000 steps, growth of
+energy or |L| at most 1 %), on cases from thin rods (1e-6 ratio) and MuJoCo's rod to
+symmetric and generic triaxial bodies:
+
+* rk4 and lie_rk4: the largest stable step is 0.99 to 1.2 times ``2 sqrt(2) / nu``
+  (the bound here is for the worst axis at |omega0|, hence never optimistic);
+* implicit_midpoint: bounded at any step, but its Newton solve (core/integrators/implicit.py,
+  started from omega_n) fails from about ``nu dt = 4`` on a generic triaxial body
+  (measured 4.15 for I = (1, 2, 3), omega0 = (10, 1, 5)); ``MIDPOINT_SOLVER_LIMIT``;
+* splitting (order 2): |L| exact at any step, but the energy error passes 1 % at about
+  2.5 rad of rotation per step on the same body; hence ``ROTATION_PER_STEP_LIMIT = 2``.
 """
 
 from __future__ import annotations
@@ -43,9 +55,13 @@ import numpy as np
 #: Extent of classical RK4's stability region along the imaginary axis.
 RK4_IMAGINARY_LIMIT = 2.0 * math.sqrt(2.0)
 
-#: Rotation per step (rad) above which sampled attitude aliases and the exp-map and
-#: splitting methods lose accuracy (still bounded).
-ROTATION_PER_STEP_LIMIT = math.pi
+#: Rotation per step (rad) above which the fixed-step methods lose accuracy (still bounded
+#: for the structure-preserving ones): below pi, where the sampled attitude aliases, with the
+#: margin the stability suite measured (splitting's energy error reaches 1 % at ~2.5 rad/step).
+ROTATION_PER_STEP_LIMIT = 2.0
+
+#: ``nu * dt`` from which implicit_midpoint's Newton solve may fail (measured, see above).
+MIDPOINT_SOLVER_LIMIT = 4.0
 
 #: ``nu * dt`` above which a 4th-order explicit method's local error (~(nu dt)^5 / 120)
 #: exceeds about 3e-4 per step; reported as an accuracy warning, not instability.
@@ -111,6 +127,20 @@ def max_stable_dt(method: str, principal_moments: Any, omega_max: float) -> floa
     raise ValueError(f"method: no stability bound known for {method!r}")
 
 
+def practical_step_limit(method: str, principal_moments: Any, omega_max: float) -> float:
+    """Step (s) beyond which ``method`` is unstable *or* fails the suite's 1 % criterion.
+
+    The linear bound of :func:`max_stable_dt` for the explicit methods; the measured
+    solver and accuracy limits for implicit_midpoint and splitting; inf for the rest.
+    """
+    nu = gyroscopic_frequency(principal_moments, omega_max)
+    if method == "implicit_midpoint":
+        return MIDPOINT_SOLVER_LIMIT / nu if nu > 0 else math.inf
+    if method == "splitting":
+        return ROTATION_PER_STEP_LIMIT / omega_max if omega_max > 0 else math.inf
+    return max_stable_dt(method, principal_moments, omega_max)
+
+
 def euler_growth_time(principal_moments: Any, omega_max: float, dt: float) -> float:
     """Time (s) in which explicit Euler multiplies a gyroscopic oscillation by e."""
     nu = gyroscopic_frequency(principal_moments, omega_max)
@@ -154,11 +184,17 @@ def step_warnings(method: str, principal_moments: Any, omega_max: float, dt: flo
                 f"(nu*dt)^5/120 ≈ {(nu * dt) ** 5 / 120:.2g} per step); use dt < "
                 f"{EXPLICIT_ACCURACY_LIMIT / nu:.3g} s or exact_split"
             )
+    elif method == "implicit_midpoint" and nu * dt > MIDPOINT_SOLVER_LIMIT:
+        warnings.append(
+            f"implicit_midpoint at nu*dt = {nu * dt:.3g}: its Newton solve may fail beyond nu*dt ≈ "
+            f"{MIDPOINT_SOLVER_LIMIT:g} (gyroscopic frequency {nu:.3g} rad/s); use dt < "
+            f"{MIDPOINT_SOLVER_LIMIT / nu:.3g} s, exact_split or taylor"
+        )
     if method not in ADAPTIVE and method != "exact" and rotation > ROTATION_PER_STEP_LIMIT:
         warnings.append(
-            f"{method}: rotation per step {rotation:.3g} rad exceeds pi at {omega_max:.3g} rad/s; "
-            f"the sampled attitude aliases and the step error is large (bounded for "
-            f"structure-preserving methods); use dt < {ROTATION_PER_STEP_LIMIT / omega_max:.3g} s"
+            f"{method}: rotation per step {rotation:.3g} rad exceeds {ROTATION_PER_STEP_LIMIT:g} rad at "
+            f"{omega_max:.3g} rad/s; the step error is large (bounded for structure-preserving methods) "
+            f"and beyond pi the sampled attitude aliases; use dt < {ROTATION_PER_STEP_LIMIT / omega_max:.3g} s"
             + (" or exact" if method != "exact_split" else " or taylor")
         )
     return warnings

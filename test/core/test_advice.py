@@ -109,3 +109,12 @@ def test_bad_input_names_argument(args, name):
         advice.choose_integrator(*args)
 
 
+
+
+def test_implicit_midpoint_warns_beyond_measured_newton_limit():
+    moments, spin = (1.0, 2.0, 3.0), 10.0
+    nu = advice.gyroscopic_frequency(moments, spin)
+    assert any("Newton" in w for w in advice.step_warnings("implicit_midpoint", moments, spin, 1.1 * 4.0 / nu))
+    assert not any("Newton" in w for w in advice.step_warnings("implicit_midpoint", moments, spin, 0.9 * 4.0 / nu))
+    assert advice.practical_step_limit("implicit_midpoint", moments, spin) == pytest.approx(4.0 / nu)
+    assert advice.practical_step_limit("rk4", moments, spin) == advice.max_stable_dt("rk4", moments, spin)
