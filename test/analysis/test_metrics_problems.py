@@ -58,3 +58,34 @@ def test_p2_reference_is_certified_and_obeys_angular_impulse():
 def test_unknown_problem_lists_valid_keys():
     with pytest.raises(ValueError, match="P1"):
         problems.get_problem("P9")
+
+
+@pytest.mark.parametrize("key", ["P3", "P3b"])
+def test_heavy_top_references_start_at_the_initial_state(key):
+    import dataclasses
+
+    p = problems.get_problem(key)
+    start = dataclasses.replace(p, key=f"{key}-start", t_end=1e-12)
+    ref = start.reference_factory(start)
+    np.testing.assert_allclose(ref.omega, p.omega0, atol=1e-9)
+    assert metrics.attitude_error_angle(p.q0, ref.q) < 1e-9
+
+
+@pytest.mark.parametrize("key", ["P3", "P3b"])
+def test_heavy_top_references_keep_energy_and_both_momenta(key):
+    p = problems.get_problem(key)
+    ref = p.reference()
+    initial = p.top.invariants(np.asarray(p.q0), np.asarray(p.omega0))
+    final = p.top.invariants(ref.q, ref.omega)
+    np.testing.assert_allclose(final, initial, rtol=1e-10, atol=1e-12)
+
+
+def test_separatrix_reference_approaches_the_vertical():
+    p = problems.get_problem("P3")
+    ref = p.reference()
+    # cos(theta) = z of the body symmetry axis in the world: 1/cos(theta) = 1 + 1/cosh(gamma t)
+    axis_z = Rotation.from_quat(ref.q).apply([0.0, 0.0, 1.0])[2]
+    i1 = p.top.pivot_moments[0]
+    gamma = math.sqrt(p.top.mass * p.top.gravity * p.top.com_distance / i1)
+    assert 1.0 / axis_z == pytest.approx(1.0 + 1.0 / math.cosh(gamma * p.t_end), rel=1e-12)
+    assert math.acos(axis_z) < 0.1
