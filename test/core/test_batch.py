@@ -106,3 +106,22 @@ def test_bad_input_names_argument(kwargs, name):
     args.update(kwargs)
     with pytest.raises(ValueError, match=name):
         batch.advance_batch(**args)
+
+
+@pytest.mark.parametrize("method", batch.BATCH_METHODS)
+def test_matches_single_body_integrator_to_round_off(method):
+    from rigid_rot_sim.core.integrators import get_method
+    from rigid_rot_sim.core.torque import ConstantTorque
+
+    rng = np.random.default_rng(11)
+    moments = np.sort(rng.uniform(0.5, 2.0, size=(4, 3)), axis=1)
+    omega = rng.normal(size=(4, 3))
+    q = Rotation.random(4, random_state=5).as_quat()
+    torque = 0.1 * rng.normal(size=(4, 3))
+    q_all, w_all = batch.advance_batch(method, moments, q, omega, 0.05, 200, torque)
+    for k in range(4):
+        single = get_method(method)(moments[k], 0.05, ConstantTorque(torque[k]), q0=q[k], omega0=omega[k])
+        single.advance(200)
+        np.testing.assert_allclose(w_all[k], single.omega, rtol=0, atol=1e-12)
+        # q and -q are the same rotation
+        assert attitude_angle(single.q, q_all[k]) < 1e-12
