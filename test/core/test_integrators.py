@@ -425,3 +425,26 @@ def test_implicit_midpoint_is_stable_on_stiff_damping():
     explicit = make("rk4", {}, MOMENTS, 0.1, damping, q0=Q0, omega0=OMEGA0)
     with pytest.raises(NonFiniteStateError):
         explicit.advance(1000)
+
+
+def test_float_torque_matches_the_torque_models():
+    from rigid_rot_sim.core.integrators.fixed_step import float_torque
+    from rigid_rot_sim.core.torque import PolynomialTorque
+
+    rng = np.random.default_rng(7)
+    models = [
+        ConstantTorque(np.array([0.1, -0.2, 0.3])),
+        PolynomialTorque(np.array([[0.1, -0.2, 0.3], [0.5, 0.0, -1.0], [0.01, 0.02, 0.03]])),
+        GravityTorque(np.array([0.1, -0.4, 0.25]), 9.81 * 2.0),
+        general_torque,
+    ]
+    for model in models:
+        f, attitude_dependent = float_torque(model)
+        for _ in range(10):
+            t = float(rng.uniform(-3, 3))
+            q = Rotation.random(random_state=rng).as_quat()
+            w = rng.normal(size=3)
+            assert np.allclose(f(t, tuple(q), tuple(w)), model(t, q, w), rtol=1e-14, atol=1e-15)
+        assert attitude_dependent == (model is general_torque or isinstance(model, GravityTorque))
+    assert float_torque(None) == (None, False)
+    assert float_torque(ConstantTorque(np.zeros(3)))[0] is None

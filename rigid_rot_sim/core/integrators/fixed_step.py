@@ -22,7 +22,8 @@ from typing import Any, Callable, ClassVar
 import numpy as np
 
 from rigid_rot_sim.core.integrators.base import Integrator, NonFiniteStateError
-from rigid_rot_sim.core.torque import ConstantTorque
+from rigid_rot_sim.core.quaternion import rotate_inverse
+from rigid_rot_sim.core.torque import ConstantTorque, GravityTorque, PolynomialTorque
 
 State = tuple[float, float, float, float, float, float, float]
 FloatTorque = Callable[[float, tuple, tuple], tuple]
@@ -31,9 +32,10 @@ FloatTorque = Callable[[float, tuple, tuple], tuple]
 def float_torque(torque: Any) -> tuple[FloatTorque | None, bool]:
     """Adapt a torque model to ``f(t, q, omega) -> (N1, N2, N3)`` on float tuples.
 
-    Returns ``(f, attitude_dependent)``; ``f`` is None for a free body. A
-    :class:`ConstantTorque` becomes a constant tuple (no numpy per call); any other
-    callable is called with small numpy arrays, as the torque contract says.
+    Returns ``(f, attitude_dependent)``; ``f`` is None for a free body. The structured
+    models of ``core/torque.py`` (constant, polynomial in time, gravity) are evaluated on
+    floats (no numpy per call); any other callable is called with small numpy arrays, as
+    the torque contract says, and counts as depending on the attitude.
     """
     if torque is None:
         return None, False
@@ -42,6 +44,26 @@ def float_torque(torque: Any) -> tuple[FloatTorque | None, bool]:
         if not any(value):
             return None, False
         return (lambda t, q, w: value), False
+    if isinstance(torque, PolynomialTorque):
+        rows = [tuple(row) for row in torque.coefficients[::-1].tolist()]
+
+        def polynomial(t: float, q: tuple, w: tuple) -> tuple:
+            n1, n2, n3 = rows[0]
+            for c1, c2, c3 in rows[1:]:  # Horner, highest power first
+                n1, n2, n3 = n1 * t + c1, n2 * t + c2, n3 * t + c3
+            return n1, n2, n3
+
+        return polynomial, False
+    if isinstance(torque, GravityTorque):
+        a1, a2, a3 = torque.lever_arm.tolist()
+        weight = float(torque.weight)
+
+        def gravity(t: float, q: tuple, w: tuple) -> tuple:
+            # lever_arm x (R^T (-weight e_z)), as GravityTorque.__call__ (tests compare the two)
+            u1, u2, u3 = rotate_inverse(q, (0.0, 0.0, -weight))
+            return a2 * u3 - a3 * u2, a3 * u1 - a1 * u3, a1 * u2 - a2 * u1
+
+        return gravity, True
 
     def call(t: float, q: tuple, w: tuple) -> tuple:
         n1, n2, n3 = np.asarray(torque(t, np.array(q), np.array(w)), dtype=float).reshape(3).tolist()
