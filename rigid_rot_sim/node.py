@@ -51,7 +51,6 @@ from std_srvs.srv import SetBool
 
 from rigid_rot_sim import conversions
 from rigid_rot_sim.core.inertia import mass_properties, parallel_axis_shift
-from rigid_rot_sim.core.integrators import get_method
 from rigid_rot_sim.core.scene import OUTPUT_NAMES, Scene, load_scene
 from rigid_rot_sim.core.simulator import CommandRejected, Simulator
 
@@ -528,8 +527,7 @@ class RigidRotSimNode(Node):
                 dt = values.get("dt", sim.dt)
                 if not isinstance(dt, float) or not (math.isfinite(dt) and dt > 0.0):
                     raise ValueError(f"dt must be a finite number > 0 s, got {dt!r}")
-                if method != "auto":
-                    get_method(method)
+                sim.check_integrator(method, dt)
             for name, value in values.items():
                 if name.startswith("rates."):
                     output = name[len("rates."):]

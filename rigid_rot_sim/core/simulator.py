@@ -55,6 +55,11 @@ _BOUNDARY_SLACK = 1e-9
 
 _ZERO3 = (0.0, 0.0, 0.0)
 
+#: Methods whose ``advance(n)`` differs in the last bits from n single steps: dop853 lands
+#: on ``t + n * dt`` (one rounding) instead of n additions. Stepped one at a time so that
+#: states do not depend on how the node chunks the run (publish rates, wall clock).
+_STEPWISE_METHODS = frozenset({"dop853"})
+
 #: A command stamped further ahead of sim time than this (s) is rejected: its publisher
 #: almost certainly stamps with wall-clock time instead of the sim time on /clock, and
 #: would otherwise wait for decades of sim time.
@@ -225,6 +230,13 @@ class Simulator:
         if method == "auto":
             method = advice.choose_integrator(self.body.principal_moments, self.omega_bound(), dt, self.scene.torque_kind)
         cls = get_method(method)  # ValueError listing the valid names
+        if self.scene.topic_inputs or self.scene.schedules:
+            # commands give the method a ConstantTorque between boundaries: refuse now, not mid-run,
+            # a method that cannot take one (the exact flow is torque-free)
+            try:
+                cls(self.body.principal_moments, dt, ConstantTorque(np.ones(3)), **options)
+            except ValueError as exc:
+                raise ValueError(f"integrator {method!r} cannot run this scene's torque inputs: {exc}") from None
         if first:
             state = (0.0, self.body.attitude_to_principal(np.array(self.scene.initial.orientation)), np.zeros(3))
         else:
@@ -252,6 +264,18 @@ class Simulator:
             self.dt if dt is None else dt,
             self.options if options is None and method in (None, self.method) else dict(options or {}),
         )
+
+    def check_integrator(self, method: str, dt: float) -> None:
+        """ValueError (the reason) if :meth:`set_integrator` would refuse ``method`` at ``dt``; no change."""
+        dt = validation.positive_scalar("dt", dt)
+        if method == "auto":
+            method = advice.choose_integrator(self.body.principal_moments, self.omega_bound(), dt, self.scene.torque_kind)
+        cls = get_method(method)
+        torque = ConstantTorque(np.ones(3)) if self.scene.topic_inputs or self.scene.schedules else self.gravity
+        try:
+            cls(self.body.principal_moments, dt, torque)
+        except ValueError as exc:
+            raise ValueError(f"integrator {method!r} cannot run this scene: {exc}") from None
 
     def warnings(self) -> list[str]:
         """Stability / accuracy warnings for the current method and step (:mod:`advice`)."""
@@ -512,7 +536,11 @@ class Simulator:
             chunk = stop - self._k
             start = (integrator.t, integrator.q, integrator.omega, integrator.n_steps)
             try:
-                integrator.advance(chunk)
+                if integrator.name in _STEPWISE_METHODS:
+                    for _ in range(chunk):
+                        integrator.advance(1)
+                else:
+                    integrator.advance(chunk)
             except (ArithmeticError, ValueError) as exc:
                 # NonFiniteStateError, or a math error on the way to it (sin(inf), overflow)
                 good = integrator.n_steps - start[3]
