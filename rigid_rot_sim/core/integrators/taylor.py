@@ -203,16 +203,21 @@ class Taylor(Integrator):
         super().__init__(moments, dt, torque, **kwargs)
         if not np.all(np.isfinite(self.moments)) or np.any(self.moments <= 0.0):
             raise ValueError(f"taylor: moments must be finite and > 0, got {self.moments}")
-        self._configure_torque()
-
         p = self.series_order
         self._coeffs = np.zeros((p + 1, _STATE_SIZE))
         self._weights = np.ones(_STATE_SIZE)
         self._prod = np.zeros((_STATE_SIZE, _STATE_SIZE))
         self._prod_flat = self._prod.reshape(-1)
-        self._coeffs_t = self._coeffs.T  # a view: column slices are the coefficient rows
         self._exponents = np.arange(p + 1, dtype=float)
         self._inverse_orders = 1.0 / np.arange(1, p + 1, dtype=float)
+        self._maps = np.zeros((p, _STATE_SIZE, _STATE_SIZE * _STATE_SIZE))
+        # The operands of every order, as views into the persistent buffers, made once:
+        # (X_0..k)^T, (X_k..0), the map of order k and the row X_{k+1} it writes.
+        coeffs_t = self._coeffs.T
+        self._plan = [
+            (coeffs_t[:, : k + 1], self._coeffs[k::-1], self._maps[k], self._coeffs[k + 1]) for k in range(p)
+        ]
+        self._configure_torque()
 
     # -- torque -------------------------------------------------------------------------
 
@@ -229,9 +234,9 @@ class Taylor(Integrator):
             )
         c, b = derivative_map(self.moments, gravity)
         p = self.series_order
-        # Row k of the map already carries the 1/(k+1) of the recurrence.
-        self._maps = c.reshape(_STATE_SIZE, -1)[None, :, :] * (1.0 / np.arange(1, p + 1))[:, None, None]
-        self._maps = np.ascontiguousarray(self._maps)
+        # Map k already carries the 1/(k+1) of the recurrence; filled in place (the plan
+        # holds views of it).
+        np.multiply(c.reshape(_STATE_SIZE, -1)[None, :, :], self._inverse_orders[:, None, None], out=self._maps)
         self._const_forcing = b
         self._poly = None
         if isinstance(torque, ConstantTorque):
@@ -333,8 +338,6 @@ class Taylor(Integrator):
             needed = math.ceil(math.log(tol) / math.log(h_cap / rho)) + 1 if h_cap > 0.0 else 2
             p = min(p, max(needed, 4))
         coeffs = self._coeffs
-        coeffs_t = self._coeffs_t
-        maps = self._maps
         coeffs[0] = x0
         forcing = self._forcing(t0)
         n_forced = min(len(forcing), p)
@@ -342,13 +345,15 @@ class Taylor(Integrator):
         prod = self._prod
         prod_flat = self._prod_flat
         dot = np.dot
+        plan = self._plan
         for k in range(n_forced):
-            dot(coeffs_t[:, : k + 1], coeffs[k::-1], out=prod)
-            dot(maps[k], prod_flat, out=coeffs[k + 1])
-            coeffs[k + 1] += forcing[k]
-        for k in range(n_forced, p):
-            dot(coeffs_t[:, : k + 1], coeffs[k::-1], out=prod)
-            dot(maps[k], prod_flat, out=coeffs[k + 1])
+            head, tail_reversed, order_map, out = plan[k]
+            dot(head, tail_reversed, out=prod)
+            dot(order_map, prod_flat, out=out)
+            out += forcing[k]
+        for head, tail_reversed, order_map, out in plan[n_forced:p]:
+            dot(head, tail_reversed, out=prod)
+            dot(order_map, prod_flat, out=out)
 
         h = h_cap
         if tol is not None:
