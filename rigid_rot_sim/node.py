@@ -369,6 +369,11 @@ class RigidRotSimNode(Node):
                 msg = conversions.clock_message(snapshot.t)
             publisher.publish(msg)
 
+    def flush_publishers(self, timeout: float = 1.0) -> None:
+        """Wait (at most ``timeout`` s each) until reliable subscribers acknowledged what was published."""
+        for publisher in self.publishers:
+            publisher.wait_for_all_acked(rclpy.duration.Duration(seconds=timeout))
+
     def _publish_mass_properties(self) -> None:
         assert self.sim is not None
         body = self.scene.body
@@ -576,6 +581,8 @@ def main(args: list[str] | None = None) -> int:
         executor.add_node(node)
         while rclpy.ok() and not node.finished:
             executor.spin_once(timeout_sec=0.1)
+        if node.finished:
+            node.flush_publishers()
     except (KeyboardInterrupt, ExternalShutdownException):
         pass
     except RuntimeError:

@@ -342,6 +342,15 @@ def test_auto_choice_follows_the_scene(scene, expected):
     assert Simulator(load_scene(SCENES / f"{scene}.yaml")).method == expected
 
 
+def test_auto_integrator_takes_commands_from_rest():
+    # the torque_driven scene's use: at rest, then commanded (auto = taylor)
+    sim = Simulator(load_scene(SCENES / "torque_driven.yaml"))
+    sim.advance(100)
+    sim.receive_torque("~/torque", [0.0, 0.0, 0.004], "body")
+    assert sim.advance(100) == 100, sim.failure
+    assert omega(sim)[2] == pytest.approx(0.004 * 0.1 / 0.04, rel=1e-12)
+
+
 def test_heavy_top_invariants_and_euler_angles():
     sim = Simulator(load_scene(SCENES / "heavy_top.yaml"))
     start = sim.snapshot()
