@@ -65,9 +65,8 @@ from typing import Any, Mapping
 
 import numpy as np
 import yaml
-from scipy.spatial.transform import Rotation
-
 from rigid_rot_sim.core import validation
+from rigid_rot_sim.core.exact import zxz_to_quaternion
 
 __all__ = [
     "SceneError",
@@ -377,7 +376,7 @@ def _parse_initial(ctx: _Ctx, raw: Any) -> InitialState:
         orientation = tuple(float(v) for v in q)
     elif "euler_zxz" in initial:
         angles = _vector(ctx, initial["euler_zxz"], "initial.euler_zxz", 3)
-        orientation = tuple(float(v) for v in Rotation.from_euler("ZXZ", angles).as_quat())
+        orientation = tuple(float(v) for v in zxz_to_quaternion(*angles))
     omega = (0.0, 0.0, 0.0)
     if "angular_velocity" in initial:
         omega = _vector(ctx, initial["angular_velocity"], "initial.angular_velocity", 3)

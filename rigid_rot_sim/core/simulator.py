@@ -38,6 +38,7 @@ from scipy.spatial.transform import Rotation
 from rigid_rot_sim.core import advice
 from rigid_rot_sim.core import quaternion as quat
 from rigid_rot_sim.core.dynamics import RigidBody
+from rigid_rot_sim.core.exact import quaternion_to_zxz
 from rigid_rot_sim.core.integrators import get_method
 from rigid_rot_sim.core.integrators.base import Integrator
 from rigid_rot_sim.core.scene import Scene, TopicInput
@@ -179,7 +180,7 @@ class Simulator:
             self._symmetry_axis = self._com_body / np.linalg.norm(self._com_body)
             # frame whose z is the symmetry axis, for the heavy top's Euler angles
             align, _ = Rotation.align_vectors([self._symmetry_axis], [[0.0, 0.0, 1.0]])
-            self._body_from_top = align
+            self._body_from_top = tuple(float(v) for v in align.as_quat())
         self._body_from_principal = tuple(float(v) for v in self.body.body_from_principal)
         self._principal_from_body = quat.conjugate(self._body_from_principal)
         self._serial = itertools.count()
@@ -644,7 +645,7 @@ class Simulator:
             potential = self._weight * quat.rotate(q, self._com_body)[2]
             gravity = quat.rotate(body_from_principal, self.gravity(0.0, np.array(q_principal), np.array((w1, w2, w3))))
             torque_body = tuple(a + b for a, b in zip(torque_body, gravity))
-            euler = (Rotation.from_quat(q) * self._body_from_top).as_euler("ZXZ")
+            euler = np.array(quaternion_to_zxz(quat.multiply(q, self._body_from_top)))
             p_phi = momentum_world[2]
             p_psi = float(np.dot(momentum_body, self._symmetry_axis))
         energy = kinetic + potential
