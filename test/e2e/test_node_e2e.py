@@ -235,3 +235,35 @@ def test_bad_commands_and_requests_are_rejected_and_pause_step_reset_work(launch
     collector.spin_until(lambda: len(states) > n and stamp(states[-1]) < 0.5, 10.0, node, "a state after the reset")
     assert states[-1].angular_velocity_body.z == 0.0
     node.check_alive()
+
+
+def test_shell_commands_run_and_torque(launch_node, collector, ros_env, tmp_path):
+    """`rigid-rot torque` drives a running node; `rigid-rot run --echo` (the demo path) prints and exits 0."""
+    import subprocess
+    import sys
+
+    from rigid_rot_msgs.msg import RigidBodyState
+
+    from rigid_rot_sim.node import STATE_QOS
+
+    node = launch_node(*scene_args("torque_driven", real_time_factor=1.0, integrator="rk4"), name="cli_target")
+    states = collector.subscribe(RigidBodyState, f"{NODE}/state", STATE_QOS)
+    collector.spin_until(lambda: len(states) > 0, 30.0, node, "the node's state")
+    cli = [str(Path(sys.executable).with_name("rigid-rot"))]
+    sent = subprocess.run(cli + ["torque", "0", "0", "0.004", "--frame", "body"], env=ros_env,
+                          capture_output=True, text=True, timeout=30)
+    assert sent.returncode == 0, sent.stdout + sent.stderr
+    assert "1 command(s) [0.0, 0.0, 0.004]" in sent.stdout
+    # held 0.5 s of sim time (the scene's timeout): omega_z = 0.004 * 0.5 / 0.04 = 0.05 rad/s
+    collector.spin_until(lambda: states[-1].angular_velocity_body.z > 0.049, 10.0, node, "the torque to act")
+    collector.spin_until(lambda: len(states) > 80 and states[-1].angular_velocity_body.z == states[-80].angular_velocity_body.z,
+                         10.0, node, "the timeout to end the torque")
+    assert states[-1].angular_velocity_body.z == pytest.approx(0.05, rel=1e-9)
+    node.stop()
+
+    demo = subprocess.run(cli + ["run", "free_tumble", "--duration", "1.5", "--echo", "0.5"], env=ros_env,
+                          capture_output=True, text=True, timeout=60)
+    assert demo.returncode == 0, demo.stdout + demo.stderr
+    lines = [line for line in demo.stdout.splitlines() if line.startswith("t=")]
+    assert len(lines) >= 2 and "|L|=" in lines[0]
+    assert "duration reached" in demo.stderr
