@@ -558,17 +558,17 @@ class RigidRotSimNode(Node):
                 self.get_logger().info(f"integrator {sim.method}, dt {sim.dt:g} s from t = {sim.t:.9g} s")
                 for warning in sim.warnings():
                     self.get_logger().warning(warning)
-            for output in self.output_periods:
-                self.output_periods[output] = self._period_steps(self.get_parameter(f"rates.{output}").value)
         if "real_time_factor" in values:
             self.real_time_factor = float(values["real_time_factor"])
-            self.timer.timer_period_ns = int(self._tick_period() * 1e9)
             self._anchor()
         if "duration" in values:
             self.duration = values["duration"] if values["duration"] > 0.0 else None
-        for name, value in values.items():
-            if name.startswith("rates.") and name[len("rates."):] in self.output_periods:
-                self.output_periods[name[len("rates."):]] = self._period_steps(value)
+        if {"integrator", "dt", "real_time_factor"} & values.keys():
+            self.timer.timer_period_ns = int(self._tick_period() * 1e9)
+        if {"integrator", "dt"} & values.keys() or any(name.startswith("rates.") for name in values):
+            # periods in steps depend on dt; get_parameter already returns the new values here
+            for output in self.output_periods:
+                self.output_periods[output] = self._period_steps(self.get_parameter(f"rates.{output}").value)
 
 
 def main(args: list[str] | None = None) -> int:
