@@ -43,7 +43,7 @@ def timed_bag(path: Path, gaps_s: list[float]) -> None:
 
 def test_replay_publishes_the_recorded_bytes_with_the_recorded_gaps(tmp_path, ros_context):
     bag = tmp_path / "cmds.mcap"
-    gaps = [0.0, 0.05, 0.20, 0.05, 0.10]
+    gaps = [0.0, 0.2, 0.6, 0.2, 0.4]
     timed_bag(bag, gaps)
     listener = rclpy.create_node("listener", context=ros_context)
     publisher_node = rclpy.create_node("replayer", context=ros_context)
@@ -70,7 +70,7 @@ def test_replay_publishes_the_recorded_bytes_with_the_recorded_gaps(tmp_path, ro
     arrival = [t for t, _ in received]
     expected = [sum(gaps[1 : i + 1]) / 2.0 for i in range(len(gaps))]  # rate 2: half the gaps
     for i in range(1, len(gaps)):
-        assert arrival[i] - arrival[0] == pytest.approx(expected[i], abs=0.04)
+        assert arrival[i] - arrival[0] == pytest.approx(expected[i], abs=0.06)
 
 
 def test_default_topics_are_the_recorded_torque_inputs(tmp_path):

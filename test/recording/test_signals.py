@@ -81,7 +81,7 @@ def test_sigkill_loses_at_most_the_last_second_and_repair_recovers_the_rest(tmp_
     last_kept_ns = values[-1][1]
     # flushed every 0.5 s: everything logged more than a second before the kill is there
     assert (killed_at - last_kept_ns) / 1e9 < 1.0
-    assert len(got) > 300
+    assert len(got) > 50  # ~3 s of messages at up to 200 per second
     report = repair(path)
     assert report.messages == len(got) and not report.already_complete
     repaired, values_after = counters(path)
