@@ -25,6 +25,8 @@ from typing import Any
 import numpy as np
 from scipy.spatial.transform import Rotation
 
+from rigid_rot_sim.core import validation
+
 #: Symmetry labels, from the most to the least degenerate.
 SYMMETRY_LABELS = ("point", "linear", "spherical", "symmetric", "asymmetric")
 
@@ -68,18 +70,6 @@ class MassProperties:
     principal_moments: np.ndarray
     principal_axes: np.ndarray
     symmetry: str
-
-
-def _as_vector3(value: Any, name: str) -> np.ndarray:
-    try:
-        vector = np.asarray(value, dtype=float)
-    except (TypeError, ValueError) as exc:
-        raise ValueError(f"{name} must be 3 numbers, got {value!r}") from exc
-    if vector.shape != (3,):
-        raise ValueError(f"{name} must have shape (3,), got shape {vector.shape}")
-    if not np.all(np.isfinite(vector)):
-        raise ValueError(f"{name} must be finite, got {vector.tolist()}")
-    return vector
 
 
 def validate_point_masses(masses: Any, positions: Any) -> tuple[np.ndarray, np.ndarray]:
@@ -133,14 +123,9 @@ def parallel_axis_shift(inertia_com: Any, mass: float, offset: Any) -> np.ndarra
     to the new point; the sign does not matter). ``inertia_com`` (3, 3) is in kg*m^2 and
     ``mass`` in kg (> 0). Returns a new (3, 3) array in the same axes.
     """
-    tensor = np.asarray(inertia_com, dtype=float)
-    if tensor.shape != (3, 3):
-        raise ValueError(f"inertia_com must have shape (3, 3), got shape {tensor.shape}")
-    if not np.all(np.isfinite(tensor)):
-        raise ValueError("inertia_com must be finite")
-    if not (np.isfinite(mass) and mass > 0.0):
-        raise ValueError(f"mass must be finite and > 0 kg, got {mass}")
-    shift = _as_vector3(offset, "offset")
+    tensor = validation.finite_array("inertia_com", inertia_com, (3, 3))
+    mass = validation.positive_scalar("mass", mass)
+    shift = validation.finite_vector("offset", offset)
     return tensor + mass * (float(shift @ shift) * np.eye(3) - np.outer(shift, shift))
 
 
@@ -172,11 +157,7 @@ def principal_frame(inertia_com: Any) -> tuple[np.ndarray, np.ndarray]:
     Rounding can leave the zero moment of a linear or point body slightly negative; it is
     clamped to 0 so no negative moment leaves this function.
     """
-    tensor = np.asarray(inertia_com, dtype=float)
-    if tensor.shape != (3, 3):
-        raise ValueError(f"inertia_com must have shape (3, 3), got shape {tensor.shape}")
-    if not np.all(np.isfinite(tensor)):
-        raise ValueError("inertia_com must be finite")
+    tensor = validation.finite_array("inertia_com", inertia_com, (3, 3))
     moments, axes = np.linalg.eigh(0.5 * (tensor + tensor.T))
     moments = np.clip(moments, 0.0, None)
     if np.linalg.det(axes) < 0.0:
@@ -222,7 +203,7 @@ def mass_properties(masses: Any, positions: Any, origin: Any = (0.0, 0.0, 0.0)) 
         Naming the argument and index of the first invalid entry.
     """
     mass_array, position_array = validate_point_masses(masses, positions)
-    origin_vector = _as_vector3(origin, "origin")
+    origin_vector = validation.finite_vector("origin", origin)
     total_mass = float(np.sum(mass_array))
     center_of_mass = (mass_array @ position_array) / total_mass
     inertia_com = _point_mass_inertia(mass_array, position_array - center_of_mass)

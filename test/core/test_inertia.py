@@ -191,7 +191,7 @@ def test_principal_orientation_rejects_a_reflection():
 def test_principal_frame_rejects_bad_tensor():
     with pytest.raises(ValueError, match="inertia_com"):
         principal_frame(np.eye(2))
-    with pytest.raises(ValueError, match="inertia_com must be finite"):
+    with pytest.raises(ValueError, match=r"inertia_com\[\[1, 1\]\] must be finite"):
         principal_frame(np.diag([1.0, np.nan, 1.0]))
 
 
@@ -209,10 +209,10 @@ def test_parallel_axis_shift_by_hand():
     "args, message",
     [
         ((np.eye(2), 1.0, [0, 0, 0]), "inertia_com must have shape"),
-        ((np.eye(3), 0.0, [0, 0, 0]), "mass must be finite and > 0"),
-        ((np.eye(3), math.nan, [0, 0, 0]), "mass must be finite and > 0"),
-        ((np.eye(3), 1.0, [0, 0]), "offset must have shape"),
-        ((np.eye(3), 1.0, [0, math.inf, 0]), "offset must be finite"),
+        ((np.eye(3), 0.0, [0, 0, 0]), r"mass must be > 0"),
+        ((np.eye(3), math.nan, [0, 0, 0]), r"mass must be finite"),
+        ((np.eye(3), 1.0, [0, 0]), r"offset must have shape"),
+        ((np.eye(3), 1.0, [0, math.inf, 0]), r"offset\[1\] must be finite"),
     ],
 )
 def test_parallel_axis_shift_validation(args, message):
@@ -237,7 +237,7 @@ def test_parallel_axis_shift_validation(args, message):
         ([[1.0]], [[0, 0, 0]], (0, 0, 0), r"masses must be one-dimensional"),
         (["a"], [[0, 0, 0]], (0, 0, 0), r"masses must be a sequence of numbers"),
         ([1.0], [[0, 0, 0]], (0, 0), r"origin must have shape \(3,\)"),
-        ([1.0], [[0, 0, 0]], (0, math.inf, 0), r"origin must be finite"),
+        ([1.0], [[0, 0, 0]], (0, math.inf, 0), r"origin\[1\] must be finite"),
     ],
 )
 def test_invalid_input_names_argument_and_index(masses, positions, origin, message):
