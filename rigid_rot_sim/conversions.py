@@ -174,17 +174,23 @@ def torque_command_from_msg(msg) -> tuple[np.ndarray, np.ndarray | None, str, fl
     return torque, force, msg.header.frame_id, time_to_seconds(msg.header.stamp)
 
 
+def _set_vector3(vector, values) -> None:
+    """Write a length-3 array into a geometry_msgs/Vector3 in place (cheaper than a new message)."""
+    vector.x, vector.y, vector.z = values.tolist() if isinstance(values, np.ndarray) else (float(v) for v in values)
+
+
 def fill_rigid_body_state(msg: RigidBodyState, snapshot: StateSnapshot, world_frame: str, body_frame: str) -> RigidBodyState:
     """Write every field of a RigidBodyState from a snapshot (stamp: sim time); returns it."""
     msg.header.stamp = seconds_to_time(snapshot.t)
     msg.header.frame_id = world_frame
     msg.child_frame_id = body_frame
-    msg.orientation = array_to_quaternion(snapshot.orientation)
-    msg.angular_velocity_body = array_to_vector3(snapshot.angular_velocity_body)
-    msg.angular_velocity_world = array_to_vector3(snapshot.angular_velocity_world)
-    msg.angular_momentum_body = array_to_vector3(snapshot.angular_momentum_body)
-    msg.angular_momentum_world = array_to_vector3(snapshot.angular_momentum_world)
-    msg.torque_body = array_to_vector3(snapshot.torque_body)
+    q = msg.orientation
+    q.x, q.y, q.z, q.w = snapshot.orientation.tolist()
+    _set_vector3(msg.angular_velocity_body, snapshot.angular_velocity_body)
+    _set_vector3(msg.angular_velocity_world, snapshot.angular_velocity_world)
+    _set_vector3(msg.angular_momentum_body, snapshot.angular_momentum_body)
+    _set_vector3(msg.angular_momentum_world, snapshot.angular_momentum_world)
+    _set_vector3(msg.torque_body, snapshot.torque_body)
     msg.kinetic_energy = float(snapshot.kinetic_energy)
     msg.potential_energy = float(snapshot.potential_energy)
     msg.energy_drift = float(snapshot.energy_drift)
@@ -216,7 +222,9 @@ def state_to_arrays(msg: RigidBodyState) -> dict[str, np.ndarray | float]:
 
 def snapshot_to_orientation(snapshot: StateSnapshot, world_frame: str) -> QuaternionStamped:
     """Attitude body -> world, header frame_id = world frame."""
-    msg = QuaternionStamped(quaternion=array_to_quaternion(snapshot.orientation))
+    msg = QuaternionStamped()
+    q = msg.quaternion
+    q.x, q.y, q.z, q.w = snapshot.orientation.tolist()
     msg.header.stamp = seconds_to_time(snapshot.t)
     msg.header.frame_id = world_frame
     return msg
@@ -224,7 +232,8 @@ def snapshot_to_orientation(snapshot: StateSnapshot, world_frame: str) -> Quater
 
 def vector_stamped(values, t: float, frame_id: str) -> Vector3Stamped:
     """ndarray (3,) at sim time t (s) in frame_id -> Vector3Stamped."""
-    msg = Vector3Stamped(vector=array_to_vector3(values))
+    msg = Vector3Stamped()
+    _set_vector3(msg.vector, values)
     msg.header.stamp = seconds_to_time(t)
     msg.header.frame_id = frame_id
     return msg
