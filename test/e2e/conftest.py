@@ -1,10 +1,8 @@
 """Fixtures for end-to-end tests: the node in a subprocess, the test process as a DDS peer.
 
-Isolation: this module picks one ROS_DOMAIN_ID for the whole pytest session (from the pid,
-so parallel sessions differ) and sets it, with ROS_AUTOMATIC_DISCOVERY_RANGE=LOCALHOST, in
-``os.environ`` at import time. pytest imports conftest files while collecting, before any
-test runs, so both the test process (rclpy reads them at ``init``) and every subprocess see
-them. ROS log files go to a session temp directory, not ~/.ros.
+Isolation: test/conftest.py picks one ROS_DOMAIN_ID for the whole pytest session and sets it,
+with ROS_AUTOMATIC_DISCOVERY_RANGE=LOCALHOST, in ``os.environ`` at import time, so both the
+test process and every subprocess see them. ROS log files go to a session temp directory.
 
 Fixtures
 --------
@@ -41,11 +39,8 @@ from pathlib import Path
 
 import pytest
 
-ROS_DOMAIN_ID = os.getpid() % 100 + 1  # 1..100: clear of the default 0, below the 101 port limit
-os.environ["ROS_DOMAIN_ID"] = str(ROS_DOMAIN_ID)
-os.environ["ROS_AUTOMATIC_DISCOVERY_RANGE"] = "LOCALHOST"
-os.environ.setdefault("ROS_LOG_DIR", tempfile.mkdtemp(prefix="rigid_rot_ros_log_"))
-os.environ["PYTHONUNBUFFERED"] = "1"  # the node's prints reach its log even if it is killed
+# test/conftest.py set the session's domain and discovery range before this file loads.
+ROS_DOMAIN_ID = int(os.environ["ROS_DOMAIN_ID"])
 
 NODE_START_TIMEOUT = 30.0  # s; a cold start on a loaded 2-core machine takes a few seconds
 STOP_TIMEOUT = 10.0  # s to wait after SIGINT before SIGKILL
