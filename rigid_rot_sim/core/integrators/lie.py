@@ -60,15 +60,16 @@ def cf4_step(t, state, h, moments, torque, attitude_torque):
     K4 = (x1, x2, x3)
 
     h12 = h / 12.0
-    second = (
-        h12 * (-w1 + 2.0 * (K2[0] + K3[0]) + 3.0 * K4[0]),
-        h12 * (-w2 + 2.0 * (K2[1] + K3[1]) + 3.0 * K4[1]),
-        h12 * (-w3 + 2.0 * (K2[2] + K3[2]) + 3.0 * K4[2]),
-    )
+    # body-frame increments compose on the right: q_n (x) exp(first) (x) exp(second)
     first = (
         h12 * (3.0 * w1 + 2.0 * (K2[0] + K3[0]) - K4[0]),
         h12 * (3.0 * w2 + 2.0 * (K2[1] + K3[1]) - K4[1]),
         h12 * (3.0 * w3 + 2.0 * (K2[2] + K3[2]) - K4[2]),
+    )
+    second = (
+        h12 * (-w1 + 2.0 * (K2[0] + K3[0]) + 3.0 * K4[0]),
+        h12 * (-w2 + 2.0 * (K2[1] + K3[1]) + 3.0 * K4[1]),
+        h12 * (-w3 + 2.0 * (K2[2] + K3[2]) + 3.0 * K4[2]),
     )
     q = quat.multiply(quat.multiply(qn, quat.exp_rotation_vector(first)), quat.exp_rotation_vector(second))
     h6 = h / 6.0
