@@ -197,10 +197,12 @@ class RigidRotSimNode(Node):
         self.add_on_set_parameters_callback(self.validate_parameters_callback)
         self.add_post_set_parameters_callback(self.apply_parameters_callback)
 
+        self.sim.pause(self.get_parameter("start_paused").value)
         self._anchor()
         self.timer = self.create_timer(self._tick_period(), self.timer_callback)
         log.info(
             f"scene {scene.name!r} ({scene.source}), rtf {self.real_time_factor:g}, "
+            f"{'paused, ' if self.sim.paused else ''}"
             f"duration {'unbounded' if self.duration is None else f'{self.duration:g} s'}; "
             f"built: {'; '.join(built)}; left out: {'; '.join(left_out) or 'nothing'}"
         )
@@ -237,6 +239,14 @@ class RigidRotSimNode(Node):
             ParameterDescriptor(
                 description="Sim time (s) after which the node stops and exits; 0 = unbounded",
                 floating_point_range=_float_range(0.0, 1e9),
+            ),
+        )
+        self.declare_parameter(
+            "start_paused",
+            False,
+            ParameterDescriptor(
+                description="Start paused at t = 0 (resume with ~/pause data=false, e.g. once a controller is up)",
+                read_only=True,
             ),
         )
         self.declare_parameter(

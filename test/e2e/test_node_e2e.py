@@ -122,16 +122,20 @@ def test_torque_free_run_conserves_momentum_and_energy_and_exits_cleanly(launch_
 
     from rigid_rot_sim.node import STATE_QOS
 
-    # 40 s of sim time at 10x: the test's subscription is matched within the first second
-    node = launch_node(*scene_args("intermediate_axis_flip", real_time_factor=10.0, duration=40.0, **{"rates.state": 20.0}),
-                       name="flip")
+    from std_srvs.srv import SetBool
+
+    # started paused, resumed once this test's subscription is matched: every state arrives
+    node = launch_node(*scene_args("intermediate_axis_flip", real_time_factor=10.0, duration=40.0, start_paused="true",
+                                   **{"rates.state": 20.0}), name="flip")
     states = collector.subscribe(RigidBodyState, f"{NODE}/state", STATE_QOS)
+    collector.spin_until(lambda: len(states) > 0, 30.0, node, "the initial state")
+    assert collector.call(SetBool, "pause", SetBool.Request(data=False), process=node).success
     collector.spin_until(lambda: not node.alive(), 30.0, None, "the node to finish its 40 s run")
     assert node.process.returncode == 0, node.log()
     assert "duration reached" in node.log()
     # the node waits for reliable subscribers to acknowledge before it exits: the last state arrives
     collector.spin_until(lambda: states and stamp(states[-1]) >= 40.0 - 1e-9, 5.0, None, "the last state")
-    assert len(states) > 500
+    assert len(states) == 40 * 20 + 1 and stamp(states[0]) == 0.0
     reference = Simulator(load_scene(SCENES / "intermediate_axis_flip.yaml"))
     l0 = np.linalg.norm(reference.snapshot().angular_momentum_world)
     e0 = reference.snapshot().kinetic_energy

@@ -135,6 +135,9 @@ def _make_kernel(coefficients: tuple[float, ...]):
             w1 += hk * n1 / i1
             w2 += hk * n2 / i2
             w3 += hk * n3 / i3
+            if not math.isfinite(w1 + w2 + w3):
+                # a non-finite torque: hand the bad state back for the step's NaN check
+                return (*q, w1, w2, w3)
             q, (w1, w2, w3) = torque_free_flow(moments_array, q, (w1, w2, w3), tau)
             t += tau
             w1, w2, w3, n1, n2, n3 = _adjoint_kick(torque, t, q, w1, w2, w3, hk, i1, i2, i3)
