@@ -110,7 +110,8 @@ class Integrator:
             )
 
     def advance(self, n: int) -> None:
-        """Take ``n`` steps of ``dt`` (same result as calling :meth:`step` n times)."""
+        """Take ``n`` steps of ``dt``: the state of n calls of :meth:`step` (for adaptive
+        methods, up to their tolerance, as they may step past the intermediate outputs)."""
         for _ in range(n):
             self.step()
 
