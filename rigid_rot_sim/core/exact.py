@@ -111,10 +111,10 @@ class _RigidRotation:
     def __init__(self, omega: np.ndarray, q0: np.ndarray) -> None:
         self.omega = omega
         self.q0 = q0
-        self.omega_world = Rotation.from_quat(q0).apply(omega)
         self._omega_tuple = tuple(omega.tolist())
-        self._omega_world_tuple = tuple(self.omega_world.tolist())
         self._q0_tuple = tuple(q0.tolist())
+        self._omega_world_tuple = quat.rotate(self._q0_tuple, self._omega_tuple)
+        self.omega_world = np.array(self._omega_world_tuple)
 
     def evaluate(self, tau: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         rot = Rotation.from_rotvec(tau[:, None] * self.omega_world[None, :]) * Rotation.from_quat(self.q0)
@@ -129,15 +129,18 @@ class _SymmetricFlow:
     """I_a = I_b = i_perp != I_d: commuting rotations about L_world and the body axis d."""
 
     def __init__(self, moments: np.ndarray, axis: int, q0: np.ndarray, omega0: np.ndarray) -> None:
-        i_perp = float(moments[(axis + 1) % 3])
-        l_body = moments * omega0
+        m = moments.tolist()
+        i_perp = m[(axis + 1) % 3]
+        l_body = tuple(i * w for i, w in zip(m, omega0.tolist()))
+        q0_tuple = tuple(q0.tolist())
+        rate_world = tuple(x / i_perp for x in quat.rotate(q0_tuple, l_body))  # rad/s
         self.moments = moments
         self.axis = axis
-        self.rate_world = Rotation.from_quat(q0).apply(l_body) / i_perp  # rad/s
-        self.beta = float((1.0 / moments[axis] - 1.0 / i_perp) * l_body[axis])  # rad/s
-        self.l_body0 = l_body
+        self.rate_world = np.array(rate_world)
+        self.beta = (1.0 / m[axis] - 1.0 / i_perp) * l_body[axis]  # rad/s
+        self.l_body0 = np.array(l_body)
         self.q0 = q0
-        self._tuples = tuple(tuple(x.tolist()) for x in (moments, self.rate_world, l_body, q0))
+        self._tuples = (tuple(m), rate_world, l_body, q0_tuple)
 
     def evaluate(self, tau: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         body_rotvec = np.zeros((tau.size, 3))
