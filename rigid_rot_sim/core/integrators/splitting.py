@@ -50,35 +50,23 @@ COMPOSITIONS: dict[int, tuple[float, ...]] = {
 _KICK_ITERATIONS = 50
 
 
-def _axis_flow(axis, phi, qx, qy, qz, qw, w1, w2, w3, i1, i2, i3):
-    """Turn the body by phi about principal axis ``axis`` and L_body by -phi about it."""
-    half = 0.5 * phi
-    s, c = math.sin(half), math.cos(half)
-    sn, cs = 2.0 * s * c, 1.0 - 2.0 * s * s  # sin, cos of phi
-    if axis == 0:
-        w2, w3 = cs * w2 + sn * (i3 / i2) * w3, cs * w3 - sn * (i2 / i3) * w2
-        qx, qy, qz, qw = qw * s + qx * c, qy * c + qz * s, qz * c - qy * s, qw * c - qx * s
-    elif axis == 1:
-        w3, w1 = cs * w3 + sn * (i1 / i3) * w1, cs * w1 - sn * (i3 / i1) * w3
-        qx, qy, qz, qw = qx * c - qz * s, qw * s + qy * c, qz * c + qx * s, qw * c - qy * s
-    else:
-        w1, w2 = cs * w1 + sn * (i2 / i1) * w2, cs * w2 - sn * (i1 / i2) * w1
-        qx, qy, qz, qw = qx * c + qy * s, qy * c - qx * s, qw * s + qz * c, qw * c - qz * s
-    return qx, qy, qz, qw, w1, w2, w3
-
-
+_CASIMIR = 3
 _PLANS: dict[tuple[float, float, float], tuple] = {}
 
 
 def _plan(i1: float, i2: float, i3: float) -> tuple:
-    """For moments (i1, i2, i3): the X terms as (axis, phi / (tau omega_axis)) and I / I_k."""
+    """The Strang sequence for moments (i1, i2, i3): (term, time fraction, rate) triples.
+
+    term 0, 1, 2 is X_i about that axis, with ``phi = rate * tau * omega_i``; term 3 is the
+    Casimir, with the rotation vector ``tau * (I / I_k) * omega``.
+    """
     key = (i1, i2, i3)
     plan = _PLANS.get(key)
     if plan is None:
         k = sorted(range(3), key=key.__getitem__)[1]
         ik = key[k]
-        terms = tuple((a, 1.0 - key[a] / ik) for a in range(3) if a != k and key[a] != ik)
-        plan = (terms, tuple(reversed(terms)), i1 / ik, i2 / ik, i3 / ik)
+        terms = [(a, 0.5, 1.0 - key[a] / ik) for a in range(3) if a != k and key[a] != ik]
+        plan = (tuple(terms + [(_CASIMIR, 1.0, 0.0)] + terms[::-1]), i1 / ik, i2 / ik, i3 / ik)
         if len(_PLANS) > 256:
             _PLANS.clear()
         _PLANS[key] = plan
@@ -90,15 +78,27 @@ def _free_strang(qx, qy, qz, qw, w1, w2, w3, h, i1, i2, i3):
     if not math.isfinite(w1 + w2 + w3):
         nan = math.nan
         return nan, nan, nan, nan, nan, nan, nan
-    terms, reverse, c1, c2, c3 = _plan(i1, i2, i3)
-    hh = 0.5 * h
-    for axis, rate in terms:
-        phi = rate * hh * (w1 if axis == 0 else w2 if axis == 1 else w3)
-        qx, qy, qz, qw, w1, w2, w3 = _axis_flow(axis, phi, qx, qy, qz, qw, w1, w2, w3, i1, i2, i3)
-    qx, qy, qz, qw = quat.multiply((qx, qy, qz, qw), quat.exp_rotation_vector((h * c1 * w1, h * c2 * w2, h * c3 * w3)))
-    for axis, rate in reverse:
-        phi = rate * hh * (w1 if axis == 0 else w2 if axis == 1 else w3)
-        qx, qy, qz, qw, w1, w2, w3 = _axis_flow(axis, phi, qx, qy, qz, qw, w1, w2, w3, i1, i2, i3)
+    sequence, c1, c2, c3 = _plan(i1, i2, i3)
+    sin, cos = math.sin, math.cos
+    for term, fraction, rate in sequence:
+        if term == _CASIMIR:
+            qx, qy, qz, qw = quat.multiply(
+                (qx, qy, qz, qw), quat.exp_rotation_vector((h * c1 * w1, h * c2 * w2, h * c3 * w3))
+            )
+            continue
+        # X_term: the body turns by phi about the axis, L_body by -phi
+        half = 0.5 * fraction * h * rate * (w1 if term == 0 else w2 if term == 1 else w3)
+        s, c = sin(half), cos(half)
+        sn, cs = 2.0 * s * c, 1.0 - 2.0 * s * s  # sin, cos of phi
+        if term == 0:
+            w2, w3 = cs * w2 + sn * (i3 / i2) * w3, cs * w3 - sn * (i2 / i3) * w2
+            qx, qy, qz, qw = qw * s + qx * c, qy * c + qz * s, qz * c - qy * s, qw * c - qx * s
+        elif term == 1:
+            w3, w1 = cs * w3 + sn * (i1 / i3) * w1, cs * w1 - sn * (i3 / i1) * w3
+            qx, qy, qz, qw = qx * c - qz * s, qw * s + qy * c, qz * c + qx * s, qw * c - qy * s
+        else:
+            w1, w2 = cs * w1 + sn * (i2 / i1) * w2, cs * w2 - sn * (i1 / i2) * w1
+            qx, qy, qz, qw = qx * c + qy * s, qy * c - qx * s, qw * s + qz * c, qw * c - qz * s
     return qx, qy, qz, qw, w1, w2, w3
 
 
