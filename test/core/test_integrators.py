@@ -448,3 +448,22 @@ def test_float_torque_matches_the_torque_models():
         assert attitude_dependent == (model is general_torque or isinstance(model, GravityTorque))
     assert float_torque(None) == (None, False)
     assert float_torque(ConstantTorque(np.zeros(3)))[0] is None
+
+
+@pytest.mark.parametrize("name, options", [("implicit_midpoint", {}), ("splitting", {"order": 2}), ("splitting", {"order": 6})])
+def test_random_bodies_keep_their_invariants(name, options):
+    """Any physical body and initial rate: |L| (and T for implicit_midpoint) to round-off."""
+    rng = np.random.default_rng(11)
+    for _ in range(15):
+        a, b = rng.uniform(0.1, 10.0, size=2)
+        moments = np.array([a, b, rng.uniform(abs(a - b), a + b)])  # triangle inequality holds
+        omega0 = rng.normal(scale=3.0, size=3)
+        q0 = Rotation.random(random_state=rng).as_quat()
+        integrator = make(name, options, moments, 0.05, q0=q0, omega0=omega0)
+        integrator.advance(200)
+        L0 = dynamics.angular_momentum_world(moments, q0, omega0)
+        L = dynamics.angular_momentum_world(moments, integrator.q, integrator.omega)
+        assert np.linalg.norm(L - L0) < 1e-12 * np.linalg.norm(L0)
+        if name == "implicit_midpoint":
+            T0 = dynamics.kinetic_energy(moments, omega0)
+            assert dynamics.kinetic_energy(moments, integrator.omega) == pytest.approx(T0, rel=1e-12)
