@@ -209,3 +209,12 @@ def test_non_finite_state_is_reported_with_step_and_time():
         simulate(MOMENTS, OMEGA0, 1.0, 0.01, "rk4", torque=torque)
     match = re.search(r"step (\d+), t = ([0-9.]+) s", str(info.value))
     assert match and int(match.group(1)) == 26 and float(match.group(2)) == pytest.approx(0.26)
+
+
+@pytest.mark.parametrize("module_name", ["rigid_rot_sim.core.simulate", "rigid_rot_sim.core.integrators"])
+def test_docstring_examples_run(module_name):
+    import doctest
+    import importlib
+
+    result = doctest.testmod(importlib.import_module(module_name))
+    assert result.attempted > 0 and result.failed == 0
