@@ -34,6 +34,8 @@ or on the publish rates (see the Simulator's determinism notes).
 from __future__ import annotations
 
 import math
+import signal
+import threading
 import time
 from typing import Any
 
@@ -42,6 +44,7 @@ from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
 from rclpy.node import Node
 from rclpy.parameter import Parameter
 from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
+from rclpy.signals import SignalHandlerOptions
 from rcl_interfaces.msg import FloatingPointRange, ParameterDescriptor, SetParametersResult
 from geometry_msgs.msg import InertiaStamped, QuaternionStamped, Vector3Stamped, WrenchStamped
 from rigid_rot_msgs.msg import HeavyTopState, RejectedCommand, RigidBodyState
@@ -583,23 +586,23 @@ class RigidRotSimNode(Node):
 
 def main(args: list[str] | None = None) -> int:
     """Run the node until shut down or until the scene's duration is reached (exit code 0)."""
-    rclpy.init(args=args)
+    # SIGINT and SIGTERM only ask the loop below to stop: the node (and its recording) then
+    # closes in `finally`, never interrupted in the middle of a callback or a file write
+    rclpy.init(args=args, signal_handler_options=SignalHandlerOptions.NO)
+    stop = threading.Event()
+    for signum in (signal.SIGINT, signal.SIGTERM):
+        signal.signal(signum, lambda *_: stop.set())
     node = None
     try:
         node = RigidRotSimNode()
         executor = SingleThreadedExecutor()
         executor.add_node(node)
-        while rclpy.ok() and not node.finished:
+        while rclpy.ok() and not node.finished and not stop.is_set():
             executor.spin_once(timeout_sec=0.1)
         if node.finished:
             node.flush_publishers()
     except (KeyboardInterrupt, ExternalShutdownException):
         pass
-    except RuntimeError:
-        if rclpy.ok():
-            raise
-        # SIGTERM / SIGINT shut the context down while spin_once was waiting (an RCLError):
-        # a normal stop, and the finally below still closes the node (and its recording)
     except ValueError as exc:  # SceneError, or a scene the integrator cannot run
         print(f"rigid_rot_sim_node: {exc}", flush=True)
         return 2
