@@ -346,7 +346,7 @@ class RigidRotSimNode(Node):
 
     def _finish(self) -> None:
         assert self.sim is not None
-        self._publish_due(force=True)
+        self._publish_due(rest=True)  # every output ends on the final state, none twice
         self.finished = True
         self.get_logger().info(
             f"duration reached: t = {self.sim.t:.9g} s after {self.sim.step_index} steps; stopping"
@@ -354,12 +354,13 @@ class RigidRotSimNode(Node):
 
     # ------------------------------------------------------------------ publishing
 
-    def _publish_due(self, force: bool = False) -> None:
-        """Publish the outputs due at the current step (all of them when ``force``)."""
+    def _publish_due(self, force: bool = False, rest: bool = False) -> None:
+        """Publish the outputs due at the current step (all of them when ``force``; with
+        ``rest`` only those not due, i.e. not yet published at this step)."""
         sim = self.sim
         assert sim is not None
         k = sim.step_index
-        due = [name for name, n in self.output_periods.items() if force or k % n == 0]
+        due = [name for name, n in self.output_periods.items() if force or (k % n != 0 if rest else k % n == 0)]
         if not due:
             return
         snapshot = sim.snapshot()

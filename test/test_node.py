@@ -244,6 +244,14 @@ def test_apply_torque_service_and_rejections(harness):
     assert h.node.sim.snapshot().angular_velocity_body[2] == pytest.approx(0.01, rel=1e-9)
 
 
+def test_start_paused_waits_for_resume(harness):
+    h = harness("free_tumble", real_time_factor=0.0, start_paused=True)
+    h.spin_until(lambda: False, timeout=0.3)
+    assert h.node.sim.paused and h.node.sim.step_index == 0
+    assert h.call(SetBool, "pause", SetBool.Request(data=False)).success
+    assert h.spin_until(lambda: h.node.sim.step_index > 100)
+
+
 def test_duration_reached_finishes(harness):
     h = harness("free_tumble", real_time_factor=0.0, duration=0.5)
     assert h.spin_until(lambda: h.node.finished)
