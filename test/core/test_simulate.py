@@ -8,7 +8,6 @@ import numpy as np
 import pytest
 from scipy.spatial.transform import Rotation
 
-from rigid_rot_sim.core import dynamics
 from rigid_rot_sim.core.dynamics import RigidBody
 from rigid_rot_sim.core.exact import torque_free_solution
 from rigid_rot_sim.core.integrators import METHODS, NonFiniteStateError
