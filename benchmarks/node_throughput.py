@@ -39,22 +39,21 @@ SCENES = ROOT / "config" / "scenes"
 METHODS_FREE = ["exact", "exact_split", "taylor", "rk4", "lie_rk4", "splitting", "implicit_midpoint", "dop853", "euler"]
 
 
-def steps_per_second(method: str, seconds: float) -> tuple[float, int]:
+def make_node(scene: str, method: str, **params: float):
+    """(context, node): the simulation node in this process at dt = 1 ms, warnings only."""
     from rigid_rot_sim.node import RigidRotSimNode
 
     context = rclpy.Context()
     rclpy.init(context=context, args=["--ros-args", "--log-level", "warn"])
-    rates = [Parameter(f"rates.{name}", value=100.0) for name in ("state", "orientation", "angular_velocity", "angular_momentum", "clock")]
-    node = RigidRotSimNode(
-        context=context,
-        parameter_overrides=[
-            Parameter("scene", value=str(SCENES / "free_tumble.yaml")),
-            Parameter("integrator", value=method),
-            Parameter("dt", value=0.001),
-            Parameter("real_time_factor", value=0.0),
-            *rates,
-        ],
-    )
+    overrides = [Parameter("scene", value=str(SCENES / f"{scene}.yaml")), Parameter("integrator", value=method),
+                 Parameter("dt", value=0.001)]
+    overrides += [Parameter(name, value=value) for name, value in params.items()]
+    return context, RigidRotSimNode(context=context, parameter_overrides=overrides)
+
+
+def steps_per_second(method: str, seconds: float) -> tuple[float, int]:
+    rates = {f"rates.{name}": 100.0 for name in ("state", "orientation", "angular_velocity", "angular_momentum", "clock")}
+    context, node = make_node("free_tumble", method, real_time_factor=0.0, **rates)
     executor = SingleThreadedExecutor(context=context)
     executor.add_node(node)
     try:
@@ -96,20 +95,7 @@ pub.wait_for_all_acked(rclpy.duration.Duration(seconds=2.0))
 
 def command_latency(n_commands: int, method: str) -> None:
     """Node in this process (instrumented), commands from another process; arrival -> publication."""
-    from rigid_rot_sim.node import RigidRotSimNode
-
-    context = rclpy.Context()
-    rclpy.init(context=context, args=["--ros-args", "--log-level", "warn"])
-    node = RigidRotSimNode(
-        context=context,
-        parameter_overrides=[
-            Parameter("scene", value=str(SCENES / "torque_driven.yaml")),
-            Parameter("integrator", value=method),
-            Parameter("dt", value=0.001),
-            Parameter("real_time_factor", value=1.0),
-            Parameter("rates.state", value=1000.0),
-        ],
-    )
+    context, node = make_node("torque_driven", method, real_time_factor=1.0, **{"rates.state": 1000.0})
     arrivals: dict[float, float] = {}
     latencies: list[float] = []
     received = node.torque_callback
