@@ -2,14 +2,17 @@
 
 :func:`attach` is called by the node once its publishers and subscriptions exist, and
 only when a recording was asked for (scene ``recording:`` or the ``record_path``
-parameter). It opens a :class:`~rigid_rot_sim.recording.session.RunRecorder` and returns
+parameter). It opens a :class:`~rigid_rot_sim.recording.session.RunRecorder`, then
 
-* a :class:`RecordedSimulator` that forwards everything to the node's Simulator and
-  records, on ``~/sim_events``, every call that changes the simulation from outside the
-  physics (torque commands with their effective time, apply_torque, set_state, reset,
-  integrator / step changes) with the step index it happened at: what resim replays;
-* after replacing the node's output, rejected and mass-properties publishers with
-  :class:`RecordingPublisher` s, which publish and then record the same message.
+* replaces ``node.sim`` by a :class:`RecordedSimulator`, which forwards everything to the
+  Simulator and records, on ``~/sim_events``, every call that changes the simulation from
+  outside the physics (torque commands with their effective time, apply_torque,
+  set_state, reset, integrator / step changes) with the step index it happened at: what
+  resim replays;
+* replaces the node's output, rejected and mass-properties publishers by
+  :class:`RecordingPublisher` s, which publish and record the same serialised bytes;
+
+and returns the :class:`NodeRecording` the node keeps as ``node.recorder``.
 
 The node itself records the torque commands as received, with their receive time
 (:meth:`NodeRecording.record_command`), and closes the recording in ``destroy_node``.
