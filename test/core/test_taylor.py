@@ -398,3 +398,19 @@ def test_set_state_restarts_from_the_new_state():
     assert integrator.t == fresh.t == 10.5
     np.testing.assert_array_equal(integrator.omega, fresh.omega)
     np.testing.assert_array_equal(integrator.q, fresh.q)
+
+
+# -- PolynomialTorque (core/torque.py) --------------------------------------------------------
+
+
+def test_polynomial_torque_evaluates_its_polynomial_and_validates():
+    coeffs = [[1.0, 0.0, -1.0], [0.5, 2.0, 0.0], [0.0, 0.0, 3.0]]
+    torque = PolynomialTorque(coeffs)
+    t = 1.5
+    expected = np.array(coeffs[0]) + np.array(coeffs[1]) * t + np.array(coeffs[2]) * t**2
+    np.testing.assert_allclose(torque(t, Q0, OMEGA0), expected, rtol=1e-15)
+    np.testing.assert_array_equal(PolynomialTorque([0.1, 0.2, 0.3])(7.0, Q0, OMEGA0), [0.1, 0.2, 0.3])
+    with pytest.raises(ValueError, match="shape"):
+        PolynomialTorque(np.zeros((2, 2)))
+    with pytest.raises(ValueError, match=r"coefficients\[1, 2\]"):
+        PolynomialTorque([[0.0, 0.0, 0.0], [0.0, 0.0, float("inf")]])
