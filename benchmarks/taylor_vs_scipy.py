@@ -41,7 +41,11 @@ OMEGA0 = (1.0, 0.1, 0.5)
 Q0 = (0.0, 0.0, 0.0, 1.0)
 PROBLEMS = {
     "P1": {"title": "torque-free, T = 100 s", "torque": (0.0, 0.0, 0.0), "t_end": 100.0},
-    "P2": {"title": "constant body torque (0.1, -0.05, 0.02) N*m, T = 20 s", "torque": (0.1, -0.05, 0.02), "t_end": 20.0},
+    "P2": {
+        "title": "constant body torque (0.1, -0.05, 0.02) N*m, T = 20 s",
+        "torque": (0.1, -0.05, 0.02),
+        "t_end": 20.0,
+    },
 }
 TARGET = 1e-10
 BUDGET = 1.5  # s of run time per setting, beyond which it is repeated no more (after 2 rounds)

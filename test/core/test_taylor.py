@@ -315,7 +315,9 @@ def test_bad_options_are_value_errors_naming_them(options, match):
         Taylor(MOMENTS, 0.1, **options)
 
 
-@pytest.mark.filterwarnings("ignore:overflow encountered:RuntimeWarning", "ignore:invalid value encountered:RuntimeWarning")
+@pytest.mark.filterwarnings(
+    "ignore:overflow encountered:RuntimeWarning", "ignore:invalid value encountered:RuntimeWarning"
+)
 def test_blow_up_raises_instead_of_returning_nan():
     integrator = Taylor(MOMENTS, 1.0, None, omega0=[1e200, 1e200, 1e200])
     with pytest.raises(NonFiniteStateError, match="step 1"):
