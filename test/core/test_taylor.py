@@ -200,6 +200,24 @@ def test_body_at_rest_stays_at_rest():
     np.testing.assert_allclose(integrator.q, Q0, rtol=0, atol=1e-16)
 
 
+def test_switching_between_gravity_and_free_rebuilds_the_recurrence():
+    gravity = GravityTorque(lever_arm=[0.0, 0.1, 0.3], weight=4.0)
+    switching = Taylor(MOMENTS, 1.0, gravity, omega0=OMEGA0, q0=Q0, tol=1e-13)
+    switching.step()
+    switching.torque = None
+    switching.step()
+    switching.torque = gravity
+    switching.step()
+    state = (0.0, Q0, OMEGA0)
+    for torque in (gravity, None, gravity):  # fresh integrators, one segment each
+        fresh = Taylor(MOMENTS, 1.0, torque, t0=state[0], q0=state[1], omega0=state[2], tol=1e-13)
+        fresh.step()
+        state = (fresh.t, fresh.q, fresh.omega)
+    assert switching.t == state[0] == 3.0
+    np.testing.assert_allclose(switching.omega, state[2], rtol=0, atol=1e-12)
+    assert quaternion_distance(switching.q, state[1]) < 1e-12
+
+
 def test_torque_free_invariants_over_one_long_step():
     """T and |L| conserved to ~tol over 100 s (P1), and the attitude matches DOP853."""
     integrator = run(MOMENTS, 100.0, 1, None, tol=1e-12)

@@ -77,6 +77,8 @@ MAX_AUTO_ORDER = 30
 MAX_ORDER = 60
 DEFAULT_TOL = 1e-12
 
+_NOT_BUILT = object()  # marks maps not yet built for any torque
+
 # State layout: omega (rad/s) first, then the quaternion (x, y, z, w).
 _W1, _W2, _W3, _QX, _QY, _QZ, _QW = range(7)
 _STATE_SIZE = 7
@@ -160,9 +162,10 @@ class Taylor(Integrator):
     -------
     tol : float or None
         Local error tolerance per internal step: absolute on the unit quaternion, on omega
-        relative to ``max(1 rad/s, |omega|_inf)``; default 1e-12. Sets the order (ceil(-ln tol) in 10..30)
-        and the step. ``None`` switches step control off: one internal step of the
-        given ``order`` per ``min(dt, max_step)`` (for convergence studies).
+        relative to ``max(1 rad/s, |omega|_inf)``; default 1e-12. Sets the order
+        (ceil(-ln tol) in 10..30) and the step. ``None`` switches step control off: one
+        internal step of the given ``order`` per ``min(dt, max_step)`` (for convergence
+        studies).
     order : int or None
         Series order (2..60) overriding the one derived from ``tol``.
     max_step : float
@@ -213,6 +216,7 @@ class Taylor(Integrator):
         self._exponents = np.arange(p + 1, dtype=float)
         self._inverse_orders = 1.0 / np.arange(1, p + 1, dtype=float)
         self._maps = np.zeros((p, _STATE_SIZE, _STATE_SIZE * _STATE_SIZE))
+        self._maps_gravity: object = _NOT_BUILT
         # The operands of every order, as views into the persistent buffers, made once:
         # (X_0..k)^T, (X_k..0), the map of order k and the row X_{k+1} it writes.
         coeffs_t = self._coeffs.T
@@ -234,11 +238,16 @@ class Taylor(Integrator):
                 "rigid_rot_sim.core.torque); for an arbitrary callable torque use method "
                 "'dop853' (adaptive) or 'rk4'."
             )
-        c, b = derivative_map(self.moments, gravity)
-        p = self.series_order
-        # Map k already carries the 1/(k+1) of the recurrence; filled in place (the plan
-        # holds views of it).
-        np.multiply(c.reshape(_STATE_SIZE, -1)[None, :, :], self._inverse_orders[:, None, None], out=self._maps)
+        if self._maps_gravity is _NOT_BUILT or gravity is not self._maps_gravity:
+            # Commands replace a ConstantTorque every few steps: the maps depend only on
+            # the body and gravity, so they are rebuilt only when gravity changes.
+            c, b = derivative_map(self.moments, gravity)
+            # Map k already carries the 1/(k+1) of the recurrence; filled in place (the
+            # plan holds views of it).
+            np.multiply(c.reshape(_STATE_SIZE, -1)[None, :, :], self._inverse_orders[:, None, None], out=self._maps)
+            self._gravity_forcing = b
+            self._maps_gravity = gravity
+        b = self._gravity_forcing
         self._const_forcing = b
         self._poly = None
         if isinstance(torque, ConstantTorque):
