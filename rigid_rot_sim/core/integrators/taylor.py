@@ -229,6 +229,7 @@ class Taylor(Integrator):
 
     def _configure_torque(self) -> None:
         """Derive the recurrence's constant map and forcing from ``self.torque``."""
+        self._rho = None  # the convergence radius estimated under the old torque no longer holds
         torque = self.torque
         gravity = torque if isinstance(torque, GravityTorque) else None
         if not (torque is None or gravity is not None or isinstance(torque, (ConstantTorque, PolynomialTorque))):
@@ -344,7 +345,8 @@ class Taylor(Integrator):
         if not math.isfinite(omega_scale):
             raise NonFiniteStateError(f"{self.name}: non-finite state at step {self.n_steps + 1}, t = {t0:.9g} s")
         rho = self._rho
-        if tol is not None and rho is not None and h_cap < rho:
+        # rho is infinite after a step whose series vanished (a body at rest): no estimate.
+        if tol is not None and rho is not None and math.isfinite(rho) and h_cap < rho:
             # Enough order for the shorter step: (h / rho)^n <= tol.
             needed = math.ceil(math.log(tol) / math.log(h_cap / rho)) + 1 if h_cap > 0.0 else 2
             p = min(p, max(needed, 4))
