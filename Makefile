@@ -116,18 +116,28 @@ $(STAMPS)/package: $(STAMPS)/msgs setup.py setup.cfg package.xml
 	"$(VPY)" -c "import rclpy, rigid_rot_msgs.srv, rigid_rot_sim"
 	touch $@
 
-# Until the simulator exists: mass properties of the sample body from the CLI, then the same
-# body through the node's ~/compute_inertia service over DDS (domain id private to this run).
-DEMO_BODY := config/bodies/sample_body.yaml
+# The main job: the free_tumble scene (embedded defaults) for 3 s of sim time on a private
+# DDS domain, its states echoed as they arrive over DDS, the run recorded to MCAP; then the
+# recording is summarised, re-simulated bit for bit without DDS, and plotted.
+DEMO_SCENE := free_tumble
+DEMO_BAG := out/demo_$(DEMO_SCENE).mcap
 demo: setup
-	@echo "== mass properties from the library (rigid-rot inertia) =="
-	"$(VENV)/bin/rigid-rot" inertia $(DEMO_BODY)
-	@echo
-	@echo "== the same body through the ROS 2 service /rigid_rot_sim/compute_inertia =="
+	@mkdir -p out && rm -f $(DEMO_BAG)
+	@echo "== rigid-rot run $(DEMO_SCENE): the node over DDS, recorded to $(DEMO_BAG) =="
 	@export ROS_DOMAIN_ID=$$(( ($$$$ % 100) + 1 )) ROS_AUTOMATIC_DISCOVERY_RANGE=LOCALHOST; \
-	"$(VENV)/bin/rigid_rot_sim_node" & node=$$!; \
-	trap 'kill -INT $$node 2>/dev/null; wait $$node 2>/dev/null || true' EXIT; \
-	"$(VENV)/bin/rigid-rot" inertia $(DEMO_BODY) --service /rigid_rot_sim/compute_inertia --compare
+	"$(VENV)/bin/rigid-rot" run $(DEMO_SCENE) --duration 3 --echo 0.5 --record $(DEMO_BAG)
+	@echo
+	@echo "== rigid-rot bag info $(DEMO_BAG) =="
+	@"$(VENV)/bin/rigid-rot" bag info $(DEMO_BAG)
+	@echo
+	@echo "== rigid-rot resim $(DEMO_BAG): the run rebuilt from the file, without DDS =="
+	@"$(VENV)/bin/rigid-rot" resim $(DEMO_BAG)
+	@echo
+	@echo "== rigid-rot plot $(DEMO_BAG) =="
+	@"$(VENV)/bin/rigid-rot" plot $(DEMO_BAG) --out out/demo_plots
+	@echo
+	@echo "recorded: $(CURDIR)/$(DEMO_BAG)"
+	@echo "inspect:  .venv/bin/rigid-rot bag info|plot|resim|replay $(DEMO_BAG); ros2 bag info/play and Foxglove open it as is"
 
 # An explicit path, so the suite is the same from any directory. pytest's exit code 5 (nothing
 # collected) must never pass for green: it is reported and turned into a failure.
