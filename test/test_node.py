@@ -6,15 +6,12 @@ node in the same executor.
 """
 
 import math
-import os
 import time
 from pathlib import Path
 
 import pytest
 
-os.environ.setdefault("ROS_DOMAIN_ID", str(os.getpid() % 100 + 1))
-os.environ.setdefault("ROS_AUTOMATIC_DISCOVERY_RANGE", "LOCALHOST")
-
+# test/conftest.py has set the session's ROS_DOMAIN_ID and localhost discovery.
 import rclpy  # noqa: E402
 from builtin_interfaces.msg import Duration  # noqa: E402
 from geometry_msgs.msg import Vector3, WrenchStamped  # noqa: E402
