@@ -145,13 +145,24 @@ def replay(
             publishers[message.topic].publish(message.data)
             published[remap.get(message.topic, message.topic)] += 1
             lateness = max(lateness, time.monotonic() - target)
-        return ReplayReport(dict(published), time.monotonic() - start, lateness)
+        elapsed = time.monotonic() - start
+        _wait_until_delivered(publishers.values())
+        return ReplayReport(dict(published), elapsed, lateness)
     finally:
         stop.set()
         if clock_thread is not None:
             clock_thread.join(timeout=2.0)
         if own_node:
             node.destroy_node()
+
+
+def _wait_until_delivered(publishers: Any, timeout_s: float = 5.0) -> None:
+    """Block until reliable subscribers acknowledged every message, so that a replay that
+    ends right after its last publish does not tear the node down with it still in flight."""
+    from rclpy.duration import Duration
+
+    for publisher in publishers:
+        publisher.wait_for_all_acked(Duration(seconds=timeout_s))
 
 
 def _start_clock(node: Any, first_ns: int, start: float, rate: float, stop: threading.Event) -> threading.Thread:
