@@ -43,6 +43,10 @@ class NonFiniteStateError(FloatingPointError):
     """Raised when a step produced a non-finite state, or failed on the way to one."""
 
 
+class UnsupportedTorqueError(ValueError):
+    """The torque set on the integrator is one the method cannot take: a usage error, raised as is."""
+
+
 #: What a failing step may raise besides NonFiniteStateError (math domain error, overflow).
 _STEP_ERRORS = (ArithmeticError, ValueError)
 
@@ -54,7 +58,7 @@ def _failing_as_non_finite(method: Callable) -> Callable:
     def wrapper(self, *args, **kwargs):
         try:
             return method(self, *args, **kwargs)
-        except NonFiniteStateError:
+        except (NonFiniteStateError, UnsupportedTorqueError):
             raise
         except _STEP_ERRORS as exc:
             raise NonFiniteStateError(
@@ -145,7 +149,7 @@ class Integrator:
         try:
             self._step_impl()
         except _STEP_ERRORS:
-            self.set_state(*before)
+            self.set_state(*before)  # also for UnsupportedTorqueError: nothing was stepped
             raise
         self.n_steps += 1
         if not (np.all(np.isfinite(self.q)) and np.all(np.isfinite(self.omega))):
