@@ -123,3 +123,12 @@ def test_shipped_torque_driven_scene_bounds_its_commands():
     scene = load_scene(SCENES / "torque_driven.yaml")
     assert scene.commands.max_torque > 0.0
     assert limits.MAX_TORQUE_RANGE[0] <= scene.commands.max_torque <= limits.MAX_TORQUE_RANGE[1]
+
+
+def test_a_quaternion_of_huge_components_is_normalised_not_zeroed():
+    # found by the fuzz tests: |q| overflowed to inf and q / |q| gave the zero quaternion
+    sim = driven("rk4")
+    sim.set_state([1e308, 1e308, 0.0, 0.0], [0.0, 0.0, 0.0])
+    q = sim.snapshot().orientation
+    assert all_finite(sim.snapshot()) and np.linalg.norm(q) == pytest.approx(1.0)
+    assert abs(q[0]) == pytest.approx(math.sqrt(0.5)) and abs(q[1]) == pytest.approx(math.sqrt(0.5))
