@@ -181,6 +181,7 @@ def running_node_campaign(args, rng: random.Random, log_dir: Path) -> dict:
         figures["rss_before_kib"] = rss_kib(process.pid)
         start = time.monotonic()
         next_probe = start
+        figures["rss_mid_kib"] = -1
         while time.monotonic() - start < args.duration and figures["sent"] < args.max_messages:
             action = rng.random()
             if action < 0.6:  # a burst of torque commands, published as fast as possible
@@ -209,6 +210,8 @@ def running_node_campaign(args, rng: random.Random, log_dir: Path) -> dict:
                     figures["hangs"] += 1
                 figures["probe_max_s"] = max(figures["probe_max_s"], time.monotonic() - began)
                 next_probe = time.monotonic() + 1.0
+            if figures["rss_mid_kib"] < 0 and time.monotonic() - start > 0.25 * args.duration:
+                figures["rss_mid_kib"] = rss_kib(process.pid)  # after the warm-up: flat from here?
             if process.poll() is not None:
                 break
         client.spin(1.0)
@@ -287,7 +290,7 @@ def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--seed", type=int, default=1)
     parser.add_argument("--duration", type=float, default=120.0, help="s of part 1, and at most that for part 2")
-    parser.add_argument("--max-messages", type=int, default=60_000, help="most torque commands sent in part 1")
+    parser.add_argument("--max-messages", type=int, default=1_000_000, help="most torque commands sent in part 1")
     parser.add_argument("--scenes", type=int, default=60, help="mutated scene files in part 2")
     parser.add_argument("--quick", action="store_true", help="15 s, 10 scenes")
     args = parser.parse_args()
@@ -307,7 +310,8 @@ def main() -> int:
         print(f"  ~/state messages {node['states']}, non-finite {node['non_finite']}; tracebacks {node['tracebacks']}; "
               f"hangs {node['hangs']}; slowest liveness probe {node['probe_max_s']:.3f} s")
         print(f"  node alive at the end {node['alive']}, RSS before {node['rss_before_kib'] / 1024:.1f} MiB, "
-              f"after {node['rss_after_kib'] / 1024:.1f} MiB over {node['wall_s']:.0f} s; "
+              f"at 1/4 {node['rss_mid_kib'] / 1024:.1f} MiB, after {node['rss_after_kib'] / 1024:.1f} MiB "
+              f"over {node['wall_s']:.0f} s; "
               f"SIGTERM -> exit {node['exit_code']} in {node['sigterm_s']:.2f} s")
         scenes = scene_campaign(args, rng, work)
         print("part 2, scene files:")
