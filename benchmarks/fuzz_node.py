@@ -67,6 +67,19 @@ def rss_kib(pid: int) -> int:
     return -1
 
 
+def signal_and_wait(process: subprocess.Popen, signum: int, timeout: float = 10.0) -> float:
+    """Seconds from ``signum`` to the process's exit (inf, and SIGKILL, if it outlives ``timeout``)."""
+    began = time.monotonic()
+    process.send_signal(signum)
+    try:
+        process.wait(timeout=timeout)
+    except subprocess.TimeoutExpired:
+        process.kill()
+        process.wait()
+        return math.inf
+    return time.monotonic() - began
+
+
 def finite_state(msg: RigidBodyState) -> bool:
     values = [msg.orientation.x, msg.orientation.y, msg.orientation.z, msg.orientation.w,
               msg.kinetic_energy, msg.potential_energy, msg.energy_drift, msg.angular_momentum_drift]
@@ -218,15 +231,8 @@ def running_node_campaign(args, rng: random.Random, log_dir: Path) -> dict:
         figures["alive"] = process.poll() is None
         figures["rss_after_kib"] = rss_kib(process.pid) if figures["alive"] else -1
         figures["wall_s"] = time.monotonic() - start
-        began = time.monotonic()
-        process.send_signal(signal.SIGTERM)
-        try:
-            process.wait(timeout=10.0)
-            figures["sigterm_s"] = time.monotonic() - began
-        except subprocess.TimeoutExpired:
-            process.kill()
-            figures["sigterm_s"] = math.inf
-            figures["hangs"] += 1
+        figures["sigterm_s"] = signal_and_wait(process, signal.SIGTERM)
+        figures["hangs"] += figures["sigterm_s"] == math.inf
         figures["exit_code"] = process.returncode
     finally:
         if process.poll() is None:
@@ -274,15 +280,8 @@ def scene_campaign(args, rng: random.Random, work: Path) -> dict:
     process = subprocess.Popen([sys.executable, "-m", "rigid_rot_sim.node", "--ros-args", "-p", f"scene:={big}"],
                                stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, stdin=subprocess.DEVNULL)
     time.sleep(1.0)
-    began = time.monotonic()
-    process.send_signal(signal.SIGINT)
-    try:
-        process.wait(timeout=10.0)
-        figures["ctrl_c_during_load_s"] = time.monotonic() - began
-    except subprocess.TimeoutExpired:
-        process.kill()
-        figures["ctrl_c_during_load_s"] = math.inf
-        figures["hangs"] += 1
+    figures["ctrl_c_during_load_s"] = signal_and_wait(process, signal.SIGINT)
+    figures["hangs"] += figures["ctrl_c_during_load_s"] == math.inf
     return figures
 
 
