@@ -239,7 +239,10 @@ def running_node_campaign(args, rng: random.Random, log_dir: Path) -> dict:
             process.kill()
         figures["states"], figures["non_finite"], figures["reported"] = client.states, client.non_finite, client.rejected
         client.close()
-    figures["tracebacks"] = log_path.read_text(errors="replace").count("Traceback")
+    text = log_path.read_text(errors="replace")
+    figures["tracebacks"] = text.count("Traceback")
+    if figures["tracebacks"]:
+        print(text[text.index("Traceback") :][:3000], flush=True)
     return figures
 
 

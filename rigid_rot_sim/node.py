@@ -343,6 +343,14 @@ class RigidRotSimNode(Node):
     # ------------------------------------------------------------------ stepping
 
     def timer_callback(self) -> None:
+        try:
+            self._tick()
+        except Exception as exc:  # never out of a callback: the run pauses with the reason, the node serves on
+            self.get_logger().error(f"simulation paused: internal error {exc!r} (reset or set_state to continue)")
+            if self.sim is not None:
+                self.sim.fail(f"internal error: {exc!r}")
+
+    def _tick(self) -> None:
         sim = self.sim
         if sim is None or sim.paused or self.finished:
             return
@@ -483,6 +491,8 @@ class RigidRotSimNode(Node):
             self.sim.receive_torque(source, torque, frame_id, stamp, force)
         except CommandRejected as exc:
             self._reject(self.resolve_topic_name(source), exc.reason, frame_id, torque)
+        except Exception as exc:  # never out of a callback: rejected with the reason
+            self._reject(self.resolve_topic_name(source), f"internal error: {exc!r}", frame_id, torque)
         if self.recorder is not None:
             self.recorder.record_command(self.resolve_topic_name(source), msg, received_ns)
 

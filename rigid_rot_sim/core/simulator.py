@@ -570,7 +570,7 @@ class Simulator:
             chunk = stop - self._k
             reason = self._rotation_failure(self.dt)
             if reason is not None:
-                self._fail(f"rotation limit: {reason}")
+                self.fail(f"rotation limit: {reason}")
                 return done
             chunk = min(chunk, self._steps_within_rotation_limit())
             start = (integrator.t, integrator.q, integrator.omega, integrator.n_steps)
@@ -590,20 +590,20 @@ class Simulator:
                     integrator.set_state(*start[:3])
                     integrator.n_steps = start[3]
                 name = "NonFiniteStateError" if isinstance(exc, NonFiniteStateError) else type(exc).__name__
-                self._fail(f"{name}: {exc}")
+                self.fail(f"{name}: {exc}")
                 return done
             reason = self._derived_failure()
             if reason is not None:  # a finite state whose energy or momentum overflows
                 integrator.set_state(*start[:3])
                 integrator.n_steps = start[3]
-                self._fail(f"NonFiniteStateError: {reason}")
+                self.fail(f"NonFiniteStateError: {reason}")
                 return done
             self._k += chunk
             done += chunk
         return done
 
-    def _fail(self, reason: str) -> None:
-        """Stop the run at the current (good) state with ``reason``."""
+    def fail(self, reason: str) -> None:
+        """Stop the run at the current (good) state with ``reason`` (cleared by reset / set_state)."""
         self.failure = reason
         self._paused_by_failure = self._paused_by_failure or not self.paused
         self.paused = True
@@ -633,7 +633,9 @@ class Simulator:
             return 1 << 62
         omega = math.hypot(*self._integrator.omega.tolist())  # type: ignore[union-attr]
         gain_per_step = self.dt * torque / self._i_min
-        return max(1, int((limits.MAX_ROTATION_PER_STEP / self.dt - omega) / gain_per_step))
+        if not gain_per_step > 0.0:  # a torque so small that its effect underflows
+            return 1 << 62
+        return max(1, int(min((limits.MAX_ROTATION_PER_STEP / self.dt - omega) / gain_per_step, 1 << 62)))
 
     def _derived_failure(self) -> str | None:
         """Why a snapshot of the current state would hold a non-finite number (None: it would not)."""

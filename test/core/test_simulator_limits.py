@@ -132,3 +132,11 @@ def test_a_quaternion_of_huge_components_is_normalised_not_zeroed():
     q = sim.snapshot().orientation
     assert all_finite(sim.snapshot()) and np.linalg.norm(q) == pytest.approx(1.0)
     assert abs(q[0]) == pytest.approx(math.sqrt(0.5)) and abs(q[1]) == pytest.approx(math.sqrt(0.5))
+
+
+@pytest.mark.parametrize("torque", [5e-324, 1e-320, 1e-300])
+def test_a_torque_whose_effect_underflows_is_stepped_normally(torque):
+    # found by the fuzz campaign: ZeroDivisionError (then OverflowError) sizing the slice
+    sim = driven("rk4")
+    sim.receive_torque("~/torque", [torque, 0.0, 0.0], "body")
+    assert sim.advance(300) == 300 and sim.failure is None
