@@ -107,7 +107,10 @@ class Client:
 
     def _on_state(self, msg) -> None:
         self.states += 1
-        self.non_finite += not finite_state(msg)
+        if not finite_state(msg):
+            self.non_finite += 1
+            if self.non_finite == 1:
+                print(f"non-finite ~/state: {msg}", flush=True)
 
     def _on_rejected(self, msg) -> None:
         self.rejected += 1

@@ -140,3 +140,13 @@ def test_a_torque_whose_effect_underflows_is_stepped_normally(torque):
     sim = driven("rk4")
     sim.receive_torque("~/torque", [torque, 0.0, 0.0], "body")
     assert sim.advance(300) == 300 and sim.failure is None
+
+
+def test_an_unstable_method_never_leaves_a_state_whose_energy_overflows():
+    # found by the fuzz campaign: euler grew |omega| to ~1e200 inside one slice, the next step
+    # overflowed, and the last good state (finite omega, infinite kinetic energy) was kept
+    sim = driven("euler")
+    sim.set_state([0, 0, 0, 1], [0.0, 3.0e4, 3.0e4])  # 42 rad per step: allowed, violently unstable
+    sim.advance(5000)
+    assert sim.failure is not None and sim.paused
+    assert all_finite(sim.snapshot()), sim.failure
