@@ -263,7 +263,8 @@ def scene_campaign(args, rng: random.Random, work: Path) -> dict:
                    "-p", "duration:=0.2", "-p", "real_time_factor:=0.0"]
         figures["scenes"] += 1
         try:
-            done = subprocess.run(command, capture_output=True, text=True, timeout=20.0, stdin=subprocess.DEVNULL)
+            # in the work directory: a mutated scene may name a relative recording path
+            done = subprocess.run(command, capture_output=True, text=True, timeout=20.0, stdin=subprocess.DEVNULL, cwd=work)
         except subprocess.TimeoutExpired:
             figures["hangs"] += 1
             continue
