@@ -29,6 +29,7 @@ from typing import Any, ClassVar
 
 import numpy as np
 
+from rigid_rot_sim.core import quaternion as quat
 from rigid_rot_sim.core.torque import TorqueFunction
 
 
@@ -92,7 +93,8 @@ class Integrator:
         if not math.isfinite(t):
             raise ValueError(f"t must be finite, got {t}")
         self.t = float(t)
-        self.q = q / norm
+        # the kernels' normalisation (the batch core normalises its bodies the same way)
+        self.q = np.array(quat.normalize(q.tolist()))
         self.omega = omega
         self._on_state_change()
 

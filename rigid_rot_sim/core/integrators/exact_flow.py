@@ -30,8 +30,8 @@ import numpy as np
 
 from rigid_rot_sim.core.exact import TorqueFreeSolution, _solution, torque_free_flow
 from rigid_rot_sim.core.integrators.base import Integrator, NonFiniteStateError
-from rigid_rot_sim.core.integrators.fixed_step import FixedStepIntegrator, float_torque
-from rigid_rot_sim.core.integrators.splitting import COMPOSITIONS, _adjoint_kick
+from rigid_rot_sim.core.integrators.fixed_step import KICK_FAILED, OK, FixedStepIntegrator, float_torque, has_torque, torque_at
+from rigid_rot_sim.core.integrators.splitting import COMPOSITIONS, KICK_ERROR, adjoint_kick
 
 EXACT_SPLIT_ORDERS = (2, 4)
 
@@ -120,15 +120,15 @@ class ExactFlow(Integrator):
 
 
 def _make_kernel(coefficients: tuple[float, ...]):
-    def kernel(t, state, h, moments, torque, attitude_torque):
+    def kernel(t, state, h, moments, torque):
         q = state[:4]
         w1, w2, w3 = state[4:]
         i1, i2, i3 = moments
         moments_array = np.array(moments)
-        if torque is None:
+        if not has_torque(torque):
             q_new, w_new = torque_free_flow(moments_array, q, (w1, w2, w3), h)
-            return (*q_new, *w_new)
-        n1, n2, n3 = torque(t, q, (w1, w2, w3))
+            return (*q_new, *w_new), OK
+        n1, n2, n3 = torque_at(torque, t, q, (w1, w2, w3))
         for gamma in coefficients:
             tau = gamma * h
             hk = 0.5 * tau
@@ -137,13 +137,15 @@ def _make_kernel(coefficients: tuple[float, ...]):
             w3 += hk * n3 / i3
             if not math.isfinite(w1 + w2 + w3):
                 # a non-finite torque: hand the bad state back for the step's NaN check
-                return (*q, w1, w2, w3)
+                return (*q, w1, w2, w3), OK
             q, (w1, w2, w3) = torque_free_flow(moments_array, q, (w1, w2, w3), tau)
             t += tau
-            w1, w2, w3, n1, n2, n3 = _adjoint_kick(torque, t, q, w1, w2, w3, hk, i1, i2, i3)
+            w1, w2, w3, n1, n2, n3, converged = adjoint_kick(torque, t, q, w1, w2, w3, hk, i1, i2, i3)
+            if not converged:
+                return state, KICK_FAILED
         qx, qy, qz, qw = q
         inv = 1.0 / math.sqrt(qx * qx + qy * qy + qz * qz + qw * qw)
-        return qx * inv, qy * inv, qz * inv, qw * inv, w1, w2, w3
+        return (qx * inv, qy * inv, qz * inv, qw * inv, w1, w2, w3), OK
 
     return kernel
 
@@ -162,10 +164,12 @@ class ExactSplit(FixedStepIntegrator):
 
     name = "exact_split"
     order = 2
+    kernel_name = "exact_split"
+    error_types = {KICK_FAILED: (NonFiniteStateError, KICK_ERROR)}
 
     def __init__(self, *args: Any, order: int = 2, **kwargs: Any) -> None:
         if order not in EXACT_SPLIT_ORDERS:
             raise ValueError(f"exact_split: order must be one of {list(EXACT_SPLIT_ORDERS)}, got {order!r}")
         self.order = order
-        self.kernel = _KERNELS[order]
+        self.python_kernel = _KERNELS[order]
         super().__init__(*args, **kwargs)
