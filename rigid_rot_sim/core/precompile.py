@@ -20,10 +20,11 @@ import numpy as np
 def entry_points() -> dict[str, object]:
     """The compiled entry points of the core, by name."""
     from rigid_rot_sim.core import batch
-    from rigid_rot_sim.core.integrators import kernels
+    from rigid_rot_sim.core.integrators import kernels, taylor
 
     return {
         "integrators.kernels.advance_compiled": kernels.advance_compiled,
+        "integrators.taylor.taylor_advance": taylor.taylor_advance,
         "batch._advance_bodies_serial": batch._advance_bodies_serial,
         "batch._advance_bodies_parallel": batch._advance_bodies_parallel,
     }
