@@ -48,6 +48,22 @@ def euler_rhs_components(
     )
 
 
+@register_jitable
+def axes_by_moment(i1: float, i2: float, i3: float) -> tuple[int, int, int]:
+    """The principal axes (0, 1, 2) sorted by moment, smallest first (ties: axis order)."""
+    if i2 < i1:
+        lo, hi = 1, 0
+    else:
+        lo, hi = 0, 1
+    i_lo = i2 if lo == 1 else i1
+    i_hi = i1 if lo == 1 else i2
+    if i3 < i_lo:
+        return 2, lo, hi
+    if i3 < i_hi:
+        return lo, 2, hi
+    return lo, hi, 2
+
+
 def euler_rhs(moments: Any, omega: Any, torque: Any = None) -> np.ndarray:
     """Angular acceleration d(omega)/dt, rad/s^2, principal frame.
 

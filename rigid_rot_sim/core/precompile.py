@@ -19,12 +19,15 @@ import numpy as np
 
 def entry_points() -> dict[str, object]:
     """The compiled entry points of the core, by name."""
-    from rigid_rot_sim.core import batch
+    from rigid_rot_sim.core import batch, exact
     from rigid_rot_sim.core.integrators import kernels, taylor
 
     return {
         "integrators.kernels.advance_compiled": kernels.advance_compiled,
         "integrators.taylor.taylor_advance": taylor.taylor_advance,
+        "exact._build": exact._build,
+        "exact.evaluate_flow": exact.evaluate_flow,
+        "exact._free_flow_compiled": exact._free_flow_compiled,
         "batch._advance_bodies_serial": batch._advance_bodies_serial,
         "batch._advance_bodies_parallel": batch._advance_bodies_parallel,
     }
@@ -52,6 +55,12 @@ def exercise() -> None:
             integrator.advance(2)
             integrator.advance_saving(2, 1)
             integrator.step()
+    from rigid_rot_sim.core.exact import torque_free_flow, torque_free_solution
+
+    solution = torque_free_solution(moments, (1.0, 0.1, 0.5))
+    solution.state(1.0)
+    solution.state(np.linspace(0.0, 1.0, 3))
+    torque_free_flow(moments, (0.0, 0.0, 0.0, 1.0), (1.0, 0.1, 0.5), 0.1)
     rng = np.random.default_rng(0)
     for method in BATCH_METHODS:
         for n, steps in ((1, 2), (2, 100_000)):  # serial, then parallel

@@ -22,7 +22,6 @@ accumulated, so advancing k steps in one call gives the same bits as k single st
 
 from __future__ import annotations
 
-import math
 from typing import Any, Callable, ClassVar
 
 import numpy as np
@@ -102,8 +101,6 @@ class FixedStepIntegrator(Integrator):
 
     kernel_name: ClassVar[str]
     error_types: ClassVar[dict[int, tuple[type, str]]] = {}
-    #: A kernel not compiled yet: always run interpreted, one step per call.
-    python_kernel: Callable[..., tuple[State, int]] | None = None
 
     def _on_state_change(self) -> None:
         self._state: State = tuple(self.q.tolist() + self.omega.tolist())
@@ -146,9 +143,9 @@ class FixedStepIntegrator(Integrator):
         if n <= 0:
             return saved
         data = self._torque_data()
-        method = kernels.KERNEL_IDS.get(self.kernel_name, -1)
+        method = kernels.KERNEL_IDS[self.kernel_name]
         start_k = self._anchor_k
-        if data.kind != TORQUE_CALLABLE and self.python_kernel is None:
+        if data.kind != TORQUE_CALLABLE:
             state, done, status, bad = kernels.advance_compiled(
                 method, self._anchor_t, start_k, self.dt, n, self._state, self._moments, data.compiled, save_every, saved
             )
@@ -157,10 +154,9 @@ class FixedStepIntegrator(Integrator):
             # the state at the last good step
             state, done, status, bad = self._state, 0, OK, self._state
             row = np.empty((1, 7))
-            run = kernels.advance_steps if self.python_kernel is None else self._python_step
             try:
                 while done < n and status == OK:
-                    state, one, status, bad = run(
+                    state, one, status, bad = kernels.advance_steps(
                         method, self._anchor_t, start_k + done, self.dt, 1, state, self._moments, data, 1, row
                     )
                     done += one
@@ -181,15 +177,6 @@ class FixedStepIntegrator(Integrator):
                 f"(q = {bad[:4]}, omega = {bad[4:]})"
             )
         return saved
-
-    def _python_step(self, method, t_anchor, k, dt, n, state, moments, torque, save_every, row):
-        new, status = self.python_kernel(t_anchor + k * dt, state, dt, moments, torque)
-        if status != OK:
-            return state, 0, status, new
-        if not all(map(math.isfinite, new)):
-            return state, 0, NON_FINITE, new
-        row[0] = new
-        return new, 1, OK, new
 
     def _commit(self, state: State, steps: int) -> None:
         if steps:

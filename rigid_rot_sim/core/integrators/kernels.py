@@ -14,6 +14,7 @@ import math
 
 from numba.extending import register_jitable
 
+from rigid_rot_sim.core.integrators.exact_flow import exact_split_step
 from rigid_rot_sim.core.integrators.explicit import euler_step, rk4_step
 from rigid_rot_sim.core.integrators.fixed_step import NON_FINITE, OK
 from rigid_rot_sim.core.integrators.implicit import implicit_midpoint_step
@@ -21,7 +22,7 @@ from rigid_rot_sim.core.integrators.lie import cf4_step
 from rigid_rot_sim.core.integrators.splitting import COMPOSITIONS, splitting_step
 from rigid_rot_sim.core.jit import compiled
 
-EULER, RK4, LIE_RK4, IMPLICIT_MIDPOINT, SPLITTING2, SPLITTING4, SPLITTING6 = range(7)
+EULER, RK4, LIE_RK4, IMPLICIT_MIDPOINT, SPLITTING2, SPLITTING4, SPLITTING6, EXACT_SPLIT2, EXACT_SPLIT4 = range(9)
 
 #: ``FixedStepIntegrator.kernel_name`` -> the id the compiled loop dispatches on.
 KERNEL_IDS = {
@@ -32,6 +33,8 @@ KERNEL_IDS = {
     "splitting2": SPLITTING2,
     "splitting4": SPLITTING4,
     "splitting6": SPLITTING6,
+    "exact_split2": EXACT_SPLIT2,
+    "exact_split4": EXACT_SPLIT4,
 }
 
 _SPLITTING2 = COMPOSITIONS[2]
@@ -54,6 +57,10 @@ def step_kernel(method, t, state, dt, moments, torque):
         return splitting_step(t, state, dt, moments, torque, _SPLITTING4)
     if method == SPLITTING6:
         return splitting_step(t, state, dt, moments, torque, _SPLITTING6)
+    if method == EXACT_SPLIT2:
+        return exact_split_step(t, state, dt, moments, torque, _SPLITTING2)
+    if method == EXACT_SPLIT4:
+        return exact_split_step(t, state, dt, moments, torque, _SPLITTING4)
     return euler_step(t, state, dt, moments, torque)
 
 

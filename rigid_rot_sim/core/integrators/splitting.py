@@ -35,6 +35,7 @@ from typing import Any
 from numba.extending import register_jitable
 
 from rigid_rot_sim.core import quaternion as quat
+from rigid_rot_sim.core.dynamics import axes_by_moment
 from rigid_rot_sim.core.integrators.base import NonFiniteStateError
 from rigid_rot_sim.core.integrators.fixed_step import KICK_FAILED, OK, FixedStepIntegrator, has_torque, torque_at
 
@@ -50,20 +51,6 @@ COMPOSITIONS: dict[int, tuple[float, ...]] = {
 }
 
 _KICK_ITERATIONS = 50
-
-
-@register_jitable
-def _median_axis(i1, i2, i3):
-    """The axis k of the median moment (ties: as a stable sort of (0, 1, 2) by moment)."""
-    if i2 < i1:
-        lo, hi = (1, i2), (0, i1)
-    else:
-        lo, hi = (0, i1), (1, i2)
-    if i3 < lo[1]:
-        return lo[0]
-    if i3 < hi[1]:
-        return 2
-    return hi[0]
 
 
 @register_jitable
@@ -94,7 +81,7 @@ def _free_strang(qx, qy, qz, qw, w1, w2, w3, h, i1, i2, i3):
     if not math.isfinite(w1 + w2 + w3):
         nan = math.nan
         return nan, nan, nan, nan, nan, nan, nan
-    k = _median_axis(i1, i2, i3)
+    k = axes_by_moment(i1, i2, i3)[1]
     ik = i1 if k == 0 else i2 if k == 1 else i3
     c1, c2, c3 = i1 / ik, i2 / ik, i3 / ik
     for a in (0, 1, 2):
