@@ -6,9 +6,11 @@ principal -> world, angular velocities ``(N, 3)`` rad/s and torques ``(N, 3)`` N
 (or ``(3,)``), both in the principal body frame. Each body's torque is constant in its
 body frame over the run (a body-fixed thruster).
 
-Methods: ``'rk4'``, ``'implicit_midpoint'`` and ``'splitting'`` (order 2) run the
-single-body kernels of :mod:`rigid_rot_sim.core.integrators` with the same names, body by
-body, in one compiled loop spread over the cores (numba ``prange``); so a body advanced
+Methods (:data:`BATCH_METHODS`): ``'rk4'``, ``'implicit_midpoint'``, ``'splitting'``
+(order 2) and ``'exact_split'`` (order 2: the exact free flow with torque kicks), and for
+torque-free bodies ``'exact'`` (:data:`FREE_BODY_METHODS`: one evaluation of the exact flow
+at ``n_steps * dt``; a torque is refused) run the single-body kernels of
+:mod:`rigid_rot_sim.core.integrators` with the same names, body by body, in one compiled loop spread over the cores (numba ``prange``); so a body advanced
 here has the same bits as the same body advanced alone by ``get_method(name)`` with a
 :class:`~rigid_rot_sim.core.torque.ConstantTorque`, and there is no second copy of any
 formula. The compiled loop is cached like the single-body one (``make setup`` builds it).
@@ -24,15 +26,26 @@ from numba import prange
 from numba.extending import register_jitable
 
 from rigid_rot_sim.core import quaternion as quat
+from rigid_rot_sim.core.exact import free_flow
 from rigid_rot_sim.core.integrators import kernels
 from rigid_rot_sim.core.integrators.base import NonFiniteStateError
 from rigid_rot_sim.core.integrators.fixed_step import NEWTON_FAILED, NON_FINITE, OK
 from rigid_rot_sim.core.jit import compiled
 from rigid_rot_sim.core.torque import TORQUE_NONE, TORQUE_TIME
 
-BATCH_METHODS = ("rk4", "implicit_midpoint", "splitting")
+#: Methods for bodies under (per-body) torques.
+BATCH_METHODS = ("rk4", "implicit_midpoint", "splitting", "exact_split")
+#: Methods for torque-free bodies only (a torque is refused, as by the single-body method).
+FREE_BODY_METHODS = ("exact",)
 
-_KERNELS = {"rk4": kernels.RK4, "implicit_midpoint": kernels.IMPLICIT_MIDPOINT, "splitting": kernels.SPLITTING2}
+_EXACT = -1  # the exact flow, evaluated once at n_steps * dt (torque-free bodies)
+_KERNELS = {
+    "rk4": kernels.RK4,
+    "implicit_midpoint": kernels.IMPLICIT_MIDPOINT,
+    "splitting": kernels.SPLITTING2,
+    "exact": _EXACT,
+    "exact_split": kernels.EXACT_SPLIT2,
+}
 _FAILURES = {NON_FINITE: "non-finite state", NEWTON_FAILED: "Newton's method did not converge"}
 
 
@@ -63,9 +76,22 @@ def _advance_body(b, method, moments, q, omega, torque, dt, n_steps, failed_step
     # normalised as Integrator.set_state does it, so that the bits match a single body's
     qx, qy, qz, qw = quat.normalize((q[b, 0], q[b, 1], q[b, 2], q[b, 3]))
     state = (qx, qy, qz, qw, omega[b, 0], omega[b, 1], omega[b, 2])
-    state, done, status, bad = kernels.advance_steps(
-        method, 0.0, 0, dt, n_steps, state, body_moments, body_torque, 0, np.empty((0, 7))
-    )
+    if method == _EXACT:
+        # as ExactFlow.advance(n_steps): one evaluation of the flow at n_steps * dt
+        done, status = n_steps, OK
+        if n_steps > 0:
+            q_end, w_end = free_flow(body_moments, (qx, qy, qz, qw), (state[4], state[5], state[6]), n_steps * dt)
+            finite = True
+            for x in q_end + w_end:
+                finite = finite and math.isfinite(x)
+            if finite:
+                state = (q_end[0], q_end[1], q_end[2], q_end[3], w_end[0], w_end[1], w_end[2])
+            else:
+                done, status = n_steps - 1, NON_FINITE
+    else:
+        state, done, status, bad = kernels.advance_steps(
+            method, 0.0, 0, dt, n_steps, state, body_moments, body_torque, 0, np.empty((0, 7))
+        )
     for i in range(4):
         q[b, i] = state[i]
     for i in range(3):
@@ -105,7 +131,7 @@ def advance_batch(
 
     Parameters
     ----------
-    method : {'rk4', 'implicit_midpoint', 'splitting'}
+    method : {'rk4', 'implicit_midpoint', 'splitting', 'exact', 'exact_split'}
     principal_moments : array_like, (3,) or (N, 3)
         kg*m^2, each row > 0.
     q : array_like, (N, 4)
@@ -127,7 +153,7 @@ def advance_batch(
         A step produced a non-finite state (names the step and the first body).
     """
     if method not in _KERNELS:
-        raise ValueError(f"method must be one of {list(BATCH_METHODS)}, got {method!r}")
+        raise ValueError(f"method must be one of {list(BATCH_METHODS + FREE_BODY_METHODS)}, got {method!r}")
     omega = np.array(_as_batch("omega", omega, None, 3), dtype=float, order="C")
     n = omega.shape[0]
     q = np.array(_as_batch("q", q, n, 4), dtype=float, order="C")
@@ -148,6 +174,8 @@ def advance_batch(
         torque = np.zeros((n, 3))
     else:
         torque = np.array(_as_batch("torque_body", torque_body, n, 3), dtype=float, order="C")
+    if method == "exact" and np.any(torque):
+        raise ValueError("exact: torque_body must be None or zero (the exact flow is torque-free); use exact_split")
     failed_step = np.zeros(n, dtype=np.int64)
     failure = np.zeros(n, dtype=np.int64)
     parallel = n > 1 and n * int(n_steps) >= _PARALLEL_BODY_STEPS

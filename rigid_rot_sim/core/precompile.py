@@ -35,7 +35,7 @@ def entry_points() -> dict[str, object]:
 
 def exercise() -> None:
     """Run every entry point once, as the node, simulate and the batch core do."""
-    from rigid_rot_sim.core.batch import BATCH_METHODS, advance_batch
+    from rigid_rot_sim.core.batch import BATCH_METHODS, FREE_BODY_METHODS, advance_batch
     from rigid_rot_sim.core.integrators import METHODS
     from rigid_rot_sim.core.torque import ConstantTorque, GravityTorque, PolynomialTorque
 
@@ -62,9 +62,10 @@ def exercise() -> None:
     solution.state(np.linspace(0.0, 1.0, 3))
     torque_free_flow(moments, (0.0, 0.0, 0.0, 1.0), (1.0, 0.1, 0.5), 0.1)
     rng = np.random.default_rng(0)
-    for method in BATCH_METHODS:
+    for method in BATCH_METHODS + FREE_BODY_METHODS:
+        torque = None if method in FREE_BODY_METHODS else np.ones(3) * 1e-3
         for n, steps in ((1, 2), (2, 100_000)):  # serial, then parallel
-            advance_batch(method, moments, rng.normal(size=(n, 4)), rng.normal(size=(n, 3)), 1e-4, steps, np.ones(3) * 1e-3)
+            advance_batch(method, moments, rng.normal(size=(n, 4)), rng.normal(size=(n, 3)), 1e-4, steps, torque)
 
 
 def main() -> int:

@@ -65,7 +65,7 @@ def test_chunked_steps_equal_single_steps_bit_for_bit(name, options, torque_name
 
 
 def test_batch_bodies_equal_single_bodies_bit_for_bit():
-    from rigid_rot_sim.core.batch import BATCH_METHODS, advance_batch
+    from rigid_rot_sim.core.batch import BATCH_METHODS, FREE_BODY_METHODS, advance_batch
 
     rng = np.random.default_rng(3)
     n = 6
@@ -81,6 +81,14 @@ def test_batch_bodies_equal_single_bodies_bit_for_bit():
             single = METHODS[method](moments[k], 0.01, ConstantTorque(torque[k]), q0=q0[k], omega0=omega0[k])
             single.advance(300)
             assert np.array_equal(single.q, q[k]) and np.array_equal(single.omega, omega[k]), (method, k)
+    for method in FREE_BODY_METHODS:
+        q, omega = advance_batch(method, moments, q0, omega0, 0.01, 300)
+        for k in range(n):
+            single = METHODS[method](moments[k], 0.01, q0=q0[k], omega0=omega0[k])
+            single.advance(300)
+            assert np.array_equal(single.q, q[k]) and np.array_equal(single.omega, omega[k]), (method, k)
+        with pytest.raises(ValueError, match="exact_split"):
+            advance_batch(method, moments, q0, omega0, 0.01, 3, torque)
 
 
 # A fresh process integrates with the cache directory given; it reports the state it reached
