@@ -94,6 +94,19 @@ def float_torque(torque: Any) -> tuple[FloatTorque | None, bool]:
     return f, data.kind >= TORQUE_GRAVITY
 
 
+_NO_SAVES = np.empty((0, 7))
+_KERNELS_MODULE: list = []
+
+
+def _kernels() -> Any:
+    """``integrators.kernels`` (imported on first use: it imports every kernel module)."""
+    if not _KERNELS_MODULE:
+        from rigid_rot_sim.core.integrators import kernels
+
+        _KERNELS_MODULE.append(kernels)
+    return _KERNELS_MODULE[0]
+
+
 class FixedStepIntegrator(Integrator):
     """Base of the fixed-step methods: subclasses set ``kernel_name`` (a key of
     ``integrators.kernels.KERNEL_IDS``) and, optionally, ``error_types`` mapping a kernel
@@ -135,11 +148,10 @@ class FixedStepIntegrator(Integrator):
         return saved[:, :4], saved[:, 4:]
 
     def _run(self, n: int, save_every: int) -> np.ndarray:
-        from rigid_rot_sim.core.integrators import kernels  # imports every kernel module
-
+        kernels = _kernels()
         if self.dt != self._anchor_dt:  # dt changed: time restarts from here
             self._anchor_t, self._anchor_k, self._anchor_dt = self.t, 0, self.dt
-        saved = np.empty((n // save_every if save_every > 0 else 0, 7))
+        saved = np.empty((n // save_every, 7)) if save_every > 0 else _NO_SAVES
         if n <= 0:
             return saved
         data = self._torque_data()

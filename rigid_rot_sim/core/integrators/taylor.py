@@ -214,6 +214,9 @@ class Taylor(Integrator):
         self._inverse_orders = 1.0 / np.arange(1, p + 1, dtype=float)
         self._forcing_buffer = np.zeros((p, _STATE_SIZE))
         self._x_end = np.zeros(_STATE_SIZE)
+        self._series_buffer = np.zeros(4)
+        self._state_buffer = np.zeros(10)
+        self._counters = np.zeros(3, dtype=np.int64)
         self._maps_gravity: object = _NOT_BUILT
         self._configure_torque()
 
@@ -294,12 +297,16 @@ class Taylor(Integrator):
             self._configure_torque()
             self._series = None
             landing_first = True
-        series = np.zeros(4)  # t, h, order, valid
-        if self._series is not None:
-            series[:] = (self._series[0], self._series[1], self._series[2], 1.0)
-            self._x_end[:] = self._series[3]
-        state = np.concatenate([self.omega, self.q, [self.t, -1.0 if self._rho is None else self._rho, 0.0]])
-        counters = np.zeros(3, dtype=np.int64)  # API steps done, internal steps, status
+        series = self._series_buffer  # t, h, order, valid
+        if self._series is None:
+            series[3] = 0.0
+        state = self._state_buffer  # omega, q, t, rho (< 0: none), t of a failure
+        state[:3] = self.omega
+        state[3:7] = self.q
+        state[7] = self.t
+        state[8] = -1.0 if self._rho is None else self._rho
+        counters = self._counters  # API steps done, internal steps, status
+        counters[:] = 0
         taylor_advance(
             n, self.dt, state, series, self._x_end, landing_first, self.tol is not None,
             -1.0 if self.tol is None else self.tol, self.max_step, self.series_order,
@@ -314,7 +321,7 @@ class Taylor(Integrator):
             self.q = state[3:7].copy()
             self.n_steps += done
         self._rho = None if state[8] < 0.0 else float(state[8])
-        self._series = (float(series[0]), float(series[1]), int(series[2]), self._x_end.copy()) if series[3] else None
+        self._series = True if series[3] else None  # the series itself stays in the buffers
         if status == _OK:
             return
         t = float(state[9])
@@ -337,6 +344,7 @@ class Taylor(Integrator):
         """
         rho = np.array([-1.0 if self._rho is None else self._rho])
         x_end = np.zeros(_STATE_SIZE)
+        self._series = None  # the coefficient buffer is reused here
         h, p, status = taylor_substep(
             t0, np.asarray(x0, dtype=float), h_cap, h_fallback, self.tol is not None,
             -1.0 if self.tol is None else self.tol, self.series_order, rho, self._coeffs, self._pairs, self._terms,
