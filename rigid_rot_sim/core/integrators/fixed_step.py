@@ -125,6 +125,7 @@ class FixedStepIntegrator(Integrator):
         if self.torque is not self._torque_source:
             self._torque_source = self.torque
             self._torque_cache = torque_data(self.torque)
+            self._torque_compiled = self._torque_cache.compiled
         return self._torque_cache
 
     def step(self) -> None:
@@ -159,7 +160,8 @@ class FixedStepIntegrator(Integrator):
         start_k = self._anchor_k
         if data.kind != TORQUE_CALLABLE:
             state, done, status, bad = kernels.advance_compiled(
-                method, self._anchor_t, start_k, self.dt, n, self._state, self._moments, data.compiled, save_every, saved
+                method, self._anchor_t, start_k, self.dt, n, self._state, self._moments, self._torque_compiled, save_every,
+                saved,
             )
         else:
             # interpreted: a step at a time, so that an exception from the callable leaves
