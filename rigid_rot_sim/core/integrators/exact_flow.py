@@ -32,7 +32,7 @@ from numba.extending import register_jitable
 from rigid_rot_sim.core.exact import TorqueFreeSolution, _solution, free_flow
 from rigid_rot_sim.core.integrators.base import Integrator, NonFiniteStateError
 from rigid_rot_sim.core.integrators.fixed_step import KICK_FAILED, OK, FixedStepIntegrator, float_torque, has_torque, torque_at
-from rigid_rot_sim.core.integrators.splitting import KICK_ERROR, adjoint_kick
+from rigid_rot_sim.core.integrators.splitting import KICK_ERROR, adjoint_kick, kick
 
 EXACT_SPLIT_ORDERS = (2, 4)
 
@@ -133,9 +133,7 @@ def exact_split_step(t, state, h, moments, torque, coefficients):
     for gamma in coefficients:
         tau = gamma * h
         hk = 0.5 * tau
-        w1 += hk * n1 / i1
-        w2 += hk * n2 / i2
-        w3 += hk * n3 / i3
+        w1, w2, w3 = kick(w1, w2, w3, hk, n1, n2, n3, i1, i2, i3)
         if not math.isfinite(w1 + w2 + w3):
             # a non-finite torque: hand the bad state back for the step's NaN check
             return (q[0], q[1], q[2], q[3], w1, w2, w3), OK

@@ -84,14 +84,16 @@ def _free_strang(qx, qy, qz, qw, w1, w2, w3, h, i1, i2, i3):
     k = axes_by_moment(i1, i2, i3)[1]
     ik = i1 if k == 0 else i2 if k == 1 else i3
     c1, c2, c3 = i1 / ik, i2 / ik, i3 / ik
-    for a in (0, 1, 2):
-        ia = i1 if a == 0 else i2 if a == 1 else i3
-        if a != k and ia != ik:
-            rate = 1.0 - ia / ik
-            half = 0.5 * 0.5 * h * rate * (w1 if a == 0 else w2 if a == 1 else w3)
-            qx, qy, qz, qw, w1, w2, w3 = _x_flow(a, half, qx, qy, qz, qw, w1, w2, w3, i1, i2, i3)
+    qx, qy, qz, qw, w1, w2, w3 = _x_terms((0, 1, 2), k, ik, h, qx, qy, qz, qw, w1, w2, w3, i1, i2, i3)
     qx, qy, qz, qw = quat.multiply((qx, qy, qz, qw), quat.exp_rotation_vector((h * c1 * w1, h * c2 * w2, h * c3 * w3)))
-    for a in (2, 1, 0):
+    return _x_terms((2, 1, 0), k, ik, h, qx, qy, qz, qw, w1, w2, w3, i1, i2, i3)
+
+
+@register_jitable
+def _x_terms(axes, k, ik, h, qx, qy, qz, qw, w1, w2, w3, i1, i2, i3):
+    """The X terms over h/2 in the order ``axes``, skipping the median axis k and any axis
+    whose moment equals I_k."""
+    for a in axes:
         ia = i1 if a == 0 else i2 if a == 1 else i3
         if a != k and ia != ik:
             rate = 1.0 - ia / ik
@@ -113,9 +115,7 @@ def splitting_step(t, state, h, moments, torque, coefficients):
         for gamma in coefficients:
             tau = gamma * h
             hk = 0.5 * tau
-            w1 += hk * n1 / i1
-            w2 += hk * n2 / i2
-            w3 += hk * n3 / i3
+            w1, w2, w3 = kick(w1, w2, w3, hk, n1, n2, n3, i1, i2, i3)
             qx, qy, qz, qw, w1, w2, w3 = _free_strang(qx, qy, qz, qw, w1, w2, w3, tau, i1, i2, i3)
             t += tau
             # the torque at the kicked state is also the next explicit kick's torque
@@ -127,12 +127,18 @@ def splitting_step(t, state, h, moments, torque, coefficients):
 
 
 @register_jitable
+def kick(w1, w2, w3, hk, n1, n2, n3, i1, i2, i3):
+    """The explicit kick ``omega + hk N / I``."""
+    return w1 + hk * n1 / i1, w2 + hk * n2 / i2, w3 + hk * n3 / i3
+
+
+@register_jitable
 def adjoint_kick(torque, t, q, w1, w2, w3, hk, i1, i2, i3):
     """Solve ``x = w + hk N(t, q, x) / I`` by fixed-point iteration; return x, N(t, q, x), converged."""
     x1, x2, x3 = w1, w2, w3
     n1, n2, n3 = torque_at(torque, t, q, (x1, x2, x3))
     for _ in range(_KICK_ITERATIONS):
-        y1, y2, y3 = w1 + hk * n1 / i1, w2 + hk * n2 / i2, w3 + hk * n3 / i3
+        y1, y2, y3 = kick(w1, w2, w3, hk, n1, n2, n3, i1, i2, i3)
         change = max(abs(y1 - x1), abs(y2 - x2), abs(y3 - x3))
         x1, x2, x3 = y1, y2, y3
         n1, n2, n3 = torque_at(torque, t, q, (x1, x2, x3))
