@@ -1,7 +1,8 @@
 # rigid_rot_sim: one-command set-up of ROS 2 Jazzy from PyPI, the interface package and the
 # Python package, all inside this checkout (.venv/, build/). No sudo, no sourcing.
 #
-#   make setup   create or update .venv, build + install rigid_rot_msgs, install rigid_rot_sim
+#   make setup   create or update .venv, build + install rigid_rot_msgs, install rigid_rot_sim,
+#                compile (and cache) the numba kernels
 #   make demo    setup, then the main job
 #   make test    setup, then the whole test suite
 #   make clean   remove build/ and the set-up stamps (keeps the downloaded .venv packages)
@@ -32,8 +33,11 @@ ROS_PINS := \
 # setuptools 65 (what ensurepip gives Python 3.11) needs `wheel` for pip's editable install.
 PY_PINS := \
 	setuptools==65.5.0 wheel==0.45.1 numpy==2.4.6 scipy==1.17.1 mcap==1.6.0 mcap-ros2-support==0.6.0 \
-	PyYAML==6.0.3 matplotlib==3.11.2 tqdm==4.70.1
+	PyYAML==6.0.3 matplotlib==3.11.2 tqdm==4.70.1 numba==0.68.1 llvmlite==0.50.0
 TEST_PINS := pytest==9.2.0 hypothesis==6.170.15 rosbags==0.11.9
+
+# The compiled kernels are built from these (rigid_rot_sim/core/jit.py keys their cache on them).
+CORE_SOURCES := $(shell find rigid_rot_sim/core -name '*.py' 2>/dev/null)
 
 MSGS_SOURCES := $(wildcard rigid_rot_msgs/CMakeLists.txt rigid_rot_msgs/package.xml \
 	rigid_rot_msgs/msg/*.msg rigid_rot_msgs/srv/*.srv)
@@ -67,7 +71,7 @@ export FIX_CMAKE_INCLUDES
 
 .PHONY: setup demo test clean check-tools FORCE
 
-setup: check-tools $(STAMPS)/package
+setup: check-tools $(STAMPS)/kernels
 
 # Cheap, runs every time: a missing tool must fail before anything is downloaded or built.
 check-tools:
@@ -134,6 +138,13 @@ $(STAMPS)/package: $(STAMPS)/msgs $(VENDOR_STAMPS) setup.py setup.cfg package.xm
 		test -x "$(VENV)/bin/$$exe" || { echo "setup: $(VENV)/bin/$$exe was not installed" >&2; exit 1; }; \
 	done
 	"$(VPY)" -c "import rclpy, rigid_rot_msgs.srv, rigid_rot_sim"
+	touch $@
+
+# numba compiles every integrator and batch kernel once, into the on-disk cache (__pycache__
+# next to the sources, or NUMBA_CACHE_DIR), so that neither the node nor the CLI nor the tests
+# pay JIT time. Rerun when a core source changes (the cache is keyed on all of them).
+$(STAMPS)/kernels: $(STAMPS)/package $(CORE_SOURCES)
+	"$(VPY)" -m rigid_rot_sim.core.precompile
 	touch $@
 
 # The main job: the free_tumble scene (embedded defaults), 12 s of sim time at 4x wall pace on a private

@@ -3,8 +3,12 @@
     .venv/bin/python benchmarks/batch_bodies.py [--max-n 1000000] [--seconds 1.0]
 
 Each figure is the best of three timed runs, each run advancing N random bodies
-(I in [1, 3] kg*m^2, |omega| ~ 1 rad/s, a constant body torque) by as many steps of
-1 ms as fill about ``--seconds / 3`` of wall-clock time. Printed, never asserted.
+(I in [1, 3] kg*m^2, |omega| ~ 1 rad/s, a constant body torque per body) by as many steps
+of 1 ms as fill about ``--seconds / 3`` of wall-clock time. Then, for rk4 at the largest N,
+the same compiled loop on one thread (``numba.set_num_threads(1)``) in the same run: the
+parallel speed-up over the cores. For reference, the numpy-vectorised batch core this
+replaced did about 2e6 body-steps/s for rk4 on this machine (issue 11). Printed, never
+asserted: on a shared machine compare ratios of one run.
 """
 
 from __future__ import annotations
@@ -14,9 +18,13 @@ import os
 import platform
 import time
 
+import numba
 import numpy as np
 
 from rigid_rot_sim.core.batch import BATCH_METHODS, advance_batch
+
+#: rk4 body-steps/s of the numpy batch core before the compiled kernels (issue 11).
+OLD_NUMPY_RK4 = 2e6
 
 
 def body_steps_per_second(method: str, n: int, seconds: float, rng: np.random.Generator) -> float:
@@ -44,11 +52,20 @@ def main() -> None:
     args = parser.parse_args()
     rng = np.random.default_rng(0)
     sizes = [n for n in (1, 10, 100, 1_000, 10_000, 100_000, 1_000_000) if n <= args.max_n]
-    print(f"# {platform.processor() or platform.machine()}, {os.cpu_count()} CPUs, numpy {np.__version__}")
+    print(f"# {platform.processor() or platform.machine()}, {os.cpu_count()} CPUs, numpy {np.__version__}, "
+          f"numba {numba.__version__} ({numba.get_num_threads()} threads), load average {os.getloadavg()[0]:.2f}")
     print(f"{'N':>9} " + " ".join(f"{m + ' [body-steps/s]':>32}" for m in BATCH_METHODS))
+    rk4 = 0.0
     for n in sizes:
         rates = [body_steps_per_second(m, n, args.seconds, rng) for m in BATCH_METHODS]
+        rk4 = rates[BATCH_METHODS.index("rk4")]
         print(f"{n:>9} " + " ".join(f"{r:>32.3e}" for r in rates), flush=True)
+    threads = numba.get_num_threads()
+    numba.set_num_threads(1)
+    one = body_steps_per_second("rk4", sizes[-1], args.seconds, rng)
+    numba.set_num_threads(threads)
+    print(f"rk4, N = {sizes[-1]}: {rk4:.3e} body-steps/s on {threads} threads, {one:.3e} on 1 thread "
+          f"({rk4 / one:.2f}x); {rk4 / OLD_NUMPY_RK4:.1f}x the numpy batch core's {OLD_NUMPY_RK4:.0e}")
 
 
 if __name__ == "__main__":

@@ -6,7 +6,10 @@
 Part 1, real-time factor 0: the node (in this process, real rclpy publishers) runs the
 free_tumble body at dt = 1 ms, publishing ~/state, ~/orientation, ~/angular_velocity,
 ~/angular_momentum and /clock at 100 Hz of sim time each; physics steps per wall second,
-per integrator. Nobody subscribes (publishing cost without network delivery).
+per integrator. Nobody subscribes (publishing cost without network delivery). Next to it,
+the same scene's physics alone (``Simulator.advance`` in chunks of 10 steps, as the node
+takes them between 100 Hz outputs) in the same run, and the split of the node's time per
+step into physics and everything else (publishing, executor, timers).
 
 Part 2, real-time factor 1, dt = 1 ms (1 kHz physics), ~/state at 1 kHz, torque_driven
 scene: the node runs in this process, instrumented; a separate process publishes
@@ -36,6 +39,9 @@ from rclpy.parameter import Parameter  # noqa: E402
 
 ROOT = Path(__file__).resolve().parents[1]
 SCENES = ROOT / "config" / "scenes"
+# Part 1 figures before the compiled kernels (README, load average ~4): steps/s per method.
+OLD_STEPS_PER_SECOND = {"exact": 41e3, "exact_split": 11e3, "taylor": 25e3, "rk4": 34e3, "lie_rk4": 41e3,
+                        "splitting": 38e3, "implicit_midpoint": 35e3, "dop853": 23e3, "euler": 40e3}
 METHODS_FREE = ["exact", "exact_split", "taylor", "rk4", "lie_rk4", "splitting", "implicit_midpoint", "dop853", "euler"]
 
 
@@ -68,6 +74,20 @@ def steps_per_second(method: str, seconds: float) -> tuple[float, int]:
         executor.shutdown()
         node.destroy_node()
         rclpy.shutdown(context=context)
+
+
+def physics_steps_per_second(method: str, seconds: float) -> float:
+    """Steps per wall second of the free_tumble scene's Simulator alone, 10 steps a call."""
+    from rigid_rot_sim.core.scene import load_scene
+    from rigid_rot_sim.core.simulator import Simulator
+
+    sim = Simulator(load_scene(SCENES / "free_tumble.yaml"), method=method, dt=0.001)
+    sim.advance(10)
+    k0, t0 = sim.step_index, time.perf_counter()
+    while time.perf_counter() - t0 < seconds:
+        for _ in range(100):
+            sim.advance(10)
+    return (sim.step_index - k0) / (time.perf_counter() - t0)
 
 
 # The command source: a separate process publishing WrenchStamped at 20 Hz, the torque
@@ -151,9 +171,15 @@ def main() -> None:
     print(f"python {sys.version.split()[0]}, numpy {np.__version__}, cpus {os.cpu_count()}, "
           f"load average {os.getloadavg()[0]:.2f} (other processes share the cores)")
     print("part 1: real-time factor 0, dt 1 ms, 5 outputs at 100 Hz (sim time), free_tumble")
+    print(f"  {'method':18s} {'node':>16s} {'physics alone':>22s}   split of the node's time per step")
     for method in METHODS_FREE:
         rate, steps = steps_per_second(method, seconds)
-        print(f"  {method:18s} {rate:10.0f} steps/s  ({steps} steps, {rate * 0.001:.1f}x real time)")
+        physics = physics_steps_per_second(method, seconds / 2)
+        per_step, physics_per_step = 1e6 / rate, 1e6 / physics
+        print(f"  {method:18s} {rate:10.0f} steps/s {physics:12.0f} steps/s   "
+              f"{per_step:6.2f} us = physics {physics_per_step:5.2f} us + rest {per_step - physics_per_step:5.2f} us "
+              f"({steps} steps; {rate / OLD_STEPS_PER_SECOND[method]:.1f}x the old "
+              f"{OLD_STEPS_PER_SECOND[method] / 1e3:.0f}k)")
     print("part 2: real-time factor 1, 1 kHz physics, torque_driven, commands at 20 Hz")
     command_latency(40 if args.quick else 200, args.latency_integrator)
 

@@ -1,4 +1,4 @@
-"""Pure numerical core of rigid_rot_sim (numpy and scipy only; never imports rclpy).
+"""Pure numerical core of rigid_rot_sim (numpy, scipy and numba; never imports rclpy).
 
 Conventions everywhere: SI units; quaternions scalar-last ``(x, y, z, w)`` rotating
 body -> world (as ``scipy.spatial.transform.Rotation`` and geometry_msgs do);

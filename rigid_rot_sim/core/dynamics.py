@@ -22,6 +22,7 @@ from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
+from numba.extending import register_jitable
 from scipy.spatial.transform import Rotation
 
 from rigid_rot_sim.core import quaternion as quat
@@ -29,6 +30,7 @@ from rigid_rot_sim.core import validation
 from rigid_rot_sim.core.inertia import principal_frame, principal_orientation
 
 
+@register_jitable
 def euler_rhs_components(
     i1: float, i2: float, i3: float, w1: float, w2: float, w3: float, n1: float, n2: float, n3: float
 ) -> tuple[float, float, float]:
@@ -36,13 +38,30 @@ def euler_rhs_components(
 
     Principal moments ``i1..i3`` (kg*m^2), body rates ``w1..w3`` (rad/s) and torque
     ``n1..n3`` (N*m) in the principal frame. Works on floats (the integrators' hot
-    loops) and elementwise on arrays alike; this is the one place the formula lives.
+    loops, compiled into the numba kernels) and elementwise on arrays alike; this is the
+    one place the formula lives.
     """
     return (
         ((i2 - i3) * w2 * w3 + n1) / i1,
         ((i3 - i1) * w3 * w1 + n2) / i2,
         ((i1 - i2) * w1 * w2 + n3) / i3,
     )
+
+
+@register_jitable
+def axes_by_moment(i1: float, i2: float, i3: float) -> tuple[int, int, int]:
+    """The principal axes (0, 1, 2) sorted by moment, smallest first (ties: axis order)."""
+    if i2 < i1:
+        lo, hi = 1, 0
+    else:
+        lo, hi = 0, 1
+    i_lo = i2 if lo == 1 else i1
+    i_hi = i1 if lo == 1 else i2
+    if i3 < i_lo:
+        return 2, lo, hi
+    if i3 < i_hi:
+        return lo, 2, hi
+    return lo, hi, 2
 
 
 def euler_rhs(moments: Any, omega: Any, torque: Any = None) -> np.ndarray:

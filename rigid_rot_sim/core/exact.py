@@ -51,8 +51,8 @@ parameter 1 - m passed exactly (scipy's ``ellipj`` takes m only, and rounding m 
 would cost digits next to the separatrix); the quarter period is ``K = pi / (2 a_N)``
 from the same AGM, so period reduction and evaluation agree.
 
-D decides the case and sets 1 - m; where its two terms cancel it is evaluated in exact
-rational arithmetic from the floats given, so the case and the phase next to the
+D decides the case and sets 1 - m; where its two terms cancel it is evaluated exactly
+from the floats given (error-free products and sums, Dekker and Shewchuk), so the case and the phase next to the
 separatrix are those of the omega0 given (the label 'separatrix' allows 8 ulps, the flow
 does not snap to it). Accuracy (against a long-double Taylor reference, t = 1000 s):
 ~3e-14 relative in omega and ~1e-13 in the attitude away from the separatrix; next to it
@@ -63,27 +63,33 @@ Special cases in closed form: a spherical body (omega constant); a symmetric bod
 (I_a = I_b = I_p, distinct axis d): ``q(t) = exp(tau L_world / I_p) q0 exp(tau beta e_d)``
 with ``beta = (1/I_d - 1/I_p) L_d`` (the two flows commute); a stationary spin about
 the middle axis (or a body at rest), labelled 'separatrix' because L^2 = 2 E I2 holds.
+
+Implementation: the construction of a solution from a state and its evaluation at a time
+are numba kernels on a parameter vector (``register_jitable``; Carlson's integrals and the
+AGM in ``core/elliptic.py``), compiled into the cached entry points below and into the
+``exact_split`` kernel; the same source runs interpreted only where Python calls it.
 """
 
 from __future__ import annotations
 
-import functools
 import math
 from dataclasses import dataclass, field
-from fractions import Fraction
-from types import SimpleNamespace
 from typing import Any
 
 import numpy as np
+from numba.extending import register_jitable
 from scipy.spatial.transform import Rotation
-from scipy.special import elliprf, elliprj
 
 from rigid_rot_sim.core import quaternion as quat
 from rigid_rot_sim.core import validation
+from rigid_rot_sim.core.dynamics import axes_by_moment
+from rigid_rot_sim.core.elliptic import AGM_LEVELS, agm_tables, carlson_rf, carlson_rj, jacobi
+from rigid_rot_sim.core.jit import compiled
 
 CASES = ("spherical", "symmetric", "below_separatrix", "above_separatrix", "separatrix")
+_SPHERICAL, _SYMMETRIC, _BELOW, _ABOVE, _SEPARATRIX = range(5)
 
-_EPS = np.finfo(float).eps
+_EPS = float(np.finfo(float).eps)
 # Moments equal to within this many ulps of the largest are treated as equal.
 _EQUAL_MOMENTS_ULPS = 4.0
 # |L^2 - 2 E I2| within this many ulps of its two (opposite-sign) terms is the separatrix.
@@ -92,148 +98,395 @@ _SEPARATRIX_ULPS = 8.0
 # would lose more than 7 bits of it).
 _EXACT_SEPARATRIX_DISTANCE = 1e-2
 
+# The flow's parameter vector: the kind, then the fields of each kind.
+_KIND = 0
+_RIGID, _SYMMETRIC_FLOW, _ELLIPTIC = 0.0, 1.0, 2.0
+# rigid rotation: omega (body), q0, omega_world
+_R_OMEGA, _R_Q0, _R_OMEGA_WORLD = 1, 4, 8
+# symmetric: moments, axis, rate_world, beta, l_body, q0
+_S_MOMENTS, _S_AXIS, _S_RATE, _S_BETA, _S_L, _S_Q0 = 1, 4, 5, 8, 9, 12
+# elliptic (relabelled frame): order, axis signs, moments, amplitudes, signs, psi scale,
+# lam, u0, m1 (1 - m), n, |L|, K, 2 (Pi(n|m) - K), j0, g0, q_wl, q_perm, AGM levels
+(_E_ORDER, _E_AXIS_SIGNS, _E_MOMENTS, _E_AMPLITUDE, _E_SIGNS, _E_PSI_SCALE, _E_LAM, _E_U0, _E_M1, _E_N,
+ _E_LNORM, _E_K, _E_EXCESS, _E_J0, _E_G0, _E_QWL, _E_QPERM, _E_LEVELS) = (
+    1, 4, 7, 10, 13, 16, 18, 19, 20, 21, 22, 23, 24, 25, 26, 27, 31, 35)
+PARAMS_SIZE = 36
 
-# Elementary functions for the two evaluation paths: plain floats (one time, the
-# integrators' per-step path, where math is ~10x cheaper than numpy on scalars) and arrays.
-_SCALAR_FUNCTIONS = SimpleNamespace(
-    sin=math.sin, cos=math.cos, asin=math.asin, atan=math.atan, atan2=math.atan2, sqrt=math.sqrt,
-    hypot=math.hypot, tanh=math.tanh, exp=math.exp, abs=abs, floor=math.floor, fmod2=lambda j: j % 2.0,
-)
-_ARRAY_FUNCTIONS = SimpleNamespace(
-    sin=np.sin, cos=np.cos, asin=np.arcsin, atan=np.arctan, atan2=np.arctan2, sqrt=np.sqrt,
-    hypot=np.hypot, tanh=np.tanh, exp=np.exp, abs=np.abs, floor=np.floor, fmod2=lambda j: np.mod(j, 2.0),
-)
+
+def _relabelling_table() -> np.ndarray:
+    """Row ``3 order[0] + order[1]``: axis signs (3) and the quaternion (4) of the proper signed
+    permutation x'_k = sign_k x[order[k]] (body -> relabelled body; det = +1 by flipping axis 2)."""
+    table = np.zeros((9, 7))
+    for order in ((0, 1, 2), (0, 2, 1), (1, 0, 2), (1, 2, 0), (2, 0, 1), (2, 1, 0)):
+        perm = np.zeros((3, 3))
+        for k, i in enumerate(order):
+            perm[k, i] = 1.0
+        signs = (1.0, -1.0 if np.linalg.det(perm) < 0.0 else 1.0, 1.0)
+        perm[1] *= signs[1]  # keep the relabelled frame right-handed
+        table[3 * order[0] + order[1]] = (*signs, *Rotation.from_matrix(perm).as_quat())
+    return table
 
 
-class _RigidRotation:
+_RELABELLING = _relabelling_table()
+
+
+@register_jitable
+def _sign(x):
+    return 1.0 if x >= 0.0 else -1.0
+
+
+# -- L^2 - 2 E I2, exactly where its terms cancel -----------------------------------------
+
+
+@register_jitable
+def _two_product(a, b):
+    """a b = p + e exactly (Dekker's splitting; no FMA needed)."""
+    p = a * b
+    split = 134217729.0  # 2^27 + 1
+    t = split * a
+    ah = t - (t - a)
+    al = a - ah
+    t = split * b
+    bh = t - (t - b)
+    bl = b - bh
+    return p, ((ah * bh - p) + ah * bl + al * bh) + al * bl
+
+
+@register_jitable
+def _exact_term(i, d1, d2, w, terms, start):
+    """Write 16 floats summing exactly to ``i (d1 - d2) w^2`` into terms[start:start + 16]."""
+    s = d1 - d2
+    bv = s - d1
+    e = (d1 - (s - bv)) + (-d2 - bv)  # two_sum(d1, -d2)
+    parts = np.empty(16)
+    parts[0], parts[1] = s, e
+    n = 2
+    for factor in (i, w, w):
+        for k in range(n - 1, -1, -1):
+            p, err = _two_product(parts[k], factor)
+            parts[2 * k], parts[2 * k + 1] = p, err
+        n *= 2
+    for k in range(16):
+        terms[start + k] = parts[k]
+
+
+@register_jitable
+def _exact_sum(values):
+    """The sum of the floats, rounded from the exact value (Shewchuk's partials, as fsum);
+    exactly 0.0 when the exact sum is 0."""
+    partials = np.zeros(values.size + 1)
+    n = 0
+    for x in values:
+        i = 0
+        for k in range(n):
+            y = partials[k]
+            if abs(x) < abs(y):
+                x, y = y, x
+            hi = x + y
+            lo = y - (hi - x)
+            if lo != 0.0:
+                partials[i] = lo
+                i += 1
+            x = hi
+        partials[i] = x
+        n = i + 1
+    total = 0.0
+    for k in range(n - 1, -1, -1):
+        total += partials[k]
+    return total
+
+
+@register_jitable
+def _separatrix_distance(moments, omega, i_min, i_mid, i_max):
+    """``L^2 - 2 E I2`` from its two terms of opposite sign (exact where they cancel)."""
+    d_above = moments[i_max] * (moments[i_max] - moments[i_mid]) * omega[i_max] ** 2
+    d_below = moments[i_min] * (moments[i_mid] - moments[i_min]) * omega[i_min] ** 2
+    scale = d_above + d_below
+    if abs(d_above - d_below) > _EXACT_SEPARATRIX_DISTANCE * scale:
+        return d_above - d_below
+    # The terms cancel: evaluate exactly (a rounded D would decide the case wrongly at the
+    # separatrix and cost digits in the phase and precession next to it).
+    terms = np.empty(32)
+    _exact_term(moments[i_max], moments[i_max], moments[i_mid], omega[i_max], terms, 0)
+    _exact_term(moments[i_min], moments[i_mid], moments[i_min], omega[i_min], terms, 16)
+    for k in range(16, 32):
+        terms[k] = -terms[k]
+    return _exact_sum(terms)
+
+
+# -- construction -------------------------------------------------------------------------
+
+
+@register_jitable
+def _zxz(phi, theta, psi):
+    """Quaternion of ``Rz(phi) Rx(theta) Rz(psi)`` (floats, or arrays from Python)."""
+    half_sum = 0.5 * (phi + psi)
+    half_diff = 0.5 * (phi - psi)
+    ch = np.cos(0.5 * theta)
+    sh = np.sin(0.5 * theta)
+    return (sh * np.cos(half_diff), sh * np.sin(half_diff), ch * np.sin(half_sum), ch * np.cos(half_sum))
+
+
+@register_jitable
+def _phase(params, agm_a, agm_c, u):
+    """sn, cn, dn at u and the two parts of Pi(n; am u | m) beyond u: (j, g)."""
+    n = params[_E_N]
+    if params[_E_M1] == 0.0:  # separatrix
+        sn = math.tanh(u)
+        e = math.exp(-abs(u))
+        cn = 2.0 * e / (1.0 + e * e)
+        a = math.sqrt(-n)
+        return sn, cn, cn, 0.0, a * math.atan(a * sn)
+    k = params[_E_K]
+    j = math.floor((u + k) / (2.0 * k))
+    r = u - 2.0 * k * j
+    sn, cn, dn = jacobi(r, agm_a, agm_c, int(params[_E_LEVELS]), params[_E_M1])
+    s2 = sn * sn
+    g = (n / 3.0) * sn * s2 * carlson_rj(cn * cn, dn * dn, 1.0, 1.0 - n * s2)
+    # sn and cn change sign over each half period 2K (dn does not)
+    parity = 1.0 - 2.0 * (j % 2.0)
+    return parity * sn, parity * cn, dn, j, g
+
+
+@register_jitable
+def _elliptic_state(params, agm_a, agm_c, tau):
+    """(q, omega) of the elliptic flow at tau (s) after its anchor."""
+    i1, i2, i3 = params[_E_MOMENTS], params[_E_MOMENTS + 1], params[_E_MOMENTS + 2]
+    lam = params[_E_LAM]
+    n = params[_E_N]
+    l_norm = params[_E_LNORM]
+    u = lam * tau + params[_E_U0]
+    sn, cn, dn, j, g = _phase(params, agm_a, agm_c, u)
+    j0, g0 = params[_E_J0], params[_E_G0]
+    coeff = l_norm * (i3 - i1) / (i1 * i3 * lam)
+    if params[_E_M1] == 0.0:
+        phi = l_norm * tau / i3 + coeff * (lam * tau + (g - g0)) / (1.0 - n)
+    else:
+        phi = l_norm * tau / i1 + coeff * ((j - j0) * params[_E_EXCESS] + (g - g0))
+    w0 = params[_E_SIGNS] * params[_E_AMPLITUDE] * cn
+    w1 = params[_E_SIGNS + 1] * params[_E_AMPLITUDE + 1] * sn
+    w2 = params[_E_SIGNS + 2] * params[_E_AMPLITUDE + 2] * dn
+    theta = math.atan2(math.hypot(i1 * w0, i2 * w1), i3 * w2)
+    psi = math.atan2(params[_E_PSI_SCALE] * cn, params[_E_PSI_SCALE + 1] * sn)
+    q_wl = (params[_E_QWL], params[_E_QWL + 1], params[_E_QWL + 2], params[_E_QWL + 3])
+    q_perm = (params[_E_QPERM], params[_E_QPERM + 1], params[_E_QPERM + 2], params[_E_QPERM + 3])
+    # a product of unit quaternions: normalised against the rounding of the products
+    q = quat.normalize(quat.multiply(quat.multiply(q_wl, _zxz(phi, theta, psi)), q_perm))
+    omega = np.zeros(3)
+    omega[int(params[_E_ORDER])] = params[_E_AXIS_SIGNS] * w0
+    omega[int(params[_E_ORDER + 1])] = params[_E_AXIS_SIGNS + 1] * w1
+    omega[int(params[_E_ORDER + 2])] = params[_E_AXIS_SIGNS + 2] * w2
+    return q, (omega[0], omega[1], omega[2])
+
+
+@register_jitable
+def flow_state(params, agm_a, agm_c, tau):
+    """``(q, omega)`` as tuples, tau (s) after the anchor of the flow ``params``."""
+    kind = params[_KIND]
+    if kind == _RIGID:
+        wx, wy, wz = params[_R_OMEGA_WORLD], params[_R_OMEGA_WORLD + 1], params[_R_OMEGA_WORLD + 2]
+        q0 = (params[_R_Q0], params[_R_Q0 + 1], params[_R_Q0 + 2], params[_R_Q0 + 3])
+        q = quat.normalize(quat.multiply(quat.exp_rotation_vector((tau * wx, tau * wy, tau * wz)), q0))
+        return q, (params[_R_OMEGA], params[_R_OMEGA + 1], params[_R_OMEGA + 2])
+    if kind == _SYMMETRIC_FLOW:
+        axis = int(params[_S_AXIS])
+        angle = tau * params[_S_BETA]
+        spin = quat.exp_rotation_vector((angle if axis == 0 else 0.0, angle if axis == 1 else 0.0,
+                                         angle if axis == 2 else 0.0))
+        rate = (tau * params[_S_RATE], tau * params[_S_RATE + 1], tau * params[_S_RATE + 2])
+        q0 = (params[_S_Q0], params[_S_Q0 + 1], params[_S_Q0 + 2], params[_S_Q0 + 3])
+        q = quat.normalize(quat.multiply(quat.multiply(quat.exp_rotation_vector(rate), q0), spin))
+        l_now = quat.rotate_inverse(spin, (params[_S_L], params[_S_L + 1], params[_S_L + 2]))
+        return q, (l_now[0] / params[_S_MOMENTS], l_now[1] / params[_S_MOMENTS + 1], l_now[2] / params[_S_MOMENTS + 2])
+    return _elliptic_state(params, agm_a, agm_c, tau)
+
+
+@register_jitable
+def _elliptic_params(moments, omega, q0, order, d, params, agm_a, agm_c):
+    """Fill params / the AGM tables for the triaxial body; ``d`` = L^2 - 2 E I2 (0: separatrix)."""
+    row = 3 * order[0] + order[1]
+    axis_signs = (_RELABELLING[row, 0], _RELABELLING[row, 1], _RELABELLING[row, 2])
+    q_perm = (_RELABELLING[row, 3], _RELABELLING[row, 4], _RELABELLING[row, 5], _RELABELLING[row, 6])
+    i1, i2, i3 = moments[order[0]], moments[order[1]], moments[order[2]]
+    w1 = axis_signs[0] * omega[order[0]]
+    w2 = axis_signs[1] * omega[order[1]]
+    w3 = axis_signs[2] * omega[order[2]]
+    eps = _sign(i3 - i2)
+    d31, d32, d21 = i3 - i1, i3 - i2, i2 - i1
+    a1 = math.sqrt(w1 * w1 + i2 * d32 / (i1 * d31) * w2 * w2)
+    a2 = math.sqrt(i1 * d31 / (i2 * d32) * w1 * w1 + w2 * w2)
+    a3 = math.sqrt(i2 * d21 / (i3 * d31) * w2 * w2 + w3 * w3)
+    big = i3 * d32 * a3 * a3
+    separatrix = d == 0.0
+    m1 = d / big
+    m = i1 * d21 * a1 * a1 / big
+    lam = math.sqrt(d32 * d31 * a3 * a3 / (i1 * i2))
+    n = -i3 * d21 / (i1 * d32)
+    s3 = _sign(w3)
+    s1 = _sign(w1) if separatrix else 1.0
+    sigma = eps * s1 * s3
+    alpha1 = 1.0 / math.sqrt(i1 * abs(d31))
+    alpha2 = 1.0 / math.sqrt(i2 * abs(d32))
+    # phase u0 from sn u0 = sigma w2 / A2, cn u0 = s1 w1 / A1 (normalised against rounding)
+    if a1 > 0.0:
+        sn0, cn0 = sigma * w2 / a2, s1 * w1 / a1
+    else:
+        sn0, cn0 = 0.0, 1.0
+    norm = math.hypot(sn0, cn0)
+    sn0, cn0 = sn0 / norm, cn0 / norm
+    params[_KIND] = _ELLIPTIC
+    if separatrix:
+        agm_a[0], agm_c[0] = 1.0, 1.0
+        levels = 0
+        k = math.inf
+        excess = 0.0
+        u0 = math.asinh(sn0 / cn0)
+        m1 = 0.0
+    else:
+        levels = agm_tables(m, m1, agm_a, agm_c)
+        k = math.pi / (2.0 * agm_a[levels])
+        excess = (2.0 * n / 3.0) * carlson_rj(0.0, m1, 1.0, 1.0 - n)
+        f = sn0 * carlson_rf(cn0 * cn0, cn0 * cn0 + m1 * sn0 * sn0, 1.0)
+        u0 = f if cn0 >= 0.0 else math.copysign(2.0 * k, sn0) - f
+    for idx in range(3):
+        params[_E_ORDER + idx] = order[idx]
+        params[_E_AXIS_SIGNS + idx] = axis_signs[idx]
+    params[_E_MOMENTS], params[_E_MOMENTS + 1], params[_E_MOMENTS + 2] = i1, i2, i3
+    params[_E_AMPLITUDE], params[_E_AMPLITUDE + 1], params[_E_AMPLITUDE + 2] = a1, a2, a3
+    params[_E_SIGNS], params[_E_SIGNS + 1], params[_E_SIGNS + 2] = s1, sigma, s3
+    params[_E_PSI_SCALE], params[_E_PSI_SCALE + 1] = s1 * i1 * alpha1, sigma * i2 * alpha2
+    params[_E_LAM], params[_E_U0], params[_E_M1], params[_E_N] = lam, u0, m1, n
+    params[_E_LNORM] = math.sqrt((i1 * w1) ** 2 + (i2 * w2) ** 2 + (i3 * w3) ** 2)
+    params[_E_K], params[_E_EXCESS], params[_E_LEVELS] = k, excess, levels
+    _, _, _, j0, g0 = _phase(params, agm_a, agm_c, u0)
+    params[_E_J0], params[_E_G0] = j0, g0
+    # q_world<-body = q_WL (x) q_zxz(t) (x) q_perm; q_WL from q(t0) = q0, with q_zxz(t0)
+    # evaluated by the flow itself so that the two agree to rounding
+    for idx in range(4):
+        params[_E_QWL + idx] = 1.0 if idx == 3 else 0.0
+        params[_E_QPERM + idx] = 1.0 if idx == 3 else 0.0
+    q_zxz0 = _elliptic_state(params, agm_a, agm_c, 0.0)[0]
+    q_wl = quat.multiply(quat.multiply(q0, quat.conjugate(q_perm)), quat.conjugate(q_zxz0))
+    for idx in range(4):
+        params[_E_QWL + idx] = q_wl[idx]
+        params[_E_QPERM + idx] = q_perm[idx]
+
+
+@register_jitable
+def flow_params(moments, omega, q0, params, agm_a, agm_c):
+    """Build the flow from (moments, omega, q0) (tuples) into params / the AGM tables;
+    returns the case (an index of CASES)."""
+    i_min, i_mid, i_max = axes_by_moment(moments[0], moments[1], moments[2])
+    tol = _EQUAL_MOMENTS_ULPS * _EPS * moments[i_max]
+    low_equal = moments[i_mid] - moments[i_min] <= tol
+    high_equal = moments[i_max] - moments[i_mid] <= tol
+    if low_equal and high_equal:
+        _rigid_params(omega, q0, params)
+        return _SPHERICAL
+    if low_equal or high_equal:
+        axis = i_max if low_equal else i_min
+        i_perp = moments[(axis + 1) % 3]
+        l_body = (moments[0] * omega[0], moments[1] * omega[1], moments[2] * omega[2])
+        rate = quat.rotate(q0, l_body)
+        params[_KIND] = _SYMMETRIC_FLOW
+        for idx in range(3):
+            params[_S_MOMENTS + idx] = moments[idx]
+            params[_S_RATE + idx] = rate[idx] / i_perp  # rad/s
+            params[_S_L + idx] = l_body[idx]
+        params[_S_AXIS] = axis
+        params[_S_BETA] = (1.0 / moments[axis] - 1.0 / i_perp) * l_body[axis]  # rad/s
+        for idx in range(4):
+            params[_S_Q0 + idx] = q0[idx]
+        return _SYMMETRIC
+    d = _separatrix_distance(moments, omega, i_min, i_mid, i_max)
+    # The label allows for rounding in the caller's omega0; the flow itself is the exact
+    # solution for the omega0 given (the separatrix closed form only when d is exactly 0).
+    scale = (moments[i_max] * (moments[i_max] - moments[i_mid]) * omega[i_max] ** 2
+             + moments[i_min] * (moments[i_mid] - moments[i_min]) * omega[i_min] ** 2)
+    if abs(d) <= _SEPARATRIX_ULPS * _EPS * scale:
+        case = _SEPARATRIX
+    else:
+        case = _ABOVE if d > 0.0 else _BELOW
+    if omega[i_min] == 0.0 and omega[i_max] == 0.0:
+        # at rest, or a stationary spin about the middle axis
+        _rigid_params(omega, q0, params)
+    elif d < 0.0:
+        _elliptic_params(moments, omega, q0, (i_max, i_mid, i_min), d, params, agm_a, agm_c)
+    else:
+        _elliptic_params(moments, omega, q0, (i_min, i_mid, i_max), d, params, agm_a, agm_c)
+    return case
+
+
+@register_jitable
+def _rigid_params(omega, q0, params):
     """omega constant in the body; q(t) = exp(tau omega_world) q0."""
-
-    def __init__(self, omega: np.ndarray, q0: np.ndarray) -> None:
-        self.omega = omega
-        self.q0 = q0
-        self._omega_tuple = tuple(omega.tolist())
-        self._q0_tuple = tuple(q0.tolist())
-        self._omega_world_tuple = quat.rotate(self._q0_tuple, self._omega_tuple)
-        self.omega_world = np.array(self._omega_world_tuple)
-
-    def evaluate(self, tau: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        rot = Rotation.from_rotvec(tau[:, None] * self.omega_world[None, :]) * Rotation.from_quat(self.q0)
-        return rot.as_quat(), np.broadcast_to(self.omega, (tau.size, 3)).copy()
-
-    def evaluate_scalar(self, tau: float) -> tuple[tuple, tuple]:
-        wx, wy, wz = self._omega_world_tuple
-        return quat.multiply(quat.exp_rotation_vector((tau * wx, tau * wy, tau * wz)), self._q0_tuple), self._omega_tuple
+    params[_KIND] = _RIGID
+    omega_world = quat.rotate(q0, omega)
+    for idx in range(3):
+        params[_R_OMEGA + idx] = omega[idx]
+        params[_R_OMEGA_WORLD + idx] = omega_world[idx]
+    for idx in range(4):
+        params[_R_Q0 + idx] = q0[idx]
 
 
-class _SymmetricFlow:
-    """I_a = I_b = i_perp != I_d: commuting rotations about L_world and the body axis d."""
-
-    def __init__(self, moments: np.ndarray, axis: int, q0: np.ndarray, omega0: np.ndarray) -> None:
-        m = moments.tolist()
-        i_perp = m[(axis + 1) % 3]
-        l_body = tuple(i * w for i, w in zip(m, omega0.tolist()))
-        q0_tuple = tuple(q0.tolist())
-        rate_world = tuple(x / i_perp for x in quat.rotate(q0_tuple, l_body))  # rad/s
-        self.moments = moments
-        self.axis = axis
-        self.rate_world = np.array(rate_world)
-        self.beta = (1.0 / m[axis] - 1.0 / i_perp) * l_body[axis]  # rad/s
-        self.l_body0 = np.array(l_body)
-        self.q0 = q0
-        self._tuples = (tuple(m), rate_world, l_body, q0_tuple)
-
-    def evaluate(self, tau: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        body_rotvec = np.zeros((tau.size, 3))
-        body_rotvec[:, self.axis] = tau * self.beta
-        spin = Rotation.from_rotvec(body_rotvec)
-        rot = Rotation.from_rotvec(tau[:, None] * self.rate_world[None, :]) * Rotation.from_quat(self.q0) * spin
-        l_body = spin.apply(self.l_body0, inverse=True)
-        return rot.as_quat(), l_body / self.moments
-
-    def evaluate_scalar(self, tau: float) -> tuple[tuple, tuple]:
-        moments, rate, l_body, q0 = self._tuples
-        body_rotvec = [0.0, 0.0, 0.0]
-        body_rotvec[self.axis] = tau * self.beta
-        spin = quat.exp_rotation_vector(body_rotvec)
-        q = quat.multiply(quat.multiply(quat.exp_rotation_vector([tau * r for r in rate]), q0), spin)
-        l_now = quat.rotate_inverse(spin, l_body)
-        return q, tuple(l / i for l, i in zip(l_now, moments))
+@register_jitable
+def free_flow(moments, q, omega, tau):
+    """Exact free flow over tau (s) from (q, omega) (tuples): ``(q(tau), omega(tau))``."""
+    params = np.zeros(PARAMS_SIZE)
+    agm_a = np.zeros(AGM_LEVELS)
+    agm_c = np.zeros(AGM_LEVELS)
+    flow_params(moments, omega, q, params, agm_a, agm_c)
+    return flow_state(params, agm_a, agm_c, tau)
 
 
-class _EllipticFlow:
-    """The triaxial body (generic or separatrix) in the relabelled principal frame.
+@compiled
+def _build(moments, omega, q0, params, agm_a, agm_c):
+    return flow_params(moments, omega, q0, params, agm_a, agm_c)
 
-    Attributes (set by :func:`_elliptic_flow`): ``order`` and ``axis_signs`` (the proper
-    signed permutation: omega'_k = axis_signs[k] * omega[order[k]]), the relabelled
-    ``moments`` (I1', I2', I3'), ``amplitude`` (A1, A2, A3), ``signs`` (s1, sigma, s3),
-    ``psi_scale``, ``lam``, ``u0``, ``m1`` (1 - m; 0 on the separatrix), ``n``, ``l_norm``,
-    the AGM tables ``agm_a``/``agm_c``, ``quarter_period`` K, ``half_period_pi_excess``
-    = 2 (Pi(n|m) - K), ``phase0`` = (j0, g0) and the constant quaternions ``q_wl`` (L frame
-    -> world) and ``q_perm`` (body -> relabelled body).
-    """
 
-    @property
-    def separatrix(self) -> bool:
-        return self.m1 == 0.0
+@compiled
+def evaluate_flow(params, agm_a, agm_c, taus, out):
+    """out[k] = (q, omega) at taus[k] (s after the anchor), for every k."""
+    for k in range(taus.size):
+        q, w = flow_state(params, agm_a, agm_c, taus[k])
+        for i in range(4):
+            out[k, i] = q[i]
+        for i in range(3):
+            out[k, 4 + i] = w[i]
 
-    def jacobi(self, r: Any, f: SimpleNamespace = _ARRAY_FUNCTIONS) -> tuple[Any, Any, Any]:
-        """sn, cn, dn of r (|r| <= K) by the descending AGM (Abramowitz & Stegun 16.4)."""
-        a, c = self.agm_a, self.agm_c
-        levels = len(a) - 1
-        phi = (2.0**levels * a[levels]) * r
-        for i in range(levels, 0, -1):
-            phi = 0.5 * (phi + f.asin(c[i] * f.sin(phi) / a[i]))
-        sn = f.sin(phi)
-        cn = f.cos(phi)
-        return sn, cn, f.sqrt(cn * cn + self.m1 * sn * sn)
 
-    def phase(self, u: Any, f: SimpleNamespace = _ARRAY_FUNCTIONS) -> tuple[Any, Any, Any, Any, Any]:
-        """sn, cn, dn at u and the two parts of Pi(n; am u | m) beyond u: (j, g)."""
-        if self.separatrix:
-            sn = f.tanh(u)
-            e = f.exp(-f.abs(u))
-            cn = 2.0 * e / (1.0 + e * e)
-            a = math.sqrt(-self.n)
-            return sn, cn, cn, 0.0 * u, a * f.atan(a * sn)
-        k = self.quarter_period
-        j = f.floor((u + k) / (2.0 * k))
-        r = u - 2.0 * k * j
-        sn, cn, dn = self.jacobi(r, f)
-        s2 = sn * sn
-        g = (self.n / 3.0) * sn * s2 * elliprj(cn * cn, dn * dn, 1.0, 1.0 - self.n * s2)
-        # sn and cn change sign over each half period 2K (dn does not)
-        parity = 1.0 - 2.0 * f.fmod2(j)
-        return parity * sn, parity * cn, dn, j, g
+@compiled
+def _free_flow_compiled(moments, q, omega, tau):
+    return free_flow(moments, q, omega, tau)
 
-    def components(self, tau: Any, f: SimpleNamespace) -> tuple[tuple, list]:
-        """Quaternion and omega components at tau (s) (floats or arrays alike)."""
-        i1, i2, i3 = self.moments
-        a1, a2, a3 = self.amplitude
-        s1, sigma, s3 = self.signs
-        u = self.lam * tau + self.u0
-        sn, cn, dn, j, g = self.phase(u, f)
-        j0, g0 = self.phase0
-        coeff = self.l_norm * (i3 - i1) / (i1 * i3 * self.lam)
-        if self.separatrix:
-            phi = self.l_norm * tau / i3 + coeff * (self.lam * tau + (g - g0)) / (1.0 - self.n)
-        else:
-            phi = self.l_norm * tau / i1 + coeff * ((j - j0) * self.half_period_pi_excess + (g - g0))
-        w = (s1 * a1 * cn, sigma * a2 * sn, s3 * a3 * dn)
-        theta = f.atan2(f.hypot(i1 * w[0], i2 * w[1]), i3 * w[2])
-        psi = f.atan2(self.psi_scale[0] * cn, self.psi_scale[1] * sn)
-        q = quat.multiply(quat.multiply(self.q_wl, _zxz_components(phi, theta, psi, f)), self.q_perm)
-        omega = [0.0, 0.0, 0.0]
-        for k in range(3):
-            omega[self.order[k]] = self.axis_signs[k] * w[k]
-        return q, omega
+
+class _Flow:
+    """A built flow: its parameter vector and AGM tables, evaluated by the compiled kernels."""
+
+    def __init__(self, moments: np.ndarray, omega0: np.ndarray, q0: np.ndarray) -> None:
+        self.params = np.zeros(PARAMS_SIZE)
+        self.agm_a = np.zeros(AGM_LEVELS)
+        self.agm_c = np.zeros(AGM_LEVELS)
+        self.case = CASES[_build(_floats3(moments), _floats3(omega0), _floats4(q0), self.params, self.agm_a, self.agm_c)]
 
     def evaluate(self, tau: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        q, omega = self.components(tau, _ARRAY_FUNCTIONS)
-        return np.stack(q, axis=-1), np.stack(omega, axis=-1)
+        out = np.empty((tau.size, 7))
+        evaluate_flow(self.params, self.agm_a, self.agm_c, np.ascontiguousarray(tau, dtype=float), out)
+        return out[:, :4], out[:, 4:]
 
     def evaluate_scalar(self, tau: float) -> tuple[tuple, tuple]:
-        q, omega = self.components(tau, _SCALAR_FUNCTIONS)
-        return tuple(float(x) for x in q), tuple(float(x) for x in omega)
+        q, omega = self.evaluate(np.array([float(tau)]))
+        return tuple(q[0].tolist()), tuple(omega[0].tolist())
+
+
+def _floats3(v: Any) -> tuple[float, float, float]:
+    a, b, c = (float(x) for x in np.asarray(v, dtype=float).reshape(3))
+    return a, b, c
+
+
+def _floats4(v: Any) -> tuple[float, float, float, float]:
+    a, b, c, d = (float(x) for x in np.asarray(v, dtype=float).reshape(4))
+    return a, b, c, d
 
 
 @dataclass(frozen=True, eq=False)
@@ -268,11 +521,10 @@ class TorqueFreeSolution:
     def state(self, t: Any) -> tuple[np.ndarray, np.ndarray]:
         """``(quaternion(t), omega(t))`` evaluated together (shapes (..., 4) and (..., 3))."""
         if isinstance(t, (float, int)) and not isinstance(t, bool):
-            # one time: the float path (an order of magnitude cheaper than 1-element arrays)
             if not math.isfinite(t):
                 raise ValueError(f"t must be finite, got {t}")
-            q, w = self._flow.evaluate_scalar(float(t) - self.t0)
-            return np.array(q), np.array(w)
+            q, w = self._flow.evaluate(np.array([float(t) - self.t0]))
+            return q[0], w[0]
         tau = np.asarray(t, dtype=float) - self.t0
         if not np.all(np.isfinite(tau)):
             raise ValueError(f"t must be finite, got {t}")
@@ -305,15 +557,7 @@ def zxz_to_quaternion(phi: Any, theta: Any, psi: Any) -> np.ndarray:
     vectorised over the (broadcast) angle arrays.
     """
     broadcast = np.broadcast_arrays(*(np.asarray(a, dtype=float) for a in (phi, theta, psi)))
-    return np.stack(_zxz_components(*broadcast, _ARRAY_FUNCTIONS), axis=-1)
-
-
-def _zxz_components(phi: Any, theta: Any, psi: Any, f: SimpleNamespace) -> tuple[Any, Any, Any, Any]:
-    half_sum = 0.5 * (phi + psi)
-    half_diff = 0.5 * (phi - psi)
-    ch = f.cos(0.5 * theta)
-    sh = f.sin(0.5 * theta)
-    return (sh * f.cos(half_diff), sh * f.sin(half_diff), ch * f.sin(half_sum), ch * f.cos(half_sum))
+    return np.stack(_zxz(*broadcast), axis=-1)
 
 
 def quaternion_to_zxz(q: Any) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -338,96 +582,6 @@ def quaternion_to_zxz(q: Any) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
 def _wrap_angle(a: np.ndarray) -> np.ndarray:
     """a reduced to (-pi, pi]."""
     return np.pi - np.mod(np.pi - a, 2.0 * np.pi)
-
-
-@functools.lru_cache(maxsize=None)
-def _relabelling(order: tuple[int, int, int]) -> tuple[tuple[float, float, float], tuple[float, ...]]:
-    """Signs and quaternion of the proper signed permutation x'_k = sign_k x[order[k]].
-
-    The quaternion rotates body -> relabelled body coordinates (det = +1 by flipping axis 2).
-    """
-    perm = np.zeros((3, 3))
-    for k, i in enumerate(order):
-        perm[k, i] = 1.0
-    signs = (1.0, -1.0 if np.linalg.det(perm) < 0.0 else 1.0, 1.0)
-    perm[1] *= signs[1]  # keep the relabelled frame right-handed
-    return signs, tuple(Rotation.from_matrix(perm).as_quat().tolist())
-
-
-def _sign(x: float) -> float:
-    return 1.0 if x >= 0.0 else -1.0
-
-
-def _agm_tables(m: float, m1: float) -> tuple[tuple[float, ...], tuple[float, ...]]:
-    a = [1.0]
-    c = [math.sqrt(m)]
-    b = math.sqrt(m1)
-    while abs(c[-1]) > _EPS * a[-1] and len(a) < 40:
-        a_next = 0.5 * (a[-1] + b)
-        # c_{i+1} = (a_i - b_i)/2 = c_i^2 / (4 a_{i+1}) without the subtraction
-        c.append(c[-1] * c[-1] / (4.0 * a_next))
-        b = math.sqrt(a[-1] * b)
-        a.append(a_next)
-    return tuple(a), tuple(c)
-
-
-def _elliptic_flow(
-    moments: list, omega: list, q0: np.ndarray, order: tuple[int, int, int], d: float
-) -> _EllipticFlow:
-    """Build the flow; ``d`` = L^2 - 2 E I2 (0 on the separatrix), computed by the caller."""
-    flow = _EllipticFlow()
-    axis_signs, q_perm = _relabelling(order)
-    i1, i2, i3 = (float(moments[k]) for k in order)
-    w1, w2, w3 = (axis_signs[k] * float(omega[order[k]]) for k in range(3))
-    eps = _sign(i3 - i2)
-    d31, d32, d21 = i3 - i1, i3 - i2, i2 - i1
-    a1 = math.sqrt(w1 * w1 + i2 * d32 / (i1 * d31) * w2 * w2)
-    a2 = math.sqrt(i1 * d31 / (i2 * d32) * w1 * w1 + w2 * w2)
-    a3 = math.sqrt(i2 * d21 / (i3 * d31) * w2 * w2 + w3 * w3)
-    big = i3 * d32 * a3 * a3
-    separatrix = d == 0.0
-    m1 = d / big
-    m = i1 * d21 * a1 * a1 / big
-    lam = math.sqrt(d32 * d31 * a3 * a3 / (i1 * i2))
-    n = -i3 * d21 / (i1 * d32)
-    s3 = _sign(w3)
-    s1 = _sign(w1) if separatrix else 1.0
-    sigma = eps * s1 * s3
-    alpha1 = 1.0 / math.sqrt(i1 * abs(d31))
-    alpha2 = 1.0 / math.sqrt(i2 * abs(d32))
-    # phase u0 from sn u0 = sigma w2 / A2, cn u0 = s1 w1 / A1 (normalised against rounding)
-    sn0, cn0 = (sigma * w2 / a2, s1 * w1 / a1) if a1 > 0.0 else (0.0, 1.0)
-    norm = math.hypot(sn0, cn0)
-    sn0, cn0 = sn0 / norm, cn0 / norm
-    if separatrix:
-        agm_a, agm_c = (1.0,), (1.0,)
-        k = math.inf
-        excess = 0.0
-        u0 = math.asinh(sn0 / cn0)
-    else:
-        agm_a, agm_c = _agm_tables(m, m1)
-        k = math.pi / (2.0 * agm_a[-1])
-        excess = (2.0 * n / 3.0) * float(elliprj(0.0, m1, 1.0, 1.0 - n))
-        f = sn0 * float(elliprf(cn0 * cn0, cn0 * cn0 + m1 * sn0 * sn0, 1.0))
-        u0 = f if cn0 >= 0.0 else math.copysign(2.0 * k, sn0) - f
-    flow.order, flow.axis_signs = order, axis_signs
-    flow.moments = (i1, i2, i3)
-    flow.amplitude = (a1, a2, a3)
-    flow.signs = (s1, sigma, s3)
-    flow.psi_scale = (s1 * i1 * alpha1, sigma * i2 * alpha2)
-    flow.lam, flow.u0, flow.m1, flow.n = lam, u0, m1, n
-    flow.l_norm = math.sqrt((i1 * w1) ** 2 + (i2 * w2) ** 2 + (i3 * w3) ** 2)
-    flow.agm_a, flow.agm_c = agm_a, agm_c
-    flow.quarter_period, flow.half_period_pi_excess = k, excess
-    _, _, _, j0, g0 = flow.phase(u0, _SCALAR_FUNCTIONS)
-    flow.phase0 = (float(j0), float(g0))
-    # q_world<-body = q_WL (x) q_zxz(t) (x) q_perm; q_WL from q(t0) = q0, with q_zxz(t0)
-    # evaluated by the flow itself so that the two agree to rounding
-    flow.q_wl, flow.q_perm = (0.0, 0.0, 0.0, 1.0), (0.0, 0.0, 0.0, 1.0)
-    q_zxz0 = flow.evaluate_scalar(0.0)[0]
-    flow.q_wl = quat.multiply(quat.multiply(tuple(q0.tolist()), quat.conjugate(q_perm)), quat.conjugate(q_zxz0))
-    flow.q_perm = q_perm
-    return flow
 
 
 def torque_free_solution(moments: Any, omega0: Any, q0: Any = (0.0, 0.0, 0.0, 1.0), t0: float = 0.0) -> TorqueFreeSolution:
@@ -468,54 +622,11 @@ def torque_free_flow(moments: np.ndarray, q: Any, omega: Any, tau: float) -> tup
     """Exact free flow over tau (s) from (q, omega): ``(q(tau), omega(tau))`` as float tuples.
 
     The same as ``torque_free_solution(moments, omega, q).state(tau)`` without the input
-    checks, for integrators that call it every step with a state they already checked
-    (``moments`` a float array (3,), q a unit quaternion).
+    checks, for callers that already checked the state (``q`` a unit quaternion).
     """
-    solution = _solution(moments, np.asarray(omega, dtype=float), np.asarray(q, dtype=float), 0.0)
-    return solution._flow.evaluate_scalar(float(tau))
-
-
-def _separatrix_distance(moments: list, omega: list, i_min: int, i_mid: int, i_max: int) -> float:
-    """``L^2 - 2 E I2`` from its two terms of opposite sign (exact where they cancel)."""
-    d_above = float(moments[i_max] * (moments[i_max] - moments[i_mid]) * omega[i_max] ** 2)
-    d_below = float(moments[i_min] * (moments[i_mid] - moments[i_min]) * omega[i_min] ** 2)
-    scale = d_above + d_below
-    if abs(d_above - d_below) > _EXACT_SEPARATRIX_DISTANCE * scale:
-        return d_above - d_below
-    # The terms cancel: evaluate exactly in rational arithmetic (a rounded D would decide the
-    # case wrongly at the separatrix and cost digits in the phase and precession next to it).
-    i1, i2, i3, w1, w3 = (
-        Fraction(float(x)) for x in (moments[i_min], moments[i_mid], moments[i_max], omega[i_min], omega[i_max])
-    )
-    return float(i3 * (i3 - i2) * w3 * w3 - i1 * (i2 - i1) * w1 * w1)
+    return _free_flow_compiled(_floats3(moments), _floats4(q), _floats3(omega), float(tau))
 
 
 def _solution(moments: np.ndarray, omega0: np.ndarray, q0: np.ndarray, t0: float) -> TorqueFreeSolution:
-    m = moments.tolist()
-    i_min, i_mid, i_max = sorted(range(3), key=m.__getitem__)
-    tol = _EQUAL_MOMENTS_ULPS * _EPS * m[i_max]
-    low_equal = m[i_mid] - m[i_min] <= tol
-    high_equal = m[i_max] - m[i_mid] <= tol
-    if low_equal and high_equal:
-        case = "spherical"
-        flow: Any = _RigidRotation(omega0.copy(), q0)
-    elif low_equal or high_equal:
-        case = "symmetric"
-        flow = _SymmetricFlow(moments.copy(), i_max if low_equal else i_min, q0, omega0)
-    else:
-        w = omega0.tolist()
-        d = _separatrix_distance(m, w, i_min, i_mid, i_max)
-        # The label allows for rounding in the caller's omega0; the flow itself is the exact
-        # solution for the omega0 given (the separatrix closed form only when d is exactly 0).
-        scale = m[i_max] * (m[i_max] - m[i_mid]) * w[i_max] ** 2 + m[i_min] * (m[i_mid] - m[i_min]) * w[i_min] ** 2
-        if abs(d) <= _SEPARATRIX_ULPS * _EPS * scale:
-            case = "separatrix"
-        else:
-            case = "above_separatrix" if d > 0.0 else "below_separatrix"
-        if not (w[i_min] or w[i_max]):
-            # at rest, or a stationary spin about the middle axis
-            flow = _RigidRotation(omega0.copy(), q0)
-        else:
-            order = (i_max, i_mid, i_min) if d < 0.0 else (i_min, i_mid, i_max)
-            flow = _elliptic_flow(m, w, q0, order, d)
-    return TorqueFreeSolution(moments, omega0, q0, t0, case, flow)
+    flow = _Flow(moments, omega0, q0)
+    return TorqueFreeSolution(moments, omega0.copy(), q0, t0, flow.case, flow)

@@ -8,12 +8,17 @@ rotation "first q, then p", the quaternion of ``Rotation.from_quat(p) * Rotation
 These functions take any length-3/length-4 sequence and return tuples of floats: a
 call costs well under a microsecond, where the same on small numpy arrays costs several.
 For arrays of many quaternions (output, plotting) use ``scipy.spatial.transform.Rotation``.
+They are also the compiled integrator kernels' quaternion algebra: ``register_jitable``
+leaves them plain Python functions for Python callers and lets numba compile them into
+the kernels (on tuples), so each formula exists once.
 """
 
 from __future__ import annotations
 
 import math
 from typing import Sequence
+
+from numba.extending import register_jitable
 
 Quaternion = tuple[float, float, float, float]
 Vector = tuple[float, float, float]
@@ -25,6 +30,7 @@ IDENTITY: Quaternion = (0.0, 0.0, 0.0, 1.0)
 _SMALL_ANGLE = 1e-8
 
 
+@register_jitable
 def multiply(p: Sequence[float], q: Sequence[float]) -> Quaternion:
     """Hamilton product ``p (x) q`` of two quaternions (x, y, z, w)."""
     px, py, pz, pw = p
@@ -37,12 +43,14 @@ def multiply(p: Sequence[float], q: Sequence[float]) -> Quaternion:
     )
 
 
+@register_jitable
 def conjugate(q: Sequence[float]) -> Quaternion:
     """Conjugate (the inverse rotation for a unit quaternion)."""
     x, y, z, w = q
     return (-x, -y, -z, w)
 
 
+@register_jitable
 def normalize(q: Sequence[float]) -> Quaternion:
     """``q / |q|`` (q must be non-zero)."""
     x, y, z, w = q
@@ -50,6 +58,7 @@ def normalize(q: Sequence[float]) -> Quaternion:
     return (x * inv, y * inv, z * inv, w * inv)
 
 
+@register_jitable
 def exp_rotation_vector(v: Sequence[float]) -> Quaternion:
     """Unit quaternion of the rotation by the angle |v| (rad) about the axis v.
 
@@ -71,6 +80,7 @@ def exp_rotation_vector(v: Sequence[float]) -> Quaternion:
     return (s * vx, s * vy, s * vz, c)
 
 
+@register_jitable
 def cayley(v: Sequence[float]) -> Quaternion:
     """Unit quaternion of the Cayley transform ``(1 - v^/2)^-1 (1 + v^/2)`` of so(3).
 
@@ -84,6 +94,7 @@ def cayley(v: Sequence[float]) -> Quaternion:
     return (h * vx, h * vy, h * vz, inv)
 
 
+@register_jitable
 def rotate(q: Sequence[float], v: Sequence[float]) -> Vector:
     """Rotate the vector v by the unit quaternion q: body -> world coordinates, ``R(q) v``."""
     x, y, z, w = q
@@ -99,6 +110,7 @@ def rotate(q: Sequence[float], v: Sequence[float]) -> Vector:
     )
 
 
+@register_jitable
 def rotate_inverse(q: Sequence[float], v: Sequence[float]) -> Vector:
     """Rotate v by the inverse of the unit quaternion q: world -> body, ``R(q)^T v``."""
     x, y, z, w = q

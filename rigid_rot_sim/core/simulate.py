@@ -160,8 +160,11 @@ def simulate(
     save_every = int(save_every)
     integrator_class = get_method(method)
 
-    q0_p = body.attitude_to_principal(q0)
-    omega0_p = body.vector_to_principal(omega0)
+    if body.is_principal:  # nothing to rotate (and no Rotation objects to build)
+        q0_p, omega0_p = q0, omega0
+    else:
+        q0_p = body.attitude_to_principal(q0)
+        omega0_p = body.vector_to_principal(omega0)
     integrator = integrator_class(
         body.principal_moments, dt, principal_torque(body, torque), q0=q0_p, omega0=omega0_p, **options
     )

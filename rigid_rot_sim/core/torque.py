@@ -6,14 +6,22 @@ torque in N*m in the *principal body frame*, given the time t (s), the attitude 
 The classes below are such callables that also expose their structure, so that an
 integrator may exploit it (a Taylor method expands a constant or polynomial torque
 exactly; a splitting method applies a gravity torque as an exact kick).
+
+The compiled integrator kernels evaluate these models as *data* (:func:`torque_data`):
+a polynomial in time (a constant is its one row) plus a gravity term, with a kind that
+says whether there is a torque at all and whether it depends on the attitude. Any other
+callable is :data:`TORQUE_CALLABLE` and runs the kernels' interpreted (slower) path.
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from typing import Callable, Protocol
+from typing import Any, Callable, NamedTuple, Protocol
 
 import numpy as np
+from numba.extending import register_jitable
+
+from rigid_rot_sim.core.quaternion import rotate_inverse as _rotate_inverse
 
 
 class TorqueModel(Protocol):
@@ -92,3 +100,74 @@ class PolynomialTorque:
         for c in self.coefficients[-2::-1]:
             value = value * t + c
         return value
+
+
+#: ``TorqueData.kind``: no torque (free body) / a polynomial in time (constant included) /
+#: a gravity term plus an optional polynomial (depends on the attitude) / a Python callable.
+TORQUE_NONE, TORQUE_TIME, TORQUE_GRAVITY, TORQUE_CALLABLE = 0, 1, 2, 3
+
+
+class TorqueData(NamedTuple):
+    """A torque model as plain data for the compiled kernels (all N*m, principal frame).
+
+    ``polynomial`` (n, 3): ``N(t) = sum_k polynomial[k] t**k`` (n = 0: no such term);
+    ``gravity`` (4,): lever arm (m) and weight (N) of :class:`GravityTorque` (zeros when
+    absent); ``function``: the callable for :data:`TORQUE_CALLABLE`, else None.
+    """
+
+    kind: int
+    polynomial: np.ndarray
+    gravity: np.ndarray
+    function: Any = None
+
+    @property
+    def compiled(self) -> tuple[int, np.ndarray, np.ndarray]:
+        """The tuple the compiled kernels take (one numba type for every kind)."""
+        return (self.kind, self.polynomial, self.gravity)
+
+
+_NO_POLYNOMIAL = np.zeros((0, 3))
+_NO_GRAVITY = np.zeros(4)
+
+
+def torque_data(torque: Any) -> TorqueData:
+    """The :class:`TorqueData` of a torque model (None or an all-zero constant: no torque)."""
+    if torque is None:
+        return TorqueData(TORQUE_NONE, _NO_POLYNOMIAL, _NO_GRAVITY)
+    if isinstance(torque, ConstantTorque):
+        if not np.any(torque.value):
+            return TorqueData(TORQUE_NONE, _NO_POLYNOMIAL, _NO_GRAVITY)
+        return TorqueData(TORQUE_TIME, np.array(torque.value, dtype=float).reshape(1, 3), _NO_GRAVITY)
+    if isinstance(torque, PolynomialTorque):
+        # a writable C-contiguous copy: the one array type the compiled kernels were built for
+        return TorqueData(TORQUE_TIME, np.array(torque.coefficients, dtype=float, order="C"), _NO_GRAVITY)
+    if isinstance(torque, GravityTorque):
+        gravity = np.array([*torque.lever_arm.tolist(), float(torque.weight)])
+        return TorqueData(TORQUE_GRAVITY, _NO_POLYNOMIAL, gravity)
+    if not callable(torque):
+        raise TypeError(f"torque must be None or a callable torque(t, q, omega), got {torque!r}")
+    return TorqueData(TORQUE_CALLABLE, _NO_POLYNOMIAL, _NO_GRAVITY, torque)
+
+
+@register_jitable
+def evaluate_torque_data(kind, polynomial, gravity, t, q, w):
+    """The torque (N1, N2, N3) of data-kind torques at time t, attitude q (tuple) and omega.
+
+    Horner's rule on the polynomial rows (highest power first), plus
+    ``lever_arm x (R^T (-weight e_z))`` for gravity: compiled into the kernels, and the
+    float evaluation :func:`~rigid_rot_sim.core.integrators.fixed_step.float_torque` uses.
+    """
+    n1 = n2 = n3 = 0.0
+    rows = polynomial.shape[0]
+    if rows > 0:
+        n1, n2, n3 = polynomial[rows - 1, 0], polynomial[rows - 1, 1], polynomial[rows - 1, 2]
+        for k in range(rows - 2, -1, -1):
+            n1, n2, n3 = n1 * t + polynomial[k, 0], n2 * t + polynomial[k, 1], n3 * t + polynomial[k, 2]
+    if kind == TORQUE_GRAVITY:
+        a1, a2, a3, weight = gravity[0], gravity[1], gravity[2], gravity[3]
+        u1, u2, u3 = _rotate_inverse(q, (0.0, 0.0, -weight))
+        g1, g2, g3 = a2 * u3 - a3 * u2, a3 * u1 - a1 * u3, a1 * u2 - a2 * u1
+        if rows > 0:
+            return n1 + g1, n2 + g2, n3 + g3
+        return g1, g2, g3
+    return n1, n2, n3

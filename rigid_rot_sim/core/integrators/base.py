@@ -36,6 +36,7 @@ from typing import Any, Callable, ClassVar
 
 import numpy as np
 
+from rigid_rot_sim.core import quaternion as quat
 from rigid_rot_sim.core.torque import TorqueFunction
 
 
@@ -136,7 +137,8 @@ class Integrator:
         if not math.isfinite(t):
             raise ValueError(f"t must be finite, got {t}")
         self.t = float(t)
-        self.q = q / norm
+        # the kernels' normalisation (the batch core normalises its bodies the same way)
+        self.q = np.array(quat.normalize(q.tolist()))
         self.omega = omega
         self._on_state_change()
 

@@ -27,11 +27,12 @@ import math
 from typing import Any
 
 import numpy as np
+from numba.extending import register_jitable
 
-from rigid_rot_sim.core.exact import TorqueFreeSolution, _solution, torque_free_flow
+from rigid_rot_sim.core.exact import TorqueFreeSolution, _solution, free_flow
 from rigid_rot_sim.core.integrators.base import Integrator, NonFiniteStateError, UnsupportedTorqueError
-from rigid_rot_sim.core.integrators.fixed_step import FixedStepIntegrator, float_torque
-from rigid_rot_sim.core.integrators.splitting import COMPOSITIONS, _adjoint_kick
+from rigid_rot_sim.core.integrators.fixed_step import KICK_FAILED, OK, FixedStepIntegrator, float_torque, has_torque, torque_at
+from rigid_rot_sim.core.integrators.splitting import KICK_ERROR, adjoint_kick, kick
 
 EXACT_SPLIT_ORDERS = (2, 4)
 
@@ -119,36 +120,32 @@ class ExactFlow(Integrator):
         return self._advance_saving(n_saves, save_every)
 
 
-def _make_kernel(coefficients: tuple[float, ...]):
-    def kernel(t, state, h, moments, torque, attitude_torque):
-        q = state[:4]
-        w1, w2, w3 = state[4:]
-        i1, i2, i3 = moments
-        moments_array = np.array(moments)
-        if torque is None:
-            q_new, w_new = torque_free_flow(moments_array, q, (w1, w2, w3), h)
-            return (*q_new, *w_new)
-        n1, n2, n3 = torque(t, q, (w1, w2, w3))
-        for gamma in coefficients:
-            tau = gamma * h
-            hk = 0.5 * tau
-            w1 += hk * n1 / i1
-            w2 += hk * n2 / i2
-            w3 += hk * n3 / i3
-            if not math.isfinite(w1 + w2 + w3):
-                # a non-finite torque: hand the bad state back for the step's NaN check
-                return (*q, w1, w2, w3)
-            q, (w1, w2, w3) = torque_free_flow(moments_array, q, (w1, w2, w3), tau)
-            t += tau
-            w1, w2, w3, n1, n2, n3 = _adjoint_kick(torque, t, q, w1, w2, w3, hk, i1, i2, i3)
-        qx, qy, qz, qw = q
-        inv = 1.0 / math.sqrt(qx * qx + qy * qy + qz * qz + qw * qw)
-        return qx * inv, qy * inv, qz * inv, qw * inv, w1, w2, w3
-
-    return kernel
-
-
-_KERNELS = {order: _make_kernel(COMPOSITIONS[order]) for order in EXACT_SPLIT_ORDERS}
+@register_jitable
+def exact_split_step(t, state, h, moments, torque, coefficients):
+    """One step of the composition ``coefficients`` of kick(h/2) o free(h) o adjoint kick(h/2)."""
+    qx, qy, qz, qw, w1, w2, w3 = state
+    q = (qx, qy, qz, qw)
+    i1, i2, i3 = moments
+    if not has_torque(torque):
+        q, w = free_flow(moments, q, (w1, w2, w3), h)
+        return (q[0], q[1], q[2], q[3], w[0], w[1], w[2]), OK
+    n1, n2, n3 = torque_at(torque, t, q, (w1, w2, w3))
+    for gamma in coefficients:
+        tau = gamma * h
+        hk = 0.5 * tau
+        w1, w2, w3 = kick(w1, w2, w3, hk, n1, n2, n3, i1, i2, i3)
+        if not math.isfinite(w1 + w2 + w3):
+            # a non-finite torque: hand the bad state back for the step's NaN check
+            return (q[0], q[1], q[2], q[3], w1, w2, w3), OK
+        q, w = free_flow(moments, q, (w1, w2, w3), tau)
+        w1, w2, w3 = w
+        t += tau
+        w1, w2, w3, n1, n2, n3, converged = adjoint_kick(torque, t, q, w1, w2, w3, hk, i1, i2, i3)
+        if not converged:
+            return state, KICK_FAILED
+    qx, qy, qz, qw = q
+    inv = 1.0 / math.sqrt(qx * qx + qy * qy + qz * qz + qw * qw)
+    return (qx * inv, qy * inv, qz * inv, qw * inv, w1, w2, w3), OK
 
 
 class ExactSplit(FixedStepIntegrator):
@@ -162,10 +159,11 @@ class ExactSplit(FixedStepIntegrator):
 
     name = "exact_split"
     order = 2
+    error_types = {KICK_FAILED: (NonFiniteStateError, KICK_ERROR)}
 
     def __init__(self, *args: Any, order: int = 2, **kwargs: Any) -> None:
         if order not in EXACT_SPLIT_ORDERS:
             raise ValueError(f"exact_split: order must be one of {list(EXACT_SPLIT_ORDERS)}, got {order!r}")
         self.order = order
-        self.kernel = _KERNELS[order]
+        self.kernel_name = f"exact_split{order}"
         super().__init__(*args, **kwargs)

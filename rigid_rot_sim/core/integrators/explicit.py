@@ -13,23 +13,27 @@ the one after is O(dt^4).
 
 from __future__ import annotations
 
+from numba.extending import register_jitable
+
 from rigid_rot_sim.core import quaternion as quat
 from rigid_rot_sim.core.dynamics import euler_rhs_components
-from rigid_rot_sim.core.integrators.fixed_step import FixedStepIntegrator
-
-_ZERO = (0.0, 0.0, 0.0)
+from rigid_rot_sim.core.integrators.fixed_step import OK, FixedStepIntegrator, attitude_dependent, has_torque, torque_at
 
 
-def euler_step(t, state, h, moments, torque, attitude_torque):
+@register_jitable
+def euler_step(t, state, h, moments, torque):
     """Explicit Euler on omega; attitude ``q (x) exp(h omega_n)``. Order 1."""
     qx, qy, qz, qw, w1, w2, w3 = state
     i1, i2, i3 = moments
-    n1, n2, n3 = _ZERO if torque is None else torque(t, (qx, qy, qz, qw), (w1, w2, w3))
+    n1 = n2 = n3 = 0.0
+    if has_torque(torque):
+        n1, n2, n3 = torque_at(torque, t, (qx, qy, qz, qw), (w1, w2, w3))
     a1, a2, a3 = euler_rhs_components(i1, i2, i3, w1, w2, w3, n1, n2, n3)
     q = quat.normalize(quat.multiply((qx, qy, qz, qw), quat.exp_rotation_vector((h * w1, h * w2, h * w3))))
-    return (*q, w1 + h * a1, w2 + h * a2, w3 + h * a3)
+    return (q[0], q[1], q[2], q[3], w1 + h * a1, w2 + h * a2, w3 + h * a3), OK
 
 
+@register_jitable
 def _dexpinv(u1, u2, u3, w1, w2, w3):
     """``omega + 1/2 u x omega + 1/12 u x (u x omega)``: du/ds for q = q_n (x) exp(u)."""
     c1 = u2 * w3 - u3 * w2
@@ -42,45 +46,50 @@ def _dexpinv(u1, u2, u3, w1, w2, w3):
     )
 
 
-def rk4_step(t, state, h, moments, torque, attitude_torque):
+@register_jitable
+def rk4_step(t, state, h, moments, torque):
     """Classical RK4 in exponential coordinates of the attitude (RKMK4). Order 4."""
     qx, qy, qz, qw, w1, w2, w3 = state
     i1, i2, i3 = moments
     qn = (qx, qy, qz, qw)
     hh = 0.5 * h
     th = t + hh
+    forced = has_torque(torque)
+    attitude_torque = attitude_dependent(torque)
 
     # stage 1: u = 0, du/ds = omega
-    n1, n2, n3 = _ZERO if torque is None else torque(t, qn, (w1, w2, w3))
+    n1 = n2 = n3 = 0.0
+    if forced:
+        n1, n2, n3 = torque_at(torque, t, qn, (w1, w2, w3))
     a1, b1, c1 = euler_rhs_components(i1, i2, i3, w1, w2, w3, n1, n2, n3)
     U1 = (w1, w2, w3)
 
     # stage 2
     x1, x2, x3 = w1 + hh * a1, w2 + hh * b1, w3 + hh * c1
     u = (hh * w1, hh * w2, hh * w3)
-    if torque is not None:
+    if forced:
         q = quat.multiply(qn, quat.exp_rotation_vector(u)) if attitude_torque else qn
-        n1, n2, n3 = torque(th, q, (x1, x2, x3))
+        n1, n2, n3 = torque_at(torque, th, q, (x1, x2, x3))
     a2, b2, c2 = euler_rhs_components(i1, i2, i3, x1, x2, x3, n1, n2, n3)
-    U2 = _dexpinv(*u, x1, x2, x3)
+    U2 = _dexpinv(u[0], u[1], u[2], x1, x2, x3)
 
     # stage 3
     x1, x2, x3 = w1 + hh * a2, w2 + hh * b2, w3 + hh * c2
     u = (hh * U2[0], hh * U2[1], hh * U2[2])
-    if torque is not None:
+    if forced:
         q = quat.multiply(qn, quat.exp_rotation_vector(u)) if attitude_torque else qn
-        n1, n2, n3 = torque(th, q, (x1, x2, x3))
+        n1, n2, n3 = torque_at(torque, th, q, (x1, x2, x3))
     a3, b3, c3 = euler_rhs_components(i1, i2, i3, x1, x2, x3, n1, n2, n3)
-    U3 = _dexpinv(*u, x1, x2, x3)
+    U3 = _dexpinv(u[0], u[1], u[2], x1, x2, x3)
 
     # stage 4
     x1, x2, x3 = w1 + h * a3, w2 + h * b3, w3 + h * c3
     u = (h * U3[0], h * U3[1], h * U3[2])
-    if torque is not None:
+    if forced:
         q = quat.multiply(qn, quat.exp_rotation_vector(u)) if attitude_torque else qn
-        n1, n2, n3 = torque(t + h, q, (x1, x2, x3))
+        n1, n2, n3 = torque_at(torque, t + h, q, (x1, x2, x3))
     a4, b4, c4 = euler_rhs_components(i1, i2, i3, x1, x2, x3, n1, n2, n3)
-    U4 = _dexpinv(*u, x1, x2, x3)
+    U4 = _dexpinv(u[0], u[1], u[2], x1, x2, x3)
 
     h6 = h / 6.0
     u = (
@@ -90,11 +99,14 @@ def rk4_step(t, state, h, moments, torque, attitude_torque):
     )
     q = quat.normalize(quat.multiply(qn, quat.exp_rotation_vector(u)))
     return (
-        *q,
+        q[0],
+        q[1],
+        q[2],
+        q[3],
         w1 + h6 * (a1 + 2.0 * (a2 + a3) + a4),
         w2 + h6 * (b1 + 2.0 * (b2 + b3) + b4),
         w3 + h6 * (c1 + 2.0 * (c2 + c3) + c4),
-    )
+    ), OK
 
 
 class Euler(FixedStepIntegrator):
@@ -102,7 +114,7 @@ class Euler(FixedStepIntegrator):
 
     name = "euler"
     order = 1
-    kernel = staticmethod(euler_step)
+    kernel_name = "euler"
 
 
 class RK4(FixedStepIntegrator):
@@ -110,4 +122,4 @@ class RK4(FixedStepIntegrator):
 
     name = "rk4"
     order = 4
-    kernel = staticmethod(rk4_step)
+    kernel_name = "rk4"

@@ -16,62 +16,84 @@ The implicit equation is solved by Newton's method on the 3x3 system, to round-o
 (fixed-point iteration would diverge when h * |omega| is large, the stiff gyroscopic
 case this method is for). For a general torque callable its Jacobian with respect to W
 (through omega and the midpoint attitude) is taken once per step by forward differences.
+Newton starts from an explicit Euler predictor. At many radians per step it can fail to
+converge from there; the step is then re-solved by continuation in the step length
+(``h k / K`` for k = 1..K, each solve started from the last, K doubled up to 4096), which
+follows the branch of solutions that starts at W = omega_n for h = 0.
 """
 
 from __future__ import annotations
 
 import math
 
+from numba.extending import register_jitable
+
 from rigid_rot_sim.core import quaternion as quat
 from rigid_rot_sim.core.dynamics import euler_rhs_components
 from rigid_rot_sim.core.integrators.base import NonFiniteStateError
-from rigid_rot_sim.core.integrators.fixed_step import FixedStepIntegrator
+from rigid_rot_sim.core.integrators.fixed_step import (
+    NEWTON_FAILED,
+    OK,
+    FixedStepIntegrator,
+    attitude_dependent,
+    has_torque,
+    torque_at,
+)
 
-_ZERO = (0.0, 0.0, 0.0)
 _EPS = 2.220446049250313e-16
 _MAX_ITERATIONS = 60
+_MAX_CONTINUATION_STAGES = 4096
 
 
 class NewtonConvergenceError(NonFiniteStateError):
     """The implicit equation of a step could not be solved."""
 
 
+@register_jitable
 def _half_cayley(qn, h, W1, W2, W3):
     """Midpoint attitude ``q_n (x) sqrt(cay(h W))``: the normalised mean of q_n and q_{n+1}."""
     c = quat.cayley((h * W1, h * W2, h * W3))
     return quat.multiply(qn, quat.normalize((c[0], c[1], c[2], c[3] + 1.0)))
 
 
-def implicit_midpoint_step(t, state, h, moments, torque, attitude_torque):
-    qx, qy, qz, qw, w1, w2, w3 = state
+@register_jitable
+def _newton(t, qn, w1, w2, w3, h, moments, torque, W1, W2, W3):
+    """Solve ``2 (W - omega_n) = h alpha(t + h/2, q_mid, W)`` from W; returns (W1, W2, W3, converged)."""
     i1, i2, i3 = moments
-    qn = (qx, qy, qz, qw)
-    hh = 0.5 * h
-    tm = t + hh
+    tm = t + 0.5 * h
     k1, k2, k3 = (i2 - i3) / i1, (i3 - i1) / i2, (i1 - i2) / i3
-
-    # predictor: explicit Euler to the midpoint
-    n1, n2, n3 = _ZERO if torque is None else torque(t, qn, (w1, w2, w3))
-    a1, a2, a3 = euler_rhs_components(i1, i2, i3, w1, w2, w3, n1, n2, n3)
-    W1, W2, W3 = w1 + hh * a1, w2 + hh * a2, w3 + hh * a3
+    forced = has_torque(torque)
+    attitude_torque = attitude_dependent(torque)
 
     # d(N/I)/dW of a general torque, frozen over the iteration
     d11 = d12 = d13 = d21 = d22 = d23 = d31 = d32 = d33 = 0.0
-    if torque is not None and attitude_torque:
-        base = torque(tm, _half_cayley(qn, h, W1, W2, W3), (W1, W2, W3))
-        cols = []
+    if forced and attitude_torque:
+        b1, b2, b3 = torque_at(torque, tm, _half_cayley(qn, h, W1, W2, W3), (W1, W2, W3))
         for j in range(3):
-            P = [W1, W2, W3]
-            delta = 1.5e-8 * max(abs(P[j]), 1.0)
-            P[j] += delta
-            n = torque(tm, _half_cayley(qn, h, *P), tuple(P))
-            cols.append(((n[0] - base[0]) / (delta * i1), (n[1] - base[1]) / (delta * i2), (n[2] - base[2]) / (delta * i3)))
-        (d11, d21, d31), (d12, d22, d32), (d13, d23, d33) = cols
+            P1, P2, P3 = W1, W2, W3
+            if j == 0:
+                delta = 1.5e-8 * max(abs(P1), 1.0)
+                P1 += delta
+            elif j == 1:
+                delta = 1.5e-8 * max(abs(P2), 1.0)
+                P2 += delta
+            else:
+                delta = 1.5e-8 * max(abs(P3), 1.0)
+                P3 += delta
+            m1, m2, m3 = torque_at(torque, tm, _half_cayley(qn, h, P1, P2, P3), (P1, P2, P3))
+            c1, c2, c3 = (m1 - b1) / (delta * i1), (m2 - b2) / (delta * i2), (m3 - b3) / (delta * i3)
+            if j == 0:
+                d11, d21, d31 = c1, c2, c3
+            elif j == 1:
+                d12, d22, d32 = c1, c2, c3
+            else:
+                d13, d23, d33 = c1, c2, c3
 
+    n1 = n2 = n3 = 0.0
     previous = math.inf
     for _ in range(_MAX_ITERATIONS):
-        if torque is not None:
-            n1, n2, n3 = torque(tm, _half_cayley(qn, h, W1, W2, W3) if attitude_torque else qn, (W1, W2, W3))
+        if forced:
+            n1, n2, n3 = torque_at(torque, tm, _half_cayley(qn, h, W1, W2, W3) if attitude_torque else qn, (W1, W2, W3))
         a1, a2, a3 = euler_rhs_components(i1, i2, i3, W1, W2, W3, n1, n2, n3)
         g1 = 2.0 * (W1 - w1) - h * a1
         g2 = 2.0 * (W2 - w2) - h * a2
@@ -92,7 +114,7 @@ def implicit_midpoint_step(t, state, h, moments, torque, attitude_torque):
         c13 = j21 * j32 - j22 * j31
         det = j11 * c11 + j12 * c12 + j13 * c13
         if det == 0.0 or not math.isfinite(det):
-            break
+            return W1, W2, W3, True  # the finiteness check below decides
         inv = -1.0 / det
         e1 = inv * (g1 * c11 + g2 * (j13 * j32 - j12 * j33) + g3 * (j12 * j23 - j13 * j22))
         e2 = inv * (g1 * c12 + g2 * (j11 * j33 - j13 * j31) + g3 * (j13 * j21 - j11 * j23))
@@ -103,22 +125,45 @@ def implicit_midpoint_step(t, state, h, moments, torque, attitude_torque):
         size = max(abs(e1), abs(e2), abs(e3))
         scale = max(abs(W1), abs(W2), abs(W3))
         if size <= 4.0 * _EPS * scale:
-            break
+            return W1, W2, W3, True
         # converged to the round-off floor, where corrections stop shrinking
         if size <= 1e-12 * scale and size >= 0.5 * previous:
-            break
+            return W1, W2, W3, True
         if not math.isfinite(size):
-            break
+            return W1, W2, W3, True
         previous = size
-    else:
-        raise NewtonConvergenceError(
-            f"implicit_midpoint: Newton's method did not converge at t = {t:.9g} s (last correction {size:.3g} rad/s)"
-        )
+    return W1, W2, W3, False
+
+
+@register_jitable
+def implicit_midpoint_step(t, state, h, moments, torque):
+    qx, qy, qz, qw, w1, w2, w3 = state
+    i1, i2, i3 = moments
+    qn = (qx, qy, qz, qw)
+    hh = 0.5 * h
+
+    # predictor: explicit Euler to the midpoint
+    n1 = n2 = n3 = 0.0
+    if has_torque(torque):
+        n1, n2, n3 = torque_at(torque, t, qn, (w1, w2, w3))
+    a1, a2, a3 = euler_rhs_components(i1, i2, i3, w1, w2, w3, n1, n2, n3)
+    W1, W2, W3, converged = _newton(t, qn, w1, w2, w3, h, moments, torque, w1 + hh * a1, w2 + hh * a2, w3 + hh * a3)
+    stages = 4
+    while not converged:
+        # continuation in the step length along the branch that starts at W = omega_n
+        if stages > _MAX_CONTINUATION_STAGES:
+            return state, NEWTON_FAILED
+        W1, W2, W3 = w1, w2, w3
+        converged = True
+        for k in range(1, stages + 1):
+            W1, W2, W3, ok = _newton(t, qn, w1, w2, w3, h * k / stages, moments, torque, W1, W2, W3)
+            converged = converged and ok
+        stages *= 2
     if not (math.isfinite(W1) and math.isfinite(W2) and math.isfinite(W3)):
-        raise NewtonConvergenceError(f"implicit_midpoint: Newton's method diverged at t = {t:.9g} s")
+        return (math.nan, math.nan, math.nan, math.nan, W1, W2, W3), OK  # reported as a non-finite state
 
     q = quat.normalize(quat.multiply(qn, quat.cayley((h * W1, h * W2, h * W3))))
-    return (*q, 2.0 * W1 - w1, 2.0 * W2 - w2, 2.0 * W3 - w3)
+    return (q[0], q[1], q[2], q[3], 2.0 * W1 - w1, 2.0 * W2 - w2, 2.0 * W3 - w3), OK
 
 
 class ImplicitMidpoint(FixedStepIntegrator):
@@ -126,4 +171,5 @@ class ImplicitMidpoint(FixedStepIntegrator):
 
     name = "implicit_midpoint"
     order = 2
-    kernel = staticmethod(implicit_midpoint_step)
+    kernel_name = "implicit_midpoint"
+    error_types = {NEWTON_FAILED: (NewtonConvergenceError, "Newton's method did not converge")}

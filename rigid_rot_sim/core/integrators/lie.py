@@ -15,47 +15,53 @@ product of exact rotations by construction.
 
 from __future__ import annotations
 
+from numba.extending import register_jitable
+
 from rigid_rot_sim.core import quaternion as quat
 from rigid_rot_sim.core.dynamics import euler_rhs_components
-from rigid_rot_sim.core.integrators.fixed_step import FixedStepIntegrator
-
-_ZERO = (0.0, 0.0, 0.0)
+from rigid_rot_sim.core.integrators.fixed_step import OK, FixedStepIntegrator, attitude_dependent, has_torque, torque_at
 
 
-def cf4_step(t, state, h, moments, torque, attitude_torque):
+@register_jitable
+def cf4_step(t, state, h, moments, torque):
     """One step of the commutator-free order-4 method on (q, omega)."""
     qx, qy, qz, qw, w1, w2, w3 = state
     i1, i2, i3 = moments
     qn = (qx, qy, qz, qw)
     hh = 0.5 * h
     th = t + hh
-    need_q = torque is not None and attitude_torque
+    forced = has_torque(torque)
+    need_q = forced and attitude_dependent(torque)
 
-    n1, n2, n3 = _ZERO if torque is None else torque(t, qn, (w1, w2, w3))
+    n1 = n2 = n3 = 0.0
+    q2 = qn
+    if forced:
+        n1, n2, n3 = torque_at(torque, t, qn, (w1, w2, w3))
     a1, b1, c1 = euler_rhs_components(i1, i2, i3, w1, w2, w3, n1, n2, n3)
 
     x1, x2, x3 = w1 + hh * a1, w2 + hh * b1, w3 + hh * c1
-    if torque is not None:
-        q2 = quat.multiply(qn, quat.exp_rotation_vector((hh * w1, hh * w2, hh * w3))) if need_q else qn
-        n1, n2, n3 = torque(th, q2, (x1, x2, x3))
+    if forced:
+        if need_q:
+            q2 = quat.multiply(qn, quat.exp_rotation_vector((hh * w1, hh * w2, hh * w3)))
+        n1, n2, n3 = torque_at(torque, th, q2, (x1, x2, x3))
     a2, b2, c2 = euler_rhs_components(i1, i2, i3, x1, x2, x3, n1, n2, n3)
     K2 = (x1, x2, x3)  # divided by h
 
     x1, x2, x3 = w1 + hh * a2, w2 + hh * b2, w3 + hh * c2
-    if torque is not None:
+    if forced:
         q3 = quat.multiply(qn, quat.exp_rotation_vector((hh * K2[0], hh * K2[1], hh * K2[2]))) if need_q else qn
-        n1, n2, n3 = torque(th, q3, (x1, x2, x3))
+        n1, n2, n3 = torque_at(torque, th, q3, (x1, x2, x3))
     a3, b3, c3 = euler_rhs_components(i1, i2, i3, x1, x2, x3, n1, n2, n3)
     K3 = (x1, x2, x3)
 
     x1, x2, x3 = w1 + h * a3, w2 + h * b3, w3 + h * c3
-    if torque is not None:
+    if forced:
         if need_q:
             v = (h * (K3[0] - 0.5 * w1), h * (K3[1] - 0.5 * w2), h * (K3[2] - 0.5 * w3))
             q4 = quat.multiply(q2, quat.exp_rotation_vector(v))
         else:
             q4 = qn
-        n1, n2, n3 = torque(t + h, q4, (x1, x2, x3))
+        n1, n2, n3 = torque_at(torque, t + h, q4, (x1, x2, x3))
     a4, b4, c4 = euler_rhs_components(i1, i2, i3, x1, x2, x3, n1, n2, n3)
     K4 = (x1, x2, x3)
 
@@ -73,12 +79,16 @@ def cf4_step(t, state, h, moments, torque, attitude_torque):
     )
     q = quat.multiply(quat.multiply(qn, quat.exp_rotation_vector(first)), quat.exp_rotation_vector(second))
     h6 = h / 6.0
+    q = quat.normalize(q)
     return (
-        *quat.normalize(q),
+        q[0],
+        q[1],
+        q[2],
+        q[3],
         w1 + h6 * (a1 + 2.0 * (a2 + a3) + a4),
         w2 + h6 * (b1 + 2.0 * (b2 + b3) + b4),
         w3 + h6 * (c1 + 2.0 * (c2 + c3) + c4),
-    )
+    ), OK
 
 
 class LieRK4(FixedStepIntegrator):
@@ -86,4 +96,4 @@ class LieRK4(FixedStepIntegrator):
 
     name = "lie_rk4"
     order = 4
-    kernel = staticmethod(cf4_step)
+    kernel_name = "lie_rk4"

@@ -32,9 +32,12 @@ from __future__ import annotations
 import math
 from typing import Any
 
+from numba.extending import register_jitable
+
 from rigid_rot_sim.core import quaternion as quat
+from rigid_rot_sim.core.dynamics import axes_by_moment
 from rigid_rot_sim.core.integrators.base import NonFiniteStateError
-from rigid_rot_sim.core.integrators.fixed_step import FixedStepIntegrator
+from rigid_rot_sim.core.integrators.fixed_step import KICK_FAILED, OK, FixedStepIntegrator, has_torque, torque_at
 
 _CBRT2 = 2.0 ** (1.0 / 3.0)
 # Yoshida 1990, Table 1, solution A (w1, w2, w3); w0 = 1 - 2 (w1 + w2 + w3)
@@ -50,102 +53,103 @@ COMPOSITIONS: dict[int, tuple[float, ...]] = {
 _KICK_ITERATIONS = 50
 
 
-_CASIMIR = 3
-_PLANS: dict[tuple[float, float, float], tuple] = {}
-
-
-def _plan(i1: float, i2: float, i3: float) -> tuple:
-    """The Strang sequence for moments (i1, i2, i3): (term, time fraction, rate) triples.
-
-    term 0, 1, 2 is X_i about that axis, with ``phi = rate * tau * omega_i``; term 3 is the
-    Casimir, with the rotation vector ``tau * (I / I_k) * omega``.
-    """
-    key = (i1, i2, i3)
-    plan = _PLANS.get(key)
-    if plan is None:
-        k = sorted(range(3), key=key.__getitem__)[1]
-        ik = key[k]
-        terms = [(a, 0.5, 1.0 - key[a] / ik) for a in range(3) if a != k and key[a] != ik]
-        plan = (tuple(terms + [(_CASIMIR, 1.0, 0.0)] + terms[::-1]), i1 / ik, i2 / ik, i3 / ik)
-        if len(_PLANS) > 256:
-            _PLANS.clear()
-        _PLANS[key] = plan
-    return plan
-
-
-def _free_strang(qx, qy, qz, qw, w1, w2, w3, h, i1, i2, i3):
-    """``X_i(h/2) X_j(h/2) C(h) X_j(h/2) X_i(h/2)`` on (q, omega) in the principal frame."""
-    if not math.isfinite(w1 + w2 + w3):
-        nan = math.nan
-        return nan, nan, nan, nan, nan, nan, nan
-    sequence, c1, c2, c3 = _plan(i1, i2, i3)
-    sin, cos = math.sin, math.cos
-    for term, fraction, rate in sequence:
-        if term == _CASIMIR:
-            qx, qy, qz, qw = quat.multiply(
-                (qx, qy, qz, qw), quat.exp_rotation_vector((h * c1 * w1, h * c2 * w2, h * c3 * w3))
-            )
-            continue
-        # X_term: the body turns by phi about the axis, L_body by -phi
-        half = 0.5 * fraction * h * rate * (w1 if term == 0 else w2 if term == 1 else w3)
-        s, c = sin(half), cos(half)
-        sn, cs = 2.0 * s * c, 1.0 - 2.0 * s * s  # sin, cos of phi
-        if term == 0:
-            w2, w3 = cs * w2 + sn * (i3 / i2) * w3, cs * w3 - sn * (i2 / i3) * w2
-            qx, qy, qz, qw = qw * s + qx * c, qy * c + qz * s, qz * c - qy * s, qw * c - qx * s
-        elif term == 1:
-            w3, w1 = cs * w3 + sn * (i1 / i3) * w1, cs * w1 - sn * (i3 / i1) * w3
-            qx, qy, qz, qw = qx * c - qz * s, qw * s + qy * c, qz * c + qx * s, qw * c - qy * s
-        else:
-            w1, w2 = cs * w1 + sn * (i2 / i1) * w2, cs * w2 - sn * (i1 / i2) * w1
-            qx, qy, qz, qw = qx * c + qy * s, qy * c - qx * s, qw * s + qz * c, qw * c - qz * s
+@register_jitable
+def _x_flow(term, half, qx, qy, qz, qw, w1, w2, w3, i1, i2, i3):
+    """X_term: the body turns by phi = 2 half about the axis ``term``, L_body by -phi."""
+    s, c = math.sin(half), math.cos(half)
+    sn, cs = 2.0 * s * c, 1.0 - 2.0 * s * s  # sin, cos of phi
+    if term == 0:
+        w2, w3 = cs * w2 + sn * (i3 / i2) * w3, cs * w3 - sn * (i2 / i3) * w2
+        qx, qy, qz, qw = qw * s + qx * c, qy * c + qz * s, qz * c - qy * s, qw * c - qx * s
+    elif term == 1:
+        w3, w1 = cs * w3 + sn * (i1 / i3) * w1, cs * w1 - sn * (i3 / i1) * w3
+        qx, qy, qz, qw = qx * c - qz * s, qw * s + qy * c, qz * c + qx * s, qw * c - qy * s
+    else:
+        w1, w2 = cs * w1 + sn * (i2 / i1) * w2, cs * w2 - sn * (i1 / i2) * w1
+        qx, qy, qz, qw = qx * c + qy * s, qy * c - qx * s, qw * s + qz * c, qw * c - qz * s
     return qx, qy, qz, qw, w1, w2, w3
 
 
-def _make_kernel(coefficients: tuple[float, ...]):
-    def kernel(t, state, h, moments, torque, attitude_torque):
-        qx, qy, qz, qw, w1, w2, w3 = state
-        i1, i2, i3 = moments
-        if torque is None:
-            for gamma in coefficients:
-                qx, qy, qz, qw, w1, w2, w3 = _free_strang(qx, qy, qz, qw, w1, w2, w3, gamma * h, i1, i2, i3)
-        else:
-            n1, n2, n3 = torque(t, (qx, qy, qz, qw), (w1, w2, w3))
-            for gamma in coefficients:
-                tau = gamma * h
-                hk = 0.5 * tau
-                w1 += hk * n1 / i1
-                w2 += hk * n2 / i2
-                w3 += hk * n3 / i3
-                qx, qy, qz, qw, w1, w2, w3 = _free_strang(qx, qy, qz, qw, w1, w2, w3, tau, i1, i2, i3)
-                t += tau
-                # the torque at the kicked state is also the next explicit kick's torque
-                w1, w2, w3, n1, n2, n3 = _adjoint_kick(torque, t, (qx, qy, qz, qw), w1, w2, w3, hk, i1, i2, i3)
-        inv = 1.0 / math.sqrt(qx * qx + qy * qy + qz * qz + qw * qw)
-        return qx * inv, qy * inv, qz * inv, qw * inv, w1, w2, w3
+@register_jitable
+def _free_strang(qx, qy, qz, qw, w1, w2, w3, h, i1, i2, i3):
+    """``X_i(h/2) X_j(h/2) C(h) X_j(h/2) X_i(h/2)`` on (q, omega) in the principal frame.
 
-    return kernel
+    The X terms are those about the axes other than the median one k (in axis order,
+    then reversed), skipping a term whose moment equals I_k (it vanishes); X_a turns by
+    ``phi = (1 - I_a / I_k) tau omega_a``; the Casimir C by ``tau (I / I_k) omega``.
+    """
+    if not math.isfinite(w1 + w2 + w3):
+        nan = math.nan
+        return nan, nan, nan, nan, nan, nan, nan
+    k = axes_by_moment(i1, i2, i3)[1]
+    ik = i1 if k == 0 else i2 if k == 1 else i3
+    c1, c2, c3 = i1 / ik, i2 / ik, i3 / ik
+    qx, qy, qz, qw, w1, w2, w3 = _x_terms((0, 1, 2), k, ik, h, qx, qy, qz, qw, w1, w2, w3, i1, i2, i3)
+    qx, qy, qz, qw = quat.multiply((qx, qy, qz, qw), quat.exp_rotation_vector((h * c1 * w1, h * c2 * w2, h * c3 * w3)))
+    return _x_terms((2, 1, 0), k, ik, h, qx, qy, qz, qw, w1, w2, w3, i1, i2, i3)
 
 
-def _adjoint_kick(torque, t, q, w1, w2, w3, hk, i1, i2, i3):
-    """Solve ``x = w + hk N(t, q, x) / I`` by fixed-point iteration; return x and N(t, q, x)."""
+@register_jitable
+def _x_terms(axes, k, ik, h, qx, qy, qz, qw, w1, w2, w3, i1, i2, i3):
+    """The X terms over h/2 in the order ``axes``, skipping the median axis k and any axis
+    whose moment equals I_k."""
+    for a in axes:
+        ia = i1 if a == 0 else i2 if a == 1 else i3
+        if a != k and ia != ik:
+            rate = 1.0 - ia / ik
+            half = 0.5 * 0.5 * h * rate * (w1 if a == 0 else w2 if a == 1 else w3)
+            qx, qy, qz, qw, w1, w2, w3 = _x_flow(a, half, qx, qy, qz, qw, w1, w2, w3, i1, i2, i3)
+    return qx, qy, qz, qw, w1, w2, w3
+
+
+@register_jitable
+def splitting_step(t, state, h, moments, torque, coefficients):
+    """One step of the symmetric composition ``coefficients`` of the kicked Strang step."""
+    qx, qy, qz, qw, w1, w2, w3 = state
+    i1, i2, i3 = moments
+    if not has_torque(torque):
+        for gamma in coefficients:
+            qx, qy, qz, qw, w1, w2, w3 = _free_strang(qx, qy, qz, qw, w1, w2, w3, gamma * h, i1, i2, i3)
+    else:
+        n1, n2, n3 = torque_at(torque, t, (qx, qy, qz, qw), (w1, w2, w3))
+        for gamma in coefficients:
+            tau = gamma * h
+            hk = 0.5 * tau
+            w1, w2, w3 = kick(w1, w2, w3, hk, n1, n2, n3, i1, i2, i3)
+            qx, qy, qz, qw, w1, w2, w3 = _free_strang(qx, qy, qz, qw, w1, w2, w3, tau, i1, i2, i3)
+            t += tau
+            # the torque at the kicked state is also the next explicit kick's torque
+            w1, w2, w3, n1, n2, n3, converged = adjoint_kick(torque, t, (qx, qy, qz, qw), w1, w2, w3, hk, i1, i2, i3)
+            if not converged:
+                return state, KICK_FAILED
+    inv = 1.0 / math.sqrt(qx * qx + qy * qy + qz * qz + qw * qw)
+    return (qx * inv, qy * inv, qz * inv, qw * inv, w1, w2, w3), OK
+
+
+@register_jitable
+def kick(w1, w2, w3, hk, n1, n2, n3, i1, i2, i3):
+    """The explicit kick ``omega + hk N / I``."""
+    return w1 + hk * n1 / i1, w2 + hk * n2 / i2, w3 + hk * n3 / i3
+
+
+@register_jitable
+def adjoint_kick(torque, t, q, w1, w2, w3, hk, i1, i2, i3):
+    """Solve ``x = w + hk N(t, q, x) / I`` by fixed-point iteration; return x, N(t, q, x), converged."""
     x1, x2, x3 = w1, w2, w3
-    n1, n2, n3 = torque(t, q, (x1, x2, x3))
+    n1, n2, n3 = torque_at(torque, t, q, (x1, x2, x3))
     for _ in range(_KICK_ITERATIONS):
-        y1, y2, y3 = w1 + hk * n1 / i1, w2 + hk * n2 / i2, w3 + hk * n3 / i3
+        y1, y2, y3 = kick(w1, w2, w3, hk, n1, n2, n3, i1, i2, i3)
         change = max(abs(y1 - x1), abs(y2 - x2), abs(y3 - x3))
         x1, x2, x3 = y1, y2, y3
-        n1, n2, n3 = torque(t, q, (x1, x2, x3))
+        n1, n2, n3 = torque_at(torque, t, q, (x1, x2, x3))
         # a non-finite torque is returned as is, for the step's non-finite check to report
         if change <= 4e-16 * max(abs(y1), abs(y2), abs(y3)) or not math.isfinite(y1 + y2 + y3):
-            return x1, x2, x3, n1, n2, n3
-    raise NonFiniteStateError(
-        f"splitting: the torque kick at t = {t:.9g} s did not converge "
-        "(torque too stiff in omega for this step; use implicit_midpoint)"
-    )
+            return x1, x2, x3, n1, n2, n3, True
+    return x1, x2, x3, n1, n2, n3, False
 
 
-_KERNELS = {order: _make_kernel(c) for order, c in COMPOSITIONS.items()}
+#: What a failed torque kick is reported as (splitting and exact_split).
+KICK_ERROR = "the torque kick did not converge (torque too stiff in omega for this step; use implicit_midpoint)"
 
 
 class Splitting(FixedStepIntegrator):
@@ -159,10 +163,11 @@ class Splitting(FixedStepIntegrator):
 
     name = "splitting"
     order = 2
+    error_types = {KICK_FAILED: (NonFiniteStateError, KICK_ERROR)}
 
     def __init__(self, *args: Any, order: int = 2, **kwargs: Any) -> None:
         if order not in COMPOSITIONS:
             raise ValueError(f"splitting: order must be one of {sorted(COMPOSITIONS)}, got {order!r}")
         self.order = order  # instance attribute: the nominal order of this instance
-        self.kernel = _KERNELS[order]
+        self.kernel_name = f"splitting{order}"
         super().__init__(*args, **kwargs)

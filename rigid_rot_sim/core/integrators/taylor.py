@@ -14,14 +14,12 @@ coefficient of a product is the Cauchy product ``(x_i x_j)_k = sum_m X_m,i X_k-m
 
     X_{k+1} = ( C : (X_0..k)^T (X_k..0)  +  b_k ) / (k + 1),
 
-one small matrix product per order (the 7 x 7 table of all pairwise Cauchy products,
-contracted with the constant map C). Python overhead per call, not arithmetic, is the
-cost at these sizes: this form needs two numpy calls per order. The same recurrence on
-plain floats needs fifteen Cauchy products per order (``sum(map(mul, a, b[::-1]))``);
-measured at order 24 on this kind of machine: ~1.2 us per order for the numpy form (a
-whole internal step, step control and evaluation included, ~40 us), ~7 us per order for
-the float form, so the numpy form is kept. The operands of every order are views made
-once at construction, so the loop does no slicing.
+one contraction per order. Only the Cauchy products that C uses are formed (fifteen for
+the free body, up to ten more with gravity), from the list of its non-zero entries built
+when the body or the gravity term changes; the recurrence, the step control and the dense
+output are compiled numba kernels (``register_jitable``, run by one cached loop over API
+steps), so an internal step costs a few microseconds and a 1 kHz node step that ends
+inside the last series one polynomial evaluation.
 
 Order and step (Jorba & Zou, "A software package for the numerical integration of ODEs
 by means of high-order Taylor methods", Experimental Mathematics 14 (2005) 99-117):
@@ -67,7 +65,10 @@ from typing import Any, ClassVar
 
 import numpy as np
 
+from numba.extending import register_jitable
+
 from rigid_rot_sim.core.integrators.base import Integrator, NonFiniteStateError, UnsupportedTorqueError
+from rigid_rot_sim.core.jit import compiled
 from rigid_rot_sim.core.torque import ConstantTorque, GravityTorque, PolynomialTorque, TorqueFunction
 
 SUPPORTED_TORQUES = "None (free body), ConstantTorque, PolynomialTorque, GravityTorque"
@@ -210,19 +211,13 @@ class Taylor(Integrator):
             raise ValueError(f"taylor: moments must be finite and > 0, got {self.moments}")
         p = self.series_order
         self._coeffs = np.zeros((p + 1, _STATE_SIZE))
-        self._weights = np.ones(_STATE_SIZE)
-        self._prod = np.zeros((_STATE_SIZE, _STATE_SIZE))
-        self._prod_flat = self._prod.reshape(-1)
-        self._exponents = np.arange(p + 1, dtype=float)
         self._inverse_orders = 1.0 / np.arange(1, p + 1, dtype=float)
-        self._maps = np.zeros((p, _STATE_SIZE, _STATE_SIZE * _STATE_SIZE))
+        self._forcing_buffer = np.zeros((p, _STATE_SIZE))
+        self._x_end = np.zeros(_STATE_SIZE)
+        self._series_buffer = np.zeros(4)
+        self._state_buffer = np.zeros(10)
+        self._counters = np.zeros(3, dtype=np.int64)
         self._maps_gravity: object = _NOT_BUILT
-        # The operands of every order, as views into the persistent buffers, made once:
-        # (X_0..k)^T, (X_k..0), the map of order k and the row X_{k+1} it writes.
-        coeffs_t = self._coeffs.T
-        self._plan = [
-            (coeffs_t[:, : k + 1], self._coeffs[k::-1], self._maps[k], self._coeffs[k + 1]) for k in range(p)
-        ]
         self._configure_torque()
 
     # -- torque -------------------------------------------------------------------------
@@ -240,44 +235,40 @@ class Taylor(Integrator):
                 "'dop853' (adaptive) or 'rk4'."
             )
         if self._maps_gravity is _NOT_BUILT or gravity is not self._maps_gravity:
-            # Commands replace a ConstantTorque every few steps: the maps depend only on
-            # the body and gravity, so they are rebuilt only when gravity changes.
+            # Commands replace a ConstantTorque every few steps: the map depends only on
+            # the body and gravity, so it is rebuilt only when gravity changes.
             c, b = derivative_map(self.moments, gravity)
-            # Map k already carries the 1/(k+1) of the recurrence; filled in place (the
-            # plan holds views of it).
-            np.multiply(c.reshape(_STATE_SIZE, -1)[None, :, :], self._inverse_orders[:, None, None], out=self._maps)
+            # the non-zero entries of C: (output, pair) with the pairs (i, j) of the
+            # Cauchy products they need, each pair once
+            entries = np.argwhere(c != 0.0)
+            pairs = sorted({(int(i), int(j)) for _, i, j in entries})
+            index = {pair: k for k, pair in enumerate(pairs)}
+            self._pairs = np.array(pairs, dtype=np.int64).reshape(-1, 2)
+            self._terms = np.array([[o, index[(i, j)]] for o, i, j in entries], dtype=np.int64).reshape(-1, 2)
+            self._term_values = np.array([c[o, i, j] for o, i, j in entries], dtype=float)
             self._gravity_forcing = b
             self._maps_gravity = gravity
         b = self._gravity_forcing
-        self._const_forcing = b
-        self._poly = None
+        self._const_forcing = b.copy()
+        poly = np.zeros((0, 3))
         if isinstance(torque, ConstantTorque):
             self._const_forcing = b + np.concatenate([torque.value / self.moments, np.zeros(4)])
         elif isinstance(torque, PolynomialTorque):
-            coeffs = torque.coefficients
-            n = coeffs.shape[0]
-            j, m = np.meshgrid(np.arange(n), np.arange(n), indexing="ij")
-            binom = np.array([[math.comb(mm, jj) if mm >= jj else 0 for mm in range(n)] for jj in range(n)], float)
-            # coefficients of N(t0 + s) in powers of s: shift[j, m] t0^(m - j) binom(m, j)
-            self._poly = (binom, np.maximum(m - j, 0).astype(float), coeffs / self.moments)
-        # State-independent forcing that does not move with t0 is computed once.
-        if self._poly is None and np.any(self._const_forcing != 0.0):
-            self._fixed_forcing = self._const_forcing[None, :].copy()
-        else:
-            self._fixed_forcing = np.zeros((0, _STATE_SIZE))
+            poly = torque.coefficients / self.moments
+        n = poly.shape[0]
+        # coefficients of N(t0 + s) in powers of s: sum_m binom(m, j) t0^(m - j) poly[m]
+        self._binom = np.array([[math.comb(m, j) if m >= j else 0 for m in range(n)] for j in range(n)], float)
+        self._binom = self._binom.reshape(n, n)
+        self._poly = np.ascontiguousarray(poly)
         self._torque_seen = torque
 
     def _forcing(self, t0: float) -> np.ndarray:
         """Coefficients of b(t0 + s) in powers of s, pre-divided by (k + 1): shape (n, 7)."""
-        if self._poly is None:
-            return self._fixed_forcing  # only an order-0 term, whose 1/(0 + 1) is 1
-        binom, powers, scaled = self._poly
-        shifted = (binom * np.power(t0, powers)) @ scaled
-        forcing = np.zeros((len(shifted), _STATE_SIZE))
-        forcing[:, :3] = shifted
-        forcing[0] += self._const_forcing
-        n = min(len(forcing), self.series_order)
-        return forcing[:n] * self._inverse_orders[:n, None]
+        rows = taylor_forcing(
+            t0, self._binom, self._poly, self._const_forcing, self._inverse_orders, self.series_order,
+            self._forcing_buffer,
+        )
+        return self._forcing_buffer[:rows].copy()
 
     # -- stepping -----------------------------------------------------------------------
 
@@ -286,51 +277,64 @@ class Taylor(Integrator):
         self._series = None
 
     def _step_impl(self) -> None:
+        self._advance_steps(1)
+        self.n_steps -= 1  # base.step() counts this step
+
+    def advance(self, n: int) -> None:
+        """Take ``n`` API steps of ``dt`` in one compiled loop (the same bits as n calls of
+        :meth:`step`: each API step is the same computation either way)."""
+        if n > 0:
+            self._advance_steps(int(n))
+
+    def _advance_steps(self, n: int) -> None:
         # Dense output: the series of the last internal step covers [t0, t0 + h]; an API
         # step ending inside it is one polynomial evaluation, so short API steps cost
         # little and the internal steps do not depend on dt (as scipy's dense output).
         # When the torque was just replaced (commands arriving at the step rate) or step
         # control is off, the internal steps land on the API step instead.
-        target = self.t + self.dt
-        landing = self.tol is None
+        landing_first = False
         if self.torque is not self._torque_seen:
             self._configure_torque()
             self._series = None
-            landing = True
-        series = self._series
-        if series is not None and target <= series[0] + series[1]:
-            x = self._evaluate(target - series[0], series[2])
-        else:
-            if series is None:
-                t, x = self.t, np.concatenate([self.omega, self.q])
-            else:
-                t, x = series[0] + series[1], series[3]
-            while True:
-                remaining = target - t
-                land = max(0.0, min(remaining, self.max_step))  # >= 0 despite rounding
-                h, p, x_end = self._substep(t, x, land if landing else self.max_step, land)
-                self.n_substeps += 1
-                if h >= remaining:
-                    break
-                if t + h == t:
-                    raise NonFiniteStateError(
-                        f"{self.name}: step size underflow at step {self.n_steps + 1}, t = {t:.9g} s "
-                        f"(h = {h:.3g} s; omega = {x_end[:3]})"
-                    )
-                t += h
-                x = x_end
-            self._series = (t, h, p, x_end)
-            x = x_end if h == remaining else self._evaluate(remaining, p)
-        self.t = target
-        self.omega = x[:3].copy()
-        self.q = x[3:].copy()
-
-    def _evaluate(self, s: float, p: int) -> np.ndarray:
-        """The last series (order p) at s from its start, with the quaternion renormalised."""
-        x = np.power(s, self._exponents[: p + 1]) @ self._coeffs[: p + 1]
-        q = x[3:]
-        q *= 1.0 / math.sqrt(float(q @ q))
-        return x
+            landing_first = True
+        series = self._series_buffer  # t, h, order, valid
+        if self._series is None:
+            series[3] = 0.0
+        state = self._state_buffer  # omega, q, t, rho (< 0: none), t of a failure
+        state[:3] = self.omega
+        state[3:7] = self.q
+        state[7] = self.t
+        state[8] = -1.0 if self._rho is None else self._rho
+        counters = self._counters  # API steps done, internal steps, status
+        counters[:] = 0
+        taylor_advance(
+            n, self.dt, state, series, self._x_end, landing_first, self.tol is not None,
+            -1.0 if self.tol is None else self.tol, self.max_step, self.series_order,
+            self._coeffs, self._pairs, self._terms, self._term_values, self._inverse_orders,
+            self._forcing_buffer, self._binom, self._poly, self._const_forcing, counters,
+        )
+        done, substeps, status = (int(v) for v in counters)
+        self.n_substeps += substeps
+        if done:
+            self.t = float(state[7])
+            self.omega = state[:3].copy()
+            self.q = state[3:7].copy()
+            self.n_steps += done
+        self._rho = None if state[8] < 0.0 else float(state[8])
+        self._series = True if series[3] else None  # the series itself stays in the buffers
+        if status == _OK:
+            return
+        t = float(state[9])
+        if status == _NON_FINITE_STATE:
+            raise NonFiniteStateError(f"{self.name}: non-finite state at step {self.n_steps + 1}, t = {t:.9g} s")
+        if status == _NON_FINITE_SERIES:
+            raise NonFiniteStateError(
+                f"{self.name}: non-finite Taylor coefficients at step {self.n_steps + 1}, t = {t:.9g} s "
+                f"(omega = {self.omega})"
+            )
+        raise NonFiniteStateError(
+            f"{self.name}: step size underflow at step {self.n_steps + 1}, t = {t:.9g} s (omega = {self.omega})"
+        )
 
     def _substep(self, t0: float, x0: np.ndarray, h_cap: float, h_fallback: float) -> tuple[float, int, np.ndarray]:
         """One Taylor step from (t0, x0) of length <= h_cap; returns (h, order, x(t0 + h)).
@@ -338,58 +342,194 @@ class Taylor(Integrator):
         ``h_fallback`` is taken when the series gives no bound (all its last coefficients
         vanish, as for a body at rest) and h_cap is infinite.
         """
-        p = self.series_order
-        tol = self.tol
-        w1, w2, w3 = x0[:3].tolist()
-        omega_scale = max(1.0, abs(w1), abs(w2), abs(w3))
-        if not math.isfinite(omega_scale):
-            raise NonFiniteStateError(f"{self.name}: non-finite state at step {self.n_steps + 1}, t = {t0:.9g} s")
-        rho = self._rho
-        # rho is infinite after a step whose series vanished (a body at rest): no estimate.
-        if tol is not None and rho is not None and math.isfinite(rho) and h_cap < rho:
-            # Enough order for the shorter step: (h / rho)^n <= tol.
-            needed = math.ceil(math.log(tol) / math.log(h_cap / rho)) + 1 if h_cap > 0.0 else 2
-            p = min(p, max(needed, 4))
-        coeffs = self._coeffs
-        coeffs[0] = x0
-        forcing = self._forcing(t0)
-        n_forced = min(len(forcing), p)
-        # The hot loop: two numpy calls per order (see the module docstring).
-        prod = self._prod
-        prod_flat = self._prod_flat
-        dot = np.dot
-        plan = self._plan
-        for k in range(n_forced):
-            head, tail_reversed, order_map, out = plan[k]
-            dot(head, tail_reversed, out=prod)
-            dot(order_map, prod_flat, out=out)
-            out += forcing[k]
-        for head, tail_reversed, order_map, out in plan[n_forced:p]:
-            dot(head, tail_reversed, out=prod)
-            dot(order_map, prod_flat, out=out)
+        rho = np.array([-1.0 if self._rho is None else self._rho])
+        x_end = np.zeros(_STATE_SIZE)
+        self._series = None  # the coefficient buffer is reused here
+        h, p, status = taylor_substep(
+            t0, np.asarray(x0, dtype=float), h_cap, h_fallback, self.tol is not None,
+            -1.0 if self.tol is None else self.tol, self.series_order, rho, self._coeffs, self._pairs, self._terms,
+            self._term_values, self._inverse_orders, self._forcing_buffer, self._binom, self._poly,
+            self._const_forcing, x_end,
+        )
+        if status != _OK:
+            raise NonFiniteStateError(f"{self.name}: non-finite state or Taylor coefficients at t = {t0:.9g} s")
+        self._rho = None if rho[0] < 0.0 else float(rho[0])
+        return h, p, x_end
 
-        h = h_cap
-        if tol is not None:
-            # omega relative to max(1 rad/s, |omega|), the unit quaternion absolutely
-            weights = self._weights
-            weights[:3] = 1.0 / omega_scale
-            a_prev, a_last = (np.abs(coeffs[p - 1 : p + 1]) * weights).max(axis=1).tolist()
-            if not (math.isfinite(a_prev) and math.isfinite(a_last)):
-                raise NonFiniteStateError(
-                    f"{self.name}: non-finite Taylor coefficients at step {self.n_steps + 1}, t = {t0:.9g} s "
-                    f"(omega = {x0[:3]})"
+
+# -- the compiled kernels (numba: register_jitable, run by taylor_advance) ----------------
+
+_OK, _NON_FINITE_STATE, _NON_FINITE_SERIES, _UNDERFLOW = 0, 1, 2, 3
+
+
+@register_jitable
+def taylor_forcing(t0, binom, poly, const_forcing, inverse_orders, series_order, out):
+    """Fill out[:n] with the coefficients of b(t0 + s), pre-divided by (k + 1); returns n."""
+    n = poly.shape[0]
+    if n == 0:
+        for c in range(_STATE_SIZE):
+            if const_forcing[c] != 0.0:
+                out[0, :] = const_forcing
+                return 1
+        return 0
+    rows = min(n, series_order)
+    for j in range(rows):
+        for c in range(_STATE_SIZE):
+            out[j, c] = 0.0
+        for c in range(3):
+            total = 0.0
+            for m in range(j, n):
+                total += binom[j, m] * t0 ** (m - j) * poly[m, c]
+            out[j, c] = total
+    for c in range(_STATE_SIZE):
+        out[0, c] += const_forcing[c]
+    for j in range(rows):
+        for c in range(_STATE_SIZE):
+            out[j, c] *= inverse_orders[j]
+    return rows
+
+
+@register_jitable
+def taylor_evaluate(coeffs, p, s, out):
+    """The series (order p) at s (Horner), quaternion renormalised, into out."""
+    for c in range(_STATE_SIZE):
+        value = coeffs[p, c]
+        for k in range(p - 1, -1, -1):
+            value = value * s + coeffs[k, c]
+        out[c] = value
+    norm = 1.0 / math.sqrt(out[3] * out[3] + out[4] * out[4] + out[5] * out[5] + out[6] * out[6])
+    for c in range(3, _STATE_SIZE):
+        out[c] *= norm
+
+
+@register_jitable
+def taylor_substep(t0, x0, h_cap, h_fallback, controlled, tol, series_order, rho_box, coeffs, pairs, terms,
+                   term_values, inverse_orders, forcing, binom, poly, const_forcing, x_end):
+    """One Taylor step of length <= h_cap from (t0, x0): (h, order, status); x(t0 + h) into x_end.
+
+    ``rho_box[0]`` holds the convergence radius estimate (< 0: none) and is updated.
+    """
+    p = series_order
+    omega_scale = max(1.0, abs(x0[0]), abs(x0[1]), abs(x0[2]))
+    if not math.isfinite(omega_scale):
+        return 0.0, p, _NON_FINITE_STATE
+    rho = rho_box[0]
+    # rho is infinite after a step whose series vanished (a body at rest): no estimate.
+    if controlled and rho >= 0.0 and math.isfinite(rho) and h_cap < rho:
+        # Enough order for the shorter step: (h / rho)^n <= tol.
+        needed = math.ceil(math.log(tol) / math.log(h_cap / rho)) + 1 if h_cap > 0.0 else 2
+        p = min(p, max(needed, 4))
+    for c in range(_STATE_SIZE):
+        coeffs[0, c] = x0[c]
+    n_forced = min(taylor_forcing(t0, binom, poly, const_forcing, inverse_orders, series_order, forcing), p)
+    n_pairs = pairs.shape[0]
+    products = np.empty(n_pairs)
+    for k in range(p):
+        # the Cauchy products (x_i x_j)_k = sum_m X_m,i X_k-m,j that C uses
+        for a in range(n_pairs):
+            i, j = pairs[a, 0], pairs[a, 1]
+            total = 0.0
+            for m in range(k + 1):
+                total += coeffs[m, i] * coeffs[k - m, j]
+            products[a] = total
+        for c in range(_STATE_SIZE):
+            coeffs[k + 1, c] = 0.0
+        scale = inverse_orders[k]
+        for e in range(terms.shape[0]):
+            coeffs[k + 1, terms[e, 0]] += (term_values[e] * scale) * products[terms[e, 1]]
+        if k < n_forced:
+            for c in range(_STATE_SIZE):
+                coeffs[k + 1, c] += forcing[k, c]
+
+    h = h_cap
+    if controlled:
+        # omega relative to max(1 rad/s, |omega|), the unit quaternion absolutely
+        a_prev = 0.0
+        a_last = 0.0
+        for c in range(_STATE_SIZE):
+            weight = 1.0 / omega_scale if c < 3 else 1.0
+            a_prev = max(a_prev, abs(coeffs[p - 1, c]) * weight)
+            a_last = max(a_last, abs(coeffs[p, c]) * weight)
+        if not (math.isfinite(a_prev) and math.isfinite(a_last)):
+            return 0.0, p, _NON_FINITE_SERIES
+        rho = math.inf
+        if a_prev > 0.0:
+            rho = (1.0 / a_prev) ** (1.0 / (p - 1))
+            h = min(h, rho * tol ** (1.0 / (p - 1)))
+        if a_last > 0.0:
+            rho_last = (1.0 / a_last) ** (1.0 / p)
+            rho = min(rho, rho_last)
+            h = min(h, rho_last * tol ** (1.0 / p))
+        if p == series_order or h < h_cap:
+            rho_box[0] = rho
+    if math.isinf(h):
+        h = h_fallback
+    taylor_evaluate(coeffs, p, h, x_end)
+    return h, p, _OK
+
+
+@register_jitable
+def _taylor_advance(n, dt, state, series, x_end, landing_first, controlled, tol, max_step, series_order, coeffs,
+                    pairs, terms, term_values, inverse_orders, forcing, binom, poly, const_forcing, counters):
+    """n API steps: state = (omega, q, t, rho, t of a failure) updated in place; series = (t, h, order, valid)
+    of the last internal step, whose end state is x_end; counters = (done, substeps, status)."""
+    rho_box = np.empty(1)
+    rho_box[0] = state[8]
+    x = np.empty(_STATE_SIZE)
+    out = np.empty(_STATE_SIZE)
+    for step in range(n):
+        landing = (not controlled) or (landing_first and step == 0)
+        target = state[7] + dt
+        if series[3] != 0.0 and target <= series[0] + series[1]:
+            taylor_evaluate(coeffs, int(series[2]), target - series[0], out)
+        else:
+            if series[3] == 0.0:
+                t = state[7]
+                for c in range(_STATE_SIZE):
+                    x[c] = state[c]
+            else:
+                t = series[0] + series[1]
+                for c in range(_STATE_SIZE):
+                    x[c] = x_end[c]
+            while True:
+                remaining = target - t
+                land = max(0.0, min(remaining, max_step))  # >= 0 despite rounding
+                h, p, status = taylor_substep(
+                    t, x, land if landing else max_step, land, controlled, tol, series_order, rho_box, coeffs,
+                    pairs, terms, term_values, inverse_orders, forcing, binom, poly, const_forcing, x_end,
                 )
-            rho = math.inf
-            if a_prev > 0.0:
-                rho = (1.0 / a_prev) ** (1.0 / (p - 1))
-                h = min(h, rho * tol ** (1.0 / (p - 1)))
-            if a_last > 0.0:
-                rho_last = (1.0 / a_last) ** (1.0 / p)
-                rho = min(rho, rho_last)
-                h = min(h, rho_last * tol ** (1.0 / p))
-            if p == self.series_order or h < h_cap:
-                self._rho = rho
-        if math.isinf(h):
-            h = h_fallback
-        return h, p, self._evaluate(h, p)
+                if status != _OK:
+                    state[8], state[9] = rho_box[0], t
+                    counters[2] = status
+                    return
+                counters[1] += 1
+                if h >= remaining:
+                    break
+                if t + h == t:
+                    state[8], state[9] = rho_box[0], t
+                    counters[2] = _UNDERFLOW
+                    return
+                t += h
+                for c in range(_STATE_SIZE):
+                    x[c] = x_end[c]
+            series[0], series[1], series[2], series[3] = t, h, p, 1.0
+            if h == remaining:
+                for c in range(_STATE_SIZE):
+                    out[c] = x_end[c]
+            else:
+                taylor_evaluate(coeffs, p, remaining, out)
+        finite = True
+        for c in range(_STATE_SIZE):
+            finite = finite and math.isfinite(out[c])
+        if not finite:
+            state[8], state[9] = rho_box[0], target
+            counters[2] = _NON_FINITE_STATE
+            return
+        for c in range(_STATE_SIZE):
+            state[c] = out[c]
+        state[7] = target
+        counters[0] += 1
+    state[8] = rho_box[0]
 
+
+taylor_advance = compiled(_taylor_advance)
