@@ -11,16 +11,21 @@ Topics (names relative to the node; QoS in the README, section "The simulation n
 ~/angular_velocity (Vector3Stamped, body frame), ~/angular_momentum (Vector3Stamped,
 world frame), ~/mass_properties (geometry_msgs/InertiaStamped, transient local, once),
 ~/top_state (rigid_rot_msgs/HeavyTopState, gravity scenes), ~/rejected
-(rigid_rot_msgs/RejectedCommand), /tf (when tf2_msgs imports), /clock (sim time).
-Every header stamp is sim time. Torque inputs: the scene's topics (WrenchStamped or
+(rigid_rot_msgs/RejectedCommand), ~/imu (sensor_msgs/Imu) and ~/odom (nav_msgs/Odometry)
+when the scene asks for them, /tf (when tf2_msgs imports), /clock (sim time).
+Every header stamp is sim time. Frame names: the ``world_frame`` / ``body_frame``
+parameters (default: the scene's ``frames``, REP 105 ``odom`` / ``base_link``), used by
+every output, /tf and the recording. Torque inputs: the scene's topics (WrenchStamped or
 Vector3Stamped).
 
 Services
 --------
-~/compute_inertia, ~/set_state, ~/reset, ~/pause (std_srvs/SetBool), ~/step (while
-paused; replies after the steps are done: they run in the service callback itself, so a
-single-threaded executor cannot deadlock), ~/apply_torque. A bad request gets
-``success = false`` and the reason; nothing raises out of a callback.
+~/compute_inertia, ~/set_state, ~/reset (std_srvs/Trigger), ~/pause (std_srvs/SetBool),
+~/step (rigid_rot_msgs/Step, while paused; replies after the steps are done: they run in
+the service callback itself, so a single-threaded executor cannot deadlock),
+~/apply_torque. A bad request gets ``success = false`` and the reason; nothing raises out
+of a callback. Where simulation_interfaces is installed, also the standard simulator
+services (:mod:`rigid_rot_sim.simulation_services`), through the same actions.
 
 Pacing
 ------
@@ -33,8 +38,10 @@ or on the publish rates (see the Simulator's determinism notes).
 
 from __future__ import annotations
 
+import dataclasses
 import math
 import signal
+import sys
 import threading
 import time
 from typing import Any
@@ -47,14 +54,16 @@ from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
 from rclpy.signals import SignalHandlerOptions
 from rcl_interfaces.msg import FloatingPointRange, ParameterDescriptor, SetParametersResult
 from geometry_msgs.msg import InertiaStamped, QuaternionStamped, Vector3Stamped, WrenchStamped
+from nav_msgs.msg import Odometry
 from rigid_rot_msgs.msg import HeavyTopState, RejectedCommand, RigidBodyState
-from rigid_rot_msgs.srv import ApplyTorque, ComputeInertia, Reset, SetState, StepSimulation
+from rigid_rot_msgs.srv import ApplyTorque, ComputeInertia, SetState, Step
 from rosgraph_msgs.msg import Clock
-from std_srvs.srv import SetBool
+from sensor_msgs.msg import Imu
+from std_srvs.srv import SetBool, Trigger
 
-from rigid_rot_sim import conversions
+from rigid_rot_sim import conversions, simulation_services
 from rigid_rot_sim.core.inertia import mass_properties, parallel_axis_shift
-from rigid_rot_sim.core.scene import OUTPUT_NAMES, Scene, load_scene
+from rigid_rot_sim.core.scene import OUTPUT_NAMES, Frames, Scene, load_scene
 from rigid_rot_sim.core.simulator import CommandRejected, Simulator
 
 try:  # never required: /tf exists only where tf2_msgs is installed
@@ -90,7 +99,12 @@ _OUTPUT_TYPES = {
     "angular_velocity": Vector3Stamped,
     "angular_momentum": Vector3Stamped,
     "top_state": HeavyTopState,
+    "imu": Imu,
+    "odom": Odometry,
 }
+
+#: Time base of the recording's MCAP log times (``record_log_time`` parameter).
+LOG_TIME_BASES = ("sim", "wall")
 
 
 def _float_range(low: float, high: float) -> list[FloatingPointRange]:
@@ -118,14 +132,21 @@ class RigidRotSimNode(Node):
             log.info("no scene parameter: serving ~/compute_inertia only (rigid-rot run SCENE starts a simulation)")
             return
         scene = load_scene(scene_path)  # SceneError names the file, key and problem
-        self.scene = scene
         self._declare_parameters(scene)
+        # the frame parameters override the scene's names everywhere (simulator included)
+        frames = Frames(self.get_parameter("world_frame").value, self.get_parameter("body_frame").value)
+        scene = dataclasses.replace(scene, frames=frames.checked())
+        self.scene = scene
+        if self.get_parameter("record_log_time").value not in LOG_TIME_BASES:
+            raise ValueError(f"record_log_time must be one of {', '.join(LOG_TIME_BASES)}, "
+                             f"got {self.get_parameter('record_log_time').value!r}")
         params = {name: self.get_parameter(name).value for name in ("integrator", "dt", "real_time_factor", "duration")}
         self.sim = Simulator(scene, method=params["integrator"], dt=params["dt"])
         self.real_time_factor = float(params["real_time_factor"])
         self.duration = float(params["duration"]) if params["duration"] > 0.0 else None
         self.record_path = self.get_parameter("record_path").value or None
         self.frames = scene.frames
+        self.ground_truth_variance = float(self.get_parameter("ground_truth_variance").value)
         built: list[str] = [f"integrator {self.sim.method} (dt {self.sim.dt:g} s{', auto' if params['integrator'] == 'auto' else ''})"]
         left_out: list[str] = []
 
@@ -182,18 +203,23 @@ class RigidRotSimNode(Node):
 
         # --- services
         self.set_state_service = self.create_service(SetState, "~/set_state", self.set_state_callback)
-        self.reset_service = self.create_service(Reset, "~/reset", self.reset_callback)
+        self.reset_service = self.create_service(Trigger, "~/reset", self.reset_callback)
         self.pause_service = self.create_service(SetBool, "~/pause", self.pause_callback)
-        self.step_service = self.create_service(StepSimulation, "~/step", self.step_callback)
+        self.step_service = self.create_service(Step, "~/step", self.step_callback)
         self.apply_torque_service = self.create_service(ApplyTorque, "~/apply_torque", self.apply_torque_callback)
+        self.simulation_services = None
+        if simulation_services.AVAILABLE:
+            self.simulation_services = simulation_services.SimulationServices(self)
+            built.append("simulation_interfaces services (~/step_simulation, ~/reset_simulation, ...)")
+        else:
+            left_out.append("simulation_interfaces services (package not installed)")
 
         if self.record_path:
-            from rigid_rot_sim.recording.node_recording import attach  # imported only when recording
-
-            # wraps self.sim and the publishers so that what changes the run and what is published
-            # is recorded; None (error logged) when the file cannot be created: the run goes on
-            self.recorder = attach(self, self.record_path)
-            built.append(f"recording to {self.record_path}" if self.recorder else "no recording (file error)")
+            self.recorder = self._start_recording()
+            built.append(
+                f"recording to {self.record_path} (log time: {self.get_parameter('record_log_time').value})"
+                if self.recorder else "no recording (see the error above)"
+            )
         else:
             left_out.append("recorder (nothing recorded)")
 
@@ -215,6 +241,19 @@ class RigidRotSimNode(Node):
         self._publish_due(force=True)
 
     # ------------------------------------------------------------------ set-up helpers
+
+    def _start_recording(self) -> Any:
+        """The recording wiring, or None (error logged) when it cannot start: the run goes on."""
+        try:
+            from rigid_rot_sim.recording.node_recording import attach  # imported only when recording
+        except ImportError as exc:  # the mcap packages are optional at run time
+            self.get_logger().error(
+                f"recording disabled: {exc.name or exc} is not installed (pip install mcap mcap-ros2-support)"
+            )
+            return None
+        # wraps self.sim and the publishers so that what changes the run and what is published
+        # is recorded; None (error logged) when the file cannot be created
+        return attach(self, self.record_path, log_time=self.get_parameter("record_log_time").value)
 
     def _declare_parameters(self, scene: Scene) -> None:
         """Declare every parameter once, with the scene's values as defaults."""
@@ -256,6 +295,38 @@ class RigidRotSimNode(Node):
             "record_path",
             scene.recording or "",
             ParameterDescriptor(description="MCAP file to record the run to; empty = no recording", read_only=True),
+        )
+        self.declare_parameter(
+            "record_log_time",
+            "sim",
+            ParameterDescriptor(
+                description="MCAP log time of the recording: 'sim' (sim time in ns, as ros2 bag record "
+                "--use-sim-time; continued across resets) or 'wall' (wall clock)",
+                read_only=True,
+                additional_constraints="one of: " + ", ".join(LOG_TIME_BASES),
+            ),
+        )
+        self.declare_parameter(
+            "world_frame",
+            scene.frames.world,
+            ParameterDescriptor(description="Fixed frame of the attitude (header.frame_id of the outputs, /tf parent); "
+                                "default: the scene's frames.world (odom)", read_only=True),
+        )
+        self.declare_parameter(
+            "body_frame",
+            scene.frames.body,
+            ParameterDescriptor(description="Body frame (child frame of /tf, ~/state and ~/odom, frame of ~/imu); "
+                                "default: the scene's frames.body (base_link)", read_only=True),
+        )
+        self.declare_parameter(
+            "ground_truth_variance",
+            1e-12,
+            ParameterDescriptor(
+                description="Variance on the covariance diagonals of ~/imu and ~/odom (the values are exact; "
+                "0 would read as 'unknown' to sensor_msgs consumers)",
+                floating_point_range=_float_range(0.0, 1e6),
+                read_only=True,
+            ),
         )
         for name, rate in scene.outputs.as_dict().items():
             self.declare_parameter(
@@ -379,6 +450,10 @@ class RigidRotSimNode(Node):
                 msg = conversions.snapshot_to_top_state(snapshot, world)
             elif name == "tf":
                 msg = TFMessage(transforms=[conversions.transform_stamped(snapshot, world, body)])
+            elif name == "imu":
+                msg = conversions.snapshot_to_imu(snapshot, body, self.ground_truth_variance)
+            elif name == "odom":
+                msg = conversions.snapshot_to_odometry(snapshot, world, body, self.ground_truth_variance)
             else:
                 msg = conversions.clock_message(snapshot.t)
             publisher.publish(msg)
@@ -434,6 +509,15 @@ class RigidRotSimNode(Node):
         self._publish_due(force=True)
         return f"state set at t = {sim.t:.9g} s"
 
+    def _set_initial_state(self) -> str:
+        """The scene's initial attitude and ω at the current time (a reset of the state only)."""
+        initial = self.scene.initial
+        request = SetState.Request(
+            orientation=conversions.array_to_quaternion(initial.orientation),
+            angular_velocity=conversions.array_to_vector3(initial.angular_velocity),
+        )
+        return self._set_state(request)
+
     def reset_callback(self, request, response):
         return self._serve(response, "~/reset", self._reset)
 
@@ -458,21 +542,26 @@ class RigidRotSimNode(Node):
 
     def step_callback(self, request, response):
         def step() -> str:
-            sim = self.sim
-            if not sim.paused:
-                raise ValueError("not paused: call ~/pause with data=true first")
-            if request.steps < 1:
-                raise ValueError("steps must be >= 1")
-            start = sim.step_index
-            # the steps run here, in the callback: the reply comes after they are done
-            self._run(start + int(request.steps), None)
-            snapshot = sim.snapshot()
-            conversions.fill_rigid_body_state(response.state, snapshot, self.frames.world, self.frames.body)
-            if sim.failure is not None:
-                raise ValueError(f"stopped after {sim.step_index - start} steps: {sim.failure}")
-            return f"{sim.step_index - start} steps done, t = {sim.t:.9g} s"
+            try:
+                return self._step(int(request.steps))
+            finally:
+                conversions.fill_rigid_body_state(response.state, self.sim.snapshot(), self.frames.world, self.frames.body)
 
         return self._serve(response, "~/step", step)
+
+    def _step(self, steps: int) -> str:
+        """Advance a paused run by ``steps`` steps (~/step and ~/step_simulation); ValueError if refused."""
+        sim = self.sim
+        if not sim.paused:
+            raise ValueError("not paused: call ~/pause with data=true first")
+        if steps < 1:
+            raise ValueError("steps must be >= 1")
+        start = sim.step_index
+        # the steps run here, in the callback: the reply comes after they are done
+        self._run(start + steps, None)
+        if sim.failure is not None:
+            raise ValueError(f"stopped after {sim.step_index - start} steps: {sim.failure}")
+        return f"{sim.step_index - start} steps done, t = {sim.t:.9g} s"
 
     def apply_torque_callback(self, request, response):
         def apply() -> str:
@@ -605,7 +694,7 @@ def main(args: list[str] | None = None) -> int:
     except (KeyboardInterrupt, ExternalShutdownException):
         pass
     except ValueError as exc:  # SceneError, or a scene the integrator cannot run
-        print(f"rigid_rot_sim_node: {exc}", flush=True)
+        print(f"rigid_rot_sim_node: {exc}", file=sys.stderr, flush=True)
         return 2
     finally:
         if node is not None:

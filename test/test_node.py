@@ -18,8 +18,8 @@ from geometry_msgs.msg import Vector3, WrenchStamped  # noqa: E402
 from rclpy.executors import SingleThreadedExecutor  # noqa: E402
 from rclpy.parameter import Parameter  # noqa: E402
 from rigid_rot_msgs.msg import RejectedCommand, RigidBodyState  # noqa: E402
-from rigid_rot_msgs.srv import ApplyTorque, ComputeInertia, Reset, SetState, StepSimulation  # noqa: E402
-from std_srvs.srv import SetBool  # noqa: E402
+from rigid_rot_msgs.srv import ApplyTorque, ComputeInertia, SetState, Step  # noqa: E402
+from std_srvs.srv import SetBool, Trigger  # noqa: E402
 
 from rigid_rot_sim.node import COMMAND_QOS, REJECTED_QOS, STATE_QOS, RigidRotSimNode  # noqa: E402
 
@@ -173,15 +173,15 @@ def test_pause_step_reset_set_state_services(harness):
     h = harness("free_tumble", real_time_factor=1.0)
     states = []
     h.client.create_subscription(RigidBodyState, "/rigid_rot_sim/state", states.append, STATE_QOS)
-    refused = h.call(StepSimulation, "step", StepSimulation.Request(steps=5))
+    refused = h.call(Step, "step", Step.Request(steps=5))
     assert not refused.success and "not paused" in refused.message
     assert h.call(SetBool, "pause", SetBool.Request(data=True)).success
     k = h.node.sim.step_index
     h.spin_until(lambda: False, timeout=0.2)
     assert h.node.sim.step_index == k  # paused: no steps
-    zero = h.call(StepSimulation, "step", StepSimulation.Request(steps=0))
+    zero = h.call(Step, "step", Step.Request(steps=0))
     assert not zero.success
-    stepped = h.call(StepSimulation, "step", StepSimulation.Request(steps=25))
+    stepped = h.call(Step, "step", Step.Request(steps=25))
     assert stepped.success and h.node.sim.step_index == k + 25
     t = stepped.state.header.stamp.sec + stepped.state.header.stamp.nanosec * 1e-9
     assert t == pytest.approx((k + 25) * 0.01, abs=1e-9)
@@ -199,7 +199,7 @@ def test_pause_step_reset_set_state_services(harness):
     bad_omega.orientation.w = 1.0
     bad_omega.angular_velocity.x = math.nan
     assert not h.call(SetState, "set_state", bad_omega).success
-    assert h.call(Reset, "reset", Reset.Request()).success
+    assert h.call(Trigger, "reset", Trigger.Request()).success
     assert h.node.sim.step_index == 0
     assert h.node.sim.snapshot().angular_velocity_body.tolist() == [0.3, 0.2, 2.0]
     assert h.call(SetBool, "pause", SetBool.Request(data=False)).success
@@ -222,10 +222,10 @@ def test_apply_torque_service_and_rejections(harness):
     publisher = h.client.create_publisher(WrenchStamped, "/rigid_rot_sim/torque", COMMAND_QOS)
     assert h.spin_until(lambda: publisher.get_subscription_count() > 0)
     nan_cmd = WrenchStamped()
-    nan_cmd.header.frame_id = "body"
+    nan_cmd.header.frame_id = "base_link"
     nan_cmd.wrench.torque.x = math.nan
     force_cmd = WrenchStamped()
-    force_cmd.header.frame_id = "body"
+    force_cmd.header.frame_id = "base_link"
     force_cmd.wrench.torque.z = 1.0
     force_cmd.wrench.force.x = 2.0
     publisher.publish(nan_cmd)

@@ -6,7 +6,7 @@
 
 The simplest client of the simulation node (ros2cli is not always installed). X Y Z are
 the torque in N*m, expressed in ``--frame`` (header.frame_id: the scene's body or world
-frame name, default ``body``); the force is zero and the stamp is left zero, so the node
+frame name, default ``base_link``, the REP 105 body frame); the force is zero and the stamp is left zero, so the node
 applies each command at the sim time it arrives. With ``--duration S`` the command is
 repeated at ``--rate`` Hz (wall clock) for S seconds and followed by a zero torque, which
 also keeps inputs with a hold timeout alive meanwhile. Waits up to ``--wait`` s for the
@@ -41,7 +41,8 @@ def add_parser(subparsers) -> None:
         "torque", help="publish WrenchStamped torque commands to a running node", description=__doc__.split("\n\n")[0]
     )
     parser.add_argument("torque", nargs="*", type=_finite, metavar="X Y Z", help="torque, N*m (omit with --zero)")
-    parser.add_argument("--frame", default="body", help="header.frame_id: the scene's body or world frame (default body)")
+    parser.add_argument("--frame", default="base_link",
+                        help="header.frame_id: the scene's body or world frame (default base_link)")
     parser.add_argument("--duration", type=_positive, help="repeat for this many wall seconds, then send zero")
     parser.add_argument("--rate", type=_positive, default=20.0, help="repeat rate with --duration, Hz (default 20)")
     parser.add_argument("--topic", default=DEFAULT_TOPIC, help=f"command topic (default {DEFAULT_TOPIC})")

@@ -89,12 +89,12 @@ def send_commands(ros_node, commands, process) -> None:
 
 
 COMMANDS = [
-    ((0.0, 0.0, 0.004), "body", 0.0, (0.0, 0.0, 0.0)),
-    ((0.002, 0.0, 0.0), "world", 0.0, (0.0, 0.0, 0.0)),
+    ((0.0, 0.0, 0.004), "base_link", 0.0, (0.0, 0.0, 0.0)),
+    ((0.002, 0.0, 0.0), "odom", 0.0, (0.0, 0.0, 0.0)),
     ((0.0, 0.001, 0.0), "no_such_frame", 0.0, (0.0, 0.0, 0.0)),  # rejected: unknown frame
-    ((0.0, 0.0, 0.001), "body", 0.0, (1.0, 0.0, 0.0)),           # rejected: non-zero force
-    ((float("nan"), 0.0, 0.0), "body", 0.0, (0.0, 0.0, 0.0)),    # rejected: non-finite
-    ((0.0, -0.003, 0.001), "body", 0.0, (0.0, 0.0, 0.0)),
+    ((0.0, 0.0, 0.001), "base_link", 0.0, (1.0, 0.0, 0.0)),           # rejected: non-zero force
+    ((float("nan"), 0.0, 0.0), "base_link", 0.0, (0.0, 0.0, 0.0)),    # rejected: non-finite
+    ((0.0, -0.003, 0.001), "base_link", 0.0, (0.0, 0.0, 0.0)),
 ]
 
 
@@ -214,12 +214,12 @@ def set_paused(ros_node, process, paused: bool, wait_for_service, call_service) 
 
 
 def reset(ros_node, process, wait_for_service, call_service) -> None:
-    from rigid_rot_msgs.srv import Reset
+    from std_srvs.srv import Trigger
 
-    client = ros_node.create_client(Reset, "/rigid_rot_sim/reset")
+    client = ros_node.create_client(Trigger, "/rigid_rot_sim/reset")
     try:
         wait_for_service(client, process=process)
-        response = call_service(ros_node, client, Reset.Request())
+        response = call_service(ros_node, client, Trigger.Request())
     finally:
         ros_node.destroy_client(client)
     assert response.success, response.message
@@ -262,9 +262,9 @@ def test_replayed_commands_reproduce_the_states_of_the_original_run(
     first_state_time(ros_node, node)
     t_pause = set_paused(ros_node, node, True, wait_for_service, call_service)
     stamps = tuple(round(t_pause + 1.0 + 0.4 * i, 1) for i in range(3))
-    send_commands(ros_node, [((0.0, 0.0, 0.004), "body", stamps[0], (0.0, 0.0, 0.0)),
-                             ((0.003, 0.0, 0.0), "world", stamps[1], (0.0, 0.0, 0.0)),
-                             ((0.0, -0.002, 0.0), "body", stamps[2], (0.0, 0.0, 0.0))], node)
+    send_commands(ros_node, [((0.0, 0.0, 0.004), "base_link", stamps[0], (0.0, 0.0, 0.0)),
+                             ((0.003, 0.0, 0.0), "odom", stamps[1], (0.0, 0.0, 0.0)),
+                             ((0.0, -0.002, 0.0), "base_link", stamps[2], (0.0, 0.0, 0.0))], node)
     set_paused(ros_node, node, False, wait_for_service, call_service)
     end = stamps[-1] + 0.6
     wait_for_sim_time(ros_node, node, end)

@@ -55,16 +55,16 @@ def record_like_the_node(path: Path, scene_name: str, steps: int, publish_every:
             sim.advance_to(k)
             snapshot = sim.snapshot()
             states.append(snapshot)
-            run.record("/rigid_rot_sim/state", conversions.snapshot_to_state(snapshot, "world", "body"))
-            run.record_tf(*divmod(round(snapshot.t * 1e9), 1_000_000_000), snapshot.orientation, "world", "body")
+            run.record("/rigid_rot_sim/state", conversions.snapshot_to_state(snapshot, "odom", "base_link"))
+            run.record_tf(*divmod(round(snapshot.t * 1e9), 1_000_000_000), snapshot.orientation, "odom", "base_link")
     return sim, states
 
 
 COMMANDS = {
-    0: ((0.0, 0.0, 0.002), "body", 0.0),
-    100: ((0.001, -0.002, 0.0), "world", 0.1234567),   # future stamp: effective later
-    300: ((0.0, 0.003, 0.0), "body", 0.0),
-    450: ((0.0, 0.0, 0.0), "body", 0.0),
+    0: ((0.0, 0.0, 0.002), "base_link", 0.0),
+    100: ((0.001, -0.002, 0.0), "odom", 0.1234567),   # future stamp: effective later
+    300: ((0.0, 0.003, 0.0), "base_link", 0.0),
+    450: ((0.0, 0.0, 0.0), "base_link", 0.0),
 }
 
 
