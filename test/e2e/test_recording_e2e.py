@@ -18,6 +18,7 @@ import numpy as np
 import pytest
 import yaml
 
+from rigid_rot_sim.recording.events import decode_event
 from rigid_rot_sim.recording.reader import BagReader, repair
 from rigid_rot_sim.recording.resim import resimulate
 
@@ -135,7 +136,12 @@ def test_commands_keep_receive_time_and_header_and_rejections_say_why(recorded_r
     reader = BagReader(bag)
     commands = [(m, msg) for m, msg in reader.decoded([TORQUE_TOPIC])]
     assert [msg.header.frame_id for _, msg in commands] == [c[1] for c in COMMANDS]
-    assert all(m.log_time_ns > 1.6e18 for m, _ in commands)  # wall-clock receive times (ns since epoch)
+    # log time = the sim time at receipt (time base "sim"), which the accepted ones' events also hold
+    events = [decode_event(msg) for _, msg in reader.decoded(["/rigid_rot_sim/sim_events"])]
+    receipts = [round(e.number("receipt_time") * 1e9) for e in events if e.kind == "torque"]
+    assert len(receipts) == 3 and set(receipts) <= {m.log_time_ns for m, _ in commands}
+    assert all(0 <= m.log_time_ns < 1e15 for m, _ in commands)  # sim time, not ns since the epoch
+    assert reader.metadata["log_time"] == {"base": "sim"}
     reasons = [msg.reason for _, msg in reader.decoded(["/rigid_rot_sim/rejected"])]
     assert "no_such_frame" in reasons[0] and "force" in reasons[1] and "non-finite" in reasons[2]
 
@@ -181,7 +187,8 @@ def test_sigterm_finishes_the_file(tmp_path, launch_node, ros_node):
 
 def test_sigkill_loses_at_most_the_last_second_and_repair_recovers_it(tmp_path, launch_node, ros_node):
     bag = tmp_path / "killed.mcap"
-    node = launch_node(*node_args(write_scene(tmp_path), bag), name="killed")
+    # wall-clock log times (the option), so that the loss is measured against the wall clock
+    node = launch_node(*node_args(write_scene(tmp_path), bag, "-p", "record_log_time:=wall"), name="killed")
     first_state_time(ros_node, node)
     time.sleep(2.5)
     killed_at = time.time_ns()
@@ -190,7 +197,7 @@ def test_sigkill_loses_at_most_the_last_second_and_repair_recovers_it(tmp_path, 
     reader = BagReader(bag)
     assert not reader.complete
     states = [m for m in reader.messages([STATE_TOPIC])]
-    assert len(states) > 20
+    assert len(states) > 20 and states[0].log_time_ns > 1.6e18  # ns since the epoch
     assert (killed_at - states[-1].log_time_ns) / 1e9 < 1.0  # flushed every 0.5 s: at most the last second lost
     report = repair(bag)
     assert report.messages == sum(reader.counts().values())
@@ -313,11 +320,11 @@ def _events(bag, complete=True):
 def _states_by_stamp(bag, after_reset=False):
     """{sim time: (q, ω, T)} of the recorded states (only those after the last reset, if asked)."""
     reader = BagReader(bag)
-    last_reset = max((m.log_time_ns for m, msg in reader.decoded(["/rigid_rot_sim/sim_events"])
-                      if msg.name.endswith("/reset")), default=0) if after_reset else 0
     states = {}
-    for record, msg in reader.decoded([STATE_TOPIC]):
-        if record.log_time_ns < last_reset:
+    for record, msg in reader.decoded([STATE_TOPIC, "/rigid_rot_sim/sim_events"]):
+        if record.topic != STATE_TOPIC:
+            if after_reset and msg.name.endswith("/reset"):
+                states.clear()  # log order is the order the node produced them in
             continue
         t = msg.header.stamp.sec + msg.header.stamp.nanosec * 1e-9
         q, w = msg.orientation, msg.angular_velocity_body
@@ -338,6 +345,42 @@ def test_rigid_rot_run_record_writes_a_complete_bag(tmp_path):
     assert reader.complete
     stamps = {round(msg.header.stamp.sec + msg.header.stamp.nanosec * 1e-9, 6) for _, msg in reader.decoded([STATE_TOPIC])}
     assert stamps == {round(0.02 * i, 6) for i in range(26)}  # 50 Hz over 0.5 s, both ends included
+    assert resimulate(bag).identical
+
+
+def test_log_times_of_an_rtf_0_run_are_its_sim_times(tmp_path):
+    """Sim-time log times (the default): every stamp and /clock equals its log time, so playback
+    paced by log time (ros2 bag play, Foxglove) runs at sim pace; resim stays bit-exact."""
+    from mcap.reader import make_reader
+    from mcap_ros2.decoder import DecoderFactory
+
+    bag = tmp_path / "rtf0.mcap"
+    rigid_rot = Path(sys.executable).with_name("rigid-rot")
+    done = subprocess.run(
+        [str(rigid_rot), "run", str(write_scene(tmp_path)), "--duration", "2", "--realtime-factor", "0",
+         "--record", str(bag)],
+        capture_output=True, text=True, timeout=60, env=os.environ,
+    )
+    assert done.returncode == 0, done.stdout + done.stderr
+    checked: dict[str, int] = {}
+    log_times = []
+    with open(bag, "rb") as stream:  # the mcap library's own reader, in log-time order
+        for schema, channel, message, decoded in make_reader(stream, decoder_factories=[DecoderFactory()]).iter_decoded_messages():
+            log_times.append(message.log_time)
+            if channel.topic in (STATE_TOPIC, "/rigid_rot_sim/orientation"):
+                stamp = decoded.header.stamp
+            elif channel.topic == "/clock":
+                stamp = decoded.clock
+            elif channel.topic == "/tf":
+                stamp = decoded.transforms[0].header.stamp
+            else:
+                continue
+            assert message.log_time == stamp.sec * 1_000_000_000 + stamp.nanosec, (channel.topic, message.log_time, stamp)
+            checked[channel.topic] = checked.get(channel.topic, 0) + 1
+    assert checked[STATE_TOPIC] == 101 and checked["/clock"] == 101 and checked["/tf"] == 51
+    assert log_times == sorted(log_times) and log_times[0] == 0 and log_times[-1] == 2_000_000_000
+    reader = BagReader(bag)
+    assert reader.metadata["log_time"] == {"base": "sim"}
     assert resimulate(bag).identical
 
 
