@@ -247,9 +247,8 @@ class RigidRotSimNode(Node):
         try:
             from rigid_rot_sim.recording.node_recording import attach  # imported only when recording
         except ImportError as exc:  # the mcap packages are optional at run time
-            self.get_logger().error(
-                f"recording disabled: {exc.name or exc} is not installed (pip install mcap mcap-ros2-support)"
-            )
+            missing = (exc.name or "").split(".")[0] or str(exc)
+            self.get_logger().error(f"recording disabled: {missing} is not installed (pip install mcap mcap-ros2-support)")
             return None
         # wraps self.sim and the publishers so that what changes the run and what is published
         # is recorded; None (error logged) when the file cannot be created
