@@ -20,6 +20,8 @@ import os
 import sys
 from pathlib import Path
 
+from rigid_rot_sim.cli.ros_args import add_ros_args
+
 
 def scene_search_dirs() -> list[Path]:
     """Where scene names are looked up: the source tree's and the installed config/scenes."""
@@ -70,10 +72,7 @@ def add_parser(subparsers) -> None:
     parser.add_argument("--dt", type=_positive, help="physics step, s")
     parser.add_argument("--record", metavar="OUT.mcap", help="record the run to this MCAP file")
     parser.add_argument("--echo", type=_positive, metavar="PERIOD", help="print the received ~/state every PERIOD s of sim time")
-    parser.add_argument(
-        "--ros-args", nargs=argparse.REMAINDER, dest="ros_args", metavar="ARG",
-        help="everything after it goes to ROS as with ros2 run (e.g. --params-file FILE, -p name:=value)",
-    )
+    add_ros_args(parser)
     parser.set_defaults(handler=run)
 
 

@@ -10,14 +10,18 @@ frame name, default ``base_link``, the REP 105 body frame); the force is zero an
 applies each command at the sim time it arrives. With ``--duration S`` the command is
 repeated at ``--rate`` Hz (wall clock) for S seconds and followed by a zero torque, which
 also keeps inputs with a hold timeout alive meanwhile. Waits up to ``--wait`` s for the
-node's subscription first; exit code 1 when nobody subscribes.
+node's subscription first; exit code 1 (message on stderr) when nobody subscribes.
+``--ros-args`` passes remappings, a namespace or parameters to ROS, as with ``ros2 run``.
 """
 
 from __future__ import annotations
 
 import argparse
 import math
+import sys
 import time
+
+from rigid_rot_sim.cli.ros_args import add_ros_args, rclpy_args
 
 DEFAULT_TOPIC = "/rigid_rot_sim/torque"
 
@@ -48,6 +52,7 @@ def add_parser(subparsers) -> None:
     parser.add_argument("--topic", default=DEFAULT_TOPIC, help=f"command topic (default {DEFAULT_TOPIC})")
     parser.add_argument("--zero", action="store_true", help="publish a zero torque (clears a held command)")
     parser.add_argument("--wait", type=_positive, default=5.0, help="seconds to wait for a subscriber (default 5)")
+    add_ros_args(parser)
     parser.set_defaults(handler=run)
 
 
@@ -73,14 +78,15 @@ def run(args: argparse.Namespace) -> int:
         msg.wrench.torque = array_to_vector3(values)
         return msg
 
-    rclpy.init()
+    rclpy.init(args=rclpy_args(args))
     node = rclpy.create_node("rigid_rot_torque")
     try:
         publisher = node.create_publisher(WrenchStamped, args.topic, COMMAND_QOS)
         deadline = time.monotonic() + args.wait
         while publisher.get_subscription_count() == 0:
             if time.monotonic() > deadline:
-                print(f"rigid-rot torque: no subscriber on {args.topic} after {args.wait:g} s (is the node running?)")
+                print(f"rigid-rot torque: no subscriber on {publisher.topic_name} after {args.wait:g} s "
+                      "(is the node running?)", file=sys.stderr)
                 return 1
             rclpy.spin_once(node, timeout_sec=0.05)
         sent = 0
@@ -97,7 +103,7 @@ def run(args: argparse.Namespace) -> int:
             publisher.publish(message((0.0, 0.0, 0.0)))
         # reliable delivery: give the middleware a moment before the process goes away
         publisher.wait_for_all_acked(rclpy.duration.Duration(seconds=2.0))
-        print(f"rigid-rot torque: {sent} command(s) {list(torque)} N*m in frame {args.frame!r} on {args.topic}"
+        print(f"rigid-rot torque: {sent} command(s) {list(torque)} N*m in frame {args.frame!r} on {publisher.topic_name}"
               + (", then zero" if args.duration is not None else ""))
         return 0
     finally:
