@@ -332,7 +332,13 @@ def _states_by_stamp(bag, after_reset=False):
     return states
 
 
-def test_rigid_rot_run_record_writes_a_complete_bag(tmp_path):
+def test_rigid_rot_run_record_writes_a_complete_bag_with_sim_time_log_times(tmp_path):
+    """An rtf-0 run: complete, log times equal to the sim times (the default base: every stamp and
+    /clock equals its log time, so playback paced by log time, as ros2 bag play and Foxglove do,
+    runs at sim pace), and resim bit-exact."""
+    from mcap.reader import make_reader
+    from mcap_ros2.decoder import DecoderFactory
+
     bag = tmp_path / "cli.mcap"
     rigid_rot = Path(sys.executable).with_name("rigid-rot")
     done = subprocess.run(
@@ -342,30 +348,13 @@ def test_rigid_rot_run_record_writes_a_complete_bag(tmp_path):
     )
     assert done.returncode == 0, done.stdout + done.stderr
     reader = BagReader(bag)
-    assert reader.complete
+    assert reader.complete and reader.metadata["log_time"] == {"base": "sim"}
     stamps = {round(msg.header.stamp.sec + msg.header.stamp.nanosec * 1e-9, 6) for _, msg in reader.decoded([STATE_TOPIC])}
     assert stamps == {round(0.02 * i, 6) for i in range(26)}  # 50 Hz over 0.5 s, both ends included
-    assert resimulate(bag).identical
-
-
-def test_log_times_of_an_rtf_0_run_are_its_sim_times(tmp_path):
-    """Sim-time log times (the default): every stamp and /clock equals its log time, so playback
-    paced by log time (ros2 bag play, Foxglove) runs at sim pace; resim stays bit-exact."""
-    from mcap.reader import make_reader
-    from mcap_ros2.decoder import DecoderFactory
-
-    bag = tmp_path / "rtf0.mcap"
-    rigid_rot = Path(sys.executable).with_name("rigid-rot")
-    done = subprocess.run(
-        [str(rigid_rot), "run", str(write_scene(tmp_path)), "--duration", "2", "--realtime-factor", "0",
-         "--record", str(bag)],
-        capture_output=True, text=True, timeout=60, env=os.environ,
-    )
-    assert done.returncode == 0, done.stdout + done.stderr
     checked: dict[str, int] = {}
     log_times = []
     with open(bag, "rb") as stream:  # the mcap library's own reader, in log-time order
-        for schema, channel, message, decoded in make_reader(stream, decoder_factories=[DecoderFactory()]).iter_decoded_messages():
+        for _, channel, message, decoded in make_reader(stream, decoder_factories=[DecoderFactory()]).iter_decoded_messages():
             log_times.append(message.log_time)
             if channel.topic in (STATE_TOPIC, "/rigid_rot_sim/orientation"):
                 stamp = decoded.header.stamp
@@ -377,10 +366,9 @@ def test_log_times_of_an_rtf_0_run_are_its_sim_times(tmp_path):
                 continue
             assert message.log_time == stamp.sec * 1_000_000_000 + stamp.nanosec, (channel.topic, message.log_time, stamp)
             checked[channel.topic] = checked.get(channel.topic, 0) + 1
-    assert checked[STATE_TOPIC] == 101 and checked["/clock"] == 101 and checked["/tf"] == 51
-    assert log_times == sorted(log_times) and log_times[0] == 0 and log_times[-1] == 2_000_000_000
-    reader = BagReader(bag)
-    assert reader.metadata["log_time"] == {"base": "sim"}
+    # /tf at 25 Hz: 13, plus the final state at 0.5 s (every output ends on it)
+    assert checked[STATE_TOPIC] == 26 and checked["/clock"] == 26 and checked["/tf"] == 14
+    assert log_times == sorted(log_times) and log_times[0] == 0 and log_times[-1] == 500_000_000
     assert resimulate(bag).identical
 
 

@@ -17,7 +17,7 @@ import yaml
 
 pytest.importorskip("simulation_interfaces.srv", reason="simulation_interfaces is not installed (make setup builds it)")
 sys.path.insert(0, str(Path(__file__).resolve().parent))
-from test_node_e2e import NODE, SCENES, Collector, stamp  # noqa: E402
+from test_node_e2e import NODE, SCENES, collector, stamp  # noqa: E402,F401 (collector: the fixture)
 
 WORLD, BODY = "map_test", "satellite"
 
@@ -38,13 +38,6 @@ def sim_node(launch_node_module, scene_file):
         "--ros-args", "-p", f"scene:={scene_file}", "-p", "real_time_factor:=1.0",
         "-p", f"world_frame:={WORLD}", "-p", f"body_frame:={BODY}", name="standard",
     )
-
-
-@pytest.fixture
-def collector(ros_node_module):
-    c = Collector(ros_node_module)
-    yield c
-    c.close()
 
 
 def test_simulation_interfaces_services_refuse_bad_requests_and_serve_good_ones(sim_node, collector):
