@@ -19,6 +19,7 @@ from __future__ import annotations
 import argparse
 import json
 import os
+import sys
 from collections.abc import Mapping
 from dataclasses import dataclass
 from pathlib import Path
@@ -149,8 +150,8 @@ def run(args: argparse.Namespace) -> int:
         difference = max_difference(local, remote)
         scale = max(float(local.principal_moments[-1]), float(local.total_mass), 1.0)
         if remote.symmetry != local.symmetry or not difference <= 1e-12 * scale:
-            print(f"MISMATCH: service and library differ by {difference:.3g} "
-                  f"(symmetry {remote.symmetry} vs {local.symmetry})")
+            print(f"rigid-rot inertia: MISMATCH: service and library differ by {difference:.3g} "
+                  f"(symmetry {remote.symmetry} vs {local.symmetry})", file=sys.stderr)
             return 1
         print(f"service answer matches the library (largest difference {difference:.3g})")
     return 0
