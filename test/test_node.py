@@ -330,3 +330,15 @@ def test_recording_without_the_mcap_package_is_disabled_with_a_message(context, 
         assert node.sim.step_index == k + 3
     finally:
         node.destroy_node()
+
+
+def test_without_simulation_interfaces_the_node_runs_without_the_standard_services(harness, monkeypatch):
+    from rigid_rot_sim import simulation_services
+
+    monkeypatch.setattr(simulation_services, "AVAILABLE", False)  # as on an install without the package
+    h = harness("free_tumble", real_time_factor=0.0)
+    assert h.node.simulation_services is None
+    assert h.call(Trigger, "reset", Trigger.Request()).success  # its own services are there
+    services = dict(h.client.get_service_names_and_types_by_node("rigid_rot_sim", "/"))
+    assert "/rigid_rot_sim/step" in services
+    assert not any(name.endswith(("_simulation", "_simulation_state", "_simulator_features")) for name in services)
