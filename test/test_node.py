@@ -339,6 +339,8 @@ def test_without_simulation_interfaces_the_node_runs_without_the_standard_servic
     h = harness("free_tumble", real_time_factor=0.0)
     assert h.node.simulation_services is None
     assert h.call(Trigger, "reset", Trigger.Request()).success  # its own services are there
-    services = dict(h.client.get_service_names_and_types_by_node("rigid_rot_sim", "/"))
-    assert "/rigid_rot_sim/step" in services
-    assert not any(name.endswith(("_simulation", "_simulation_state", "_simulator_features")) for name in services)
+    def services():
+        return dict(h.client.get_service_names_and_types_by_node("rigid_rot_sim", "/"))
+
+    assert h.spin_until(lambda: "/rigid_rot_sim/step" in services() and "/rigid_rot_sim/apply_torque" in services())
+    assert not any(name.endswith(("_simulation", "_simulation_state", "_simulator_features")) for name in services())

@@ -122,7 +122,7 @@ def test_torque_commands_change_omega_exactly_as_the_core_predicts(launch_node, 
 
     sim = Simulator(load_scene(SCENES / "torque_driven.yaml"), method="rk4")
     for when, torque, frame in commands:
-        sim.submit_torque("~/torque", torque, frame, when)
+        sim.submit_torque("~/torque", torque, sim.resolve_frame("~/torque", frame, "header"), when)
     compared = 0
     for msg in states:
         t = stamp(msg)
