@@ -45,3 +45,14 @@ def test_inertia_ros_args_need_the_service():
     done = rigid_rot("inertia", "--mass", "1", "0", "0", "0", "--ros-args", "-r", "__ns:=/x")
     assert done.returncode == 2 and done.stdout == ""
     assert "--ros-args needs --service" in done.stderr
+
+
+def test_run_passes_its_options_then_the_ros_args_to_the_node():
+    from rigid_rot_sim.cli import build_parser
+    from rigid_rot_sim.cli.run import node_arguments
+
+    args = build_parser("run").parse_args(
+        ["run", "free_tumble", "--record", "x.mcap", "--record-log-time", "wall", "--ros-args", "-p", "body_frame:=sat"])
+    argv = node_arguments(args)
+    assert argv[:2] == ["rigid_rot_sim_node", "--ros-args"]
+    assert "record_log_time:=wall" in argv and argv[-2:] == ["-p", "body_frame:=sat"]  # ours first, theirs win
