@@ -65,6 +65,7 @@ from rigid_rot_sim import conversions, simulation_services
 from rigid_rot_sim.core.inertia import mass_properties, parallel_axis_shift
 from rigid_rot_sim.core.scene import OUTPUT_NAMES, Frames, Scene, load_scene
 from rigid_rot_sim.core.simulator import CommandRejected, Simulator
+from rigid_rot_sim.recording import LOG_TIME_BASES  # the package itself is light (no mcap)
 
 try:  # never required: /tf exists only where tf2_msgs is installed
     from tf2_msgs.msg import TFMessage
@@ -102,9 +103,6 @@ _OUTPUT_TYPES = {
     "imu": Imu,
     "odom": Odometry,
 }
-
-#: Time base of the recording's MCAP log times (``record_log_time`` parameter).
-LOG_TIME_BASES = ("sim", "wall")
 
 
 def _float_range(low: float, high: float) -> list[FloatingPointRange]:

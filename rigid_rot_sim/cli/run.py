@@ -21,6 +21,7 @@ import sys
 from pathlib import Path
 
 from rigid_rot_sim.cli.ros_args import add_ros_args
+from rigid_rot_sim.recording import LOG_TIME_BASES
 
 
 def scene_search_dirs() -> list[Path]:
@@ -71,7 +72,7 @@ def add_parser(subparsers) -> None:
     parser.add_argument("--integrator", help="integrator name from the registry, or auto")
     parser.add_argument("--dt", type=_positive, help="physics step, s")
     parser.add_argument("--record", metavar="OUT.mcap", help="record the run to this MCAP file")
-    parser.add_argument("--record-log-time", choices=("sim", "wall"), dest="record_log_time",
+    parser.add_argument("--record-log-time", choices=LOG_TIME_BASES, dest="record_log_time",
                         help="MCAP log times of the recording: sim time (default) or wall clock")
     parser.add_argument("--echo", type=_positive, metavar="PERIOD", help="print the received ~/state every PERIOD s of sim time")
     add_ros_args(parser)

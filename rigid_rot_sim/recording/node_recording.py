@@ -31,7 +31,8 @@ from typing import Any
 
 from rclpy.serialization import serialize_message
 
-from rigid_rot_sim.recording.session import LOG_TIME_BASES, RunRecorder
+from rigid_rot_sim.recording import LOG_TIME_BASES
+from rigid_rot_sim.recording.session import RunRecorder
 from rigid_rot_sim.recording.writer import QosProfile, RecorderError
 
 

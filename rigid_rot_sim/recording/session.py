@@ -42,10 +42,7 @@ from rigid_rot_sim.recording.writer import QosProfile, Recorder, RecorderError
 TF_TOPIC = "/tf"
 TF_TYPE = "tf2_msgs/msg/TFMessage"
 
-__all__ = ["RunRecorder", "RecorderError", "SimLogTime", "type_name_of", "LOG_TIME_BASES"]
-
-#: Time bases of the log times, the first the default.
-LOG_TIME_BASES = ("sim", "wall")
+__all__ = ["RunRecorder", "RecorderError", "SimLogTime", "type_name_of"]
 
 
 def type_name_of(msg_type: type) -> str:
