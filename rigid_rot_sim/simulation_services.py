@@ -142,8 +142,7 @@ class SimulationServices:
         node = self.node
         current = self.run_state()
         already = SetSimulationState.Response.ALREADY_IN_TARGET_STATE
-        names = {STOPPED: "STOPPED", PLAYING: "PLAYING",
-                 PAUSED: "PAUSED"}
+        names = {STOPPED: "STOPPED", PLAYING: "PLAYING", PAUSED: "PAUSED"}
         if target == QUITTING:
             raise _Refused(FEATURE_UNSUPPORTED, "QUITTING is not supported: stop the node with SIGINT or SIGTERM")
         if target not in names:
