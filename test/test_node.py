@@ -336,15 +336,29 @@ def test_recording_without_the_mcap_package_is_disabled_with_a_message(context, 
         node.destroy_node()
 
 
-def test_without_simulation_interfaces_the_node_runs_without_the_standard_services(harness, monkeypatch):
+def test_without_simulation_interfaces_the_node_runs_without_the_standard_services(context, monkeypatch):
     from rigid_rot_sim import simulation_services
 
     monkeypatch.setattr(simulation_services, "AVAILABLE", False)  # as on an install without the package
-    h = harness("free_tumble", real_time_factor=0.0)
-    assert h.node.simulation_services is None
-    assert h.call(Trigger, "reset", Trigger.Request()).success  # its own services are there
-    def services():
-        return dict(h.client.get_service_names_and_types_by_node("rigid_rot_sim", "/"))
+    # a node name of its own, so that no other test's node can answer the graph query below
+    node = RigidRotSimNode(context=context, cli_args=["--ros-args", "-r", "__node:=rigid_rot_plain"],
+                           parameter_overrides=[Parameter("scene", value=str(SCENES / "free_tumble.yaml"))])
+    probe = rclpy.create_node("probe_plain", context=context)
+    executor = SingleThreadedExecutor(context=context)
+    executor.add_node(node)
+    executor.add_node(probe)
+    try:
+        assert node.simulation_services is None
 
-    assert h.spin_until(lambda: "/rigid_rot_sim/step" in services() and "/rigid_rot_sim/apply_torque" in services())
-    assert not any(name.endswith(("_simulation", "_simulation_state", "_simulator_features")) for name in services())
+        def services():
+            return dict(probe.get_service_names_and_types_by_node("rigid_rot_plain", "/"))
+
+        deadline = time.monotonic() + 30.0
+        while not {"/rigid_rot_plain/step", "/rigid_rot_plain/apply_torque"} <= set(services()):
+            assert time.monotonic() < deadline, services()
+            executor.spin_once(timeout_sec=0.05)
+        assert not any(name.endswith(("_simulation", "_simulation_state", "_simulator_features")) for name in services())
+    finally:
+        executor.shutdown()
+        probe.destroy_node()
+        node.destroy_node()

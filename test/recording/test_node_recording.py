@@ -27,7 +27,7 @@ def test_every_event_kind_is_recorded_and_replayed_bit_for_bit(tmp_path):
     recorded = RecordedSimulator(sim, NodeRecording(None, run, sim))
 
     def publish():
-        run.record("/rigid_rot_sim/state", conversions.snapshot_to_state(recorded.snapshot(), "odom", "body"))
+        run.record("/rigid_rot_sim/state", conversions.snapshot_to_state(recorded.snapshot(), "odom", "base_link"))
 
     script = [
         (50, lambda: recorded.receive_torque("~/torque", (0.0, 0.0, 0.003), "base_link", 0.0)),
