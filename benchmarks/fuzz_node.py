@@ -48,8 +48,8 @@ from rcl_interfaces.srv import SetParameters  # noqa: E402
 from rclpy.executors import SingleThreadedExecutor  # noqa: E402
 from rclpy.parameter import Parameter  # noqa: E402
 from rigid_rot_msgs.msg import RejectedCommand, RigidBodyState  # noqa: E402
-from rigid_rot_msgs.srv import ApplyTorque, ComputeInertia, Reset, SetState, StepSimulation  # noqa: E402
-from std_srvs.srv import SetBool  # noqa: E402
+from rigid_rot_msgs.srv import ApplyTorque, ComputeInertia, SetState, Step  # noqa: E402
+from std_srvs.srv import SetBool, Trigger  # noqa: E402
 
 import generators  # noqa: E402
 from rigid_rot_sim.core import limits  # noqa: E402
@@ -164,14 +164,14 @@ def service_request(rng: random.Random):
         request.orientation.x, request.orientation.y, request.orientation.z, request.orientation.w = r["orientation"]
         return SetState, "set_state", request
     if kind == "step":
-        return StepSimulation, "step", StepSimulation.Request(steps=generators.step_count(rng))
+        return Step, "step", Step.Request(steps=generators.step_count(rng))
     if kind == "apply":
         torque = [generators.number(rng) for _ in range(3)]
         return ApplyTorque, "apply_torque", ApplyTorque.Request(
             torque=Vector3(x=torque[0], y=torque[1], z=torque[2]), frame_id=rng.choice(generators.FRAMES),
             duration=Duration(sec=rng.choice([0, 1, 100]), nanosec=rng.choice([0, 1000])))
     if kind == "reset":
-        return Reset, "reset", Reset.Request()
+        return Trigger, "reset", Trigger.Request()
     return SetBool, "pause", SetBool.Request(data=rng.random() < 0.5)
 
 

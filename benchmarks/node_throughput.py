@@ -105,7 +105,7 @@ while pub.get_subscription_count() == 0:
 time.sleep(1.0)
 for i in range(n):
     msg = WrenchStamped()
-    msg.header.frame_id = "body"
+    msg.header.frame_id = "base_link"
     msg.wrench.torque.z = (1e-4 + 1e-8 * i) * (1 if i % 2 == 0 else -1)
     pub.publish(msg)
     time.sleep(0.05)

@@ -20,9 +20,11 @@ from geometry_msgs.msg import (
     Vector3,
     Vector3Stamped,
 )
+from nav_msgs.msg import Odometry
 from rigid_rot_msgs.msg import HeavyTopState, RejectedCommand, RigidBodyState
 from rigid_rot_msgs.srv import ComputeInertia
 from rosgraph_msgs.msg import Clock
+from sensor_msgs.msg import Imu
 
 from rigid_rot_sim.core.inertia import MassProperties, principal_orientation
 
@@ -292,4 +294,57 @@ def rejected_command(source: str, reason: str, t: float, frame_id: str, torque) 
     msg.header.frame_id = frame_id
     values = np.asarray(torque, dtype=float).reshape(3)
     msg.torque = Vector3(x=float(values[0]), y=float(values[1]), z=float(values[2]))
+    return msg
+
+
+# --------------------------------------------------------------------- RViz / estimator outputs
+# The simulated values are exact (ground truth): every covariance diagonal carries the same
+# ``variance`` (the node's ``ground_truth_variance`` parameter, tiny by default, so that an
+# estimator's matrices stay invertible); off-diagonal terms are 0. All-zero covariances would
+# mean "unknown" to sensor_msgs consumers, and -1 in element 0 means "not provided".
+
+
+def _diagonal(size: int, variances) -> list[float]:
+    """Row-major size x size covariance with ``variances`` (one per axis) on the diagonal."""
+    values = [0.0] * (size * size)
+    for i, variance in enumerate(variances):
+        values[i * size + i] = float(variance)
+    return values
+
+
+def snapshot_to_imu(snapshot: StateSnapshot, body_frame: str, variance: float) -> Imu:
+    """sensor_msgs/Imu of an ideal IMU at the body frame's origin.
+
+    ``orientation``: body -> world attitude (x, y, z, w); ``angular_velocity``: rad/s in
+    the body frame (header.frame_id); both with ``variance`` on their covariance
+    diagonals (rad^2, (rad/s)^2). No linear acceleration is simulated: the field is zero
+    and ``linear_acceleration_covariance[0] = -1`` (the message's "not provided").
+    """
+    msg = Imu()
+    msg.header.stamp = seconds_to_time(snapshot.t)
+    msg.header.frame_id = body_frame
+    q = msg.orientation
+    q.x, q.y, q.z, q.w = snapshot.orientation.tolist()
+    _set_vector3(msg.angular_velocity, snapshot.angular_velocity_body)
+    msg.orientation_covariance = _diagonal(3, [variance] * 3)
+    msg.angular_velocity_covariance = _diagonal(3, [variance] * 3)
+    msg.linear_acceleration_covariance = [-1.0] + [0.0] * 8
+    return msg
+
+
+def snapshot_to_odometry(snapshot: StateSnapshot, world_frame: str, body_frame: str, variance: float) -> Odometry:
+    """nav_msgs/Odometry: attitude in the world frame, angular velocity in the body (child) frame.
+
+    The body turns about a fixed point, so position and linear velocity are exactly zero;
+    every pose and twist covariance diagonal entry is ``variance``.
+    """
+    msg = Odometry()
+    msg.header.stamp = seconds_to_time(snapshot.t)
+    msg.header.frame_id = world_frame
+    msg.child_frame_id = body_frame
+    q = msg.pose.pose.orientation
+    q.x, q.y, q.z, q.w = snapshot.orientation.tolist()
+    _set_vector3(msg.twist.twist.angular, snapshot.angular_velocity_body)
+    msg.pose.covariance = _diagonal(6, [variance] * 6)
+    msg.twist.covariance = _diagonal(6, [variance] * 6)
     return msg

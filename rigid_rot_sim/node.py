@@ -11,16 +11,22 @@ Topics (names relative to the node; QoS in the README, section "The simulation n
 ~/angular_velocity (Vector3Stamped, body frame), ~/angular_momentum (Vector3Stamped,
 world frame), ~/mass_properties (geometry_msgs/InertiaStamped, transient local, once),
 ~/top_state (rigid_rot_msgs/HeavyTopState, gravity scenes), ~/rejected
-(rigid_rot_msgs/RejectedCommand), /tf (when tf2_msgs imports), /clock (sim time).
-Every header stamp is sim time. Torque inputs: the scene's topics (WrenchStamped or
+(rigid_rot_msgs/RejectedCommand), ~/imu (sensor_msgs/Imu) and ~/odom (nav_msgs/Odometry)
+when the scene asks for them, /tf (when tf2_msgs imports), /clock (sim time).
+Every header stamp is sim time. Frame names: the ``world_frame`` / ``body_frame``
+parameters (default: the scene's ``frames``, REP 105 ``odom`` / ``base_link``), used by
+every output, /tf and the recording. Torque inputs: the scene's topics (WrenchStamped or
 Vector3Stamped).
 
 Services
 --------
-~/compute_inertia, ~/set_state, ~/reset, ~/pause (std_srvs/SetBool), ~/step (while
-paused; at most ``limits.MAX_STEPS_PER_REQUEST`` steps, run in the service callback for at
-most ``STEP_REQUEST_WALL`` s: the reply says how many were done), ~/apply_torque. A bad
-request gets ``success = false`` and the reason; nothing raises out of a callback.
+~/compute_inertia, ~/set_state, ~/reset (std_srvs/Trigger), ~/pause (std_srvs/SetBool),
+~/step (rigid_rot_msgs/Step, while paused; at most ``limits.MAX_STEPS_PER_REQUEST`` steps,
+run in the service callback for at most ``STEP_REQUEST_WALL`` s: the reply says how many
+were done), ~/apply_torque. A bad request gets ``success = false`` and the reason; nothing
+raises out of a callback. Where simulation_interfaces is installed, also the standard
+simulator services (:mod:`rigid_rot_sim.simulation_services`), through the same actions
+(``~/step_simulation`` runs ``~/step``'s code, limits included).
 Every limit is in :mod:`rigid_rot_sim.core.limits` (README, "Limits and failure behaviour").
 
 Pacing
@@ -36,6 +42,7 @@ refused (at start-up and at run time).
 
 from __future__ import annotations
 
+import dataclasses
 import math
 import signal
 import sys
@@ -55,17 +62,20 @@ from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
 from rclpy.signals import SignalHandlerOptions
 from rcl_interfaces.msg import FloatingPointRange, IntegerRange, ParameterDescriptor, SetParametersResult
 from geometry_msgs.msg import InertiaStamped, QuaternionStamped, Vector3Stamped, WrenchStamped
+from nav_msgs.msg import Odometry
 from rigid_rot_msgs.msg import HeavyTopState, RejectedCommand, RigidBodyState
-from rigid_rot_msgs.srv import ApplyTorque, ComputeInertia, Reset, SetState, StepSimulation
+from rigid_rot_msgs.srv import ApplyTorque, ComputeInertia, SetState, Step
 from rosgraph_msgs.msg import Clock
-from std_srvs.srv import SetBool
+from sensor_msgs.msg import Imu
+from std_srvs.srv import SetBool, Trigger
 
-from rigid_rot_sim import conversions
+from rigid_rot_sim import conversions, simulation_services
 from rigid_rot_sim.core import limits
 from rigid_rot_sim.core.inertia import mass_properties, parallel_axis_shift
 from rigid_rot_sim.core.pacing import StepCost, falling_behind_message
-from rigid_rot_sim.core.scene import OUTPUT_NAMES, Scene, load_scene
+from rigid_rot_sim.core.scene import OUTPUT_NAMES, Frames, Scene, load_scene
 from rigid_rot_sim.core.simulator import CommandRejected, Simulator
+from rigid_rot_sim.recording import LOG_TIME_BASES  # the package itself is light (no mcap)
 
 try:  # never required: /tf exists only where tf2_msgs is installed
     from tf2_msgs.msg import TFMessage
@@ -104,6 +114,8 @@ _OUTPUT_TYPES = {
     "angular_velocity": Vector3Stamped,
     "angular_momentum": Vector3Stamped,
     "top_state": HeavyTopState,
+    "imu": Imu,
+    "odom": Odometry,
 }
 
 
@@ -144,6 +156,13 @@ class RigidRotSimNode(Node):
         self.scene = scene
         self.step_cost = StepCost()
         self._declare_parameters(scene)
+        # the frame parameters override the scene's names everywhere (simulator included)
+        frames = Frames(self.get_parameter("world_frame").value, self.get_parameter("body_frame").value)
+        scene = dataclasses.replace(scene, frames=frames.checked())
+        self.scene = scene
+        if self.get_parameter("record_log_time").value not in LOG_TIME_BASES:
+            raise ValueError(f"record_log_time must be one of {', '.join(LOG_TIME_BASES)}, "
+                             f"got {self.get_parameter('record_log_time').value!r}")
         params = {name: self.get_parameter(name).value for name in ("integrator", "dt", "real_time_factor", "duration")}
         self.sim = Simulator(scene, method=params["integrator"], dt=params["dt"])
         self.sim.max_torque = float(self.get_parameter("commands.max_torque").value)
@@ -151,6 +170,7 @@ class RigidRotSimNode(Node):
         self.duration = float(params["duration"]) if params["duration"] > 0.0 else None
         self.record_path = self.get_parameter("record_path").value or None
         self.frames = scene.frames
+        self.ground_truth_variance = float(self.get_parameter("ground_truth_variance").value)
         built: list[str] = [f"integrator {self.sim.method} (dt {self.sim.dt:g} s{', auto' if params['integrator'] == 'auto' else ''})"]
         left_out: list[str] = []
 
@@ -215,18 +235,23 @@ class RigidRotSimNode(Node):
 
         # --- services
         self.set_state_service = self.create_service(SetState, "~/set_state", self.set_state_callback)
-        self.reset_service = self.create_service(Reset, "~/reset", self.reset_callback)
+        self.reset_service = self.create_service(Trigger, "~/reset", self.reset_callback)
         self.pause_service = self.create_service(SetBool, "~/pause", self.pause_callback)
-        self.step_service = self.create_service(StepSimulation, "~/step", self.step_callback)
+        self.step_service = self.create_service(Step, "~/step", self.step_callback)
         self.apply_torque_service = self.create_service(ApplyTorque, "~/apply_torque", self.apply_torque_callback)
+        self.simulation_services = None
+        if simulation_services.AVAILABLE:
+            self.simulation_services = simulation_services.SimulationServices(self)
+            built.append("simulation_interfaces services (~/step_simulation, ~/reset_simulation, ...)")
+        else:
+            left_out.append("simulation_interfaces services (package not installed)")
 
         if self.record_path:
-            from rigid_rot_sim.recording.node_recording import attach  # imported only when recording
-
-            # wraps self.sim and the publishers so that what changes the run and what is published
-            # is recorded; None (error logged) when the file cannot be created: the run goes on
-            self.recorder = attach(self, self.record_path)
-            built.append(f"recording to {self.record_path}" if self.recorder else "no recording (file error)")
+            self.recorder = self._start_recording()
+            built.append(
+                f"recording to {self.record_path} (log time: {self.get_parameter('record_log_time').value})"
+                if self.recorder else "no recording (see the error above)"
+            )
         else:
             left_out.append("recorder (nothing recorded)")
 
@@ -250,6 +275,18 @@ class RigidRotSimNode(Node):
         self._publish_due(force=True)
 
     # ------------------------------------------------------------------ set-up helpers
+
+    def _start_recording(self) -> Any:
+        """The recording wiring, or None (error logged) when it cannot start: the run goes on."""
+        try:
+            from rigid_rot_sim.recording.node_recording import attach  # imported only when recording
+        except ImportError as exc:  # the mcap packages are optional at run time
+            missing = (exc.name or "").split(".")[0] or str(exc)
+            self.get_logger().error(f"recording disabled: {missing} is not installed (pip install mcap mcap-ros2-support)")
+            return None
+        # wraps self.sim and the publishers so that what changes the run and what is published
+        # is recorded; None (error logged) when the file cannot be created
+        return attach(self, self.record_path, log_time=self.get_parameter("record_log_time").value)
 
     def _declare_parameters(self, scene: Scene) -> None:
         """Declare every parameter once, with the scene's values as defaults."""
@@ -291,6 +328,38 @@ class RigidRotSimNode(Node):
             "record_path",
             scene.recording or "",
             ParameterDescriptor(description="MCAP file to record the run to; empty = no recording", read_only=True),
+        )
+        self.declare_parameter(
+            "record_log_time",
+            "sim",
+            ParameterDescriptor(
+                description="MCAP log time of the recording: 'sim' (sim time in ns, as ros2 bag record "
+                "--use-sim-time; continued across resets) or 'wall' (wall clock)",
+                read_only=True,
+                additional_constraints="one of: " + ", ".join(LOG_TIME_BASES),
+            ),
+        )
+        self.declare_parameter(
+            "world_frame",
+            scene.frames.world,
+            ParameterDescriptor(description="Fixed frame of the attitude (header.frame_id of the outputs, /tf parent); "
+                                "default: the scene's frames.world (odom)", read_only=True),
+        )
+        self.declare_parameter(
+            "body_frame",
+            scene.frames.body,
+            ParameterDescriptor(description="Body frame (child frame of /tf, ~/state and ~/odom, frame of ~/imu); "
+                                "default: the scene's frames.body (base_link)", read_only=True),
+        )
+        self.declare_parameter(
+            "ground_truth_variance",
+            1e-12,
+            ParameterDescriptor(
+                description="Variance on the covariance diagonals of ~/imu and ~/odom (the values are exact; "
+                "0 would read as 'unknown' to sensor_msgs consumers)",
+                floating_point_range=_float_range(0.0, 1e6),
+                read_only=True,
+            ),
         )
         for name, rate in scene.outputs.as_dict().items():
             self.declare_parameter(
@@ -445,6 +514,10 @@ class RigidRotSimNode(Node):
                 msg = conversions.snapshot_to_top_state(snapshot, world)
             elif name == "tf":
                 msg = TFMessage(transforms=[conversions.transform_stamped(snapshot, world, body)])
+            elif name == "imu":
+                msg = conversions.snapshot_to_imu(snapshot, body, self.ground_truth_variance)
+            elif name == "odom":
+                msg = conversions.snapshot_to_odometry(snapshot, world, body, self.ground_truth_variance)
             else:
                 msg = conversions.clock_message(snapshot.t)
             publisher.publish(msg)
@@ -505,6 +578,15 @@ class RigidRotSimNode(Node):
         self._publish_due(force=True)
         return f"state set at t = {sim.t:.9g} s; {self._run_state()}"
 
+    def _set_initial_state(self) -> str:
+        """The scene's initial attitude and ω at the current time (a reset of the state only)."""
+        initial = self.scene.initial
+        request = SetState.Request(
+            orientation=conversions.array_to_quaternion(initial.orientation),
+            angular_velocity=conversions.array_to_vector3(initial.angular_velocity),
+        )
+        return self._set_state(request)
+
     def reset_callback(self, request, response):
         return self._serve(response, "~/reset", self._reset)
 
@@ -535,32 +617,41 @@ class RigidRotSimNode(Node):
 
     def step_callback(self, request, response):
         def step() -> str:
-            sim = self.sim
-            if not sim.paused:
-                raise ValueError("not paused: call ~/pause with data=true first")
-            if request.steps < 1:
-                raise ValueError("steps must be >= 1")
-            if request.steps > limits.MAX_STEPS_PER_REQUEST:
-                raise ValueError(
-                    f"steps = {request.steps} exceeds the limit of {limits.MAX_STEPS_PER_REQUEST} per request "
-                    "(call ~/step again, or resume with ~/pause data=false)"
-                )
-            start = sim.step_index
-            # the steps run here, in the callback, for at most STEP_REQUEST_WALL s of wall time
-            self._run(start + int(request.steps), time.monotonic() + STEP_REQUEST_WALL)
-            snapshot = sim.snapshot()
-            conversions.fill_rigid_body_state(response.state, snapshot, self.frames.world, self.frames.body)
-            done = sim.step_index - start
-            if sim.failure is not None:
-                raise ValueError(f"stopped after {done} steps: {sim.failure}")
-            if done < request.steps:
-                raise ValueError(
-                    f"only {done} of {request.steps} steps done within the {STEP_REQUEST_WALL:g} s budget of a request "
-                    f"(t = {sim.t:.9g} s): call ~/step again for the rest"
-                )
-            return f"{done} steps done, t = {sim.t:.9g} s"
+            try:
+                return self._step(int(request.steps))
+            finally:
+                conversions.fill_rigid_body_state(response.state, self.sim.snapshot(), self.frames.world, self.frames.body)
 
         return self._serve(response, "~/step", step)
+
+    def _step(self, steps: int) -> str:
+        """Advance a paused run by ``steps`` steps (~/step and ~/step_simulation); ValueError if refused.
+
+        At most ``limits.MAX_STEPS_PER_REQUEST`` steps, run here in the service callback for
+        at most ``STEP_REQUEST_WALL`` s of wall time, so the executor is never held for long.
+        """
+        sim = self.sim
+        if not sim.paused:
+            raise ValueError("not paused: call ~/pause with data=true first")
+        if steps < 1:
+            raise ValueError("steps must be >= 1")
+        if steps > limits.MAX_STEPS_PER_REQUEST:
+            raise ValueError(
+                f"steps = {steps} exceeds the limit of {limits.MAX_STEPS_PER_REQUEST} per request "
+                "(call ~/step again, or resume with ~/pause data=false)"
+            )
+        start = sim.step_index
+        # the steps run here, in the callback, for at most STEP_REQUEST_WALL s of wall time
+        self._run(start + steps, time.monotonic() + STEP_REQUEST_WALL)
+        done = sim.step_index - start
+        if sim.failure is not None:
+            raise ValueError(f"stopped after {done} steps: {sim.failure}")
+        if done < steps:
+            raise ValueError(
+                f"only {done} of {steps} steps done within the {STEP_REQUEST_WALL:g} s budget of a request "
+                f"(t = {sim.t:.9g} s): call ~/step again for the rest"
+            )
+        return f"{done} steps done, t = {sim.t:.9g} s"
 
     def apply_torque_callback(self, request, response):
         def apply() -> str:

@@ -18,8 +18,8 @@ from geometry_msgs.msg import Vector3, WrenchStamped  # noqa: E402
 from rclpy.executors import SingleThreadedExecutor  # noqa: E402
 from rclpy.parameter import Parameter  # noqa: E402
 from rigid_rot_msgs.msg import RejectedCommand, RigidBodyState  # noqa: E402
-from rigid_rot_msgs.srv import ApplyTorque, ComputeInertia, Reset, SetState, StepSimulation  # noqa: E402
-from std_srvs.srv import SetBool  # noqa: E402
+from rigid_rot_msgs.srv import ApplyTorque, ComputeInertia, SetState, Step  # noqa: E402
+from std_srvs.srv import SetBool, Trigger  # noqa: E402
 
 from rigid_rot_sim.node import COMMAND_QOS, REJECTED_QOS, STATE_QOS, RigidRotSimNode  # noqa: E402
 
@@ -173,15 +173,15 @@ def test_pause_step_reset_set_state_services(harness):
     h = harness("free_tumble", real_time_factor=1.0)
     states = []
     h.client.create_subscription(RigidBodyState, "/rigid_rot_sim/state", states.append, STATE_QOS)
-    refused = h.call(StepSimulation, "step", StepSimulation.Request(steps=5))
+    refused = h.call(Step, "step", Step.Request(steps=5))
     assert not refused.success and "not paused" in refused.message
     assert h.call(SetBool, "pause", SetBool.Request(data=True)).success
     k = h.node.sim.step_index
     h.spin_until(lambda: False, timeout=0.2)
     assert h.node.sim.step_index == k  # paused: no steps
-    zero = h.call(StepSimulation, "step", StepSimulation.Request(steps=0))
+    zero = h.call(Step, "step", Step.Request(steps=0))
     assert not zero.success
-    stepped = h.call(StepSimulation, "step", StepSimulation.Request(steps=25))
+    stepped = h.call(Step, "step", Step.Request(steps=25))
     assert stepped.success and h.node.sim.step_index == k + 25
     t = stepped.state.header.stamp.sec + stepped.state.header.stamp.nanosec * 1e-9
     assert t == pytest.approx((k + 25) * 0.01, abs=1e-9)
@@ -199,7 +199,7 @@ def test_pause_step_reset_set_state_services(harness):
     bad_omega.orientation.w = 1.0
     bad_omega.angular_velocity.x = math.nan
     assert not h.call(SetState, "set_state", bad_omega).success
-    assert h.call(Reset, "reset", Reset.Request()).success
+    assert h.call(Trigger, "reset", Trigger.Request()).success
     assert h.node.sim.step_index == 0
     assert h.node.sim.snapshot().angular_velocity_body.tolist() == [0.3, 0.2, 2.0]
     assert h.call(SetBool, "pause", SetBool.Request(data=False)).success
@@ -222,10 +222,10 @@ def test_apply_torque_service_and_rejections(harness):
     publisher = h.client.create_publisher(WrenchStamped, "/rigid_rot_sim/torque", COMMAND_QOS)
     assert h.spin_until(lambda: publisher.get_subscription_count() > 0)
     nan_cmd = WrenchStamped()
-    nan_cmd.header.frame_id = "body"
+    nan_cmd.header.frame_id = "base_link"
     nan_cmd.wrench.torque.x = math.nan
     force_cmd = WrenchStamped()
-    force_cmd.header.frame_id = "body"
+    force_cmd.header.frame_id = "base_link"
     force_cmd.wrench.torque.z = 1.0
     force_cmd.wrench.force.x = 2.0
     publisher.publish(nan_cmd)
@@ -253,3 +253,112 @@ def test_duration_reached_finishes(harness):
     h = harness("free_tumble", real_time_factor=0.0, duration=0.5)
     assert h.spin_until(lambda: h.node.finished)
     assert h.node.sim.t == pytest.approx(0.5, abs=1e-12) and h.node.sim.step_index == 50
+
+
+def test_rep105_frames_by_default_on_every_output_and_recorded_tf(harness, tmp_path):
+    from geometry_msgs.msg import InertiaStamped, QuaternionStamped, Vector3Stamped
+    from tf2_msgs.msg import TFMessage
+
+    from rigid_rot_sim.node import LATCHED_QOS, TF_QOS
+    from rigid_rot_sim.recording.reader import BagReader
+
+    bag = tmp_path / "frames.mcap"
+    h = harness("free_tumble", real_time_factor=0.0, duration=0.2, record_path=str(bag))
+    got: dict[str, list] = {}
+    for topic, msg_type, qos in (("state", RigidBodyState, STATE_QOS), ("orientation", QuaternionStamped, STATE_QOS),
+                                 ("angular_velocity", Vector3Stamped, STATE_QOS),
+                                 ("angular_momentum", Vector3Stamped, STATE_QOS),
+                                 ("mass_properties", InertiaStamped, LATCHED_QOS)):
+        got[topic] = []
+        h.client.create_subscription(msg_type, f"/rigid_rot_sim/{topic}", got[topic].append, qos)
+    got["tf"] = []
+    h.client.create_subscription(TFMessage, "/tf", got["tf"].append, TF_QOS)
+    h.node.sim.pause(True)
+    publishers = [p for name, p in h.node.publishers_by_output.items() if name in got]
+    assert h.spin_until(lambda: all(p.get_subscription_count() > 0 for p in publishers))
+    assert h.call(Trigger, "reset", Trigger.Request()).success  # republishes every output at t = 0, matched now
+    assert h.spin_until(lambda: all(got.values()))
+    assert (got["state"][0].header.frame_id, got["state"][0].child_frame_id) == ("odom", "base_link")
+    assert got["orientation"][0].header.frame_id == "odom" and got["angular_momentum"][0].header.frame_id == "odom"
+    assert got["angular_velocity"][0].header.frame_id == "base_link"
+    assert got["mass_properties"][0].header.frame_id == "base_link"
+    transform = got["tf"][0].transforms[0]
+    assert (transform.header.frame_id, transform.child_frame_id) == ("odom", "base_link")
+    assert "/rigid_rot_sim/imu" not in h.published_topics() and "imu" not in h.node.publishers_by_output  # not asked for
+    h.node.sim.pause(False)
+    assert h.spin_until(lambda: h.node.finished)
+    h.node.recorder.close()
+    frames = {(m.transforms[0].header.frame_id, m.transforms[0].child_frame_id) for _, m in BagReader(bag).decoded(["/tf"])}
+    assert frames == {("odom", "base_link")}
+
+
+def test_frame_parameters_override_the_scene_and_bad_names_are_refused(context):
+    scene = str(SCENES / "heavy_top.yaml")  # frames {world: world, body: top} in the file
+    node = RigidRotSimNode(context=context, parameter_overrides=[Parameter("scene", value=scene)])
+    try:
+        assert (node.frames.world, node.frames.body) == ("world", "top") and node.sim.frames == node.frames
+    finally:
+        node.destroy_node()
+    node = RigidRotSimNode(context=context, parameter_overrides=[
+        Parameter("scene", value=scene), Parameter("world_frame", value="map"), Parameter("body_frame", value="base_link")])
+    try:
+        assert (node.frames.world, node.frames.body) == ("map", "base_link") and node.sim.frames == node.frames
+    finally:
+        node.destroy_node()
+    for world, body, reason in (("map", "map", "must differ"), ("", "base_link", "non-empty")):
+        with pytest.raises(ValueError, match=reason):
+            RigidRotSimNode(context=context, parameter_overrides=[
+                Parameter("scene", value=scene), Parameter("world_frame", value=world), Parameter("body_frame", value=body)])
+    with pytest.raises(ValueError, match="record_log_time must be one of sim, wall"):
+        RigidRotSimNode(context=context, parameter_overrides=[Parameter("scene", value=scene),
+                                                              Parameter("record_log_time", value="gps")])
+
+
+def test_recording_without_the_mcap_package_is_disabled_with_a_message(context, tmp_path, monkeypatch, capfd):
+    import sys
+
+    for name in [n for n in sys.modules if n == "mcap" or n.startswith(("mcap.", "rigid_rot_sim.recording."))]:
+        parent, _, child = name.rpartition(".")
+        if parent in sys.modules and hasattr(sys.modules[parent], child):
+            # undone after the test: the package attribute points at the original module again
+            monkeypatch.setattr(sys.modules[parent], child, sys.modules[name])
+        monkeypatch.delitem(sys.modules, name)
+    monkeypatch.setitem(sys.modules, "mcap", None)  # import mcap -> ImportError, as when it is not installed
+    node = RigidRotSimNode(context=context, parameter_overrides=[
+        Parameter("scene", value=str(SCENES / "free_tumble.yaml")), Parameter("record_path", value=str(tmp_path / "x.mcap"))])
+    try:
+        assert node.recorder is None and node.sim is not None and not (tmp_path / "x.mcap").exists()
+        assert "recording disabled: mcap is not installed" in capfd.readouterr().err
+        k = node.sim.step_index  # the run itself goes on
+        node.sim.advance_to(k + 3)
+        assert node.sim.step_index == k + 3
+    finally:
+        node.destroy_node()
+
+
+def test_without_simulation_interfaces_the_node_runs_without_the_standard_services(context, monkeypatch):
+    from rigid_rot_sim import simulation_services
+
+    monkeypatch.setattr(simulation_services, "AVAILABLE", False)  # as on an install without the package
+    # a node name of its own, so that no other test's node can answer the graph query below
+    node = RigidRotSimNode(context=context, cli_args=["--ros-args", "-r", "__node:=rigid_rot_plain"],
+                           parameter_overrides=[Parameter("scene", value=str(SCENES / "free_tumble.yaml"))])
+    probe = rclpy.create_node("probe_plain", context=context)
+    executor = SingleThreadedExecutor(context=context)
+    executor.add_node(node)
+    executor.add_node(probe)
+    try:
+        assert node.simulation_services is None
+
+        def services():
+            return dict(probe.get_service_names_and_types_by_node("rigid_rot_plain", "/"))
+
+        deadline = time.monotonic() + 30.0
+        while not {"/rigid_rot_plain/step", "/rigid_rot_plain/apply_torque"} <= set(services()):
+            assert time.monotonic() < deadline, services()
+            executor.spin_once(timeout_sec=0.05)
+        assert not any(name.endswith(("_simulation", "_simulation_state", "_simulator_features")) for name in services())
+    finally:
+        executor.shutdown()
+        probe.destroy_node()
+        node.destroy_node()

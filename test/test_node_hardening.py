@@ -12,8 +12,8 @@ from geometry_msgs.msg import Point, Vector3, WrenchStamped  # noqa: E402
 from rclpy.clock_type import ClockType  # noqa: E402
 from rclpy.parameter import Parameter  # noqa: E402
 from rigid_rot_msgs.msg import RejectedCommand, RigidBodyState  # noqa: E402
-from rigid_rot_msgs.srv import ApplyTorque, ComputeInertia, Reset, SetState, StepSimulation  # noqa: E402
-from std_srvs.srv import SetBool  # noqa: E402
+from rigid_rot_msgs.srv import ApplyTorque, ComputeInertia, SetState, Step  # noqa: E402
+from std_srvs.srv import SetBool, Trigger  # noqa: E402
 
 from rigid_rot_sim.core import limits  # noqa: E402
 from rigid_rot_sim.node import COMMAND_QOS, REJECTED_QOS, STATE_QOS, RigidRotSimNode  # noqa: E402
@@ -40,13 +40,13 @@ def test_reset_after_a_failure_brings_the_run_back(harness):
     assert h.call(ApplyTorque, "apply_torque", huge).success
     assert h.spin_until(lambda: h.node.sim.failure is not None)
     assert h.node.sim.paused and "rotation limit" in h.node.sim.failure
-    reply = h.call(Reset, "reset", Reset.Request())
+    reply = h.call(Trigger, "reset", Trigger.Request())
     assert reply.success and "running" in reply.message, reply.message
     k = h.node.sim.step_index
     assert h.spin_until(lambda: h.node.sim.step_index > k + 100)
     # a pause asked for is kept by reset, and the reply says so
     assert h.call(SetBool, "pause", SetBool.Request(data=True)).success
-    reply = h.call(Reset, "reset", Reset.Request())
+    reply = h.call(Trigger, "reset", Trigger.Request())
     assert reply.success and "still paused" in reply.message and h.node.sim.paused
 
 
@@ -94,10 +94,10 @@ def test_step_requests_are_bounded_and_other_services_keep_answering(harness):
     k = h.node.sim.step_index
     # before: 1e9 steps never replied, every other service was dead and SIGTERM was ignored
     start = time.monotonic()
-    reply = h.call(StepSimulation, "step", StepSimulation.Request(steps=1_000_000_000))
+    reply = h.call(Step, "step", Step.Request(steps=1_000_000_000))
     assert not reply.success and f"exceeds the limit of {limits.MAX_STEPS_PER_REQUEST}" in reply.message
     assert h.node.sim.step_index == k
-    reply = h.call(StepSimulation, "step", StepSimulation.Request(steps=limits.MAX_STEPS_PER_REQUEST))
+    reply = h.call(Step, "step", Step.Request(steps=limits.MAX_STEPS_PER_REQUEST))
     elapsed = time.monotonic() - start
     done = h.node.sim.step_index - k
     assert 0 < done <= limits.MAX_STEPS_PER_REQUEST
@@ -135,7 +135,7 @@ def test_max_torque_and_long_frame_ids_are_rejected_on_the_rejected_topic(harnes
     publisher = h.client.create_publisher(WrenchStamped, "/rigid_rot_sim/torque", COMMAND_QOS)
     assert h.spin_until(lambda: publisher.get_subscription_count() > 0)
 
-    def send(torque, frame_id="body"):
+    def send(torque, frame_id="base_link"):
         msg = WrenchStamped()
         msg.header.frame_id = frame_id
         msg.wrench.torque = torque

@@ -19,12 +19,14 @@ from __future__ import annotations
 import argparse
 import json
 import os
+import sys
 from collections.abc import Mapping
 from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 
+from rigid_rot_sim.cli.ros_args import add_ros_args, rclpy_args
 from rigid_rot_sim.core.inertia import MassProperties, mass_properties, principal_orientation
 from rigid_rot_sim.core.limits import clip_text
 
@@ -66,6 +68,7 @@ def add_parser(subparsers) -> None:
                         help="with --service: check the answer against the local computation")
     parser.add_argument("--timeout", type=float, default=10.0,
                         help="s to wait for the service (default 10)")
+    add_ros_args(parser)
     parser.set_defaults(handler=run)
 
 
@@ -135,26 +138,30 @@ def body_from_args(args: argparse.Namespace) -> BodyInput:
 def run(args: argparse.Namespace) -> int:
     if args.compare and not args.service:
         raise ValueError("--compare needs --service")
+    if args.ros_args is not None and not args.service:
+        raise ValueError("--ros-args needs --service (only the service call creates a ROS node)")
     body = body_from_args(args)
     local = mass_properties(body.masses, body.positions, body.origin)
     if not args.service:
         print(format_json(body, local) if args.json else format_table(body, local))
         return 0
-    remote = call_service(args.service, body, args.timeout)
+    remote = call_service(args.service, body, args.timeout, ros_args=rclpy_args(args))
     print(format_json(body, remote) if args.json else format_table(body, remote, source=args.service))
     if args.compare:
         difference = max_difference(local, remote)
         scale = max(float(local.principal_moments[-1]), float(local.total_mass), 1.0)
         if remote.symmetry != local.symmetry or not difference <= 1e-12 * scale:
-            print(f"MISMATCH: service and library differ by {difference:.3g} "
-                  f"(symmetry {remote.symmetry} vs {local.symmetry})")
+            print(f"rigid-rot inertia: MISMATCH: service and library differ by {difference:.3g} "
+                  f"(symmetry {remote.symmetry} vs {local.symmetry})", file=sys.stderr)
             return 1
         print(f"service answer matches the library (largest difference {difference:.3g})")
     return 0
 
 
-def call_service(name: str, body: BodyInput, timeout: float) -> MassProperties:
+def call_service(name: str, body: BodyInput, timeout: float, ros_args: list[str] | None = None) -> MassProperties:
     """Send ``body`` to a ComputeInertia service; the answer as MassProperties.
+
+    ``ros_args``: the argv for rclpy (``[program, "--ros-args", ...]``: remappings, namespace).
 
     RuntimeError (exit code 1) if the service does not answer within ``timeout`` s;
     ValueError (exit code 2) if it rejects the request.
@@ -169,7 +176,7 @@ def call_service(name: str, body: BodyInput, timeout: float) -> MassProperties:
         body.masses, body.positions, body.origin, body.frame_id
     )
     context = rclpy.Context()
-    rclpy.init(args=[], context=context)
+    rclpy.init(args=ros_args or [], context=context)
     try:
         node = rclpy.create_node("rigid_rot_inertia_client", context=context)
         client = node.create_client(ComputeInertia, name)

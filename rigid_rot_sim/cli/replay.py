@@ -4,10 +4,14 @@ The commands go out as recorded (same bytes: header stamps, frames and values), 
 original timing scaled by ``--rate``. ``--topics`` picks topics (default: the recording
 node's torque inputs, else every WrenchStamped topic), ``--remap OLD:=NEW`` renames one
 (a real robot's command topic onto the simulator's input), ``--clock`` publishes /clock
-from the bag's time.
+from the bag's time. The timing is the bag's log time: sim time for the simulator's own
+recordings (the default), so a replay runs at the recorded sim pace. ``--ros-args`` passes
+remappings, a namespace or parameters to ROS.
 """
 
 from __future__ import annotations
+
+from rigid_rot_sim.cli.ros_args import add_ros_args, rclpy_args
 
 
 def add_parser(subparsers) -> None:
@@ -20,6 +24,7 @@ def add_parser(subparsers) -> None:
     parser.add_argument("--clock", action="store_true", help="also publish /clock from the bag's time")
     parser.add_argument("--wait", type=float, default=5.0, metavar="S",
                         help="wait up to S seconds for subscribers before starting (default 5)")
+    add_ros_args(parser)
     parser.set_defaults(handler=run)
 
 
@@ -39,7 +44,7 @@ def run(args) -> int:
     from rigid_rot_sim.recording.replay import replay
 
     remap = _remaps(args.remap)
-    rclpy.init()
+    rclpy.init(args=rclpy_args(args))
     try:
         report = replay(args.bag, rate=args.rate, topics=args.topics, remap=remap, clock=args.clock,
                         wait_for_subscribers=args.wait)

@@ -6,7 +6,7 @@
 
 SCENE is a path, or the name of a scene shipped in config/scenes. The options become
 node parameters (``scene``, ``duration``, ``real_time_factor``, ``integrator``, ``dt``,
-``record_path``); anything after ``--ros-args`` goes to ROS unchanged, so a params file,
+``record_path``, ``record_log_time``); anything after ``--ros-args`` goes to ROS unchanged, so a params file,
 ``-p`` or remappings work as with ``ros2 run`` (and win over the options). ``--echo PERIOD`` adds a subscriber
 in the same process that prints the received ~/state every PERIOD s of sim time: what
 the node published, through DDS. Exit code 0 when the duration is reached or on Ctrl-C.
@@ -19,6 +19,9 @@ import math
 import os
 import sys
 from pathlib import Path
+
+from rigid_rot_sim.cli.ros_args import add_ros_args
+from rigid_rot_sim.recording import LOG_TIME_BASES
 
 
 def scene_search_dirs() -> list[Path]:
@@ -69,11 +72,10 @@ def add_parser(subparsers) -> None:
     parser.add_argument("--integrator", help="integrator name from the registry, or auto")
     parser.add_argument("--dt", type=_positive, help="physics step, s")
     parser.add_argument("--record", metavar="OUT.mcap", help="record the run to this MCAP file")
+    parser.add_argument("--record-log-time", choices=LOG_TIME_BASES, dest="record_log_time",
+                        help="MCAP log times of the recording: sim time (default) or wall clock")
     parser.add_argument("--echo", type=_positive, metavar="PERIOD", help="print the received ~/state every PERIOD s of sim time")
-    parser.add_argument(
-        "--ros-args", nargs=argparse.REMAINDER, dest="ros_args", metavar="ARG",
-        help="everything after it goes to ROS as with ros2 run (e.g. --params-file FILE, -p name:=value)",
-    )
+    add_ros_args(parser)
     parser.set_defaults(handler=run)
 
 
@@ -90,6 +92,8 @@ def node_arguments(args: argparse.Namespace) -> list[str]:
         params["dt"] = repr(float(args.dt))
     if args.record is not None:
         params["record_path"] = os.path.abspath(args.record)
+    if args.record_log_time is not None:
+        params["record_log_time"] = args.record_log_time
     argv = ["rigid_rot_sim_node", "--ros-args"]
     for name, value in params.items():
         argv += ["-p", f"{name}:={value}"]

@@ -6,18 +6,22 @@
 
 The simplest client of the simulation node (ros2cli is not always installed). X Y Z are
 the torque in N*m, expressed in ``--frame`` (header.frame_id: the scene's body or world
-frame name, default ``body``); the force is zero and the stamp is left zero, so the node
+frame name, default ``base_link``, the REP 105 body frame); the force is zero and the stamp is left zero, so the node
 applies each command at the sim time it arrives. With ``--duration S`` the command is
 repeated at ``--rate`` Hz (wall clock) for S seconds and followed by a zero torque, which
 also keeps inputs with a hold timeout alive meanwhile. Waits up to ``--wait`` s for the
-node's subscription first; exit code 1 when nobody subscribes.
+node's subscription first; exit code 1 (message on stderr) when nobody subscribes.
+``--ros-args`` passes remappings, a namespace or parameters to ROS, as with ``ros2 run``.
 """
 
 from __future__ import annotations
 
 import argparse
 import math
+import sys
 import time
+
+from rigid_rot_sim.cli.ros_args import add_ros_args, rclpy_args
 
 DEFAULT_TOPIC = "/rigid_rot_sim/torque"
 
@@ -41,12 +45,14 @@ def add_parser(subparsers) -> None:
         "torque", help="publish WrenchStamped torque commands to a running node", description=__doc__.split("\n\n")[0]
     )
     parser.add_argument("torque", nargs="*", type=_finite, metavar="X Y Z", help="torque, N*m (omit with --zero)")
-    parser.add_argument("--frame", default="body", help="header.frame_id: the scene's body or world frame (default body)")
+    parser.add_argument("--frame", default="base_link",
+                        help="header.frame_id: the scene's body or world frame (default base_link)")
     parser.add_argument("--duration", type=_positive, help="repeat for this many wall seconds, then send zero")
     parser.add_argument("--rate", type=_positive, default=20.0, help="repeat rate with --duration, Hz (default 20)")
     parser.add_argument("--topic", default=DEFAULT_TOPIC, help=f"command topic (default {DEFAULT_TOPIC})")
     parser.add_argument("--zero", action="store_true", help="publish a zero torque (clears a held command)")
     parser.add_argument("--wait", type=_positive, default=5.0, help="seconds to wait for a subscriber (default 5)")
+    add_ros_args(parser)
     parser.set_defaults(handler=run)
 
 
@@ -72,14 +78,15 @@ def run(args: argparse.Namespace) -> int:
         msg.wrench.torque = array_to_vector3(values)
         return msg
 
-    rclpy.init()
+    rclpy.init(args=rclpy_args(args))
     node = rclpy.create_node("rigid_rot_torque")
     try:
         publisher = node.create_publisher(WrenchStamped, args.topic, COMMAND_QOS)
         deadline = time.monotonic() + args.wait
         while publisher.get_subscription_count() == 0:
             if time.monotonic() > deadline:
-                print(f"rigid-rot torque: no subscriber on {args.topic} after {args.wait:g} s (is the node running?)")
+                print(f"rigid-rot torque: no subscriber on {publisher.topic_name} after {args.wait:g} s "
+                      "(is the node running?)", file=sys.stderr)
                 return 1
             rclpy.spin_once(node, timeout_sec=0.05)
         sent = 0
@@ -96,7 +103,7 @@ def run(args: argparse.Namespace) -> int:
             publisher.publish(message((0.0, 0.0, 0.0)))
         # reliable delivery: give the middleware a moment before the process goes away
         publisher.wait_for_all_acked(rclpy.duration.Duration(seconds=2.0))
-        print(f"rigid-rot torque: {sent} command(s) {list(torque)} N*m in frame {args.frame!r} on {args.topic}"
+        print(f"rigid-rot torque: {sent} command(s) {list(torque)} N*m in frame {args.frame!r} on {publisher.topic_name}"
               + (", then zero" if args.duration is not None else ""))
         return 0
     finally:

@@ -8,7 +8,7 @@ Schema (SI units; frames REP 103; quaternions scalar-last, body -> world)::
 
     name: free_tumble                  # optional, defaults to the file stem
     description: "..."                 # optional
-    frames: {world: world, body: body} # optional, these are the defaults
+    frames: {world: odom, body: base_link}  # optional, these are the defaults (REP 105)
     body:                              # exactly one of the three inertia forms
       principal_moments: [I1, I2, I3]  # kg*m^2, along the body frame's axes
       inertia_tensor: [[..], [..], [..]]   # kg*m^2, symmetric positive definite, body axes
@@ -47,6 +47,8 @@ Schema (SI units; frames REP 103; quaternions scalar-last, body -> world)::
       top_state: 100                   # gravity scenes only
       tf: 50                           # only where tf2_msgs is installed
       clock: 100
+      imu: 0                           # sensor_msgs/Imu on ~/imu (0: not built, the default)
+      odom: 0                          # nav_msgs/Odometry on ~/odom (0: not built, the default)
     recording: null                    # or a path to an .mcap file
     commands:                          # optional, for the torque inputs
       max_torque: 0                    # N*m; a command whose |torque| exceeds it is rejected (0 = no limit)
@@ -99,7 +101,7 @@ __all__ = [
 
 TORQUE_MESSAGE_TYPES = ("WrenchStamped", "Vector3Stamped")
 TORQUE_FRAMES = ("body", "world", "header")
-OUTPUT_NAMES = ("state", "orientation", "angular_velocity", "angular_momentum", "top_state", "tf", "clock")
+OUTPUT_NAMES = ("state", "orientation", "angular_velocity", "angular_momentum", "top_state", "tf", "clock", "imu", "odom")
 DEFAULT_OUTPUT_RATES = {
     "state": 100.0,
     "orientation": 100.0,
@@ -108,6 +110,8 @@ DEFAULT_OUTPUT_RATES = {
     "top_state": 100.0,
     "tf": 50.0,
     "clock": 100.0,
+    "imu": 0.0,  # sensor_msgs/Imu and nav_msgs/Odometry: built only when the scene asks
+    "odom": 0.0,
 }
 
 Vector3 = tuple[float, float, float]
@@ -117,12 +121,34 @@ class SceneError(ValueError):
     """A scene file is invalid; the message names the file, the key and what is wrong."""
 
 
+#: Default frame names, REP 105: the fixed frame the attitude is given in, and the body.
+DEFAULT_WORLD_FRAME = "odom"
+DEFAULT_BODY_FRAME = "base_link"
+
+
 @dataclass(frozen=True)
 class Frames:
-    """Names of the world frame and of the body frame (REP 103)."""
+    """Names of the world frame and of the body frame (REP 103 axes, REP 105 names).
 
-    world: str = "world"
-    body: str = "body"
+    ``world`` is the fixed frame the attitude is expressed in (``odom`` by default: a
+    continuous, non-jumping frame, as REP 105 defines it), ``body`` the frame rigidly
+    attached to the body at its centre of mass, or at the pivot for gravity scenes
+    (``base_link``). Every output, ``/tf`` and the recorder use these names.
+    """
+
+    world: str = DEFAULT_WORLD_FRAME
+    body: str = DEFAULT_BODY_FRAME
+
+    def checked(self) -> "Frames":
+        """These frames, or ValueError when a name is empty or unusable (:func:`names.check_frame_id`)
+        or both are equal."""
+        for role, name in (("world", self.world), ("body", self.body)):
+            if not isinstance(name, str) or not name:
+                raise ValueError(f"{role} frame name must be a non-empty string, got {name!r}")
+            names.check_frame_id(name, f"{role} frame name")
+        if self.world == self.body:
+            raise ValueError(f"world and body frames must differ, both are {self.world!r}")
+        return self
 
 
 @dataclass(frozen=True)
@@ -228,6 +254,8 @@ class Outputs:
     top_state: float = DEFAULT_OUTPUT_RATES["top_state"]
     tf: float = DEFAULT_OUTPUT_RATES["tf"]
     clock: float = DEFAULT_OUTPUT_RATES["clock"]
+    imu: float = DEFAULT_OUTPUT_RATES["imu"]
+    odom: float = DEFAULT_OUTPUT_RATES["odom"]
 
     def as_dict(self) -> dict[str, float]:
         return {name: getattr(self, name) for name in OUTPUT_NAMES}
@@ -619,11 +647,13 @@ def _parse_scene(data: Any, source: str, text: str) -> Scene:
 
     frames_raw = _mapping(ctx, spec.get("frames") or {}, "frames", ("world", "body"))
     frames = Frames(
-        world=_frame(ctx, frames_raw.get("world", "world"), "frames.world"),
-        body=_frame(ctx, frames_raw.get("body", "body"), "frames.body"),
+        world=_frame(ctx, frames_raw.get("world", DEFAULT_WORLD_FRAME), "frames.world"),
+        body=_frame(ctx, frames_raw.get("body", DEFAULT_BODY_FRAME), "frames.body"),
     )
-    if frames.world == frames.body:
-        raise ctx.error("frames", f"world and body frames must differ, both are {frames.world!r}")
+    try:
+        frames.checked()
+    except ValueError as exc:
+        raise ctx.error("frames", str(exc)) from None
 
     gravity, mass, com = _parse_gravity(ctx, spec.get("gravity"), spec["body"])
     body = _parse_body(ctx, spec["body"], spec.get("gravity") not in (None, "none"))

@@ -16,3 +16,6 @@ Nothing here is imported by :mod:`rigid_rot_sim.core`; rclpy is imported by the 
 :mod:`.node_recording` and otherwise only inside the functions that need it, so reading,
 resim and plots work without ROS.
 """
+
+#: Time bases of a recording's MCAP log times, the default first (see :mod:`.session`).
+LOG_TIME_BASES = ("sim", "wall")

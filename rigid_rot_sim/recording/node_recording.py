@@ -31,6 +31,7 @@ from typing import Any
 
 from rclpy.serialization import serialize_message
 
+from rigid_rot_sim.recording import LOG_TIME_BASES
 from rigid_rot_sim.recording.session import RunRecorder
 from rigid_rot_sim.recording.writer import QosProfile, RecorderError
 
@@ -141,9 +142,9 @@ class NodeRecording:
         return self.run.active
 
     def record_command(self, topic: str, msg: Any, received_ns: int) -> None:
-        """Record a torque command message as received (log time = receive time, ns)."""
+        """Record a torque command message as received (log time: receive time in the run's time base)."""
         if self.active:
-            self.run.record(topic, msg, self.run.log_time_at_least(received_ns))
+            self.run.record(topic, msg, self.run.receive_log_time(received_ns))
 
     def close(self) -> None:
         """Finish the file (idempotent); logs where it is and how to inspect it."""
@@ -158,13 +159,17 @@ class NodeRecording:
             self.run.close()
 
 
-def attach(node: Any, path: str) -> NodeRecording | None:
+def attach(node: Any, path: str, log_time: str = "sim") -> NodeRecording | None:
     """Start recording ``node``'s run to ``path``; None (error logged) if the file cannot be made.
 
-    Replaces ``node.sim`` by a :class:`RecordedSimulator` and the node's publishers by
-    :class:`RecordingPublisher` s.
+    ``log_time`` is the time base of the MCAP log times: ``sim`` (the run's sim time) or
+    ``wall`` (see :mod:`.session`). Replaces ``node.sim`` by a :class:`RecordedSimulator`
+    and the node's publishers by :class:`RecordingPublisher` s.
     """
     log = node.get_logger()
+    if log_time not in LOG_TIME_BASES:
+        log.error(f"record_log_time must be one of {', '.join(LOG_TIME_BASES)}, got {log_time!r}; not recording")
+        return None
     sim = node.sim
     scene = node.scene
     events_topic = node.resolve_topic_name("~/sim_events")
@@ -182,6 +187,7 @@ def attach(node: Any, path: str) -> NodeRecording | None:
             path, scene_text=scene_text, scene_file=str(scene.source), parameters=parameters,
             integrator={"method": sim.method, "dt": sim.dt, "options": sim.options},
             events_topic=events_topic, on_error=on_error,
+            sim_seconds=(lambda: sim.t) if log_time == "sim" else None,
         )
     except RecorderError as exc:
         log.error(f"{exc}; the simulation runs without recording")

@@ -282,6 +282,12 @@ def repair(
     return RepairReport(target, count, result.chunks, result.bad_chunks, result.unread_bytes, kept, False)
 
 
+def log_time_base(reader: BagReader) -> str:
+    """``sim`` or ``wall``: what the recording's log times measure (``wall`` for files
+    from before the ``log_time`` metadata record, and for other recorders' files)."""
+    return reader.metadata.get("log_time", {}).get("base", "wall")
+
+
 def info(path: str | os.PathLike[str]) -> str:
     """A human-readable summary of a recording (like ``ros2 bag info``)."""
     import yaml
@@ -295,10 +301,15 @@ def info(path: str | os.PathLike[str]) -> str:
         f"Size:       {size / 1e6:.3f} MB",
         f"Index:      {'complete (summary, statistics, chunk and message indexes)' if reader.complete else 'MISSING (crashed recording: run `rigid-rot bag repair`)'}",
     ]
+    base = log_time_base(reader)
     if times:
         start, end = min(times), max(times)
-        lines.append(f"Duration:   {(end - start) / 1e9:.3f} s (wall clock)")
-        lines.append(f"Start:      {start / 1e9:.6f} s since epoch")
+        if base == "sim":
+            lines.append(f"Duration:   {(end - start) / 1e9:.3f} s (sim time: log times are the run's sim time)")
+            lines.append(f"Start:      {start / 1e9:.6f} s of sim time")
+        else:
+            lines.append(f"Duration:   {(end - start) / 1e9:.3f} s (wall clock)")
+            lines.append(f"Start:      {start / 1e9:.6f} s since epoch")
     lines.append(f"Messages:   {sum(counts.values())}")
     lines.append("Topics:")
     width = max((len(name) for name in reader.topics), default=0)

@@ -3,8 +3,10 @@
 The recorded bytes are published as they are (``Publisher.publish`` of serialised CDR),
 so header stamps, frames and values reach the node exactly as they were recorded, and a
 bag from a real robot drives the simulator like the robot's controller did. Timing
-follows the recorded receive times (MCAP log time), scaled by ``rate``; ``clock``
-publishes ``/clock`` from the bag's time, like ``ros2 bag play --clock``.
+follows the recorded receive times (MCAP log time), scaled by ``rate``: for the node's
+own recordings these are sim times (``record_log_time`` ``sim``, the default), so the
+replay runs at the recorded sim pace; ``clock`` publishes ``/clock`` from the bag's time,
+like ``ros2 bag play --clock``, which then agrees with the recorded ``/clock``.
 
 By default the topics replayed are the torque inputs the recording node had (its
 ``rigid_rot_sim`` metadata record), or else every WrenchStamped topic of the bag.

@@ -12,9 +12,19 @@ run of the simulator records:
 * ``/tf`` (world -> body) encoded from the embedded TFMessage definition;
 * the simulation event log (:mod:`.events`) on ``~/sim_events``.
 
-Log times are wall-clock ns (what rosbag2 records as receive time), made strictly
-increasing within the run so that events and states keep the order in which the node
-produced them, even across a clock step.
+Log times (MCAP ``log_time``, rosbag2's receive time) have one of two time bases, named in
+the ``log_time`` metadata record:
+
+* ``sim`` (the node's default): the sim time of the run in ns, as ``ros2 bag record
+  --use-sim-time`` stores for a simulation. A state's log time equals its header stamp, a
+  ``/clock`` message's its clock, so playback paces by sim time and a timeline (Foxglove)
+  agrees with the stamps. Several messages of one step share a log time; readers keep
+  file order among equal times, which is the order the node produced them in. After a
+  reset (sim time back to 0) the log time goes on from where it was (:class:`SimLogTime`),
+  so the file stays in one increasing order: there, log time = stamp + the sim time run
+  before the reset(s).
+* ``wall``: wall-clock ns, made strictly increasing within the run so that events and
+  states keep the order in which the node produced them, even across a clock step.
 """
 
 from __future__ import annotations
@@ -32,13 +42,34 @@ from rigid_rot_sim.recording.writer import QosProfile, Recorder, RecorderError
 TF_TOPIC = "/tf"
 TF_TYPE = "tf2_msgs/msg/TFMessage"
 
-__all__ = ["RunRecorder", "RecorderError", "type_name_of"]
+__all__ = ["RunRecorder", "RecorderError", "SimLogTime", "type_name_of"]
 
 
 def type_name_of(msg_type: type) -> str:
     """``pkg/msg/Type`` of a generated rclpy message class."""
     package = msg_type.__module__.split(".", 1)[0]
     return f"{package}/msg/{msg_type.__name__}"
+
+
+class SimLogTime:
+    """Log times (ns) from the sim time (s) that ``sim_seconds`` returns.
+
+    Rounded to the nanosecond as header stamps are (:func:`rigid_rot_sim.conversions.seconds_to_time`),
+    so without a reset log time == stamp. When the sim time goes back (a reset), an offset
+    keeps the log times non-decreasing: they continue from the last one handed out.
+    """
+
+    def __init__(self, sim_seconds: Callable[[], float]) -> None:
+        self._sim_seconds = sim_seconds
+        self._offset = 0
+        self._last = 0
+
+    def __call__(self) -> int:
+        sim_ns = int(round(float(self._sim_seconds()) * 1e9))
+        if sim_ns < self._last:
+            self._offset += self._last - sim_ns
+        self._last = sim_ns
+        return self._offset + sim_ns
 
 
 def _qos(profile: Any) -> QosProfile:
@@ -69,6 +100,9 @@ class RunRecorder:
     flush_period : float
         Wall-clock seconds between chunk flushes. Half a second keeps the promise "a
         SIGKILL loses at most the last second" with room for a loaded machine.
+    sim_seconds : callable, optional
+        The run's sim time (s). Given: log times in sim time (time base ``sim``, see the
+        module docstring); None: wall clock (``wall``).
     """
 
     def __init__(
@@ -82,8 +116,11 @@ class RunRecorder:
         events_topic: str,
         on_error: Callable[[RecorderError], None] | None = None,
         flush_period: float = 0.5,
+        sim_seconds: Callable[[], float] | None = None,
     ) -> None:
         self.recorder = Recorder(path, on_error=on_error, flush_period=flush_period)
+        self.log_time_base = "wall" if sim_seconds is None else "sim"
+        self._sim_log_time = None if sim_seconds is None else SimLogTime(sim_seconds)
         self.path = self.recorder.path
         self.events_topic = events_topic
         self._roles: dict[str, str] = {"events": events_topic, "tf": TF_TOPIC}
@@ -102,6 +139,7 @@ class RunRecorder:
             },
         )
         self.recorder.add_metadata("versions", package_versions())
+        self.recorder.add_metadata("log_time", {"base": self.log_time_base})
         self.recorder.add_topic(events_topic, EVENT_TYPE, QosProfile(depth=100))
         self.recorder.add_topic(TF_TOPIC, TF_TYPE, QosProfile(depth=100))
 
@@ -118,9 +156,13 @@ class RunRecorder:
         return self.recorder.error
 
     def log_time_ns(self) -> int:
-        """Now (wall clock, ns), strictly after every log time handed out before."""
+        """Now, in the time base: sim time (ns, non-decreasing) or wall clock (ns, strictly
+        after every log time handed out before)."""
         with self._clock_lock:
-            self._last_ns = max(time.time_ns(), self._last_ns + 1)
+            if self._sim_log_time is not None:
+                self._last_ns = max(self._sim_log_time(), self._last_ns)
+            else:
+                self._last_ns = max(time.time_ns(), self._last_ns + 1)
             return self._last_ns
 
     # -- topics ----------------------------------------------------------------------
@@ -169,10 +211,13 @@ class RunRecorder:
         """Record one simulation event (see :mod:`.events`)."""
         self.recorder.write_fields(self.events_topic, event_fields(kind, step, summary, **values), self.log_time_ns())
 
-    def log_time_at_least(self, ns: int) -> int:
-        """``ns`` (e.g. a receive time taken earlier), moved after every log time handed out before."""
+    def receive_log_time(self, wall_ns: int) -> int:
+        """Log time of a message received at wall-clock ``wall_ns``: the sim time now (time
+        base ``sim``), or ``wall_ns`` moved after every log time handed out before (``wall``)."""
+        if self._sim_log_time is not None:
+            return self.log_time_ns()
         with self._clock_lock:
-            self._last_ns = max(int(ns), self._last_ns + 1)
+            self._last_ns = max(int(wall_ns), self._last_ns + 1)
             return self._last_ns
 
     # -- end -------------------------------------------------------------------------

@@ -27,6 +27,17 @@ def test_bag_info_lists_topics_counts_and_integrator(bag, capsys):
     assert "complete" in out and "Integrator: rk4" in out
     assert "/rigid_rot_sim/state" in out and "rigid_rot_msgs/msg/RigidBodyState" in out
     assert "/tf" in out and "[reliable, volatile, depth 100]" in out
+    # 400 steps of 1 ms, states every 10 steps: the last at 0.39 s, log times in sim time
+    assert "Duration:   0.390 s (sim time" in out and "Start:      0.000000 s of sim time" in out
+
+
+def test_bag_info_of_a_wall_clock_recording_says_so(tmp_path, capsys):
+    path = tmp_path / "wall.mcap"
+    record_like_the_node(path, "free_tumble", 50, 10, {}, log_time="wall")
+    assert main(["bag", "info", str(path)]) == 0
+    out = capsys.readouterr().out
+    assert "(wall clock)" in out and "s since epoch" in out
+    assert BagReader(path).metadata["log_time"] == {"base": "wall"}
 
 
 def test_bag_repair_restores_the_index_of_a_truncated_file(bag, tmp_path, capsys):

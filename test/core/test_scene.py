@@ -47,7 +47,7 @@ def test_every_scene_file_is_listed():
 def test_defaults_of_a_minimal_scene():
     scene = parse(MINIMAL, "minimal.yaml")
     assert scene.name == "minimal"
-    assert (scene.frames.world, scene.frames.body) == ("world", "body")
+    assert (scene.frames.world, scene.frames.body) == ("odom", "base_link")  # REP 105
     assert scene.initial.orientation == (0.0, 0.0, 0.0, 1.0)
     assert scene.topic_inputs == () and scene.schedules == () and scene.gravity is None
     assert scene.integrator.method == "auto" and scene.duration is None and scene.recording is None

@@ -16,6 +16,7 @@ SCENES = Path(__file__).resolve().parents[2] / "config" / "scenes"
 # and every method integrates this linear ODE exactly (up to rounding).
 DRIVEN = """
 body: {principal_moments: [2.0, 3.0, 4.0]}
+frames: {world: world, body: body}
 torque_inputs:
   - {topic: hold_in, frame: body}
   - {topic: timeout_in, frame: header, hold: {timeout: 0.05}}
@@ -346,7 +347,7 @@ def test_auto_integrator_takes_commands_from_rest():
     # the torque_driven scene's use: at rest, then commanded (auto = taylor)
     sim = Simulator(load_scene(SCENES / "torque_driven.yaml"))
     sim.advance(100)
-    sim.receive_torque("~/torque", [0.0, 0.0, 0.004], "body")
+    sim.receive_torque("~/torque", [0.0, 0.0, 0.004], "base_link")
     assert sim.advance(100) == 100, sim.failure
     assert omega(sim)[2] == pytest.approx(0.004 * 0.1 / 0.04, rel=1e-12)
 

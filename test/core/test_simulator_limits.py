@@ -82,7 +82,7 @@ def test_huge_finite_angular_velocity_is_refused_by_set_state():
 def test_a_tiny_drift_reference_never_gives_an_infinite_drift():
     sim = driven("rk4")
     sim.set_state([0, 0, 0, 1], [1e-160, 0.0, 0.0])  # E_ref ~ 1e-322
-    sim.receive_torque("~/torque", [0.0, 0.0, 1.0], "body")
+    sim.receive_torque("~/torque", [0.0, 0.0, 1.0], "base_link")
     sim.advance(50)
     snapshot = sim.snapshot()
     assert snapshot.kinetic_energy > 0.0 and all_finite(snapshot)
@@ -97,10 +97,10 @@ def test_initial_angular_velocity_beyond_the_rotation_limit_is_refused():
 def test_max_torque_rejects_commands_above_it_with_the_reason():
     sim = driven("taylor", max_torque=2.0)
     with pytest.raises(CommandRejected, match=r"\|torque\| = 1e\+06 N\*m exceeds max_torque = 2 N\*m"):
-        sim.receive_torque("~/torque", [1e6, 0.0, 0.0], "body")
+        sim.receive_torque("~/torque", [1e6, 0.0, 0.0], "base_link")
     with pytest.raises(CommandRejected, match="exceeds max_torque"):
         sim.apply_torque([0.0, 3.0, 0.0], "", 1.0)
-    sim.receive_torque("~/torque", [1.0, 1.0, 1.0], "body")  # |tau| = 1.73 N*m
+    sim.receive_torque("~/torque", [1.0, 1.0, 1.0], "base_link")  # |tau| = 1.73 N*m
     assert sim.held_torques() == {} and sim.advance(2) == 2 and sim.held_torques()
 
 
@@ -108,7 +108,7 @@ def test_torque_components_beyond_the_magnitude_limit_are_rejected():
     sim = driven("rk4")
     for torque in ([1e30, 0.0, 0.0], [0.0, -1e300, 0.0]):
         with pytest.raises(CommandRejected, match="beyond the limit of 1e\\+12"):
-            sim.receive_torque("~/torque", torque, "body")
+            sim.receive_torque("~/torque", torque, "base_link")
 
 
 def test_long_frame_ids_are_rejected_without_echoing_them():
@@ -138,7 +138,7 @@ def test_a_quaternion_of_huge_components_is_normalised_not_zeroed():
 def test_a_torque_whose_effect_underflows_is_stepped_normally(torque):
     # found by the fuzz campaign: ZeroDivisionError (then OverflowError) sizing the slice
     sim = driven("rk4")
-    sim.receive_torque("~/torque", [torque, 0.0, 0.0], "body")
+    sim.receive_torque("~/torque", [torque, 0.0, 0.0], "base_link")
     assert sim.advance(300) == 300 and sim.failure is None
 
 

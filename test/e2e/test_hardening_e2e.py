@@ -5,7 +5,7 @@ import signal
 import time
 
 import pytest
-from rigid_rot_msgs.srv import StepSimulation
+from rigid_rot_msgs.srv import Step
 from std_srvs.srv import SetBool
 
 from test_node_e2e import Collector, scene_args  # noqa: F401  (same directory)
@@ -22,13 +22,13 @@ def collector(ros_node):
 def test_signal_stops_the_node_while_it_steps(launch_node, collector, signum):
     node = launch_node(*scene_args("thin_rod", integrator="taylor", start_paused="true"), name="stepping")
     assert collector.call(SetBool, "pause", SetBool.Request(data=True), timeout=30.0, process=node).success
-    client = collector.node.create_client(StepSimulation, "/rigid_rot_sim/step")
+    client = collector.node.create_client(Step, "/rigid_rot_sim/step")
     replies = 0
     for _ in range(3):  # the largest requests, back to back: the node is busy stepping most of the time
-        future = client.call_async(StepSimulation.Request(steps=10_000))
+        future = client.call_async(Step.Request(steps=10_000))
         collector.spin_until(future.done, 30.0, node, "a step reply")
         replies += 1
-    future = client.call_async(StepSimulation.Request(steps=10_000))
+    future = client.call_async(Step.Request(steps=10_000))
     collector.executor.spin_once(timeout_sec=0.05)  # the request is on its way
     start = time.monotonic()
     node.process.send_signal(signum)

@@ -123,6 +123,19 @@ def test_cli_asks_the_service_and_agrees_with_the_library(inertia_node, ros_env)
     assert "service answer matches the library" in result.stdout
 
 
+def test_cli_takes_ros_args_for_its_client_node(inertia_node, ros_env):
+    """A relative service name resolved in the namespace given with --ros-args."""
+    rigid_rot = Path(sys.executable).parent / "rigid-rot"
+    namespace, relative = SERVICE.rsplit("/", 1)
+    result = subprocess.run(
+        [str(rigid_rot), "inertia", str(SAMPLE_BODY), "--service", relative, "--timeout", "30",
+         "--ros-args", "-r", f"__ns:={namespace}"],
+        capture_output=True, text=True, timeout=120, env=ros_env,
+    )
+    assert result.returncode == 0, result.stdout + result.stderr
+    assert "total mass" in result.stdout
+
+
 def test_node_stops_cleanly_on_sigint(launch_node, ros_node, wait_for_service):
     from rigid_rot_msgs.srv import ComputeInertia
 

@@ -77,12 +77,11 @@ def by_stamp(messages: list) -> list:
 
 def resume_when_matched(collector, node, topic: str, messages: list) -> None:
     """Resume a node started paused once ``topic`` reaches this test: every message from t = 0 arrives."""
-    from rigid_rot_msgs.srv import Reset
-    from std_srvs.srv import SetBool
+    from std_srvs.srv import SetBool, Trigger
 
     collector.spin_until(lambda: collector.node.count_publishers(topic) > 0, 30.0, node, f"a publisher on {topic}")
     for _ in range(20):  # a reset (still paused) republishes the t = 0 outputs once the match is complete
-        assert collector.call(Reset, "reset", Reset.Request(), process=node).success
+        assert collector.call(Trigger, "reset", Trigger.Request(), process=node).success
         try:
             collector.spin_until(lambda: len(messages) > 0, 0.5, node, f"the t = 0 message on {topic}")
             break
@@ -111,7 +110,7 @@ def test_torque_commands_change_omega_exactly_as_the_core_predicts(launch_node, 
     collector.spin_until(lambda: states and publisher.get_subscription_count() > 0, 30.0, node, "state and subscription")
     # stamped commands, well ahead of the node's sim time: their effect is fixed by the stamps
     t1 = math.ceil(stamp(states[-1])) + 1.0
-    commands = [(t1, (0.0, 0.0, 0.004), "body"), (t1 + 0.2, (0.002, 0.0, 0.0), "world"), (t1 + 0.45, (0.0, -0.001, 0.0), "body")]
+    commands = [(t1, (0.0, 0.0, 0.004), "base_link"), (t1 + 0.2, (0.002, 0.0, 0.0), "odom"), (t1 + 0.45, (0.0, -0.001, 0.0), "base_link")]
     for when, torque, frame in commands:
         msg = WrenchStamped()
         msg.header.stamp = seconds_to_time(when)
@@ -123,7 +122,7 @@ def test_torque_commands_change_omega_exactly_as_the_core_predicts(launch_node, 
 
     sim = Simulator(load_scene(SCENES / "torque_driven.yaml"), method="rk4")
     for when, torque, frame in commands:
-        sim.submit_torque("~/torque", torque, frame, when)
+        sim.submit_torque("~/torque", torque, sim.resolve_frame("~/torque", frame, "header"), when)
     compared = 0
     for msg in states:
         t = stamp(msg)
@@ -210,8 +209,8 @@ def test_bad_commands_and_requests_are_rejected_and_pause_step_reset_work(launch
     from builtin_interfaces.msg import Duration
     from geometry_msgs.msg import Vector3, WrenchStamped
     from rigid_rot_msgs.msg import RejectedCommand, RigidBodyState
-    from rigid_rot_msgs.srv import ApplyTorque, Reset, SetState, StepSimulation
-    from std_srvs.srv import SetBool
+    from rigid_rot_msgs.srv import ApplyTorque, SetState, Step
+    from std_srvs.srv import SetBool, Trigger
 
     from rigid_rot_sim.node import COMMAND_QOS, REJECTED_QOS, STATE_QOS
 
@@ -222,7 +221,7 @@ def test_bad_commands_and_requests_are_rejected_and_pause_step_reset_work(launch
     collector.spin_until(lambda: states and publisher.get_subscription_count() > 0, 30.0, node, "the node")
 
     bad = []
-    for frame, torque, force in (("body", (math.nan, 0.0, 0.0), 0.0), ("map", (0.0, 0.0, 1.0), 0.0), ("body", (0.0, 0.0, 1.0), 5.0)):
+    for frame, torque, force in (("base_link", (math.nan, 0.0, 0.0), 0.0), ("map", (0.0, 0.0, 1.0), 0.0), ("base_link", (0.0, 0.0, 1.0), 5.0)):
         msg = WrenchStamped()
         msg.header.frame_id = frame
         msg.wrench.torque.x, msg.wrench.torque.y, msg.wrench.torque.z = torque
@@ -236,7 +235,7 @@ def test_bad_commands_and_requests_are_rejected_and_pause_step_reset_work(launch
 
     response = collector.call(ApplyTorque, "apply_torque", ApplyTorque.Request(torque=Vector3(z=1.0), frame_id="map", duration=Duration(sec=1)), process=node)
     assert not response.success and "neither" in response.message
-    response = collector.call(StepSimulation, "step", StepSimulation.Request(steps=10), process=node)
+    response = collector.call(Step, "step", Step.Request(steps=10), process=node)
     assert not response.success and "not paused" in response.message
     zero_q = SetState.Request()
     zero_q.orientation.w = 0.0
@@ -247,20 +246,20 @@ def test_bad_commands_and_requests_are_rejected_and_pause_step_reset_work(launch
     assert all(m.angular_velocity_body.z == 0.0 and m.angular_velocity_body.x == 0.0 for m in states)
 
     assert collector.call(SetBool, "pause", SetBool.Request(data=True), process=node).success
-    first = collector.call(StepSimulation, "step", StepSimulation.Request(steps=1), process=node)
+    first = collector.call(Step, "step", Step.Request(steps=1), process=node)
     assert first.success
     applied = collector.call(ApplyTorque, "apply_torque", ApplyTorque.Request(torque=Vector3(z=0.004), duration=Duration(nanosec=50_000_000)), process=node)
     assert applied.success, applied.message
-    stepped = collector.call(StepSimulation, "step", StepSimulation.Request(steps=100), process=node)
+    stepped = collector.call(Step, "step", Step.Request(steps=100), process=node)
     assert stepped.success
     assert stamp(stepped.state) == pytest.approx(stamp(first.state) + 0.1, abs=1e-9)
     # 0.004 N*m for 0.05 s on I3 = 0.04 kg*m^2
     assert stepped.state.angular_velocity_body.z == pytest.approx(0.005, rel=1e-9)
-    again = collector.call(StepSimulation, "step", StepSimulation.Request(steps=1), process=node)
+    again = collector.call(Step, "step", Step.Request(steps=1), process=node)
     assert stamp(again.state) == pytest.approx(stamp(stepped.state) + 0.001, abs=1e-9)  # still paused: nothing ran between
 
     n = len(states)
-    assert collector.call(Reset, "reset", Reset.Request(), process=node).success
+    assert collector.call(Trigger, "reset", Trigger.Request(), process=node).success
     collector.spin_until(lambda: len(states) > n and stamp(states[-1]) < 0.5, 10.0, node, "a state after the reset")
     assert states[-1].angular_velocity_body.z == 0.0
     node.check_alive()
@@ -279,7 +278,7 @@ def test_shell_commands_run_and_torque(launch_node, collector, ros_env, tmp_path
     states = collector.subscribe(RigidBodyState, f"{NODE}/state", STATE_QOS)
     collector.spin_until(lambda: len(states) > 0, 30.0, node, "the node's state")
     cli = [str(Path(sys.executable).with_name("rigid-rot"))]
-    sent = subprocess.run(cli + ["torque", "0", "0", "0.004", "--frame", "body"], env=ros_env,
+    sent = subprocess.run(cli + ["torque", "0", "0", "0.004", "--frame", "base_link"], env=ros_env,
                           capture_output=True, text=True, timeout=30)
     assert sent.returncode == 0, sent.stdout + sent.stderr
     assert "1 command(s) [0.0, 0.0, 0.004]" in sent.stdout

@@ -18,6 +18,7 @@ import numpy as np
 import pytest
 import yaml
 
+from rigid_rot_sim.recording.events import decode_event
 from rigid_rot_sim.recording.reader import BagReader, repair
 from rigid_rot_sim.recording.resim import resimulate
 
@@ -89,12 +90,12 @@ def send_commands(ros_node, commands, process) -> None:
 
 
 COMMANDS = [
-    ((0.0, 0.0, 0.004), "body", 0.0, (0.0, 0.0, 0.0)),
-    ((0.002, 0.0, 0.0), "world", 0.0, (0.0, 0.0, 0.0)),
+    ((0.0, 0.0, 0.004), "base_link", 0.0, (0.0, 0.0, 0.0)),
+    ((0.002, 0.0, 0.0), "odom", 0.0, (0.0, 0.0, 0.0)),
     ((0.0, 0.001, 0.0), "no_such_frame", 0.0, (0.0, 0.0, 0.0)),  # rejected: unknown frame
-    ((0.0, 0.0, 0.001), "body", 0.0, (1.0, 0.0, 0.0)),           # rejected: non-zero force
-    ((float("nan"), 0.0, 0.0), "body", 0.0, (0.0, 0.0, 0.0)),    # rejected: non-finite
-    ((0.0, -0.003, 0.001), "body", 0.0, (0.0, 0.0, 0.0)),
+    ((0.0, 0.0, 0.001), "base_link", 0.0, (1.0, 0.0, 0.0)),           # rejected: non-zero force
+    ((float("nan"), 0.0, 0.0), "base_link", 0.0, (0.0, 0.0, 0.0)),    # rejected: non-finite
+    ((0.0, -0.003, 0.001), "base_link", 0.0, (0.0, 0.0, 0.0)),
 ]
 
 
@@ -135,7 +136,12 @@ def test_commands_keep_receive_time_and_header_and_rejections_say_why(recorded_r
     reader = BagReader(bag)
     commands = [(m, msg) for m, msg in reader.decoded([TORQUE_TOPIC])]
     assert [msg.header.frame_id for _, msg in commands] == [c[1] for c in COMMANDS]
-    assert all(m.log_time_ns > 1.6e18 for m, _ in commands)  # wall-clock receive times (ns since epoch)
+    # log time = the sim time at receipt (time base "sim"), which the accepted ones' events also hold
+    events = [decode_event(msg) for _, msg in reader.decoded(["/rigid_rot_sim/sim_events"])]
+    receipts = [round(e.number("receipt_time") * 1e9) for e in events if e.kind == "torque"]
+    assert len(receipts) == 3 and set(receipts) <= {m.log_time_ns for m, _ in commands}
+    assert all(0 <= m.log_time_ns < 1e15 for m, _ in commands)  # sim time, not ns since the epoch
+    assert reader.metadata["log_time"] == {"base": "sim"}
     reasons = [msg.reason for _, msg in reader.decoded(["/rigid_rot_sim/rejected"])]
     assert "no_such_frame" in reasons[0] and "force" in reasons[1] and "non-finite" in reasons[2]
 
@@ -181,7 +187,8 @@ def test_sigterm_finishes_the_file(tmp_path, launch_node, ros_node):
 
 def test_sigkill_loses_at_most_the_last_second_and_repair_recovers_it(tmp_path, launch_node, ros_node):
     bag = tmp_path / "killed.mcap"
-    node = launch_node(*node_args(write_scene(tmp_path), bag), name="killed")
+    # wall-clock log times (the option), so that the loss is measured against the wall clock
+    node = launch_node(*node_args(write_scene(tmp_path), bag, "-p", "record_log_time:=wall"), name="killed")
     first_state_time(ros_node, node)
     time.sleep(2.5)
     killed_at = time.time_ns()
@@ -190,7 +197,7 @@ def test_sigkill_loses_at_most_the_last_second_and_repair_recovers_it(tmp_path, 
     reader = BagReader(bag)
     assert not reader.complete
     states = [m for m in reader.messages([STATE_TOPIC])]
-    assert len(states) > 20
+    assert len(states) > 20 and states[0].log_time_ns > 1.6e18  # ns since the epoch
     assert (killed_at - states[-1].log_time_ns) / 1e9 < 1.0  # flushed every 0.5 s: at most the last second lost
     report = repair(bag)
     assert report.messages == sum(reader.counts().values())
@@ -214,12 +221,12 @@ def set_paused(ros_node, process, paused: bool, wait_for_service, call_service) 
 
 
 def reset(ros_node, process, wait_for_service, call_service) -> None:
-    from rigid_rot_msgs.srv import Reset
+    from std_srvs.srv import Trigger
 
-    client = ros_node.create_client(Reset, "/rigid_rot_sim/reset")
+    client = ros_node.create_client(Trigger, "/rigid_rot_sim/reset")
     try:
         wait_for_service(client, process=process)
-        response = call_service(ros_node, client, Reset.Request())
+        response = call_service(ros_node, client, Trigger.Request())
     finally:
         ros_node.destroy_client(client)
     assert response.success, response.message
@@ -262,9 +269,9 @@ def test_replayed_commands_reproduce_the_states_of_the_original_run(
     first_state_time(ros_node, node)
     t_pause = set_paused(ros_node, node, True, wait_for_service, call_service)
     stamps = tuple(round(t_pause + 1.0 + 0.4 * i, 1) for i in range(3))
-    send_commands(ros_node, [((0.0, 0.0, 0.004), "body", stamps[0], (0.0, 0.0, 0.0)),
-                             ((0.003, 0.0, 0.0), "world", stamps[1], (0.0, 0.0, 0.0)),
-                             ((0.0, -0.002, 0.0), "body", stamps[2], (0.0, 0.0, 0.0))], node)
+    send_commands(ros_node, [((0.0, 0.0, 0.004), "base_link", stamps[0], (0.0, 0.0, 0.0)),
+                             ((0.003, 0.0, 0.0), "odom", stamps[1], (0.0, 0.0, 0.0)),
+                             ((0.0, -0.002, 0.0), "base_link", stamps[2], (0.0, 0.0, 0.0))], node)
     set_paused(ros_node, node, False, wait_for_service, call_service)
     end = stamps[-1] + 0.6
     wait_for_sim_time(ros_node, node, end)
@@ -313,11 +320,11 @@ def _events(bag, complete=True):
 def _states_by_stamp(bag, after_reset=False):
     """{sim time: (q, ω, T)} of the recorded states (only those after the last reset, if asked)."""
     reader = BagReader(bag)
-    last_reset = max((m.log_time_ns for m, msg in reader.decoded(["/rigid_rot_sim/sim_events"])
-                      if msg.name.endswith("/reset")), default=0) if after_reset else 0
     states = {}
-    for record, msg in reader.decoded([STATE_TOPIC]):
-        if record.log_time_ns < last_reset:
+    for record, msg in reader.decoded([STATE_TOPIC, "/rigid_rot_sim/sim_events"]):
+        if record.topic != STATE_TOPIC:
+            if after_reset and msg.name.endswith("/reset"):
+                states.clear()  # log order is the order the node produced them in
             continue
         t = msg.header.stamp.sec + msg.header.stamp.nanosec * 1e-9
         q, w = msg.orientation, msg.angular_velocity_body
@@ -325,7 +332,13 @@ def _states_by_stamp(bag, after_reset=False):
     return states
 
 
-def test_rigid_rot_run_record_writes_a_complete_bag(tmp_path):
+def test_rigid_rot_run_record_writes_a_complete_bag_with_sim_time_log_times(tmp_path):
+    """An rtf-0 run: complete, log times equal to the sim times (the default base: every stamp and
+    /clock equals its log time, so playback paced by log time, as ros2 bag play and Foxglove do,
+    runs at sim pace), and resim bit-exact."""
+    from mcap.reader import make_reader
+    from mcap_ros2.decoder import DecoderFactory
+
     bag = tmp_path / "cli.mcap"
     rigid_rot = Path(sys.executable).with_name("rigid-rot")
     done = subprocess.run(
@@ -335,9 +348,27 @@ def test_rigid_rot_run_record_writes_a_complete_bag(tmp_path):
     )
     assert done.returncode == 0, done.stdout + done.stderr
     reader = BagReader(bag)
-    assert reader.complete
+    assert reader.complete and reader.metadata["log_time"] == {"base": "sim"}
     stamps = {round(msg.header.stamp.sec + msg.header.stamp.nanosec * 1e-9, 6) for _, msg in reader.decoded([STATE_TOPIC])}
     assert stamps == {round(0.02 * i, 6) for i in range(26)}  # 50 Hz over 0.5 s, both ends included
+    checked: dict[str, int] = {}
+    log_times = []
+    with open(bag, "rb") as stream:  # the mcap library's own reader, in log-time order
+        for _, channel, message, decoded in make_reader(stream, decoder_factories=[DecoderFactory()]).iter_decoded_messages():
+            log_times.append(message.log_time)
+            if channel.topic in (STATE_TOPIC, "/rigid_rot_sim/orientation"):
+                stamp = decoded.header.stamp
+            elif channel.topic == "/clock":
+                stamp = decoded.clock
+            elif channel.topic == "/tf":
+                stamp = decoded.transforms[0].header.stamp
+            else:
+                continue
+            assert message.log_time == stamp.sec * 1_000_000_000 + stamp.nanosec, (channel.topic, message.log_time, stamp)
+            checked[channel.topic] = checked.get(channel.topic, 0) + 1
+    # /tf at 25 Hz: 13, plus the final state at 0.5 s (every output ends on it)
+    assert checked[STATE_TOPIC] == 26 and checked["/clock"] == 26 and checked["/tf"] == 14
+    assert log_times == sorted(log_times) and log_times[0] == 0 and log_times[-1] == 500_000_000
     assert resimulate(bag).identical
 
 

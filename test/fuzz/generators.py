@@ -16,7 +16,7 @@ SCENES = Path(__file__).resolve().parents[2] / "config" / "scenes"
 
 NUMBERS = [0.0, -0.0, 1e-300, 5e-324, 1e-3, 1.0, -1.0, 3.5, 1e6, -1e6, 1e12, 1e13, 1e30, 1e200, 1e308, -1e308,
            math.inf, -math.inf, math.nan]
-FRAMES = ["", "body", "world", "map", "Body", " body", "body\n", "ünïcode", "x" * 300, "f" * 100_000]
+FRAMES = ["", "base_link", "odom", "body", "world", "map", "Body", " body", "body\n", "ünïcode", "x" * 300, "f" * 100_000]
 
 
 def number(rng: random.Random) -> float:

@@ -70,7 +70,7 @@ def test_random_commands_and_requests_keep_every_snapshot_finite(method, max_tor
                 sim.receive_torque(rng.choice(["~/torque", "~/world"]), command["torque"], command["frame_id"],
                                    command["stamp"], command["force"])
             elif action < 0.6:
-                sim.apply_torque([number(rng) for _ in range(3)], rng.choice(["", "body", "world", "map"]),
+                sim.apply_torque([number(rng) for _ in range(3)], rng.choice(["", "base_link", "odom", "body", "world", "map"]),
                                  rng.choice([0.01, 1.0, -1.0, math.inf, math.nan]))
             elif action < 0.7:
                 request = set_state_request(rng)
@@ -105,7 +105,7 @@ def test_node_survives_random_commands_requests_and_parameters(harness):
     from geometry_msgs.msg import Point, Vector3, WrenchStamped
     from rclpy.parameter import Parameter
     from rigid_rot_msgs.msg import RigidBodyState
-    from rigid_rot_msgs.srv import ComputeInertia, SetState, StepSimulation
+    from rigid_rot_msgs.srv import ComputeInertia, SetState, Step
     from std_srvs.srv import SetBool
 
     from rigid_rot_sim.node import COMMAND_QOS, STATE_QOS
@@ -140,7 +140,7 @@ def test_node_survives_random_commands_requests_and_parameters(harness):
             h.call(SetState, "set_state", call)
         elif kind == 2:
             h.call(SetBool, "pause", SetBool.Request(data=True))
-            h.call(StepSimulation, "step", StepSimulation.Request(steps=step_count(rng)))
+            h.call(Step, "step", Step.Request(steps=step_count(rng)))
             h.call(SetBool, "pause", SetBool.Request(data=False))
         else:
             name, value = parameter(rng)

@@ -27,17 +27,17 @@ def test_every_event_kind_is_recorded_and_replayed_bit_for_bit(tmp_path):
     recorded = RecordedSimulator(sim, NodeRecording(None, run, sim))
 
     def publish():
-        run.record("/rigid_rot_sim/state", conversions.snapshot_to_state(recorded.snapshot(), "world", "body"))
+        run.record("/rigid_rot_sim/state", conversions.snapshot_to_state(recorded.snapshot(), "odom", "base_link"))
 
     script = [
-        (50, lambda: recorded.receive_torque("~/torque", (0.0, 0.0, 0.003), "body", 0.0)),
-        (120, lambda: recorded.apply_torque((0.001, 0.0, 0.0), "world", 0.05)),
+        (50, lambda: recorded.receive_torque("~/torque", (0.0, 0.0, 0.003), "base_link", 0.0)),
+        (120, lambda: recorded.apply_torque((0.001, 0.0, 0.0), "odom", 0.05)),
         (200, lambda: recorded.set_integrator(dt=0.0005)),           # a dt change mid-run
         (300, lambda: recorded.set_state((0.1, 0.0, 0.0, 1.0), (0.2, -0.1, 0.3))),
         (400, lambda: recorded.submit_torque("~/torque", (0.0, 0.002, 0.0), "body", recorded.t + 0.01)),
         (500, lambda: recorded.set_integrator(method="lie_rk4")),   # an integrator change mid-run
         (600, recorded.reset),
-        (650, lambda: recorded.receive_torque("~/torque", (0.001, 0.001, 0.0), "world", 0.0)),
+        (650, lambda: recorded.receive_torque("~/torque", (0.001, 0.001, 0.0), "odom", 0.0)),
     ]
     k = 0
     for at, action in script:
@@ -68,5 +68,5 @@ def test_rejected_commands_record_no_event(tmp_path):
                      integrator={"method": sim.method, "dt": sim.dt}, events_topic="/e/sim_events") as run:
         recorded = RecordedSimulator(sim, NodeRecording(None, run, sim))
         with pytest.raises(CommandRejected):
-            recorded.receive_torque("~/torque", (float("inf"), 0.0, 0.0), "body", 0.0)
+            recorded.receive_torque("~/torque", (float("inf"), 0.0, 0.0), "base_link", 0.0)
     assert BagReader(bag).counts().get("/e/sim_events", 0) == 0

@@ -19,10 +19,12 @@ from rigid_rot_sim.recording.session import RunRecorder  # noqa: E402
 SCENES = Path(__file__).resolve().parents[2] / "config" / "scenes"
 
 
-def record_like_the_node(path: Path, scene_name: str, steps: int, publish_every: int, commands: dict, method="rk4"):
+def record_like_the_node(path: Path, scene_name: str, steps: int, publish_every: int, commands: dict, method="rk4",
+                         log_time="sim"):
     """Drive a Simulator as the node does (advance, publish, receive commands) and record it.
 
     ``commands`` maps a step index to (torque, frame_id, stamp): received at that step.
+    ``log_time``: the recording's time base, ``sim`` (the node's default) or ``wall``.
     """
     scene_path = SCENES / f"{scene_name}.yaml"
     scene = load_scene(scene_path)
@@ -32,6 +34,7 @@ def record_like_the_node(path: Path, scene_name: str, steps: int, publish_every:
         path, scene_text=scene_path.read_text(), scene_file=str(scene_path),
         parameters={"integrator": scene.integrator.method}, events_topic="/rigid_rot_sim/sim_events",
         integrator={"method": sim.method, "dt": sim.dt, "options": sim.options},
+        sim_seconds=(lambda: sim.t) if log_time == "sim" else None,
     ) as run:
         run.add_topic("/rigid_rot_sim/state", RigidBodyState, role="state")
         run.add_topic(torque_topic, WrenchStamped, role="torque")
@@ -55,16 +58,16 @@ def record_like_the_node(path: Path, scene_name: str, steps: int, publish_every:
             sim.advance_to(k)
             snapshot = sim.snapshot()
             states.append(snapshot)
-            run.record("/rigid_rot_sim/state", conversions.snapshot_to_state(snapshot, "world", "body"))
-            run.record_tf(*divmod(round(snapshot.t * 1e9), 1_000_000_000), snapshot.orientation, "world", "body")
+            run.record("/rigid_rot_sim/state", conversions.snapshot_to_state(snapshot, "odom", "base_link"))
+            run.record_tf(*divmod(round(snapshot.t * 1e9), 1_000_000_000), snapshot.orientation, "odom", "base_link")
     return sim, states
 
 
 COMMANDS = {
-    0: ((0.0, 0.0, 0.002), "body", 0.0),
-    100: ((0.001, -0.002, 0.0), "world", 0.1234567),   # future stamp: effective later
-    300: ((0.0, 0.003, 0.0), "body", 0.0),
-    450: ((0.0, 0.0, 0.0), "body", 0.0),
+    0: ((0.0, 0.0, 0.002), "base_link", 0.0),
+    100: ((0.001, -0.002, 0.0), "odom", 0.1234567),   # future stamp: effective later
+    300: ((0.0, 0.003, 0.0), "base_link", 0.0),
+    450: ((0.0, 0.0, 0.0), "base_link", 0.0),
 }
 
 

@@ -1,0 +1,219 @@
+"""The standard simulator services of ``simulation_interfaces`` on top of the node's own.
+
+``simulation_interfaces`` is the ROS 2 simulator standard released into Jazzy (Gazebo,
+Isaac Sim and O3DE serve it). The node serves the part that fits a single rigid body,
+under names relative to the node, as Gazebo does (``/gzserver/step_simulation``):
+
+==========================  ============================================  ===========================
+``~/get_simulator_features``  ``simulation_interfaces/srv/GetSimulatorFeatures``  what is supported (below)
+``~/get_simulation_state``    ``GetSimulationState``                         PLAYING, PAUSED or STOPPED
+``~/set_simulation_state``    ``SetSimulationState``                         play, pause, stop (= pause + reset)
+``~/step_simulation``         ``StepSimulation``                             n steps while paused (as ``~/step``)
+``~/reset_simulation``        ``ResetSimulation``                            time and state, or state only
+==========================  ============================================  ===========================
+
+Every call goes through the node method behind the node's own service (``~/step``,
+``~/reset``, ``~/pause``, ``~/set_state``), so their checks, limits and the recording of
+what changed apply to both. The outcome is a ``simulation_interfaces/msg/Result``:
+``RESULT_INCORRECT_STATE`` when the call needs another run state (stepping while
+playing), ``RESULT_FEATURE_UNSUPPORTED`` for what this simulator cannot do (a reset of
+time alone, QUITTING), ``RESULT_OPERATION_FAILED`` with the node's reason otherwise.
+
+The package is optional: it is imported here only, and :data:`AVAILABLE` is False when
+it is not installed (an apt install without ``ros-jazzy-simulation-interfaces``); the node
+then runs without these services and says so in its start-up line. ``make setup`` builds
+it into the venv from ``rigid_rot_msgs/vendor/simulation_interfaces``. Constant names have
+differed between versions of the package (``RESULT_OK`` / ``OK``); they are looked up under
+either name, their values being the same (constants are not part of the type hash).
+"""
+
+from __future__ import annotations
+
+from typing import Any, Callable
+
+try:
+    from simulation_interfaces.msg import Result, SimulationState, SimulatorFeatures
+    from simulation_interfaces.srv import (
+        GetSimulationState,
+        GetSimulatorFeatures,
+        ResetSimulation,
+        SetSimulationState,
+        StepSimulation,
+    )
+except ImportError:  # pragma: no cover - depends on the installation
+    AVAILABLE = False
+else:
+    AVAILABLE = True
+
+
+def _constant(cls: type, name: str, prefix: str) -> int:
+    """``cls.<prefix><name>`` or ``cls.<name>``, whichever this version of the package defines."""
+    for candidate in (prefix + name, name):
+        if hasattr(cls, candidate):
+            return int(getattr(cls, candidate))
+    raise AttributeError(f"{cls.__name__} defines neither {prefix + name} nor {name}")
+
+
+if AVAILABLE:
+    OK, FEATURE_UNSUPPORTED, INCORRECT_STATE, OPERATION_FAILED = (
+        _constant(Result, name, "RESULT_") for name in ("OK", "FEATURE_UNSUPPORTED", "INCORRECT_STATE", "OPERATION_FAILED")
+    )
+    STOPPED, PLAYING, PAUSED, QUITTING = (
+        _constant(SimulationState, name, "STATE_") for name in ("STOPPED", "PLAYING", "PAUSED", "QUITTING")
+    )
+
+#: ResetSimulation scope bits (the values of the request's SCOPE_* constants).
+SCOPE_DEFAULT, SCOPE_TIME, SCOPE_STATE, SCOPE_SPAWNED, SCOPE_ALL = 0, 1, 2, 4, 255
+
+SERVICE_NAMES = (
+    "~/get_simulator_features",
+    "~/get_simulation_state",
+    "~/set_simulation_state",
+    "~/step_simulation",
+    "~/reset_simulation",
+)
+
+
+class _Refused(Exception):
+    """A request refused with a Result code and a reason."""
+
+    def __init__(self, code: int, reason: str) -> None:
+        super().__init__(reason)
+        self.code = code
+
+
+class SimulationServices:
+    """The five services, created on ``node`` (a RigidRotSimNode with a scene loaded)."""
+
+    def __init__(self, node: Any) -> None:
+        if not AVAILABLE:
+            raise RuntimeError("simulation_interfaces is not installed")
+        self.node = node
+        self._stopped = False  # set by SetSimulationState(STOPPED) until played or stepped
+        self.services = [
+            node.create_service(GetSimulatorFeatures, SERVICE_NAMES[0], self.get_features_callback),
+            node.create_service(GetSimulationState, SERVICE_NAMES[1], self.get_state_callback),
+            node.create_service(SetSimulationState, SERVICE_NAMES[2], self.set_state_callback),
+            node.create_service(StepSimulation, SERVICE_NAMES[3], self.step_callback),
+            node.create_service(ResetSimulation, SERVICE_NAMES[4], self.reset_callback),
+        ]
+
+    # ------------------------------------------------------------------ queries
+
+    def get_features_callback(self, request, response):
+        try:
+            self._fill_features(response.features)
+        except Exception as exc:  # a callback must never raise (e.g. a package version without a constant)
+            self.node.get_logger().error(f"~/get_simulator_features failed: {exc!r}")
+        return response
+
+    def _fill_features(self, features: Any) -> None:
+        features.features = [
+            SimulatorFeatures.SIMULATION_RESET,
+            SimulatorFeatures.SIMULATION_RESET_STATE,
+            SimulatorFeatures.SIMULATION_STATE_GETTING,
+            SimulatorFeatures.SIMULATION_STATE_SETTING,
+            SimulatorFeatures.SIMULATION_STATE_PAUSE,
+            SimulatorFeatures.STEP_SIMULATION_SINGLE,
+            SimulatorFeatures.STEP_SIMULATION_MULTIPLE,
+        ]
+        features.custom_info = (
+            "rigid_rot_sim: one rigid body (Euler's equations) driven by torque topics. ResetSimulation scopes: "
+            "DEFAULT/ALL or with TIME = time and state, STATE = state only at the current time; nothing is spawned. "
+            f"Also served: {self.node.get_name()}'s ~/step (returns the state), ~/set_state, ~/apply_torque."
+        )
+
+    def run_state(self) -> int:
+        """SimulationState code of the run now."""
+        node = self.node
+        if node.finished or (self._stopped and node.sim.paused and node.sim.step_index == 0):
+            return STOPPED
+        return PAUSED if node.sim.paused else PLAYING
+
+    def get_state_callback(self, request, response):
+        return self._serve("~/get_simulation_state", response, lambda: setattr(response.state, "state", self.run_state()))
+
+    # ------------------------------------------------------------------ changes
+
+    def set_state_callback(self, request, response):
+        return self._serve("~/set_simulation_state", response, lambda: self._set_run_state(int(request.state.state)))
+
+    def _set_run_state(self, target: int) -> None:
+        node = self.node
+        current = self.run_state()
+        already = SetSimulationState.Response.ALREADY_IN_TARGET_STATE
+        names = {STOPPED: "STOPPED", PLAYING: "PLAYING", PAUSED: "PAUSED"}
+        if target == QUITTING:
+            raise _Refused(FEATURE_UNSUPPORTED, "QUITTING is not supported: stop the node with SIGINT or SIGTERM")
+        if target not in names:
+            raise _Refused(OPERATION_FAILED, f"unknown simulation state {target} (STOPPED 0, PLAYING 1, PAUSED 2)")
+        if target == current:
+            raise _Refused(already, f"already {names[target]}")
+        if node.finished:
+            raise _Refused(SetSimulationState.Response.STATE_TRANSITION_ERROR,
+                           "the run reached its duration and is stopping")
+        if target == STOPPED:
+            node._reset()  # noqa: SLF001 - the node's ~/reset action
+            node._pause(True)  # noqa: SLF001 - the node's ~/pause action
+            self._stopped = True
+            return
+        try:
+            node._pause(target == PAUSED)  # noqa: SLF001
+        except ValueError as exc:  # e.g. resuming after a failure
+            raise _Refused(SetSimulationState.Response.STATE_TRANSITION_ERROR, str(exc)) from None
+        self._stopped = False
+
+    def step_callback(self, request, response):
+        return self._serve("~/step_simulation", response, lambda: self._step(int(request.steps)))
+
+    def _step(self, steps: int) -> None:
+        node = self.node
+        if node.finished or not node.sim.paused:
+            state = "stopping (duration reached)" if node.finished else "playing"
+            raise _Refused(INCORRECT_STATE, f"stepping needs a paused simulation, it is {state}: "
+                           "pause it first (SetSimulationState PAUSED)")
+        self._stopped = False
+        node._step(steps)  # noqa: SLF001 - the node's ~/step action (ValueError: operation failed)
+
+    def reset_callback(self, request, response):
+        # the scope field came with the 1.x releases; without it, a reset is a full one
+        return self._serve("~/reset_simulation", response, lambda: self._reset(int(getattr(request, "scope", 0))))
+
+    def _reset(self, scope: int) -> None:
+        time_bit, state_bit, spawned_bit = SCOPE_TIME, SCOPE_STATE, SCOPE_SPAWNED
+        if scope in (SCOPE_DEFAULT, SCOPE_ALL):
+            scope = time_bit | state_bit | spawned_bit
+        if scope & ~(time_bit | state_bit | spawned_bit):
+            raise _Refused(FEATURE_UNSUPPORTED, f"unknown scope bits in {scope} (TIME 1, STATE 2, SPAWNED 4)")
+        if scope & time_bit and not scope & state_bit:
+            raise _Refused(FEATURE_UNSUPPORTED,
+                           "time cannot be reset without the state (the scene's initial state belongs to t = 0): "
+                           "use scope TIME|STATE, DEFAULT or ALL")
+        if scope & time_bit:
+            self.node._reset()  # noqa: SLF001 - the node's ~/reset action
+        elif scope & state_bit:
+            self.node._set_initial_state()  # noqa: SLF001 - the node's ~/set_state action
+        # SPAWNED: nothing is ever spawned here, so there is nothing to remove
+
+    # ------------------------------------------------------------------ plumbing
+
+    def _serve(self, name: str, response: Any, action: Callable[[], Any]) -> Any:
+        """Run ``action``; the Result says OK, or the refusal's code and reason. Never raises."""
+        log = self.node.get_logger()
+        try:
+            action()
+            response.result.result = OK
+            response.result.error_message = ""
+        except _Refused as exc:
+            response.result.result = exc.code
+            response.result.error_message = str(exc)
+            log.warning(f"{name} refused: {exc}")
+        except ValueError as exc:  # the node's own check (e.g. steps must be >= 1)
+            response.result.result = OPERATION_FAILED
+            response.result.error_message = str(exc)
+            log.warning(f"{name} refused: {exc}")
+        except Exception as exc:  # a callback must never raise: the node keeps serving
+            response.result.result = OPERATION_FAILED
+            response.result.error_message = f"internal error: {exc!r}"
+            log.error(f"{name} failed: {exc!r}")
+        return response
