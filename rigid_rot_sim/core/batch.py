@@ -124,7 +124,11 @@ def _rk4_step(moments, q, omega, dt, accel):
 
 
 def _newton_midpoint(coeffs, omega, accel, a, guess, max_iter):
-    """Newton for g(m) = m - omega - a (f(m) + accel) = 0; returns (m, converged mask)."""
+    """Newton for g(m) = m - omega - a (f(m) + accel) = 0; returns (m, converged mask).
+
+    A body stops iterating once it has converged, so its result does not depend on the
+    other bodies of the batch (how a sweep chunks its runs changes no bit of any run).
+    """
     c1, c2, c3 = coeffs
     rhs0 = omega if accel is None else omega + a * accel
     m = guess.copy()
@@ -153,9 +157,10 @@ def _newton_midpoint(coeffs, omega, accel, a, guess, max_iter):
                 ),
                 axis=1,
             )
+        delta[converged] = 0.0
         m = m - delta
         size = np.maximum(np.abs(m).max(axis=1), tiny)
-        converged = np.abs(delta).max(axis=1) <= 4.0 * np.finfo(float).eps * size
+        converged |= np.abs(delta).max(axis=1) <= 4.0 * np.finfo(float).eps * size
         if converged.all():
             break
     return m, converged
