@@ -35,7 +35,7 @@ from rigid_rot_sim.core.dynamics import RigidBody
 from rigid_rot_sim.core.integrators.base import NonFiniteStateError
 from rigid_rot_sim.core.simulate import step_grid
 
-__all__ = ["Chunk", "plan_chunks", "run_chunk", "sample_inputs", "COLUMNS", "measure_step_cost", "choose_chunk_size"]
+__all__ = ["Chunk", "plan_chunks", "run_chunk", "run_nominal", "sample_inputs", "COLUMNS", "measure_step_cost", "choose_chunk_size"]
 
 # A time within this fraction of a step of a boundary counts as on it (as in core.simulator).
 _BOUNDARY_SLACK = 1e-9
@@ -425,21 +425,35 @@ def _torque_free(spec: SweepSpec) -> bool:
     return not schedules and spec.dispersions.torque_noise_sigma is None
 
 
-def run_chunk(spec: SweepSpec, chunk: Chunk) -> dict[str, Any]:
-    """Simulate one chunk; returns its rows as columns (:data:`COLUMNS`), one row per sample."""
+def run_nominal(spec: SweepSpec, spin_rate: float | None) -> _Outcome:
+    """The undispersed run at ``spin_rate`` with the spec's ``nominal`` integrator.
+
+    One task per spin rate when the spec names a nominal integrator; its result is passed
+    to every chunk of that spin rate. Otherwise each chunk runs its nominal body itself.
+    """
+    if spec.nominal_method is None or spec.nominal_dt is None:
+        raise ValueError("the spec names no nominal integrator: each chunk runs its nominal body")
+    return _simulate(spec, _bodies(spec, spin_rate, None), spec.nominal_method, spec.nominal_dt)
+
+
+def run_chunk(spec: SweepSpec, chunk: Chunk, nominal: _Outcome | None = None) -> dict[str, Any]:
+    """Simulate one chunk; returns its rows as columns (:data:`COLUMNS`), one row per sample.
+
+    ``nominal``: :func:`run_nominal` of the chunk's spin rate, required when the spec
+    names a nominal integrator (else the nominal body runs in this chunk's batch).
+    """
     method, dt, spin_rate = spec.grid[chunk.grid_point]
     samples = range(chunk.start, chunk.stop)
     bodies = _bodies(spec, spin_rate, samples)
     n = chunk.size
-    nominal_method = spec.nominal_method or method
-    nominal_dt = spec.nominal_dt or dt
-    if (nominal_method, nominal_dt) == (method, dt):
+    if spec.nominal_method is None:
         # the nominal body rides along in the same batch (its bits do not depend on the others)
         both = _simulate(spec, _concat(bodies, _bodies(spec, spin_rate, None)), method, dt)
         outcome, nominal = _split(both, n)
     else:
+        if nominal is None:
+            nominal = run_nominal(spec, spin_rate)
         outcome = _simulate(spec, bodies, method, dt)
-        nominal = _simulate(spec, _bodies(spec, spin_rate, None), nominal_method, nominal_dt)
     attitude_error = (Rotation.from_quat(np.nan_to_num(nominal.q_body[0], nan=1.0)).inv() * Rotation.from_quat(np.nan_to_num(outcome.q_body, nan=1.0))).magnitude()
     failed = np.isnan(outcome.q_body).any(axis=1) | np.isnan(nominal.q_body[0]).any()
     attitude_error = np.where(failed, np.nan, attitude_error)

@@ -27,7 +27,7 @@ from typing import Any, Callable, Iterator
 
 import numpy as np
 
-from rigid_rot_sim.analysis.sweep import COLUMNS, Chunk, choose_chunk_size, plan_chunks, run_chunk
+from rigid_rot_sim.analysis.sweep import COLUMNS, Chunk, choose_chunk_size, plan_chunks, run_chunk, run_nominal
 from rigid_rot_sim.analysis.sweep_spec import SweepSpec
 
 __all__ = ["SweepResult", "open_client", "run_sweep", "scheduler_address", "available_cpus"]
@@ -136,19 +136,29 @@ def run_sweep(
             chunk_size, figures = choose_chunk_size(spec, n_workers)
         chunks = plan_chunks(spec, chunk_size)
         token = uuid.uuid4().hex[:12]
+        nominals = {}
+        if spec.nominal_method is not None:
+            # one nominal run per spin rate, shared by the chunks of that spin rate
+            for spin in dict.fromkeys(s for _, _, s in spec.grid):
+                nominals[spin] = client.submit(run_nominal, spec, spin, key=f"rigid-rot-nominal-{token}-{spin}", pure=False)
         futures = {
-            client.submit(run_chunk, spec, chunk, key=f"rigid-rot-sweep-{token}-{k}", pure=False): (k, chunk)
+            client.submit(
+                run_chunk, spec, chunk, nominals.get(spec.grid[chunk.grid_point][2]),
+                key=f"rigid-rot-sweep-{token}-{k}", pure=False,
+            ): (k, chunk)
             for k, chunk in enumerate(chunks)
         }
         parts: list[dict[str, Any] | None] = [None] * len(chunks)
         with tqdm(total=spec.n_runs, desc=f"sweep {spec.name}", unit="run", disable=not progress) as bar:
-            for done, future in enumerate(as_completed(futures), start=1):
+            for done, future in enumerate(as_completed(list(futures)), start=1):
                 index, chunk = futures[future]
                 parts[index] = future.result()
                 future.release()
                 bar.update(chunk.size)
                 if on_chunk_done is not None:
                     on_chunk_done(done, len(chunks))
+        for future in nominals.values():
+            future.release()
         engine = {
             "scheduler": client.scheduler.address,
             "local_cluster": local,

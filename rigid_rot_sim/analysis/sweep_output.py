@@ -245,7 +245,7 @@ def _stability_map(result: SweepResult, path: Path, plt: Any) -> Path:
             i = spins.index(spin) if spin is not None else 0
             j = spec.dts.index(dt)
             share[i, j] = stable[mask].mean()
-            finite = metric[mask & stable & np.isfinite(metric)]
+            finite = metric[mask & np.isfinite(metric)]
             text = f"{np.median(finite):.1e}" if finite.size else "–"
             ax.text(j, i, text, ha="center", va="center", fontsize=6)
         image = ax.imshow(share, origin="lower", cmap="RdYlGn", vmin=0.0, vmax=1.0, aspect="auto")
@@ -253,7 +253,7 @@ def _stability_map(result: SweepResult, path: Path, plt: Any) -> Path:
         ax.set_yticks(range(len(spins)), [f"{s:g}" for s in spins], fontsize=7)
         ax.set_xlabel("dt (s)")
         ax.set_ylabel("|ω0| (rad/s)")
-        ax.set_title(f"{method}: share stable; text: median {spec.metric}", fontsize=8)
+        ax.set_title(f"{method}: share stable (colour), median {spec.metric} (text)", fontsize=8)
     fig.colorbar(image, ax=axes[0].tolist(), shrink=0.8)
     fig.savefig(path)
     plt.close(fig)
