@@ -83,7 +83,7 @@ def open_client(scheduler: str | None = None, workers: int | None = None) -> Ite
         n_workers=workers or available_cpus(),
         threads_per_worker=1,
         processes=True,
-        dashboard_address=None,
+        dashboard_address="127.0.0.1:0",  # its HTTP server on a free port: never a clash with a running cluster
         silence_logs=logging.ERROR,
     )
     try:
