@@ -1,9 +1,11 @@
-"""Run a sweep's chunks on dask.distributed: a local cluster by default, or an existing one.
+"""dask.distributed as the engine of sweeps, the work-precision report and the stability suite.
 
-No engine of our own: every chunk is one task (:func:`rigid_rot_sim.analysis.sweep.run_chunk`,
-a pure function of the spec and the chunk) submitted to a ``distributed.Client``. The
-scheduler reschedules the tasks of a worker that dies; since a chunk's rows depend only
-on the spec and the chunk, a re-run gives the same bits.
+No engine of our own: work is cut into tasks submitted to a ``distributed.Client``, on
+a local cluster by default or an existing one. For a sweep every chunk is one task
+(:func:`rigid_rot_sim.analysis.sweep.run_chunk`, a pure function of the spec and the
+chunk); the scheduler reschedules the tasks of a worker that dies, and since a chunk's
+rows depend only on the spec and the chunk, a re-run gives the same bits.
+:func:`map_tasks` runs the report's and the stability suite's independent tasks.
 
 Where the cluster comes from:
 
@@ -30,7 +32,7 @@ import numpy as np
 from rigid_rot_sim.analysis.sweep import COLUMNS, Chunk, choose_chunk_size, plan_chunks, run_chunk, run_nominal
 from rigid_rot_sim.analysis.sweep_spec import SweepSpec
 
-__all__ = ["SweepResult", "open_client", "run_sweep", "scheduler_address", "available_cpus"]
+__all__ = ["SweepResult", "open_client", "run_sweep", "map_tasks", "wants_cluster", "scheduler_address", "available_cpus"]
 
 #: How long to wait for a scheduler to answer, and for ``workers`` workers to join, s.
 CONNECT_TIMEOUT = 30.0
@@ -91,6 +93,46 @@ def open_client(scheduler: str | None = None, workers: int | None = None) -> Ite
             yield client
     finally:
         cluster.close()
+
+
+def wants_cluster(scheduler: str | None, workers: int | None) -> bool:
+    """True when the options (or DASK_SCHEDULER_ADDRESS) ask for Dask rather than this process."""
+    return scheduler_address(scheduler) is not None or workers is not None
+
+
+def map_tasks(
+    client: Any,
+    calls: list[tuple[Callable[..., Any], tuple[Any, ...]]],
+    on_done: Callable[[int, Any], None] | None = None,
+) -> list[Any]:
+    """``[function(*args) for function, args in calls]``, each call one task on ``client``.
+
+    Results come back in the order of ``calls``. ``client`` None runs the calls here,
+    one after the other. ``on_done(index, result)`` is called in this thread as each
+    finishes (for a progress bar).
+    """
+    if client is None:
+        results = []
+        for index, (function, args) in enumerate(calls):
+            results.append(function(*args))
+            if on_done is not None:
+                on_done(index, results[-1])
+        return results
+    from distributed import as_completed
+
+    token = uuid.uuid4().hex[:12]
+    futures = {
+        client.submit(function, *args, key=f"rigid-rot-{getattr(function, '__name__', 'task')}-{token}-{index}", pure=False): index
+        for index, (function, args) in enumerate(calls)
+    }
+    results: list[Any] = [None] * len(calls)
+    for future in as_completed(list(futures)):
+        index = futures[future]
+        results[index] = future.result()
+        future.release()
+        if on_done is not None:
+            on_done(index, results[index])
+    return results
 
 
 def _assemble(parts: list[dict[str, Any]]) -> dict[str, Any]:
