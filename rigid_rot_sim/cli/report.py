@@ -47,9 +47,11 @@ def run(args: argparse.Namespace) -> int:
             ours, theirs = row["ours"], row["scipy"]
             text = f"{result.problem} at ω error <= {row['target']:g} rad/s: "
             text += "ours not reached" if ours is None else f"{ours['label']} {ours['seconds']:.3e} s"
-            text += "; scipy not reached" if theirs is None else f"; scipy {theirs['label']} {theirs['seconds']:.3e} s"
             if ours is not None and ours["baseline_seconds"] > 0:
-                text += f" (x{ours['seconds'] / ours['baseline_seconds']:.3g} of its scipy baseline)"
+                text += f" ({ours['seconds'] / ours['baseline_seconds']:.3g} x its scipy baseline)"
+            text += "; scipy not reached" if theirs is None else f"; scipy {theirs['label']} {theirs['seconds']:.3e} s"
+            if theirs is not None and theirs["baseline_seconds"] > 0:
+                text += f" ({theirs['seconds'] / theirs['baseline_seconds']:.3g} x its scipy baseline)"
             if row["speedup"]:
                 text += f"; speed-up {row['speedup']:.1f}x"
             print(text)
