@@ -86,12 +86,13 @@ def dask_cluster(tmp_path):
             client.wait_for_workers(2, timeout=START_TIMEOUT)
         yield Cluster(address(), workers)
     finally:
+        # workers first, while their scheduler still answers (a worker closing against a vanished
+        # scheduler can hang), then the scheduler; SIGKILL whatever does not exit in time
         for process in reversed(processes):
             if process.poll() is None:
                 process.send_signal(signal.SIGTERM)
-        for process in processes:
             try:
-                process.wait(timeout=20)
+                process.wait(timeout=15)
             except subprocess.TimeoutExpired:
                 process.kill()
                 process.wait()
