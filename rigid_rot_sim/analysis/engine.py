@@ -32,7 +32,7 @@ import numpy as np
 from rigid_rot_sim.analysis.sweep import COLUMNS, Chunk, choose_chunk_size, plan_chunks, run_chunk, run_nominal
 from rigid_rot_sim.analysis.sweep_spec import SweepSpec
 
-__all__ = ["SweepResult", "open_client", "run_sweep", "map_tasks", "wants_cluster", "scheduler_address", "available_cpus"]
+__all__ = ["SweepResult", "require", "open_client", "run_sweep", "map_tasks", "wants_cluster", "scheduler_address", "available_cpus"]
 
 #: How long to wait for a scheduler to answer, and for ``workers`` workers to join, s.
 CONNECT_TIMEOUT = 30.0
@@ -47,6 +47,21 @@ class SweepResult:
     columns: dict[str, Any]
     quick: bool
     engine: dict[str, Any] = field(default_factory=dict)
+
+
+def require(*modules: str) -> None:
+    """OSError (one line, what to install) unless every module can be imported.
+
+    Sweeps and cluster runs need packages a plain ROS install may lack; say so before any work.
+    """
+    import importlib.util
+
+    missing = [name for name in modules if importlib.util.find_spec(name) is None]
+    if missing:
+        raise OSError(
+            f"{', '.join(missing)} not installed: sweeps and --scheduler/--workers need dask.distributed and pyarrow "
+            "(`make setup` installs the pinned versions; or pip install dask distributed pyarrow)"
+        )
 
 
 def available_cpus() -> int:
@@ -65,6 +80,7 @@ def scheduler_address(scheduler: str | None) -> str | None:
 @contextlib.contextmanager
 def open_client(scheduler: str | None = None, workers: int | None = None) -> Iterator[Any]:
     """A ``distributed.Client`` on the cluster the options name (see the module docstring)."""
+    require("distributed")
     from distributed import Client, LocalCluster
 
     if workers is not None and workers < 1:

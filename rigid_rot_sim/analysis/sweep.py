@@ -23,7 +23,7 @@ body's own (dispersed) principal frame. Quaternions scalar-last, body -> world.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, fields
 from typing import Any
 
 import numpy as np
@@ -180,7 +180,9 @@ def _bodies(spec: SweepSpec, spin_rate: float | None, samples: range | None) -> 
     moments = np.asarray(body.principal_moments) * (1.0 + stack("moments"))
     body_from_principal = Rotation.from_quat(np.broadcast_to(body.body_from_principal, (n, 4))) * Rotation.from_rotvec(misalignment)
     q0 = (Rotation.from_quat(np.broadcast_to(spec.scene.initial.orientation, (n, 4))) * Rotation.from_rotvec(attitude)).as_quat()
-    noise = np.array([d["noise"] for d in draws]) if samples is not None else np.zeros((1, 0, 3))
+    d = spec.dispersions
+    intervals = math.ceil(spec.duration / d.torque_noise_interval) if d.torque_noise_sigma is not None else 0
+    noise = np.array([d["noise"] for d in draws]) if samples is not None else np.zeros((1, intervals, 3))
     return _Bodies(
         moments=moments,
         body_from_principal=body_from_principal,
@@ -375,31 +377,16 @@ def _simulate(spec: SweepSpec, bodies: _Bodies, method: str, dt: float) -> _Outc
 
 
 def _subset(bodies: _Bodies, mask: np.ndarray) -> _Bodies:
-    return _Bodies(
-        moments=bodies.moments[mask],
-        body_from_principal=bodies.body_from_principal[mask],
-        q0_body=bodies.q0_body[mask],
-        omega0_body=bodies.omega0_body[mask],
-        torque_scale=bodies.torque_scale[mask],
-        noise=bodies.noise[mask],
-        misalignment=bodies.misalignment[mask],
-        attitude0_error=bodies.attitude0_error[mask],
-    )
+    """The bodies selected by ``mask``."""
+    return _Bodies(**{f.name: getattr(bodies, f.name)[mask] for f in fields(_Bodies)})
 
 
 def _concat(a: _Bodies, b: _Bodies) -> _Bodies:
-    return _Bodies(
-        moments=np.concatenate((a.moments, b.moments)),
-        body_from_principal=Rotation.concatenate([a.body_from_principal, b.body_from_principal]),
-        q0_body=np.concatenate((a.q0_body, b.q0_body)),
-        omega0_body=np.concatenate((a.omega0_body, b.omega0_body)),
-        torque_scale=np.concatenate((a.torque_scale, b.torque_scale)),
-        noise=np.concatenate((a.noise, b.noise)) if a.noise.shape[1] == b.noise.shape[1] else np.concatenate(
-            (a.noise, np.zeros((b.noise.shape[0], a.noise.shape[1], 3)))
-        ),
-        misalignment=np.concatenate((a.misalignment, b.misalignment)),
-        attitude0_error=np.concatenate((a.attitude0_error, b.attitude0_error)),
-    )
+    """The bodies of ``a``, then those of ``b``."""
+    def join(x: Any, y: Any) -> Any:
+        return Rotation.concatenate([x, y]) if isinstance(x, Rotation) else np.concatenate((x, y))
+
+    return _Bodies(**{f.name: join(getattr(a, f.name), getattr(b, f.name)) for f in fields(_Bodies)})
 
 
 def _split(outcome: _Outcome, n: int) -> tuple[_Outcome, _Outcome]:

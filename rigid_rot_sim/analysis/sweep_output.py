@@ -22,8 +22,8 @@ from typing import Any
 
 import numpy as np
 
-from rigid_rot_sim.analysis.sweep import COLUMNS
 from rigid_rot_sim.analysis.engine import SweepResult
+from rigid_rot_sim.analysis.sweep import COLUMNS
 from rigid_rot_sim.analysis.sweep_spec import METRICS
 
 __all__ = ["to_table", "write_parquet", "summary_markdown", "write_plots", "write_outputs", "METADATA_KEY", "PERCENTILES"]

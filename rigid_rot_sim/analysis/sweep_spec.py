@@ -47,7 +47,9 @@ import numpy as np
 import yaml
 
 from rigid_rot_sim.core.batch import BATCH_METHODS
-from rigid_rot_sim.core.scene import Scene, SceneError, parse_scene_text
+# the scene parser's helpers, so that a sweep spec's errors read like a scene's
+from rigid_rot_sim.core.scene import Scene, SceneError, _Ctx, _mapping, parse_scene_text
+from rigid_rot_sim.core.scene import _number as _scene_number
 from rigid_rot_sim.core.validation import TRIANGLE_RTOL
 
 __all__ = [
@@ -160,34 +162,14 @@ class SweepSpec:
         return len(self.grid) * self.samples
 
 
-class _Ctx:
-    def __init__(self, source: str) -> None:
-        self.label = os.path.basename(source) if source else "<string>"
-
-    def error(self, key: str, what: str) -> SweepSpecError:
-        return SweepSpecError(f"{self.label}: {key}: {what}")
-
-
-def _mapping(ctx: _Ctx, value: Any, key: str, allowed: tuple[str, ...]) -> Mapping[str, Any]:
-    if not isinstance(value, Mapping):
-        raise ctx.error(key, f"must be a mapping, got {type(value).__name__}")
-    for name in value:
-        if name not in allowed:
-            raise ctx.error(f"{key}.{name}" if key else str(name), f"unknown key (allowed: {', '.join(allowed)})")
-    return value
+def _ctx(source: str) -> _Ctx:
+    return _Ctx(source, SweepSpecError)
 
 
 def _number(ctx: _Ctx, value: Any, key: str, *, positive: bool = False, nonnegative: bool = False) -> float:
-    if isinstance(value, bool) or not isinstance(value, (int, float)):
-        raise ctx.error(key, f"must be a number, got {value!r}")
-    number = float(value)
-    if not math.isfinite(number):
-        raise ctx.error(key, f"must be finite, got {number}")
-    if positive and not number > 0.0:
-        raise ctx.error(key, f"must be > 0, got {number:g}")
-    if nonnegative and number < 0.0:
-        raise ctx.error(key, f"must be >= 0, got {number:g}")
-    return number
+    if positive:
+        return _scene_number(ctx, value, key, minimum=0.0, strict=True)
+    return _scene_number(ctx, value, key, minimum=0.0 if nonnegative else None)
 
 
 def _integer(ctx: _Ctx, value: Any, key: str, minimum: int) -> int:
@@ -306,7 +288,7 @@ def _apply_quick(ctx: _Ctx, spec: Mapping[str, Any]) -> dict[str, Any]:
 
 def parse_sweep_spec(data: Any, source: str = "<string>", text: str = "", quick: bool = False) -> SweepSpec:
     """Validate a sweep spec given as parsed YAML; ``quick`` applies its ``quick`` overrides."""
-    ctx = _Ctx(source)
+    ctx = _ctx(source)
     spec = _mapping(ctx, data, "", _TOP_KEYS)
     for required in ("scene", "seed", "samples", "grid"):
         if required not in spec:

@@ -41,7 +41,9 @@ def add_parser(subparsers) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from rigid_rot_sim.analysis.engine import run_sweep
+    from rigid_rot_sim.analysis.engine import require, run_sweep
+
+    require("distributed", "pyarrow", "matplotlib")
     from rigid_rot_sim.analysis.sweep_output import summary_markdown, write_outputs
     from rigid_rot_sim.analysis.sweep_spec import load_sweep_spec
 
