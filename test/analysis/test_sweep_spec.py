@@ -88,3 +88,18 @@ def test_missing_file_is_one_line(tmp_path, capsys):
     assert main(["sweep", str(tmp_path / "nope.yaml")]) == 2
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and "cannot read sweep spec" in err
+
+
+@pytest.mark.parametrize("command", ["sweep", "report", "stability"])
+def test_zero_workers_is_one_line(tmp_path, capsys, command):
+    path = tmp_path / "good.yaml"
+    path.write_text(GOOD)
+    args = [command, str(path)] if command == "sweep" else [command]
+    try:
+        code = main(args + ["--workers", "0", "--out", str(tmp_path / "out"), "--no-progress"])
+    except SystemExit as exc:  # refused by argparse itself
+        code = exc.code
+    assert code == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "--workers" in err and "0" in err, err
+    assert not (tmp_path / "out").exists()
