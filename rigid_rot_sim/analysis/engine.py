@@ -97,18 +97,37 @@ def open_client(scheduler: str | None = None, workers: int | None = None) -> Ite
         finally:
             client.close()
         return
-    cluster = LocalCluster(
-        n_workers=workers or available_cpus(),
-        threads_per_worker=1,
-        processes=True,
-        dashboard_address="127.0.0.1:0",  # its HTTP server on a free port: never a clash with a running cluster
-        silence_logs=logging.ERROR,
-    )
+    # the scheduler first (a Ctrl-C meanwhile is taken once it runs: a half-built cluster cannot be
+    # closed, and distributed's atexit would wait 10 s for it), then the workers
+    with _sigint_deferred() as interrupted:
+        cluster = LocalCluster(
+            n_workers=0,
+            threads_per_worker=1,
+            processes=True,
+            dashboard_address="127.0.0.1:0",  # its HTTP server on a free port: never a clash with a running cluster
+            silence_logs=logging.ERROR,
+        )
+        client = Client(cluster)
     try:
-        with Client(cluster) as client:
-            yield client
-    finally:
-        cluster.close()
+        if interrupted:
+            raise KeyboardInterrupt
+        n_workers = workers or available_cpus()
+        cluster.scale(n_workers)
+        client.wait_for_workers(n_workers, timeout=WORKERS_TIMEOUT)
+        yield client
+    except BaseException:
+        # interrupted (Ctrl-C) or failed: stop our worker processes now rather than wait for
+        # their running tasks (a polite close waits for them, here or in distributed's atexit)
+        for name in ("distributed", "tornado"):  # the comms we cut would log tracebacks
+            logging.getLogger(name).setLevel(logging.CRITICAL)
+        _kill_worker_processes(cluster)
+        with contextlib.suppress(Exception):
+            client.close(timeout=1)
+        with contextlib.suppress(Exception):
+            cluster.close(timeout=1)
+        raise
+    client.close()
+    cluster.close()
 
 
 def wants_cluster(scheduler: str | None, workers: int | None) -> bool:
@@ -149,6 +168,38 @@ def map_tasks(
         if on_done is not None:
             on_done(index, results[index])
     return results
+
+
+@contextlib.contextmanager
+def _sigint_deferred() -> Iterator[list[bool]]:
+    """Hold SIGINT back inside the block; the yielded list is non-empty if one arrived."""
+    import signal
+    import threading
+
+    received: list[bool] = []
+    if threading.current_thread() is not threading.main_thread():
+        yield received
+        return
+    previous = signal.getsignal(signal.SIGINT)
+    if previous is signal.SIG_IGN:
+        yield received
+        return
+    signal.signal(signal.SIGINT, lambda signum, frame: received.append(True))
+    try:
+        yield received
+    finally:
+        signal.signal(signal.SIGINT, previous)
+
+
+def _kill_worker_processes(cluster: Any) -> None:
+    """SIGKILL the worker processes a LocalCluster's nannies started (ours, by pid)."""
+    import signal
+
+    for nanny in list(getattr(cluster, "workers", {}).values()):
+        pid = getattr(getattr(getattr(nanny, "process", None), "process", None), "pid", None)
+        if pid:
+            with contextlib.suppress(OSError):
+                os.kill(pid, signal.SIGKILL)
 
 
 def _assemble(parts: list[dict[str, Any]]) -> dict[str, Any]:
@@ -207,14 +258,20 @@ def run_sweep(
             for k, chunk in enumerate(chunks)
         }
         parts: list[dict[str, Any] | None] = [None] * len(chunks)
-        with tqdm(total=spec.n_runs, desc=f"sweep {spec.name}", unit="run", disable=not progress) as bar:
-            for done, future in enumerate(as_completed(list(futures)), start=1):
-                index, chunk = futures[future]
-                parts[index] = future.result()
-                future.release()
-                bar.update(chunk.size)
-                if on_chunk_done is not None:
-                    on_chunk_done(done, len(chunks))
+        try:
+            with tqdm(total=spec.n_runs, desc=f"sweep {spec.name}", unit="run", disable=not progress) as bar:
+                for done, future in enumerate(as_completed(list(futures)), start=1):
+                    index, chunk = futures[future]
+                    parts[index] = future.result()
+                    future.release()
+                    bar.update(chunk.size)
+                    if on_chunk_done is not None:
+                        on_chunk_done(done, len(chunks))
+        except BaseException:
+            # interrupted (Ctrl-C) or failed: leave nothing running on a shared cluster
+            with contextlib.suppress(Exception):
+                client.cancel([*futures, *nominals.values()], force=True)
+            raise
         for future in nominals.values():
             future.release()
         engine = {

@@ -150,3 +150,40 @@ def test_killing_a_worker_mid_sweep_changes_no_result(tmp_path, dask_cluster):
     for name, kind in COLUMNS.items():
         a, b = result.columns[name], reference[name]
         assert (list(a) == list(b)) if kind == "string" else np.array_equal(a, b, equal_nan=True), name
+
+
+def test_ctrl_c_stops_a_sweep_on_the_local_cluster_and_its_workers(tmp_path):
+    """SIGINT mid-sweep: exit code 130 promptly (not at the end of the sweep), no worker left behind."""
+    import psutil
+
+    path = write_spec(tmp_path, 200.0)  # minutes of work: only an honoured SIGINT ends it soon
+    process = subprocess.Popen(
+        [str(Path(sys.executable).parent / "rigid-rot"), "sweep", str(path), "--workers", "2", "--chunk-size", "2",
+         "--out", str(tmp_path / "out")],
+        stdout=subprocess.DEVNULL, stderr=subprocess.PIPE,
+        preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL),  # not inherited as ignored
+    )
+    try:
+        stderr = bytearray()
+
+        def read():
+            while chunk := process.stderr.read1(4096):
+                stderr.extend(chunk)
+
+        import threading
+
+        threading.Thread(target=read, daemon=True).start()
+        wait_for(lambda: b"sweep small:" in stderr or process.poll() is not None, START_TIMEOUT, "the progress bar")
+        children = psutil.Process(process.pid).children(recursive=True)
+        assert process.poll() is None and children, bytes(stderr).decode()
+        process.send_signal(signal.SIGINT)
+        start = time.monotonic()
+        assert process.wait(timeout=30) == 130
+        print(f"sweep stopped {time.monotonic() - start:.2f} s after SIGINT")
+        gone, alive = psutil.wait_procs(children, timeout=30)
+        assert not alive
+        assert not (tmp_path / "out").exists()
+    finally:
+        if process.poll() is None:
+            process.kill()
+            process.wait()
