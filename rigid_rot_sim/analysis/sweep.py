@@ -42,7 +42,9 @@ _BOUNDARY_SLACK = 1e-9
 # Streams of SeedSequence(seed, spawn_key=(sample, k)): one per kind of dispersion.
 _STREAMS = ("principal_moments", "axis_misalignment", "initial_omega", "initial_attitude", "torque_scale", "torque_noise")
 
-#: Output columns in order, with their Arrow types (events only when the spec asks for them).
+#: Output columns in order, with their Arrow types. I1 <= I2 <= I3 are the run's principal moments
+#: (kg*m^2; the base body's principal axes in the order of its moments, then dispersed); omega
+#: columns are rad/s in the body frame; event columns are NaN unless the spec asks for them.
 COLUMNS: dict[str, str] = {
     "run": "int64",
     "grid_point": "int32",
