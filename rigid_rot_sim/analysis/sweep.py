@@ -42,8 +42,8 @@ _BOUNDARY_SLACK = 1e-9
 # Streams of SeedSequence(seed, spawn_key=(sample, k)): one per kind of dispersion.
 _STREAMS = ("principal_moments", "axis_misalignment", "initial_omega", "initial_attitude", "torque_scale", "torque_noise")
 
-#: Output columns in order, with their Arrow types. I1 <= I2 <= I3 are the run's principal moments
-#: (kg*m^2; the base body's principal axes in the order of its moments, then dispersed); omega
+#: Output columns in order, with their Arrow types. I1, I2, I3 are the run's principal moments
+#: (kg*m^2) about the base body's principal axes, numbered by the base body's ascending moments; omega
 #: columns are rad/s in the body frame; event columns are NaN unless the spec asks for them.
 COLUMNS: dict[str, str] = {
     "run": "int64",
