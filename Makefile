@@ -107,10 +107,30 @@ $(STAMPS)/msgs: $(STAMPS)/cmake-includes $(MSGS_SOURCES)
 	"$(VPY)" -c "import rigid_rot_msgs.srv, rigid_rot_msgs.msg"
 	touch $@
 
+# Standard interface packages that are not on PyPI (rigid_rot_msgs/vendor/README.md): built from
+# their upstream definitions into .venv, unless the interpreter already finds a real installation
+# (a sourced ROS), in which case that one is used and nothing is built.
+VENDORED_MSGS := tf2_msgs simulation_interfaces
+VENDOR_STAMPS := $(VENDORED_MSGS:%=$(STAMPS)/vendor-%)
+.SECONDEXPANSION:
+$(STAMPS)/vendor-%: $(STAMPS)/cmake-includes $$(wildcard rigid_rot_msgs/vendor/$$*/*.* rigid_rot_msgs/vendor/$$*/msg/* rigid_rot_msgs/vendor/$$*/srv/*)
+	@if "$(VPY)" -c 'import importlib.util, sys; s = importlib.util.find_spec("$*"); sys.exit(0 if s and not (s.origin or "").startswith("$(VENV)/") else 1)'; then \
+		echo "setup: using the installed $* (nothing built)"; \
+	else \
+		export AMENT_PREFIX_PATH="$(VENV)" && \
+		cmake -S rigid_rot_msgs/vendor/$* -B "$(BUILD)/vendor/$*" \
+			-DCMAKE_PREFIX_PATH="$(VENV)" -DCMAKE_INSTALL_PREFIX="$(VENV)" \
+			-DPython3_EXECUTABLE="$(VPY)" -DBUILD_TESTING=OFF >/dev/null && \
+		cmake --build "$(BUILD)/vendor/$*" -j$$(nproc 2>/dev/null || echo 2) >/dev/null && \
+		cmake --install "$(BUILD)/vendor/$*" >/dev/null && \
+		"$(VPY)" -c "import $*.msg" && echo "setup: built $* into $(VENV)"; \
+	fi
+	touch $@
+
 # Editable install: source edits are live; only packaging files trigger a reinstall.
 # --use-pep517: without it pip runs `setup.py develop`, which obeys setup.cfg's ament-style
 # script_dir and puts the console scripts in .venv/lib/rigid_rot_sim/ instead of .venv/bin/.
-$(STAMPS)/package: $(STAMPS)/msgs setup.py setup.cfg package.xml
+$(STAMPS)/package: $(STAMPS)/msgs $(VENDOR_STAMPS) setup.py setup.cfg package.xml
 	"$(VPY)" -m pip install --disable-pip-version-check --no-deps --no-build-isolation --use-pep517 -e .
 	@for exe in rigid-rot rigid_rot_sim_node; do \
 		test -x "$(VENV)/bin/$$exe" || { echo "setup: $(VENV)/bin/$$exe was not installed" >&2; exit 1; }; \
