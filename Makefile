@@ -34,6 +34,8 @@ ROS_PINS := \
 PY_PINS := \
 	setuptools==65.5.0 wheel==0.45.1 numpy==2.4.6 scipy==1.17.1 mcap==1.6.0 mcap-ros2-support==0.6.0 \
 	PyYAML==6.0.3 matplotlib==3.11.2 tqdm==4.70.1 numba==0.68.1 llvmlite==0.50.0
+# Sweeps: dask.distributed is the engine (local cluster or `dask scheduler`/`dask worker`), Parquet output.
+SWEEP_PINS := dask==2026.8.0 distributed==2026.8.0 pyarrow==26.0.1
 TEST_PINS := pytest==9.2.0 hypothesis==6.170.15 rosbags==0.11.9
 
 # The compiled kernels are built from these (rigid_rot_sim/core/jit.py keys their cache on them).
@@ -88,7 +90,7 @@ $(VPY):
 # Rewritten only when the pins change, so that its timestamp drives the pip step.
 $(STAMPS)/requirements.txt: FORCE | $(VPY)
 	@mkdir -p $(STAMPS)
-	@printf '%s\n' $(ROS_PINS) $(PY_PINS) $(TEST_PINS) > $@.new
+	@printf '%s\n' $(ROS_PINS) $(PY_PINS) $(SWEEP_PINS) $(TEST_PINS) > $@.new
 	@if cmp -s $@.new $@; then rm $@.new; else mv $@.new $@; fi
 
 $(STAMPS)/pip: $(STAMPS)/requirements.txt

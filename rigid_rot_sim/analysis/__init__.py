@@ -5,7 +5,11 @@
 * :mod:`.workprecision`: error against run time for every integrator and scipy's solve_ivp.
 * :mod:`.stability`: the catalogue of stiff and extreme cases, and bisection for stable steps.
 * :mod:`.plotting`: matplotlib (Agg) figures of both.
+* :mod:`.sweep_spec`: sweep specs (a base scene, dispersions, grids) validated from YAML.
+* :mod:`.sweep`: a sweep's seeded inputs, its chunks, and the batch simulation of one chunk.
+* :mod:`.engine`: dask.distributed (local or existing cluster) for sweeps, report and stability.
+* :mod:`.sweep_output`: the Parquet file, summary.md and plots of a sweep.
 
-Nothing here is imported by the core or the node; the ``rigid-rot report`` and
-``rigid-rot stability`` commands drive it.
+Nothing here is imported by the core or the node; the ``rigid-rot report``,
+``rigid-rot stability`` and ``rigid-rot sweep`` commands drive it.
 """

@@ -557,28 +557,44 @@ def long_horizon(method: str, steps: int, dt: float = 0.01, samples: int = 1000)
     return LongHorizon(method, steps, dt, seconds, first, last, float(errors[-1]), secular)
 
 
+def bisection_row(case: Case, method: str, steps: int) -> dict[str, Any]:
+    """Largest stable step of ``method`` on ``case``, with the theory bound."""
+    spin = float(np.linalg.norm(case.problem.omega0))
+    measured = largest_stable_step(case, method, steps)
+    theory = advice.practical_step_limit(method, case.problem.moments, spin)
+    return {
+        "case": case.name,
+        "method": method,
+        "steps": steps,
+        "largest_stable_dt": measured,
+        "theory_dt": theory,
+        "ratio": measured / theory if 0 < theory < math.inf else None,
+    }
+
+
 def bisection_rows(cases: list[Case], quick: bool = False) -> list[dict[str, Any]]:
     """Largest stable step of each explicit method on each case marked ``bisect``, with the theory bound."""
-    rows = []
     steps = BISECTION_STEPS // (4 if quick else 1)
-    for case in cases:
-        if not case.bisect:
-            continue
-        spin = float(np.linalg.norm(case.problem.omega0))
-        for method in BISECTED:
-            measured = largest_stable_step(case, method, steps)
-            theory = advice.practical_step_limit(method, case.problem.moments, spin)
-            rows.append(
-                {
-                    "case": case.name,
-                    "method": method,
-                    "steps": steps,
-                    "largest_stable_dt": measured,
-                    "theory_dt": theory,
-                    "ratio": measured / theory if 0 < theory < math.inf else None,
-                }
-            )
-    return rows
+    return [bisection_row(case, method, steps) for case in cases if case.bisect for method in BISECTED]
+
+
+def _case(name: str, quick: bool) -> Case:
+    return next(case for case in catalogue(quick) if case.name == name)
+
+
+def case_task(name: str, quick: bool, method: str) -> dict[str, Any]:
+    """A Dask task: :func:`run_case` of the catalogue's case ``name`` (rebuilt on the worker)."""
+    return dataclasses.asdict(run_case(_case(name, quick), method))
+
+
+def bisection_task(name: str, quick: bool, method: str) -> dict[str, Any]:
+    """A Dask task: :func:`bisection_row` of the catalogue's case ``name``."""
+    return bisection_row(_case(name, quick), method, BISECTION_STEPS // (4 if quick else 1))
+
+
+def long_horizon_task(method: str, steps: int) -> dict[str, Any]:
+    """A Dask task: :func:`long_horizon` as a dict."""
+    return dataclasses.asdict(long_horizon(method, steps))
 
 
 def method_labels() -> list[str]:
@@ -587,6 +603,61 @@ def method_labels() -> list[str]:
 
 
 # ---------------------------------------------------------------- the suite and its outputs
+
+
+def _run_here(cases, methods, long_methods, long_steps, quick, progress, total):
+    """The suite in this process: ({case: {method: run}}, bisection rows, long horizons)."""
+    from tqdm import tqdm
+
+    case_runs: dict[str, dict[str, Any]] = {}
+    with tqdm(total=total, desc="stability", unit="run", disable=not progress) as bar:
+        for case in cases:
+            runs = case_runs.setdefault(case.name, {})
+            for method in methods:
+                bar.set_postfix_str(f"{case.name} {method}", refresh=False)
+                runs[method] = dataclasses.asdict(run_case(case, method))
+                bar.update(1)
+        bar.set_postfix_str("bisection", refresh=True)
+        bisection = bisection_rows(cases, quick)
+        bar.update(1)
+        horizon = []
+        for method in long_methods:
+            bar.set_postfix_str(f"long horizon {method}", refresh=True)
+            horizon.append(dataclasses.asdict(long_horizon(method, long_steps)))
+            bar.update(1)
+    return case_runs, bisection, horizon
+
+
+def _run_on_cluster(client, cases, methods, long_methods, long_steps, quick, bar):
+    """The same as :func:`_run_here`, every run, bisection and long horizon one Dask task."""
+    from rigid_rot_sim.analysis.engine import map_tasks
+
+    runs_args = [(case.name, quick, method) for case in cases for method in methods]
+    bisect_args = [(case.name, quick, method) for case in cases if case.bisect for method in BISECTED]
+    horizon_args = [(method, long_steps) for method in long_methods]
+    calls = (
+        [(case_task, a) for a in runs_args]
+        + [(bisection_task, a) for a in bisect_args]
+        + [(long_horizon_task, a) for a in horizon_args]
+    )
+    first_bisection, first_horizon = len(runs_args), len(runs_args) + len(bisect_args)
+    bisections_left = [len(bisect_args)]
+
+    def done(index: int, _: Any) -> None:
+        if first_bisection <= index < first_horizon:
+            bisections_left[0] -= 1
+            if bisections_left[0] == 0:
+                bar.update(1)  # the bisections are one step of the bar, as in a local run
+        else:
+            bar.update(1)
+
+    results = map_tasks(client, calls, done)
+    if not bisect_args:
+        bar.update(1)
+    case_runs: dict[str, dict[str, Any]] = {}
+    for (name, _, method), run in zip(runs_args, results[:first_bisection]):
+        case_runs.setdefault(name, {})[method] = run
+    return case_runs, results[first_bisection:first_horizon], results[first_horizon:]
 
 
 def run_suite(
@@ -598,13 +669,20 @@ def run_suite(
     methods: list[str] | None = None,
     command: str = "rigid-rot stability",
     progress: bool = True,
+    scheduler: str | None = None,
+    workers: int | None = None,
 ) -> dict[str, Any]:
-    """Run the catalogue, the bisections and the long horizon; write stability.md/.json/.png."""
+    """Run the catalogue, the bisections and the long horizon; write stability.md/.json/.png.
+
+    With ``scheduler`` or ``workers`` (or DASK_SCHEDULER_ADDRESS) every run, bisection and
+    long horizon is one Dask task; the results are the same (run times aside).
+    """
     import json
     from pathlib import Path
 
     from tqdm import tqdm
 
+    from rigid_rot_sim.analysis.engine import open_client, wants_cluster
     from rigid_rot_sim.analysis.plotting import long_horizon_plot, stability_plot
     from rigid_rot_sim.analysis.workprecision import machine_info
 
@@ -620,34 +698,26 @@ def run_suite(
     start = time.perf_counter()
     case_rows: list[dict[str, Any]] = []
     total = len(cases) * len(methods) + len(long_methods) + 1
-    with tqdm(total=total, desc="stability", unit="run", disable=not progress) as bar:
-        for case in cases:
-            runs = {}
-            for method in methods:
-                bar.set_postfix_str(f"{case.name} {method}", refresh=False)
-                runs[method] = dataclasses.asdict(run_case(case, method))
-                bar.update(1)
-            case_rows.append(
-                {
-                    "name": case.name,
-                    "description": case.description,
-                    "principal_moments": list(case.problem.principal_moments),
-                    "omega0": list(case.problem.omega0),
-                    "dt": case.dt,
-                    "steps": case.n_steps,
-                    "criterion": case.criterion.describe(),
-                    "reference": case.problem.reference().method if case.reference else None,
-                    "runs": runs,
-                }
-            )
-        bar.set_postfix_str("bisection", refresh=True)
-        bisection = bisection_rows(cases, quick)
-        bar.update(1)
-        horizon = []
-        for method in long_methods:
-            bar.set_postfix_str(f"long horizon {method}", refresh=True)
-            horizon.append(dataclasses.asdict(long_horizon(method, long_steps)))
-            bar.update(1)
+    if wants_cluster(scheduler, workers):
+        with tqdm(total=total, desc="stability", unit="run", disable=not progress) as bar, \
+                open_client(scheduler, workers) as client:
+            case_runs, bisection, horizon = _run_on_cluster(client, cases, methods, long_methods, long_steps, quick, bar)
+    else:
+        case_runs, bisection, horizon = _run_here(cases, methods, long_methods, long_steps, quick, progress, total)
+    for case in cases:
+        case_rows.append(
+            {
+                "name": case.name,
+                "description": case.description,
+                "principal_moments": list(case.problem.principal_moments),
+                "omega0": list(case.problem.omega0),
+                "dt": case.dt,
+                "steps": case.n_steps,
+                "criterion": case.criterion.describe(),
+                "reference": case.problem.reference().method if case.reference else None,
+                "runs": case_runs[case.name],
+            }
+        )
     elapsed = time.perf_counter() - start
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)

@@ -46,6 +46,11 @@ from rigid_rot_sim.core.integrators.base import NonFiniteStateError
 SCIPY_METHODS = ("RK45", "DOP853", "Radau", "LSODA")
 TARGETS = (1e-6, 1e-10)
 ERROR_FLOOR = 1e-13
+#: On a cluster every point is timed together with this scipy run on the same worker, in the
+#: same task; run times are then compared as multiples of it, so that points measured on
+#: different machines stay comparable.
+BASELINE_METHOD = "DOP853"
+BASELINE_TOL = 1e-10
 
 #: Options per order for the methods that come in several orders.
 ORDER_VARIANTS = {"splitting": (2, 4, 6), "exact_split": (2, 4)}
@@ -85,6 +90,7 @@ class Point:
     energy_drift: float = math.nan
     momentum_drift: float = math.nan
     n_steps: int = 0
+    baseline_seconds: float = math.nan  # the scipy baseline timed in the same task (distributed runs)
 
 
 @dataclass
@@ -245,10 +251,17 @@ def run_to_end(problem: Problem, method: str, dt: float, options: dict[str, Any]
     return np.asarray(integrator.q), np.asarray(integrator.omega)
 
 
-def measure_point(problem: Problem, line: Line, value: float, repeats: int) -> Point:
-    """Run one sweep point and compare its final state with the problem's reference."""
+def measure_point(problem: Problem, line: Line, value: float, repeats: int, baseline: bool = False) -> Point:
+    """Run one sweep point and compare its final state with the problem's reference.
+
+    ``baseline``: also time scipy's BASELINE_METHOD at BASELINE_TOL on the same problem,
+    right before the point, into ``point.baseline_seconds``.
+    """
     run, parameter = _runner(problem, line, value)
     point = Point(line.label, line.family, line.method, parameter, float(value), "ok")
+    if baseline:
+        base_run, _ = _runner(problem, Line("scipy baseline", "scipy", BASELINE_METHOD, (), "tol"), BASELINE_TOL)
+        _, point.baseline_seconds, _ = _best_time(base_run, repeats)
     try:
         (q, omega, n), seconds, done = _best_time(run, repeats)
     except (NonFiniteStateError, ArithmeticError) as exc:
@@ -279,39 +292,61 @@ def sweep_values(problem: Problem, line: Line, settings: Settings) -> list[float
 
 def run_problem(problem: Problem, settings: Settings, progress: Any = None) -> ProblemResult:
     """Every line's sweep on one problem."""
-    from rigid_rot_sim.core.integrators import METHODS
-
     ref = problem.reference()
     result = ProblemResult(problem.key, problem.title, problem.t_end, ref.method, ref.certified_to)
-    methods = settings.methods if settings.methods is not None else tuple(METHODS)
-    floor = max(ERROR_FLOOR, ref.certified_to)
-    for line in our_lines(methods, problem) + scipy_lines(settings.scipy_methods):
-        values = sweep_values(problem, line, settings)
-        refusals = 0
-        for k, value in enumerate(values):
-            if progress is not None:
-                progress.set_postfix_str(f"{problem.key} {line.label}", refresh=False)
-            point = measure_point(problem, line, value, settings.repeats)
-            result.points.append(point)
-            if progress is not None:
-                progress.update(1)
-            refusals = refusals + 1 if point.status == "refused" else 0
-            # a fixed-step run costs in proportion to its steps: skip a next point that
-            # would take more than twice the budget
-            predicted = point.seconds * (value / values[k + 1]) if line.sweep == "step" and k + 1 < len(values) else 0.0
-            stop = refusals >= 2 or (
-                point.status == "ok"
-                and (
-                    point.seconds > settings.budget_seconds
-                    or predicted > 2.0 * settings.budget_seconds
-                    or point.omega_error < floor
-                )
-            )
-            if stop:
-                if progress is not None:
-                    progress.update(len(values) - k - 1)
-                break
+    for line in problem_lines(problem, settings):
+        result.points += run_line(problem, line, settings, progress)
     return result
+
+
+def problem_lines(problem: Problem, settings: Settings) -> list[Line]:
+    """The lines of one problem's diagram: ours, then scipy's."""
+    from rigid_rot_sim.core.integrators import METHODS
+
+    methods = settings.methods if settings.methods is not None else tuple(METHODS)
+    return our_lines(methods, problem) + scipy_lines(settings.scipy_methods)
+
+
+def run_line(problem: Problem, line: Line, settings: Settings, progress: Any = None, baseline: bool = False) -> list[Point]:
+    """One line's sweep, coarse to fine, until a point exceeds the time budget or the error floor.
+
+    ``baseline``: time every point together with the scipy baseline (see measure_point).
+    """
+    floor = max(ERROR_FLOOR, problem.reference().certified_to)
+    values = sweep_values(problem, line, settings)
+    points = []
+    refusals = 0
+    for k, value in enumerate(values):
+        if progress is not None:
+            progress.set_postfix_str(f"{problem.key} {line.label}", refresh=False)
+        point = measure_point(problem, line, value, settings.repeats, baseline)
+        points.append(point)
+        if progress is not None:
+            progress.update(1)
+        refusals = refusals + 1 if point.status == "refused" else 0
+        # a fixed-step run costs in proportion to its steps: skip a next point that
+        # would take more than twice the budget
+        predicted = point.seconds * (value / values[k + 1]) if line.sweep == "step" and k + 1 < len(values) else 0.0
+        stop = refusals >= 2 or (
+            point.status == "ok"
+            and (
+                point.seconds > settings.budget_seconds
+                or predicted > 2.0 * settings.budget_seconds
+                or point.omega_error < floor
+            )
+        )
+        if stop:
+            if progress is not None:
+                progress.update(len(values) - k - 1)
+            break
+    return points
+
+
+def line_task(problem_key: str, line: Line, settings: Settings) -> list[Point]:
+    """A Dask task: one line of one problem, each point timed with the scipy baseline on this worker."""
+    from rigid_rot_sim.analysis.problems import get_problem
+
+    return run_line(get_problem(problem_key), line, settings, baseline=True)
 
 
 def planned_points(problems: Iterable[Problem], settings: Settings) -> int:
@@ -326,10 +361,15 @@ def planned_points(problems: Iterable[Problem], settings: Settings) -> int:
     )
 
 
+def cost(point: Point) -> float:
+    """A point's run time in units of its scipy baseline when it has one (cluster runs), else in s."""
+    return point.seconds / point.baseline_seconds if point.baseline_seconds > 0.0 else point.seconds
+
+
 def fastest_at(points: Iterable[Point], target: float, family: str) -> Point | None:
-    """The cheapest measured point of ``family`` whose omega error is <= target."""
+    """The cheapest measured point of ``family`` whose omega error is <= target (by :func:`cost`)."""
     meeting = [p for p in points if p.family == family and p.status == "ok" and p.omega_error <= target]
-    return min(meeting, key=lambda p: p.seconds) if meeting else None
+    return min(meeting, key=cost) if meeting else None
 
 
 def summary(result: ProblemResult, targets: Iterable[float] = TARGETS) -> list[dict[str, Any]]:
@@ -344,7 +384,7 @@ def summary(result: ProblemResult, targets: Iterable[float] = TARGETS) -> list[d
                 "target": target,
                 "ours": None if ours is None else asdict(ours),
                 "scipy": None if theirs is None else asdict(theirs),
-                "speedup": (theirs.seconds / ours.seconds) if (ours and theirs) else None,
+                "speedup": (cost(theirs) / cost(ours)) if (ours and theirs) else None,
             }
         )
     return rows
@@ -513,6 +553,17 @@ def write_outputs(
         "garbage collector off, every method alike. Adaptive methods sweep rtol = atol; fixed-step methods sweep dt. "
         "**Fastest at a target** = the cheapest measured sweep point whose ω error is at or below the target "
         "(no interpolation between points, so a run time is an upper bound).",
+        *(
+            [
+                "",
+                f"Run on a Dask cluster: every point was timed together with scipy {BASELINE_METHOD} at rtol = atol = "
+                f"{BASELINE_TOL:g} in the same task on the same worker; the fastest method and the speed-up compare "
+                "run times as multiples of that baseline (`baseline_seconds` in results.json), so points measured on "
+                "different machines stay comparable.",
+            ]
+            if any(p.baseline_seconds > 0.0 for r in results for p in r.points)
+            else []
+        ),
         "",
         "## Summary",
         "",
@@ -545,10 +596,18 @@ def run_report(
     settings: Settings | None = None,
     command: str = "rigid-rot report",
     progress: bool = True,
+    scheduler: str | None = None,
+    workers: int | None = None,
 ) -> tuple[list[ProblemResult], dict[str, str]]:
-    """Run the sweeps on the problems (all by default) and write the outputs."""
+    """Run the sweeps on the problems (all by default) and write the outputs.
+
+    With ``scheduler`` or ``workers`` (or DASK_SCHEDULER_ADDRESS) every line of every
+    problem is one Dask task (:func:`line_task`), each point timed with the scipy baseline
+    in that task; fastest methods and speed-ups then compare run times in baseline units.
+    """
     from tqdm import tqdm
 
+    from rigid_rot_sim.analysis.engine import map_tasks, open_client, wants_cluster
     from rigid_rot_sim.analysis.problems import PROBLEMS, get_problem
 
     if settings is None:
@@ -560,9 +619,27 @@ def run_report(
     with tqdm(
         total=planned_points(problems.values(), settings), desc="work-precision", unit="run", disable=not progress
     ) as bar:
-        for key in keys:
-            bar.set_postfix_str(f"{key} reference", refresh=True)
-            problems[key].reference()
-            results.append(run_problem(problems[key], settings, bar))
+        if not wants_cluster(scheduler, workers):
+            for key in keys:
+                bar.set_postfix_str(f"{key} reference", refresh=True)
+                problems[key].reference()
+                results.append(run_problem(problems[key], settings, bar))
+        else:
+            tasks = [(key, line, settings) for key in keys for line in problem_lines(problems[key], settings)]
+
+            def done(index: int, points: list[Point]) -> None:
+                key, line, _ = tasks[index]
+                bar.set_postfix_str(f"{key} {line.label}", refresh=False)
+                bar.update(len(sweep_values(problems[key], line, settings)))
+
+            with open_client(scheduler, workers) as client:
+                lines_points = map_tasks(client, [(line_task, args) for args in tasks], done)
+            for key in keys:
+                ref = problems[key].reference()
+                result = ProblemResult(key, problems[key].title, problems[key].t_end, ref.method, ref.certified_to)
+                for (task_key, _, _), points in zip(tasks, lines_points):
+                    if task_key == key:
+                        result.points += points
+                results.append(result)
     paths = write_outputs(out_dir, results, settings, problems, command, time.perf_counter() - start)
     return results, paths

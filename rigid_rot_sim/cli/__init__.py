@@ -27,7 +27,7 @@ import sys
 from typing import Sequence
 
 #: Subcommand modules of rigid_rot_sim.cli, in the order ``--help`` lists them.
-SUBCOMMANDS = ["inertia", "report", "stability", "bag", "resim", "plot", "replay", "run", "torque"]
+SUBCOMMANDS = ["inertia", "report", "stability", "sweep", "bag", "resim", "plot", "replay", "run", "torque"]
 
 PROG = "rigid-rot"
 

@@ -22,6 +22,10 @@ def add_parser(subparsers) -> None:
     parser.add_argument(
         "--problems", nargs="+", metavar="KEY", help="only these problems (default: all; e.g. P1 P2)"
     )
+    parser.add_argument("--scheduler", metavar="ADDRESS", help="run the points on this Dask scheduler "
+                        "(tcp://host:port; default $DASK_SCHEDULER_ADDRESS), each timed with a scipy baseline")
+    parser.add_argument("--workers", type=int, metavar="N", help="run the points on a local Dask cluster of N "
+                        "workers (with --scheduler: wait for N workers)")
     parser.add_argument("--no-progress", action="store_true", help="no progress bar")
     parser.set_defaults(handler=run)
 
@@ -32,15 +36,22 @@ def run(args: argparse.Namespace) -> int:
     command = "rigid-rot report" + (" --quick" if args.quick else "") + f" --out {args.out}"
     if args.problems:
         command += " --problems " + " ".join(args.problems)
+    if args.workers is not None and args.workers < 1:
+        raise ValueError(f"--workers must be >= 1, got {args.workers}")
     results, paths = run_report(
-        args.out, quick=args.quick, problem_keys=args.problems, command=command, progress=not args.no_progress
+        args.out, quick=args.quick, problem_keys=args.problems, command=command, progress=not args.no_progress,
+        scheduler=args.scheduler, workers=args.workers,
     )
     for result in results:
         for row in summary(result, TARGETS):
             ours, theirs = row["ours"], row["scipy"]
             text = f"{result.problem} at ω error <= {row['target']:g} rad/s: "
             text += "ours not reached" if ours is None else f"{ours['label']} {ours['seconds']:.3e} s"
+            if ours is not None and ours["baseline_seconds"] > 0:
+                text += f" ({ours['seconds'] / ours['baseline_seconds']:.3g} x its scipy baseline)"
             text += "; scipy not reached" if theirs is None else f"; scipy {theirs['label']} {theirs['seconds']:.3e} s"
+            if theirs is not None and theirs["baseline_seconds"] > 0:
+                text += f" ({theirs['seconds'] / theirs['baseline_seconds']:.3g} x its scipy baseline)"
             if row["speedup"]:
                 text += f"; speed-up {row['speedup']:.1f}x"
             print(text)

@@ -317,20 +317,25 @@ class Scene:
 
 
 class _Ctx:
-    """Error factory that prefixes the file name and the key path."""
+    """Error factory that prefixes the file name and the key path.
 
-    def __init__(self, source: str) -> None:
+    ``error_class`` is SceneError here; other YAML specs built on scenes (sweep specs)
+    reuse these helpers with their own error class, so every file error reads the same.
+    """
+
+    def __init__(self, source: str, error_class: type[ValueError] = SceneError) -> None:
         self.label = os.path.basename(source) if source else "<string>"
+        self.error_class = error_class
 
-    def error(self, key: str, what: str) -> SceneError:
-        return SceneError(f"{self.label}: {key}: {what}")
+    def error(self, key: str, what: str) -> ValueError:
+        return self.error_class(f"{self.label}: {key}: {what}")
 
     def checked(self, check: Any, key: str, value: Any) -> Any:
         """Run a core.validation check named ``key``; its ValueError becomes a SceneError."""
         try:
             return check(key, value)
         except ValueError as exc:
-            raise SceneError(f"{self.label}: {exc}") from None
+            raise self.error_class(f"{self.label}: {exc}") from None
 
 
 def _mapping(ctx: _Ctx, value: Any, key: str, allowed: tuple[str, ...]) -> Mapping[str, Any]:

@@ -1,0 +1,124 @@
+"""Sweep throughput on Dask: body-steps per second with 1 and 2 workers, task overhead, memory.
+
+    .venv/bin/python benchmarks/sweep_scaling.py [--samples 32768] [--duration 5] [--chunk 4096]
+    .venv/bin/python benchmarks/sweep_scaling.py --scheduler tcp://HOST:8786   # an existing cluster
+
+The workload is a dispersed torque-free sweep (free_tumble, rk4, dt = 0.01 s, inertia,
+misalignment and rate dispersions), the same rows each time. Measured, in one run:
+
+* in this process without Dask (run_local): the baseline rate;
+* on a local cluster of 1 worker, then 2 (single-thread processes): body-steps per second,
+  the efficiency ``rate(2) / (2 rate(1))`` and the ratio to the baseline;
+* task overhead: the round trip of 200 no-op tasks on the 2-worker cluster (per task), and
+  the share of a sweep task's time that is not simulation;
+* memory per worker: resident set size after the sweep (psutil, on each worker).
+
+Then, on paper, what a 1e9-run sweep of the shipped slew (6000 steps per run) needs at the
+measured per-worker rate. Printed, never asserted. With ``--scheduler`` the 1/2-worker
+steps are replaced by one measurement on that cluster.
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import platform
+import time
+
+import numpy as np
+
+from rigid_rot_sim.analysis.engine import open_client, run_local, run_sweep
+from rigid_rot_sim.analysis.sweep_spec import parse_sweep_text
+
+SPEC = """
+name: scaling
+scene: free_tumble
+seed: 1
+samples: {samples}
+duration: {duration}
+grid: {{method: [rk4], dt: [0.01]}}
+dispersions:
+  principal_moments: {{relative: 0.02}}
+  axis_misalignment: {{sigma: 1.0e-3}}
+  initial_omega: {{sigma: 1.0e-3}}
+checkpoints: 20
+"""
+
+SLEW_STEPS = 6000  # config/sweeps/slew_dispersion.yaml: 60 s at dt = 0.01 s
+
+
+def _noop(x: int) -> int:
+    return x
+
+
+def _rss() -> int:
+    import psutil
+
+    return psutil.Process().memory_info().rss
+
+
+def measure(client, spec, chunk: int) -> tuple[float, float]:
+    """(wall seconds, body-steps per second) of the sweep on ``client``."""
+    start = time.perf_counter()
+    run_sweep(spec, client=client, chunk_size=chunk, progress=False)
+    seconds = time.perf_counter() - start
+    return seconds, spec.n_runs * (spec.duration / spec.dts[0]) / seconds
+
+
+def task_overhead(client, n: int = 200) -> float:
+    """Seconds per no-op task, submitted together and gathered (scheduler + comms + worker)."""
+    client.gather(client.map(_noop, range(20), pure=False))  # warm up
+    start = time.perf_counter()
+    client.gather(client.map(_noop, range(n), pure=False))
+    return (time.perf_counter() - start) / n
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("--samples", type=int, default=32768)
+    parser.add_argument("--duration", type=float, default=5.0, help="s of sim time per run (dt = 0.01 s)")
+    parser.add_argument("--chunk", type=int, default=4096, help="bodies per task (what choose_chunk_size picks for the slew)")
+    parser.add_argument("--scheduler", help="measure on this existing cluster instead of local ones")
+    args = parser.parse_args()
+    spec = parse_sweep_text(SPEC.format(samples=args.samples, duration=args.duration), "scaling.yaml")
+    steps = spec.duration / spec.dts[0]
+    body_steps = spec.n_runs * steps
+    print(f"machine: {platform.processor() or platform.machine()}, {os.cpu_count()} CPUs, load {os.getloadavg()[0]:.1f}")
+    print(f"workload: {spec.n_runs} runs x {steps:.0f} rk4 steps = {body_steps:.3g} body-steps, "
+          f"{args.chunk} bodies per task ({-(-spec.n_runs // args.chunk)} tasks)")
+
+    start = time.perf_counter()
+    run_local(spec, chunk_size=args.chunk)
+    baseline = body_steps / (time.perf_counter() - start)
+    print(f"in this process, no Dask:  {baseline:.3g} body-steps/s (baseline)")
+
+    rates = {}
+    clusters = [(None, 1), (None, 2)] if args.scheduler is None else [(args.scheduler, None)]
+    for scheduler, workers in clusters:
+        with open_client(scheduler, workers) as client:
+            n = len(client.scheduler_info(n_workers=-1)["workers"])
+            run_sweep(parse_sweep_text(SPEC.format(samples=n, duration=0.1), "warm.yaml"), client=client,
+                      chunk_size=1, progress=False)  # imports on every worker
+            seconds, rate = measure(client, spec, args.chunk)
+            rates[n] = rate
+            print(f"{n} worker(s): {rate:.3g} body-steps/s ({seconds:.1f} s; {rate / baseline:.2f}x the baseline"
+                  + (f", efficiency {rate / (n * rates[1]):.0%})" if n > 1 and 1 in rates else ")"))
+            if n == max(w or n for _, w in clusters):
+                overhead = task_overhead(client)
+                compute = args.chunk * steps / baseline
+                print(f"task overhead: {overhead * 1e3:.1f} ms per no-op task round trip; a {args.chunk}-body task "
+                      f"computes {compute:.2f} s, so overhead is {overhead / compute:.2%} of it")
+                memory = client.run(_rss)
+                print("memory per worker (RSS after the sweep): "
+                      + ", ".join(f"{m / 2**20:.0f} MiB" for m in memory.values()))
+    # one worker on a core of its own is the per-worker rate a cluster scales out
+    per_worker = rates.get(1, max(rates.values()) / max(rates))
+    runs = 1e9
+    worker_hours = runs * SLEW_STEPS / per_worker / 3600.0
+    print(f"on paper: 1e9 slew runs = {runs * SLEW_STEPS:.1e} body-steps; at {per_worker:.3g} body-steps/s per worker "
+          f"that is {worker_hours:.3g} worker-hours, e.g. {worker_hours / 1000:.3g} h on 1000 workers "
+          f"or {worker_hours / 24 / 100:.3g} days on 100")
+
+
+if __name__ == "__main__":
+    main()

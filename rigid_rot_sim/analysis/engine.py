@@ -1,0 +1,291 @@
+"""dask.distributed as the engine of sweeps, the work-precision report and the stability suite.
+
+No engine of our own: work is cut into tasks submitted to a ``distributed.Client``, on
+a local cluster by default or an existing one. For a sweep every chunk is one task
+(:func:`rigid_rot_sim.analysis.sweep.run_chunk`, a pure function of the spec and the
+chunk); the scheduler reschedules the tasks of a worker that dies, and since a chunk's
+rows depend only on the spec and the chunk, a re-run gives the same bits.
+:func:`map_tasks` runs the report's and the stability suite's independent tasks.
+
+Where the cluster comes from:
+
+* ``scheduler`` (``--scheduler tcp://HOST:PORT``) or the ``DASK_SCHEDULER_ADDRESS``
+  environment variable: an existing cluster started with ``dask scheduler`` and
+  ``dask worker ADDRESS`` (each worker needs rigid_rot_sim and the same pins installed);
+  ``workers``, if given, is how many workers to wait for before submitting.
+* otherwise a ``LocalCluster`` of ``workers`` single-threaded worker processes (default:
+  the CPUs this process may use), closed at the end.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import logging
+import os
+import time
+import uuid
+from dataclasses import dataclass, field
+from typing import Any, Callable, Iterator
+
+import numpy as np
+
+from rigid_rot_sim.analysis.sweep import COLUMNS, Chunk, choose_chunk_size, plan_chunks, run_chunk, run_nominal
+from rigid_rot_sim.analysis.sweep_spec import SweepSpec
+
+__all__ = ["SweepResult", "require", "open_client", "run_sweep", "map_tasks", "wants_cluster", "scheduler_address", "available_cpus"]
+
+#: How long to wait for a scheduler to answer, and for ``workers`` workers to join, s.
+CONNECT_TIMEOUT = 30.0
+WORKERS_TIMEOUT = 120.0
+
+
+@dataclass
+class SweepResult:
+    """The rows of a sweep (columns in :data:`COLUMNS` order, sorted by run) and how it ran."""
+
+    spec: SweepSpec
+    columns: dict[str, Any]
+    quick: bool
+    engine: dict[str, Any] = field(default_factory=dict)
+
+
+def require(*modules: str) -> None:
+    """OSError (one line, what to install) unless every module can be imported.
+
+    Sweeps and cluster runs need packages a plain ROS install may lack; say so before any work.
+    """
+    import importlib.util
+
+    missing = [name for name in modules if importlib.util.find_spec(name) is None]
+    if missing:
+        raise OSError(
+            f"{', '.join(missing)} not installed: sweeps and --scheduler/--workers need dask.distributed and pyarrow "
+            "(`make setup` installs the pinned versions; or pip install dask distributed pyarrow)"
+        )
+
+
+def available_cpus() -> int:
+    """CPUs this process may run on."""
+    try:
+        return len(os.sched_getaffinity(0))
+    except AttributeError:  # not Linux
+        return os.cpu_count() or 1
+
+
+def scheduler_address(scheduler: str | None) -> str | None:
+    """``scheduler``, else ``$DASK_SCHEDULER_ADDRESS``, else None (a local cluster)."""
+    return scheduler or os.environ.get("DASK_SCHEDULER_ADDRESS") or None
+
+
+@contextlib.contextmanager
+def open_client(scheduler: str | None = None, workers: int | None = None) -> Iterator[Any]:
+    """A ``distributed.Client`` on the cluster the options name (see the module docstring)."""
+    require("distributed")
+    from distributed import Client, LocalCluster
+
+    if workers is not None and workers < 1:
+        raise ValueError(f"--workers must be >= 1, got {workers}")
+    address = scheduler_address(scheduler)
+    if address is not None:
+        try:
+            client = Client(address, timeout=CONNECT_TIMEOUT)
+        except (OSError, TimeoutError) as exc:
+            raise OSError(f"cannot reach the Dask scheduler at {address}: {' '.join(str(exc).split())}") from None
+        try:
+            client.wait_for_workers(workers or 1, timeout=WORKERS_TIMEOUT)
+            yield client
+        finally:
+            client.close()
+        return
+    # the scheduler first (a Ctrl-C meanwhile is taken once it runs: a half-built cluster cannot be
+    # closed, and distributed's atexit would wait 10 s for it), then the workers
+    with _sigint_deferred() as interrupted:
+        cluster = LocalCluster(
+            n_workers=0,
+            threads_per_worker=1,
+            processes=True,
+            dashboard_address="127.0.0.1:0",  # its HTTP server on a free port: never a clash with a running cluster
+            silence_logs=logging.ERROR,
+        )
+        client = Client(cluster)
+    try:
+        if interrupted:
+            raise KeyboardInterrupt
+        n_workers = workers or available_cpus()
+        cluster.scale(n_workers)
+        client.wait_for_workers(n_workers, timeout=WORKERS_TIMEOUT)
+        yield client
+    except BaseException:
+        # interrupted (Ctrl-C) or failed: stop our worker processes now rather than wait for
+        # their running tasks (a polite close waits for them, here or in distributed's atexit)
+        for name in ("distributed", "tornado"):  # the comms we cut would log tracebacks
+            logging.getLogger(name).setLevel(logging.CRITICAL)
+        _kill_worker_processes(cluster)
+        with contextlib.suppress(Exception):
+            client.close(timeout=1)
+        with contextlib.suppress(Exception):
+            cluster.close(timeout=1)
+        raise
+    client.close()
+    cluster.close()
+
+
+def wants_cluster(scheduler: str | None, workers: int | None) -> bool:
+    """True when the options (or DASK_SCHEDULER_ADDRESS) ask for Dask rather than this process."""
+    return scheduler_address(scheduler) is not None or workers is not None
+
+
+def map_tasks(
+    client: Any,
+    calls: list[tuple[Callable[..., Any], tuple[Any, ...]]],
+    on_done: Callable[[int, Any], None] | None = None,
+) -> list[Any]:
+    """``[function(*args) for function, args in calls]``, each call one task on ``client``.
+
+    Results come back in the order of ``calls``. ``client`` None runs the calls here,
+    one after the other. ``on_done(index, result)`` is called in this thread as each
+    finishes (for a progress bar).
+    """
+    if client is None:
+        results = []
+        for index, (function, args) in enumerate(calls):
+            results.append(function(*args))
+            if on_done is not None:
+                on_done(index, results[-1])
+        return results
+    from distributed import as_completed
+
+    token = uuid.uuid4().hex[:12]
+    futures = {
+        client.submit(function, *args, key=f"rigid-rot-{getattr(function, '__name__', 'task')}-{token}-{index}", pure=False): index
+        for index, (function, args) in enumerate(calls)
+    }
+    results: list[Any] = [None] * len(calls)
+    for future in as_completed(list(futures)):
+        index = futures[future]
+        results[index] = future.result()
+        future.release()
+        if on_done is not None:
+            on_done(index, results[index])
+    return results
+
+
+@contextlib.contextmanager
+def _sigint_deferred() -> Iterator[list[bool]]:
+    """Hold SIGINT back inside the block; the yielded list is non-empty if one arrived."""
+    import signal
+    import threading
+
+    received: list[bool] = []
+    if threading.current_thread() is not threading.main_thread():
+        yield received
+        return
+    previous = signal.getsignal(signal.SIGINT)
+    if previous is signal.SIG_IGN:
+        yield received
+        return
+    signal.signal(signal.SIGINT, lambda signum, frame: received.append(True))
+    try:
+        yield received
+    finally:
+        signal.signal(signal.SIGINT, previous)
+
+
+def _kill_worker_processes(cluster: Any) -> None:
+    """SIGKILL the worker processes a LocalCluster's nannies started (ours, by pid)."""
+    import signal
+
+    for nanny in list(getattr(cluster, "workers", {}).values()):
+        pid = getattr(getattr(getattr(nanny, "process", None), "process", None), "pid", None)
+        if pid:
+            with contextlib.suppress(OSError):
+                os.kill(pid, signal.SIGKILL)
+
+
+def _assemble(parts: list[dict[str, Any]]) -> dict[str, Any]:
+    columns: dict[str, Any] = {}
+    for name, kind in COLUMNS.items():
+        if kind == "string":
+            columns[name] = [value for part in parts for value in part[name]]
+        else:
+            columns[name] = np.concatenate([np.asarray(part[name]) for part in parts])
+    order = np.argsort(columns["run"], kind="stable")
+    return {name: (values[order] if isinstance(values, np.ndarray) else [values[i] for i in order]) for name, values in columns.items()}
+
+
+def run_sweep(
+    spec: SweepSpec,
+    *,
+    scheduler: str | None = None,
+    workers: int | None = None,
+    chunk_size: int | None = None,
+    quick: bool = False,
+    progress: bool = True,
+    on_chunk_done: Callable[[int, int], None] | None = None,
+    client: Any = None,
+) -> SweepResult:
+    """Run every chunk of ``spec`` on Dask and gather the rows.
+
+    ``chunk_size`` (bodies per task) defaults to :func:`choose_chunk_size` from a cost
+    measured here; the rows do not depend on it. ``on_chunk_done(done, total)`` is called
+    in this thread as chunks finish. ``client``: an open ``distributed.Client`` to use
+    instead of opening one from ``scheduler`` / ``workers``.
+    """
+    from distributed import as_completed
+    from tqdm import tqdm
+
+    start = time.perf_counter()
+    local = client is None and scheduler_address(scheduler) is None
+    with contextlib.ExitStack() as stack:
+        if client is None:
+            client = stack.enter_context(open_client(scheduler, workers))
+        n_workers = len(client.scheduler_info(n_workers=-1)["workers"])
+        figures: dict[str, float] = {}
+        if chunk_size is None:
+            chunk_size, figures = choose_chunk_size(spec, n_workers)
+        chunks = plan_chunks(spec, chunk_size)
+        token = uuid.uuid4().hex[:12]
+        nominals = {}
+        if spec.nominal_method is not None:
+            # one nominal run per spin rate, shared by the chunks of that spin rate
+            for spin in dict.fromkeys(s for _, _, s in spec.grid):
+                nominals[spin] = client.submit(run_nominal, spec, spin, key=f"rigid-rot-nominal-{token}-{spin}", pure=False)
+        futures = {
+            client.submit(
+                run_chunk, spec, chunk, nominals.get(spec.grid[chunk.grid_point][2]),
+                key=f"rigid-rot-sweep-{token}-{k}", pure=False,
+            ): (k, chunk)
+            for k, chunk in enumerate(chunks)
+        }
+        parts: list[dict[str, Any] | None] = [None] * len(chunks)
+        try:
+            with tqdm(total=spec.n_runs, desc=f"sweep {spec.name}", unit="run", disable=not progress) as bar:
+                for done, future in enumerate(as_completed(list(futures)), start=1):
+                    index, chunk = futures[future]
+                    parts[index] = future.result()
+                    future.release()
+                    bar.update(chunk.size)
+                    if on_chunk_done is not None:
+                        on_chunk_done(done, len(chunks))
+        except BaseException:
+            # interrupted (Ctrl-C) or failed: leave nothing running on a shared cluster
+            with contextlib.suppress(Exception):
+                client.cancel([*futures, *nominals.values()], force=True)
+            raise
+        for future in nominals.values():
+            future.release()
+        engine = {
+            "scheduler": client.scheduler.address,
+            "local_cluster": local,
+            "workers": n_workers,
+            "chunks": len(chunks),
+            "chunk_size": chunk_size,
+            **figures,
+        }
+    engine["elapsed_seconds"] = time.perf_counter() - start
+    return SweepResult(spec=spec, columns=_assemble([p for p in parts if p is not None]), quick=quick, engine=engine)
+
+
+def run_local(spec: SweepSpec, chunks: list[Chunk] | None = None, chunk_size: int = 64) -> dict[str, Any]:
+    """The rows of ``spec`` computed in this process, without Dask (tests, debugging)."""
+    return _assemble([run_chunk(spec, chunk) for chunk in (chunks or plan_chunks(spec, chunk_size))])

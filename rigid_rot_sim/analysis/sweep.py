@@ -1,0 +1,542 @@
+"""The runs of a sweep: their random inputs, how they are chunked, and the simulation of one chunk.
+
+A chunk is a vectorised batch (:func:`rigid_rot_sim.core.batch.advance_batch`) of the
+bodies of one grid point (same method and dt). :func:`run_chunk` is a pure function of
+the spec and the chunk: it is what a Dask task runs, and running it twice, elsewhere or
+with other neighbours gives the same bits, because
+
+* sample ``s``'s random inputs come from ``SeedSequence(seed, spawn_key=(s, k))``, one
+  stream ``k`` per kind of dispersion (so switching one dispersion on does not change the
+  others' draws). The key is the sample index, not the run index: the same sample has
+  the same inputs at every grid point (common random numbers), so differences between
+  grid points are the method's, the step's or the spin's, not the dice's;
+* a body's arithmetic in the batch core does not depend on the other bodies of its
+  batch (tested in test/core/test_batch.py), so chunk sizes are free;
+* a body whose state becomes non-finite (or whose implicit solve fails) is isolated by
+  re-running its half of the batch, so it becomes a row with its error and the others
+  keep their bits.
+
+Frames: inputs and outputs are in the scene's body frame; the batch runs in each
+body's own (dispersed) principal frame. Quaternions scalar-last, body -> world.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, fields
+from typing import Any
+
+import numpy as np
+from scipy.spatial.transform import Rotation
+
+from rigid_rot_sim.analysis.sweep_spec import NORMAL_CUT_SIGMAS, Dispersion, SweepSpec
+from rigid_rot_sim.core.batch import advance_batch
+from rigid_rot_sim.core.dynamics import RigidBody
+from rigid_rot_sim.core.integrators.base import NonFiniteStateError
+from rigid_rot_sim.core.simulate import step_grid
+
+__all__ = ["Chunk", "plan_chunks", "run_chunk", "run_nominal", "sample_inputs", "COLUMNS", "measure_step_cost", "choose_chunk_size"]
+
+# A time within this fraction of a step of a boundary counts as on it (as in core.simulator).
+_BOUNDARY_SLACK = 1e-9
+# Streams of SeedSequence(seed, spawn_key=(sample, k)): one per kind of dispersion.
+_STREAMS = ("principal_moments", "axis_misalignment", "initial_omega", "initial_attitude", "torque_scale", "torque_noise")
+
+#: Output columns in order, with their Arrow types. I1, I2, I3 are the run's principal moments
+#: (kg*m^2) about the base body's principal axes, numbered by the base body's ascending moments; omega
+#: columns are rad/s in the body frame; event columns are NaN unless the spec asks for them.
+COLUMNS: dict[str, str] = {
+    "run": "int64",
+    "grid_point": "int32",
+    "sample": "int64",
+    "method": "string",
+    "dt": "float64",
+    "spin_rate": "float64",
+    "I1": "float64",
+    "I2": "float64",
+    "I3": "float64",
+    "misalignment": "float64",
+    "omega0_x": "float64",
+    "omega0_y": "float64",
+    "omega0_z": "float64",
+    "attitude0_error": "float64",
+    "torque_scale_x": "float64",
+    "torque_scale_y": "float64",
+    "torque_scale_z": "float64",
+    "torque_noise_rms": "float64",
+    "final_attitude_error": "float64",
+    "final_omega_x": "float64",
+    "final_omega_y": "float64",
+    "final_omega_z": "float64",
+    "final_omega_error": "float64",
+    "max_omega": "float64",
+    "energy_drift": "float64",
+    "momentum_drift": "float64",
+    "first_flip": "float64",
+    "nutation_range": "float64",
+    "verdict": "string",
+    "error": "string",
+}
+
+
+@dataclass(frozen=True)
+class Chunk:
+    """Samples ``start`` to ``stop`` (exclusive) of grid point ``grid_point`` (method, dt, spin)."""
+
+    grid_point: int
+    start: int
+    stop: int
+
+    @property
+    def size(self) -> int:
+        return self.stop - self.start
+
+
+def plan_chunks(spec: SweepSpec, chunk_size: int) -> list[Chunk]:
+    """Every grid point's samples cut into chunks of at most ``chunk_size`` bodies."""
+    if chunk_size < 1:
+        raise ValueError(f"chunk_size must be >= 1, got {chunk_size}")
+    return [
+        Chunk(g, start, min(start + chunk_size, spec.samples))
+        for g in range(len(spec.grid))
+        for start in range(0, spec.samples, chunk_size)
+    ]
+
+
+# ----------------------------------------------------------------------------- inputs
+
+
+def _draw(rng: np.random.Generator, dispersion: Dispersion) -> np.ndarray:
+    """One draw per axis: normal cut at NORMAL_CUT_SIGMAS (drawn again beyond), or uniform."""
+    size = np.asarray(dispersion.size)
+    if dispersion.distribution == "uniform":
+        return rng.uniform(-1.0, 1.0, 3) * size
+    z = rng.standard_normal(3)
+    while np.any(np.abs(z) > NORMAL_CUT_SIGMAS):
+        bad = np.abs(z) > NORMAL_CUT_SIGMAS
+        z[bad] = rng.standard_normal(int(bad.sum()))
+    return z * size
+
+
+def sample_inputs(spec: SweepSpec, sample: int) -> dict[str, np.ndarray]:
+    """The random perturbations of ``sample`` (zeros where not dispersed), from its own seed.
+
+    Keys: ``moments`` (relative, per principal axis), ``misalignment`` (rotation vector,
+    rad, principal frame), ``omega`` (rad/s, body), ``attitude`` (rotation vector, rad,
+    body), ``torque_scale`` (relative, per body axis), ``noise`` ((intervals, 3) N*m, body).
+    """
+    d = spec.dispersions
+    rngs = {
+        name: np.random.Generator(np.random.PCG64(np.random.SeedSequence(spec.seed, spawn_key=(sample, k))))
+        for k, name in enumerate(_STREAMS)
+    }
+    zero = np.zeros(3)
+    out = {
+        "moments": _draw(rngs["principal_moments"], d.principal_moments) if d.principal_moments else zero,
+        "misalignment": _draw(rngs["axis_misalignment"], d.axis_misalignment) if d.axis_misalignment else zero,
+        "omega": _draw(rngs["initial_omega"], d.initial_omega) if d.initial_omega else zero,
+        "attitude": _draw(rngs["initial_attitude"], d.initial_attitude) if d.initial_attitude else zero,
+        "torque_scale": _draw(rngs["torque_scale"], d.torque_scale) if d.torque_scale else zero,
+    }
+    if d.torque_noise_sigma is not None:
+        intervals = math.ceil(spec.duration / d.torque_noise_interval)
+        out["noise"] = rngs["torque_noise"].standard_normal((intervals, 3)) * np.asarray(d.torque_noise_sigma)
+    else:
+        out["noise"] = np.zeros((0, 3))
+    return out
+
+
+@dataclass
+class _Bodies:
+    """N bodies' inputs, as the batch runs them (principal frames) and as rows report them."""
+
+    moments: np.ndarray  # (N, 3) kg*m^2, principal
+    body_from_principal: Rotation  # N rotations
+    q0_body: np.ndarray  # (N, 4)
+    omega0_body: np.ndarray  # (N, 3)
+    torque_scale: np.ndarray  # (N, 3) multiplies the scheduled body torque
+    noise: np.ndarray  # (N, intervals, 3) N*m, body
+    misalignment: np.ndarray  # (N,) rad
+    attitude0_error: np.ndarray  # (N,) rad
+
+
+def _nominal_omega0(spec: SweepSpec, spin_rate: float | None) -> np.ndarray:
+    omega = np.array(spec.scene.initial.angular_velocity, dtype=float)
+    if spin_rate is not None:
+        omega *= spin_rate / np.linalg.norm(omega)
+    return omega
+
+
+def _bodies(spec: SweepSpec, spin_rate: float | None, samples: range | None) -> _Bodies:
+    """The dispersed bodies of ``samples``, or the nominal body (``samples`` None)."""
+    body = RigidBody.from_inertia(spec.scene.body.inertia_array, "body.inertia")
+    draws = [sample_inputs(spec, s) for s in samples] if samples is not None else [None]
+    n = len(draws)
+    zeros = np.zeros((n, 3))
+
+    def stack(key: str) -> np.ndarray:
+        return np.array([d[key] for d in draws]) if samples is not None else zeros
+
+    misalignment = stack("misalignment")
+    attitude = stack("attitude")
+    moments = np.asarray(body.principal_moments) * (1.0 + stack("moments"))
+    body_from_principal = Rotation.from_quat(np.broadcast_to(body.body_from_principal, (n, 4))) * Rotation.from_rotvec(misalignment)
+    q0 = (Rotation.from_quat(np.broadcast_to(spec.scene.initial.orientation, (n, 4))) * Rotation.from_rotvec(attitude)).as_quat()
+    d = spec.dispersions
+    intervals = math.ceil(spec.duration / d.torque_noise_interval) if d.torque_noise_sigma is not None else 0
+    noise = np.array([d["noise"] for d in draws]) if samples is not None else np.zeros((1, intervals, 3))
+    return _Bodies(
+        moments=moments,
+        body_from_principal=body_from_principal,
+        q0_body=q0,
+        omega0_body=_nominal_omega0(spec, spin_rate) + stack("omega"),
+        torque_scale=1.0 + stack("torque_scale"),
+        noise=noise,
+        misalignment=np.linalg.norm(misalignment, axis=1),
+        attitude0_error=np.linalg.norm(attitude, axis=1),
+    )
+
+
+# ----------------------------------------------------------------------------- simulation
+
+
+def _advance_isolated(method: str, moments, q, omega, dt: float, n_steps: int, torque) -> tuple[np.ndarray, np.ndarray, dict[int, str]]:
+    """advance_batch, but a body that fails only fails itself: ``(q, omega, {index: error})``.
+
+    A failing batch is split in halves and each half re-run (a body's bits do not depend
+    on its neighbours); a single failing body is stepped once at a time to say when.
+    """
+    try:
+        q_new, omega_new = advance_batch(method, moments, q, omega, dt, n_steps, torque)
+        return q_new, omega_new, {}
+    except (NonFiniteStateError, ArithmeticError) as exc:
+        first_error = exc
+    n = q.shape[0]
+    if n == 1:
+        q_k, omega_k = q, omega
+        for k in range(n_steps):
+            try:
+                q_k, omega_k = advance_batch(method, moments, q_k, omega_k, dt, 1, torque)
+            except (NonFiniteStateError, ArithmeticError) as exc:
+                reason = " ".join(str(exc).split())
+                return np.full_like(q, np.nan), np.full_like(omega, np.nan), {0: f"{type(exc).__name__} at step {k + 1} of the segment: {reason}"}
+        return np.full_like(q, np.nan), np.full_like(omega, np.nan), {0: f"{type(first_error).__name__}: {first_error}"}
+    half = n // 2
+    parts = [slice(0, half), slice(half, n)]
+    qs, omegas, errors = [], [], {}
+    for part in parts:
+        q_p, omega_p, err = _advance_isolated(method, moments[part], q[part], omega[part], dt, n_steps, torque[part])
+        qs.append(q_p)
+        omegas.append(omega_p)
+        errors.update({part.start + i: message for i, message in err.items()})
+    return np.concatenate(qs), np.concatenate(omegas), errors
+
+
+def _boundaries(spec: SweepSpec, dt: float, n_full: int) -> tuple[np.ndarray, np.ndarray]:
+    """Step indices where the torque may change or a checkpoint is taken, and the checkpoint steps."""
+    def step_at_or_after(t: float) -> int:
+        return min(max(math.ceil(t / dt - _BOUNDARY_SLACK), 0), n_full)
+
+    checkpoints = np.unique(np.linspace(0, n_full, spec.checkpoints + 1).round().astype(np.int64))
+    marks = {0, n_full, *checkpoints.tolist()}
+    for schedule in spec.scene.schedules:
+        if schedule.frame == "world" and any(any(s.torque) for s in schedule.segments):
+            marks.update(range(n_full + 1))  # re-expressed in the body frame at every step
+        marks.update(step_at_or_after(s.start) for s in schedule.segments)
+    if spec.dispersions.torque_noise_sigma is not None:
+        interval = spec.dispersions.torque_noise_interval
+        marks.update(step_at_or_after(k * interval) for k in range(math.ceil(spec.duration / interval)))
+    return np.array(sorted(marks), dtype=np.int64), checkpoints
+
+
+def _body_torque(spec: SweepSpec, bodies: _Bodies, t: float, q_body: np.ndarray | None) -> np.ndarray:
+    """(N, 3) N*m in the body frame acting from sim time t: schedules (scaled) plus noise.
+
+    ``q_body`` (N, 4) is needed for world-frame schedules only.
+    """
+    n = bodies.moments.shape[0]
+    torque = np.zeros((n, 3))
+    for schedule in spec.scene.schedules:
+        value = np.asarray(schedule.torque_at(t), dtype=float)
+        if not value.any():
+            continue
+        if schedule.frame == "world":
+            torque += Rotation.from_quat(q_body).apply(value, inverse=True)
+        else:
+            torque += value
+    torque *= bodies.torque_scale
+    if bodies.noise.shape[1]:
+        index = min(int(t / spec.dispersions.torque_noise_interval + _BOUNDARY_SLACK), bodies.noise.shape[1] - 1)
+        torque += bodies.noise[:, index, :]
+    return torque
+
+
+@dataclass
+class _Outcome:
+    q_body: np.ndarray
+    omega_body: np.ndarray
+    errors: dict[int, str]
+    max_omega: np.ndarray
+    energy_drift: np.ndarray
+    momentum_drift: np.ndarray
+    omega_bound: np.ndarray
+    first_flip: np.ndarray
+    nutation_range: np.ndarray
+
+
+def _simulate(spec: SweepSpec, bodies: _Bodies, method: str, dt: float) -> _Outcome:
+    """Run the bodies over the spec's duration; failed bodies end as NaN with their error."""
+    n = bodies.moments.shape[0]
+    n_full, last = step_grid(spec.duration, dt)
+    marks, checkpoints = _boundaries(spec, dt, n_full)
+    checkpoint_set = set(checkpoints.tolist())
+    bp = bodies.body_from_principal
+    moments = bodies.moments
+    q = (Rotation.from_quat(bodies.q0_body) * bp).as_quat()  # principal -> world
+    omega = bp.apply(bodies.omega0_body, inverse=True)
+    alive = np.ones(n, dtype=bool)
+    errors: dict[int, str] = {}
+
+    def invariants(omega_p: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        momentum = moments * omega_p
+        return 0.5 * np.einsum("ij,ij->i", momentum, omega_p), np.linalg.norm(momentum, axis=1)
+
+    energy0, momentum0 = invariants(omega)
+    intermediate = np.argsort(moments, axis=1)[:, 1]
+    major = np.argmax(moments, axis=1)
+    rows = np.arange(n)
+    sign0 = np.sign(omega[rows, intermediate])
+    first_flip = np.full(n, np.nan)
+    previous = (0.0, omega[rows, intermediate].copy())
+    nut_min = np.full(n, np.inf)
+    nut_max = np.full(n, -np.inf)
+    max_omega = np.linalg.norm(omega, axis=1)
+    impulse = np.zeros(n)
+
+    def observe(t: float, omega_p: np.ndarray) -> None:
+        nonlocal previous
+        np.maximum(max_omega, np.linalg.norm(omega_p, axis=1), out=max_omega)
+        momentum = moments * omega_p
+        cos = np.abs(momentum[rows, major]) / np.maximum(np.linalg.norm(momentum, axis=1), np.finfo(float).tiny)
+        angle = np.arccos(np.clip(cos, 0.0, 1.0))
+        np.minimum(nut_min, angle, out=nut_min)
+        np.maximum(nut_max, angle, out=nut_max)
+        w_int = omega_p[rows, intermediate]
+        flipped = np.isnan(first_flip) & (sign0 != 0) & (np.sign(w_int) == -sign0)
+        if flipped.any():
+            t0, w0 = previous
+            # linear interpolation of the zero crossing between two checkpoints
+            frac = w0[flipped] / (w0[flipped] - w_int[flipped])
+            first_flip[flipped] = t0 + frac * (t - t0)
+        previous = (t, w_int.copy())
+
+    observe(0.0, omega)
+    world_frame = any(schedule.frame == "world" for schedule in spec.scene.schedules)
+    segments = [(int(a), int(b)) for a, b in zip(marks[:-1], marks[1:]) if b > a]
+    if last > 0.0:
+        segments.append((n_full, n_full + 1))  # the last, shorter step landing on the duration
+    for a, b in segments:
+        t_a = a * dt
+        partial = a == n_full
+        step = last if partial else dt
+        if not alive.any():
+            break
+        q_body = (Rotation.from_quat(q[alive]) * bp[alive].inv()).as_quat() if world_frame else None
+        torque_body = _body_torque(spec, _subset(bodies, alive), t_a, q_body)
+        impulse[alive] += np.linalg.norm(torque_body, axis=1) * step * (b - a)
+        torque_p = bp[alive].apply(torque_body, inverse=True)
+        q_new, omega_new, failed = _advance_isolated(method, moments[alive], q[alive], omega[alive], step, b - a, torque_p)
+        index = np.flatnonzero(alive)
+        for i, message in failed.items():
+            errors[int(index[i])] = f"{message} (segment from t = {t_a:.9g} s, dt = {step:.9g} s)"
+        q[alive], omega[alive] = q_new, omega_new
+        for i in failed:
+            alive[index[i]] = False
+        if b in checkpoint_set or partial:
+            t_b = spec.duration if partial or b == n_full and last == 0.0 else b * dt
+            observe(t_b, np.where(alive[:, None], omega, np.nan))
+
+    energy, momentum = invariants(omega)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        energy_drift = np.abs(energy - energy0) / np.where(energy0 > 0, energy0, 1.0)
+        momentum_drift = np.abs(momentum - momentum0) / np.where(momentum0 > 0, momentum0, 1.0)
+    q_body = (Rotation.from_quat(np.where(alive[:, None], q, [0.0, 0.0, 0.0, 1.0])) * bp.inv()).as_quat()
+    q_body[~alive] = np.nan
+    omega_body = bp.apply(np.where(alive[:, None], omega, 0.0))
+    omega_body[~alive] = np.nan
+    omega_bound = (momentum0 + impulse) / moments.min(axis=1)
+    return _Outcome(
+        q_body=q_body,
+        omega_body=omega_body,
+        errors=errors,
+        max_omega=np.where(alive, max_omega, np.nan),
+        energy_drift=energy_drift,
+        momentum_drift=momentum_drift,
+        omega_bound=omega_bound,
+        first_flip=first_flip,
+        nutation_range=np.where(alive, nut_max - nut_min, np.nan),
+    )
+
+
+def _subset(bodies: _Bodies, mask: np.ndarray) -> _Bodies:
+    """The bodies selected by ``mask``."""
+    return _Bodies(**{f.name: getattr(bodies, f.name)[mask] for f in fields(_Bodies)})
+
+
+def _concat(a: _Bodies, b: _Bodies) -> _Bodies:
+    """The bodies of ``a``, then those of ``b``."""
+    def join(x: Any, y: Any) -> Any:
+        return Rotation.concatenate([x, y]) if isinstance(x, Rotation) else np.concatenate((x, y))
+
+    return _Bodies(**{f.name: join(getattr(a, f.name), getattr(b, f.name)) for f in fields(_Bodies)})
+
+
+def _split(outcome: _Outcome, n: int) -> tuple[_Outcome, _Outcome]:
+    """The first n bodies' outcome and the rest's."""
+    def part(select: slice, offset: int) -> _Outcome:
+        return _Outcome(
+            q_body=outcome.q_body[select],
+            omega_body=outcome.omega_body[select],
+            errors={i - offset: m for i, m in outcome.errors.items() if select.start <= i < (select.stop or 1 << 62)},
+            max_omega=outcome.max_omega[select],
+            energy_drift=outcome.energy_drift[select],
+            momentum_drift=outcome.momentum_drift[select],
+            omega_bound=outcome.omega_bound[select],
+            first_flip=outcome.first_flip[select],
+            nutation_range=outcome.nutation_range[select],
+        )
+
+    return part(slice(0, n), 0), part(slice(n, None), n)
+
+
+def _torque_free(spec: SweepSpec) -> bool:
+    schedules = any(any(s.torque) for sched in spec.scene.schedules for s in sched.segments)
+    return not schedules and spec.dispersions.torque_noise_sigma is None
+
+
+def run_nominal(spec: SweepSpec, spin_rate: float | None) -> _Outcome:
+    """The undispersed run at ``spin_rate`` with the spec's ``nominal`` integrator.
+
+    One task per spin rate when the spec names a nominal integrator; its result is passed
+    to every chunk of that spin rate. Otherwise each chunk runs its nominal body itself.
+    """
+    if spec.nominal_method is None or spec.nominal_dt is None:
+        raise ValueError("the spec names no nominal integrator: each chunk runs its nominal body")
+    return _simulate(spec, _bodies(spec, spin_rate, None), spec.nominal_method, spec.nominal_dt)
+
+
+def run_chunk(spec: SweepSpec, chunk: Chunk, nominal: _Outcome | None = None) -> dict[str, Any]:
+    """Simulate one chunk; returns its rows as columns (:data:`COLUMNS`), one row per sample.
+
+    ``nominal``: :func:`run_nominal` of the chunk's spin rate, required when the spec
+    names a nominal integrator (else the nominal body runs in this chunk's batch).
+    """
+    method, dt, spin_rate = spec.grid[chunk.grid_point]
+    samples = range(chunk.start, chunk.stop)
+    bodies = _bodies(spec, spin_rate, samples)
+    n = chunk.size
+    if spec.nominal_method is None:
+        # the nominal body rides along in the same batch (its bits do not depend on the others)
+        both = _simulate(spec, _concat(bodies, _bodies(spec, spin_rate, None)), method, dt)
+        outcome, nominal = _split(both, n)
+    else:
+        if nominal is None:
+            nominal = run_nominal(spec, spin_rate)
+        outcome = _simulate(spec, bodies, method, dt)
+    attitude_error = (Rotation.from_quat(np.nan_to_num(nominal.q_body[0], nan=1.0)).inv() * Rotation.from_quat(np.nan_to_num(outcome.q_body, nan=1.0))).magnitude()
+    failed = np.isnan(outcome.q_body).any(axis=1) | np.isnan(nominal.q_body[0]).any()
+    attitude_error = np.where(failed, np.nan, attitude_error)
+    omega_error = np.linalg.norm(outcome.omega_body - nominal.omega_body[0], axis=1)
+    torque_free = _torque_free(spec)
+    tolerance = spec.energy_tolerance
+    verdict, error = [], []
+    for i in range(n):
+        message = outcome.errors.get(i)
+        if message is not None:
+            verdict.append("unstable")
+        elif torque_free and max(outcome.energy_drift[i], outcome.momentum_drift[i]) > tolerance:
+            verdict.append("drifting")
+        elif not torque_free and outcome.max_omega[i] > outcome.omega_bound[i] * (1.0 + tolerance):
+            verdict.append("drifting")
+        else:
+            verdict.append("stable")
+        if message is None and nominal.errors:
+            message = f"nominal run failed: {nominal.errors[0]}"
+        error.append(message)
+    nan = np.full(n, np.nan)
+    grid_point = chunk.grid_point
+    return {
+        "run": np.arange(chunk.start, chunk.stop, dtype=np.int64) + grid_point * spec.samples,
+        "grid_point": np.full(n, grid_point, dtype=np.int32),
+        "sample": np.arange(chunk.start, chunk.stop, dtype=np.int64),
+        "method": [method] * n,
+        "dt": np.full(n, dt),
+        "spin_rate": np.full(n, np.nan if spin_rate is None else spin_rate),
+        "I1": bodies.moments[:, 0],
+        "I2": bodies.moments[:, 1],
+        "I3": bodies.moments[:, 2],
+        "misalignment": bodies.misalignment,
+        "omega0_x": bodies.omega0_body[:, 0],
+        "omega0_y": bodies.omega0_body[:, 1],
+        "omega0_z": bodies.omega0_body[:, 2],
+        "attitude0_error": bodies.attitude0_error,
+        "torque_scale_x": bodies.torque_scale[:, 0],
+        "torque_scale_y": bodies.torque_scale[:, 1],
+        "torque_scale_z": bodies.torque_scale[:, 2],
+        "torque_noise_rms": np.sqrt(np.mean(bodies.noise**2, axis=(1, 2))) if bodies.noise.shape[1] else np.zeros(n),
+        "final_attitude_error": attitude_error,
+        "final_omega_x": outcome.omega_body[:, 0],
+        "final_omega_y": outcome.omega_body[:, 1],
+        "final_omega_z": outcome.omega_body[:, 2],
+        "final_omega_error": omega_error,
+        "max_omega": outcome.max_omega,
+        "energy_drift": outcome.energy_drift if torque_free else nan,
+        "momentum_drift": outcome.momentum_drift if torque_free else nan,
+        "first_flip": outcome.first_flip if "first_flip" in spec.events else nan,
+        "nutation_range": outcome.nutation_range if "nutation_range" in spec.events else nan,
+        "verdict": verdict,
+        "error": error,
+    }
+
+
+# ----------------------------------------------------------------------------- chunk size
+
+
+def measure_step_cost(method: str, sizes: tuple[int, int] = (1, 256), steps: int = 20) -> tuple[float, float]:
+    """(fixed, per-body) cost of one batch step, s: ``step time = fixed + per_body * N``.
+
+    Measured here with a short run of a generic body at each size (best of 3).
+    """
+    import time
+
+    times = []
+    for n in sizes:
+        moments = np.tile([1.0, 2.0, 2.5], (n, 1))
+        q = np.tile([0.0, 0.0, 0.0, 1.0], (n, 1))
+        omega = np.tile([0.1, 1.0, 0.1], (n, 1))
+        best = math.inf
+        for _ in range(3):
+            start = time.perf_counter()
+            advance_batch(method, moments, q, omega, 1e-3, steps, np.zeros((n, 3)))
+            best = min(best, time.perf_counter() - start)
+        times.append(best / steps)
+    per_body = max((times[1] - times[0]) / (sizes[1] - sizes[0]), 1e-12)
+    fixed = max(times[0] - per_body * sizes[0], 0.0)
+    return fixed, per_body
+
+
+def choose_chunk_size(spec: SweepSpec, workers: int, target_seconds: float = 5.0, tasks_per_worker: int = 4) -> tuple[int, dict[str, float]]:
+    """Bodies per task from the measured step cost, and the figures it was chosen from.
+
+    A batch step costs ``fixed + per_body * N``: the fixed part (Python and numpy call
+    overhead) is paid once per batch, so the fewer and larger the batches the better,
+    as long as every worker gets ``tasks_per_worker`` tasks (load balance, and little
+    work lost when a worker dies) and no task runs longer than about ``target_seconds``.
+    """
+    fixed, per_body = measure_step_cost(spec.methods[0])
+    steps = max(spec.duration / min(spec.dts), 1.0)
+    bounded = max(1, math.floor(target_seconds / (steps * per_body)))
+    balanced = math.ceil(spec.n_runs / (tasks_per_worker * max(workers, 1)))
+    size = int(max(1, min(spec.samples, bounded, balanced)))
+    figures = {"fixed_step_seconds": fixed, "per_body_step_seconds": per_body, "overhead_fraction": fixed / (fixed + per_body * size)}
+    return size, figures
