@@ -24,7 +24,9 @@ AGM_LEVELS = 40
 
 @register_jitable
 def carlson_rf(x, y, z):
-    """R_F(x, y, z) for x, y, z >= 0, at most one of them zero."""
+    """R_F(x, y, z) for x, y, z >= 0, at most one of them zero (NaN for a non-finite argument)."""
+    if not math.isfinite(x + y + z):
+        return math.nan  # the duplication below would never converge
     xt, yt, zt = x, y, z
     while True:
         sx, sy, sz = math.sqrt(xt), math.sqrt(yt), math.sqrt(zt)
@@ -41,7 +43,9 @@ def carlson_rf(x, y, z):
 
 @register_jitable
 def carlson_rc(x, y):
-    """R_C(x, y) for x >= 0, y > 0."""
+    """R_C(x, y) for x >= 0, y > 0 (NaN for a non-finite argument)."""
+    if not math.isfinite(x + y):
+        return math.nan  # the duplication below would never converge
     xt, yt = x, y
     while True:
         lam = 2.0 * math.sqrt(xt) * math.sqrt(yt) + yt
@@ -55,7 +59,9 @@ def carlson_rc(x, y):
 
 @register_jitable
 def carlson_rj(x, y, z, p):
-    """R_J(x, y, z, p) for x, y, z >= 0 (at most one zero) and p > 0."""
+    """R_J(x, y, z, p) for x, y, z >= 0 (at most one zero) and p > 0 (NaN for a non-finite argument)."""
+    if not math.isfinite(x + y + z + p):
+        return math.nan  # the duplication below would never converge
     c1, c2, c3, c4 = 3.0 / 14.0, 1.0 / 3.0, 3.0 / 22.0, 3.0 / 26.0
     c5, c6, c7, c8 = 0.75 * c3, 1.5 * c4, 0.5 * c2, c3 + c3
     total = 0.0

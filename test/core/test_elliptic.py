@@ -1,8 +1,12 @@
 """Carlson's integrals and the AGM Jacobi functions of core/elliptic.py against scipy."""
 
+import math
+
 import numpy as np
+import pytest
 from scipy.special import ellipj, elliprf, elliprj
 
+from rigid_rot_sim.core import elliptic
 from rigid_rot_sim.core.elliptic import agm_buffers, agm_tables, carlson_rf, carlson_rj, jacobi
 
 
@@ -26,3 +30,11 @@ def test_jacobi_functions_match_scipy():
             sn, cn, dn = jacobi(r, a, c, levels, 1.0 - m)
             expected = ellipj(r, m)[:3]
             np.testing.assert_allclose((sn, cn, dn), expected, rtol=0, atol=1e-13)
+
+
+@pytest.mark.parametrize("bad", [math.inf, math.nan])
+def test_carlson_integrals_return_nan_for_non_finite_arguments_instead_of_looping(bad):
+    # an overflowed phase (exact flow at an absurd step) once made the duplication loop forever
+    assert math.isnan(elliptic.carlson_rf(1.0, bad, 2.0))
+    assert math.isnan(elliptic.carlson_rc(bad, 1.0))
+    assert math.isnan(elliptic.carlson_rj(1.0, 2.0, 3.0, bad))
