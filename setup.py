@@ -27,7 +27,9 @@ setup(
         *config_data_files(),
     ],
     python_requires=">=3.10",
-    install_requires=["setuptools", "numpy", "scipy", "pyyaml"],
+    install_requires=["setuptools", "numpy", "scipy", "pyyaml", "numba"],
+    # sweeps (`rigid-rot sweep`, --scheduler): no rosdep keys exist for these; pip installs them
+    extras_require={"sweep": ["dask[distributed]", "pyarrow"]},
     zip_safe=True,
     maintainer="rigid_rot_sim maintainers",
     maintainer_email="maintainers@rigid-rot-sim.org",

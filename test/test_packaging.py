@@ -29,7 +29,12 @@ PYTHON_KEYS: dict[str, set[str]] = {
     "pytest": {"python3-pytest"},
     "hypothesis": {"python3-hypothesis"},
     "rosbags": {"python3-rosbags-pip"},
+    "numba": {"python3-numba"},
+    "psutil": {"python3-psutil"},
 }
+#: Modules without any rosdep key (rosdistro's python.yaml has no dask, distributed or pyarrow):
+#: optional, for sweeps only; declared for pip as setup.py's `sweep` extra, installed by make setup.
+PIP_ONLY = {"dask": "dask[distributed]", "distributed": "dask[distributed]", "pyarrow": "pyarrow"}
 #: ROS packages imported as Python modules: the key is the package name.
 ROS_PACKAGES = {
     "rclpy", "rcl_interfaces", "builtin_interfaces", "geometry_msgs", "std_msgs", "std_srvs", "sensor_msgs",
@@ -64,6 +69,9 @@ def undeclared(modules: set[str], keys: set[str], own: set[str]) -> list[str]:
         if module in ROS_PACKAGES:
             if module not in keys:
                 problems.append(f"{module}: add <exec_depend>{module}</exec_depend>")
+        elif module in PIP_ONLY:
+            if f'"{PIP_ONLY[module]}"' not in (ROOT / "setup.py").read_text(encoding="utf-8"):
+                problems.append(f"{module}: no rosdep key; name {PIP_ONLY[module]!r} in setup.py's extras_require")
         elif module in PYTHON_KEYS:
             if not PYTHON_KEYS[module] & keys:
                 problems.append(f"{module}: declare one of {sorted(PYTHON_KEYS[module])}")

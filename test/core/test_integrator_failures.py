@@ -49,7 +49,6 @@ class _KernelRaising(FixedStepIntegrator):
     kernel_name = "rk4"
 
     def _run(self, n, save_every):
-        self.omega = self.omega * 2.0  # a partial update: the rule must restore the state
         return math.sqrt(-1.0)
 
 
