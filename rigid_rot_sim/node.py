@@ -11,7 +11,9 @@ Topics (names relative to the node; QoS in the README, section "The simulation n
 ~/angular_velocity (Vector3Stamped, body frame), ~/angular_momentum (Vector3Stamped,
 world frame), ~/mass_properties (geometry_msgs/InertiaStamped, transient local, once),
 ~/top_state (rigid_rot_msgs/HeavyTopState, gravity scenes), ~/rejected
-(rigid_rot_msgs/RejectedCommand), /tf (when tf2_msgs imports), /clock (sim time).
+(rigid_rot_msgs/RejectedCommand), /tf (world -> body) and /tf_static (body -> principal
+frame, where it differs from the body frame), both where tf2_msgs imports (``make setup``
+builds it into the venv), /clock (sim time). QoS: rigid_rot_sim.qos.
 Every header stamp is sim time. Torque inputs: the scene's topics (WrenchStamped or
 Vector3Stamped).
 
@@ -43,9 +45,8 @@ import rclpy
 from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
 from rclpy.node import Node
 from rclpy.parameter import Parameter
-from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
 from rclpy.signals import SignalHandlerOptions
-from rcl_interfaces.msg import FloatingPointRange, ParameterDescriptor, SetParametersResult
+from rcl_interfaces.msg import FloatingPointRange, IntegerRange, ParameterDescriptor, SetParametersResult
 from geometry_msgs.msg import InertiaStamped, QuaternionStamped, Vector3Stamped, WrenchStamped
 from rigid_rot_msgs.msg import HeavyTopState, RejectedCommand, RigidBodyState
 from rigid_rot_msgs.srv import ApplyTorque, ComputeInertia, Reset, SetState, StepSimulation
@@ -53,9 +54,22 @@ from rosgraph_msgs.msg import Clock
 from std_srvs.srv import SetBool
 
 from rigid_rot_sim import conversions
-from rigid_rot_sim.core.inertia import mass_properties, parallel_axis_shift
-from rigid_rot_sim.core.scene import OUTPUT_NAMES, Scene, load_scene
+from rigid_rot_sim.core.inertia import mass_properties, parallel_axis_shift, principal_frame_pose
+from rigid_rot_sim.core.scene import MAX_QOS_DEPTH, OUTPUT_NAMES, OutputQos, Scene, load_scene
 from rigid_rot_sim.core.simulator import CommandRejected, Simulator
+from rigid_rot_sim.parameters import accept_integers_for_doubles, integer_overrides_as_doubles
+from rigid_rot_sim.qos import (  # noqa: F401 (the profiles are part of this module's API)
+    CLOCK_QOS,
+    COMMAND_QOS,
+    LATCHED_QOS,
+    REJECTED_QOS,
+    STATE_QOS,
+    TF_QOS,
+    TF_STATIC_QOS,
+    describe as describe_qos,
+    output_qos,
+)
+from rigid_rot_sim.share import ensure_ament_prefix_path, resolve_scene
 
 try:  # never required: /tf exists only where tf2_msgs is installed
     from tf2_msgs.msg import TFMessage
@@ -76,14 +90,6 @@ MAX_BACKLOG_WALL = 0.5
 #: Seconds between two warnings about rejected commands from the same source.
 REJECT_WARN_PERIOD = 2.0
 
-# QoS (documented in the README): state-like topics reliable, keep last 10, volatile.
-STATE_QOS = QoSProfile(depth=10, reliability=ReliabilityPolicy.RELIABLE, durability=DurabilityPolicy.VOLATILE)
-LATCHED_QOS = QoSProfile(depth=1, reliability=ReliabilityPolicy.RELIABLE, durability=DurabilityPolicy.TRANSIENT_LOCAL)
-REJECTED_QOS = QoSProfile(depth=50, reliability=ReliabilityPolicy.RELIABLE, durability=DurabilityPolicy.VOLATILE)
-COMMAND_QOS = QoSProfile(depth=10, reliability=ReliabilityPolicy.RELIABLE, durability=DurabilityPolicy.VOLATILE)
-TF_QOS = QoSProfile(depth=100, reliability=ReliabilityPolicy.RELIABLE, durability=DurabilityPolicy.VOLATILE)
-CLOCK_QOS = QoSProfile(depth=1, reliability=ReliabilityPolicy.RELIABLE, durability=DurabilityPolicy.VOLATILE)
-
 _OUTPUT_TYPES = {
     "state": RigidBodyState,
     "orientation": QuaternionStamped,
@@ -103,6 +109,7 @@ class RigidRotSimNode(Node):
     def __init__(self, **kwargs: Any) -> None:
         super().__init__(NODE_NAME, **kwargs)
         log = self.get_logger()
+        accept_integers_for_doubles(self)  # `ros2 param set ... real_time_factor 2` stores 2.0
         self.compute_inertia_service = self.create_service(
             ComputeInertia, "~/compute_inertia", self.compute_inertia_callback
         )
@@ -112,12 +119,16 @@ class RigidRotSimNode(Node):
         scene_path = self.declare_parameter(
             "scene",
             "",
-            ParameterDescriptor(description="Path of the scene YAML file; empty: serve ~/compute_inertia only", read_only=True),
+            ParameterDescriptor(
+                description="Scene YAML path, or the name of a shipped scene (e.g. free_tumble); "
+                "empty: serve ~/compute_inertia only",
+                read_only=True,
+            ),
         ).value
         if not scene_path:
             log.info("no scene parameter: serving ~/compute_inertia only (rigid-rot run SCENE starts a simulation)")
             return
-        scene = load_scene(scene_path)  # SceneError names the file, key and problem
+        scene = load_scene(resolve_scene(scene_path))  # SceneError names the file, key and problem
         self.scene = scene
         self._declare_parameters(scene)
         params = {name: self.get_parameter(name).value for name in ("integrator", "dt", "real_time_factor", "duration")}
@@ -126,6 +137,9 @@ class RigidRotSimNode(Node):
         self.duration = float(params["duration"]) if params["duration"] > 0.0 else None
         self.record_path = self.get_parameter("record_path").value or None
         self.frames = scene.frames
+        self.state_qos = output_qos(
+            OutputQos(self.get_parameter("qos.reliability").value, self.get_parameter("qos.depth").value)
+        )
         built: list[str] = [f"integrator {self.sim.method} (dt {self.sim.dt:g} s{', auto' if params['integrator'] == 'auto' else ''})"]
         left_out: list[str] = []
 
@@ -147,10 +161,22 @@ class RigidRotSimNode(Node):
             elif name == "clock":
                 publisher = self.create_publisher(Clock, "/clock", CLOCK_QOS)
             else:
-                publisher = self.create_publisher(_OUTPUT_TYPES[name], f"~/{name}", STATE_QOS)
+                publisher = self.create_publisher(_OUTPUT_TYPES[name], f"~/{name}", self.state_qos)
             self.publishers_by_output[name] = publisher
             self.output_periods[name] = self._period_steps(rate)
-            built.append(f"{self._output_topic(name)} {rate:g} Hz")
+            built.append(f"{self._output_topic(name)} {rate:g} Hz ({describe_qos(publisher.qos_profile)})")
+        # fixed frames on /tf_static (latched): the principal-axes frame, where it is not the body frame
+        self.tf_static_publisher = None
+        self.static_transforms = []
+        if "tf" in self.publishers_by_output:
+            _, com, tensor = self._inertia_about_com()
+            pose = principal_frame_pose(tensor, com)
+            if pose is not None:
+                self.static_transforms.append(conversions.static_transform(*pose, self.frames.body, self.frames.principal))
+                self.tf_static_publisher = self.create_publisher(TFMessage, "/tf_static", TF_STATIC_QOS)
+                built.append(f"/tf_static {self.frames.body} -> {self.frames.principal} ({describe_qos(TF_STATIC_QOS)})")
+            else:
+                left_out.append(f"/tf_static (the body axes are the principal axes, {self.frames.principal} not needed)")
         self.mass_properties_publisher = self.create_publisher(InertiaStamped, "~/mass_properties", LATCHED_QOS)
         self.rejected_publisher = self.create_publisher(RejectedCommand, "~/rejected", REJECTED_QOS)
         built += ["~/mass_properties (transient local)", "~/rejected"]
@@ -212,12 +238,16 @@ class RigidRotSimNode(Node):
         for warning in self.sim.warnings():
             log.warning(warning)
         self._publish_mass_properties()
+        if self.tf_static_publisher is not None:
+            self.tf_static_publisher.publish(TFMessage(transforms=self.static_transforms))
         self._publish_due(force=True)
 
     # ------------------------------------------------------------------ set-up helpers
 
     def _declare_parameters(self, scene: Scene) -> None:
         """Declare every parameter once, with the scene's values as defaults."""
+        doubles = ["dt", "real_time_factor", "duration", *(f"rates.{name}" for name in scene.outputs.as_dict())]
+        integer_overrides_as_doubles(self, doubles)  # `-p dt:=1` or `dt: 1` in a params file: 1.0
         self.declare_parameter(
             "integrator",
             scene.integrator.method,
@@ -256,6 +286,25 @@ class RigidRotSimNode(Node):
             "record_path",
             scene.recording or "",
             ParameterDescriptor(description="MCAP file to record the run to; empty = no recording", read_only=True),
+        )
+        self.declare_parameter(
+            "qos.reliability",
+            scene.qos.reliability,
+            ParameterDescriptor(
+                description="Reliability of the state-like outputs (~/state ... ~/top_state): reliable | best_effort "
+                "(set at start-up; /tf, /tf_static, /clock keep their standard profiles)",
+                read_only=True,
+                additional_constraints="reliable | best_effort",
+            ),
+        )
+        self.declare_parameter(
+            "qos.depth",
+            scene.qos.depth,
+            ParameterDescriptor(
+                description="Keep-last depth of the state-like outputs (set at start-up)",
+                read_only=True,
+                integer_range=[IntegerRange(from_value=1, to_value=MAX_QOS_DEPTH, step=1)],
+            ),
         )
         for name, rate in scene.outputs.as_dict().items():
             self.declare_parameter(
@@ -388,15 +437,20 @@ class RigidRotSimNode(Node):
         for publisher in self.publishers:
             publisher.wait_for_all_acked(rclpy.duration.Duration(seconds=timeout))
 
-    def _publish_mass_properties(self) -> None:
-        assert self.sim is not None
+    def _inertia_about_com(self) -> tuple[float, Any, Any]:
+        """Mass (kg; 0 when the scene gives none), centre of mass (m, body frame), tensor about it."""
         body = self.scene.body
         tensor = body.inertia_array
         mass = body.mass or 0.0
         com = body.center_of_mass or (0.0, 0.0, 0.0)
         if self.scene.gravity is not None:
-            # the scene's tensor is about the pivot; the message wants it about the centre of mass
+            # the scene's tensor is about the pivot
             tensor = tensor - parallel_axis_shift(tensor * 0.0, mass, com)
+        return mass, com, tensor
+
+    def _publish_mass_properties(self) -> None:
+        assert self.sim is not None
+        mass, com, tensor = self._inertia_about_com()
         self.mass_properties_publisher.publish(conversions.inertia_stamped(mass, com, tensor, self.sim.t, self.frames.body))
 
     def _reject(self, source: str, reason: str, frame_id: str, torque: Any) -> None:
@@ -589,6 +643,7 @@ def main(args: list[str] | None = None) -> int:
     """Run the node until shut down or until the scene's duration is reached (exit code 0)."""
     # SIGINT and SIGTERM only ask the loop below to stop: the node (and its recording) then
     # closes in `finally`, never interrupted in the middle of a callback or a file write
+    ensure_ament_prefix_path()  # the console script works without activating the venv
     rclpy.init(args=args, signal_handler_options=SignalHandlerOptions.NO)
     stop = threading.Event()
     for signum in (signal.SIGINT, signal.SIGTERM):

@@ -47,6 +47,9 @@ Schema (SI units; frames REP 103; quaternions scalar-last, body -> world)::
       top_state: 100                   # gravity scenes only
       tf: 50                           # only where tf2_msgs is installed
       clock: 100
+    qos:                               # QoS of the state-like outputs (~/state ... ~/top_state)
+      reliability: reliable            # reliable | best_effort
+      depth: 10                        # keep-last history depth, 1..MAX_QOS_DEPTH
     recording: null                    # or a path to an .mcap file
 
 With ``gravity`` the body frame's origin is the pivot, and the inertia (principal
@@ -79,6 +82,7 @@ __all__ = [
     "Gravity",
     "IntegratorSpec",
     "Outputs",
+    "OutputQos",
     "Scene",
     "load_scene",
     "parse_scene",
@@ -100,6 +104,10 @@ DEFAULT_OUTPUT_RATES = {
     "clock": 100.0,
 }
 
+QOS_RELIABILITIES = ("reliable", "best_effort")
+#: Largest keep-last depth of an output (a bound on the memory a slow subscriber can pin).
+MAX_QOS_DEPTH = 100_000
+
 Vector3 = tuple[float, float, float]
 
 
@@ -113,6 +121,11 @@ class Frames:
 
     world: str = "world"
     body: str = "body"
+
+    @property
+    def principal(self) -> str:
+        """Name of the principal-axes frame (child of the body frame on /tf_static)."""
+        return f"{self.body}_principal"
 
 
 @dataclass(frozen=True)
@@ -224,6 +237,20 @@ class Outputs:
 
 
 @dataclass(frozen=True)
+class OutputQos:
+    """QoS of the state-like outputs: ``reliability`` (reliable | best_effort), keep-last ``depth``.
+
+    Defaults, reliable with depth 10: every subscriber matches (reliable or best effort), a
+    reliable one gets every message unless it falls 10 behind, and memory stays bounded.
+    A depth sized to a run (rate x duration) makes a reliable subscriber that keeps up
+    within it receive every message of the run.
+    """
+
+    reliability: str = "reliable"
+    depth: int = 10
+
+
+@dataclass(frozen=True)
 class Scene:
     """A validated scene. ``source`` is the file it came from, ``text`` the YAML as given."""
 
@@ -238,6 +265,7 @@ class Scene:
     duration: float | None = None
     real_time_factor: float = 1.0
     outputs: Outputs = Outputs()
+    qos: OutputQos = OutputQos()
     recording: str | None = None
     description: str = ""
     source: str = "<string>"
@@ -495,6 +523,19 @@ def _parse_outputs(ctx: _Ctx, raw: Any) -> Outputs:
     return Outputs(**rates)
 
 
+def _parse_qos(ctx: _Ctx, raw: Any) -> OutputQos:
+    if raw is None:
+        return OutputQos()
+    spec = _mapping(ctx, raw, "qos", ("reliability", "depth"))
+    reliability = spec.get("reliability", OutputQos.reliability)
+    if reliability not in QOS_RELIABILITIES:
+        raise ctx.error("qos.reliability", f"must be one of {', '.join(QOS_RELIABILITIES)}, got {reliability!r}")
+    depth = spec.get("depth", OutputQos.depth)
+    if isinstance(depth, bool) or not isinstance(depth, int) or not 1 <= depth <= MAX_QOS_DEPTH:
+        raise ctx.error("qos.depth", f"must be an integer from 1 to {MAX_QOS_DEPTH}, got {depth!r}")
+    return OutputQos(reliability=reliability, depth=depth)
+
+
 def parse_scene(data: Any, source: str = "<string>", text: str = "") -> Scene:
     """Validate a scene given as parsed YAML (a mapping); ``source`` names it in errors."""
     ctx = _Ctx(source)
@@ -510,6 +551,7 @@ def parse_scene(data: Any, source: str = "<string>", text: str = "") -> Scene:
         "duration",
         "real_time_factor",
         "outputs",
+        "qos",
         "recording",
     )
     spec = _mapping(ctx, data, "", top_keys)
@@ -549,6 +591,7 @@ def parse_scene(data: Any, source: str = "<string>", text: str = "") -> Scene:
         duration = _number(ctx, duration, "duration", minimum=0.0, strict=True)
     rtf = _number(ctx, spec.get("real_time_factor", 1.0), "real_time_factor", minimum=0.0)
     outputs = _parse_outputs(ctx, spec.get("outputs"))
+    qos = _parse_qos(ctx, spec.get("qos"))
     recording = spec.get("recording")
     if recording is not None:
         recording = _string(ctx, recording, "recording")
@@ -565,6 +608,7 @@ def parse_scene(data: Any, source: str = "<string>", text: str = "") -> Scene:
         duration=duration,
         real_time_factor=rtf,
         outputs=outputs,
+        qos=qos,
         recording=recording,
         source=source,
         text=text,
