@@ -20,6 +20,8 @@ the node dies while waiting):
 ``call_service(node, client, request, timeout=10) -> response``
 ``collector``          a :class:`Collector` on ``ros_node``: subscribe, spin until a condition, call.
 
+Plain helpers (no fixtures) are in ``e2e_helpers.py`` beside this file.
+
 The ROS wheels' bootstrapper re-executes every venv Python once at start-up (``os.execve``,
 same pid) unless ``_ROS_WHEELS_BOOTSTRAP_COMPLETE`` is set. Subprocesses here inherit the
 test process's environment, which already has it, so they start once; signals reach the

@@ -17,12 +17,13 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from e2e_helpers import WAIT, wait_until_recorded  # beside this file
+
 from rigid_rot_sim.core.scene import load_scene
 from rigid_rot_sim.core.simulator import Simulator
 
 SCENES = Path(__file__).resolve().parents[2] / "config" / "scenes"
 NODE = "/rigid_rot_sim"
-WAIT = 60.0  # s: generous, the condition ends the wait (a loaded 2-core machine is slow)
 
 
 def scene_args(scene: str, **params) -> list[str]:
@@ -74,19 +75,24 @@ def same_fields(received, from_file, names: tuple[str, ...]) -> bool:
     return all(value(received, name) == value(from_file, name) for name in names)
 
 
-def test_torque_commands_change_omega_exactly_as_the_core_predicts(launch_node, collector):
+def test_torque_commands_change_omega_exactly_as_the_core_predicts(launch_node, collector, tmp_path):
     from geometry_msgs.msg import WrenchStamped
     from rigid_rot_msgs.msg import RigidBodyState
+
+    from std_srvs.srv import SetBool
 
     from rigid_rot_sim.conversions import seconds_to_time
     from rigid_rot_sim.node import COMMAND_QOS, STATE_QOS
 
-    node = launch_node(*scene_args("torque_driven", real_time_factor=2.0, integrator="rk4"), name="torque_driven")
+    # started paused at t = 0; resumed once the node has received (and recorded) every command
+    bag = tmp_path / "commands.mcap"
+    node = launch_node(*scene_args("torque_driven", real_time_factor=2.0, integrator="rk4", start_paused="true",
+                                   record_path=bag), name="torque_driven")
     states = collector.subscribe(RigidBodyState, f"{NODE}/state", STATE_QOS)
     publisher = collector.node.create_publisher(WrenchStamped, f"{NODE}/torque", COMMAND_QOS)
-    collector.spin_until(lambda: states and publisher.get_subscription_count() > 0, WAIT, node, "state and subscription")
-    # stamped commands, well ahead of the node's sim time: their effect is fixed by the stamps
-    t1 = math.ceil(stamp(states[-1])) + 1.0
+    collector.spin_until(lambda: publisher.get_subscription_count() > 0, WAIT, node, "the torque subscription")
+    # stamped commands ahead of the node's sim time: their effect is fixed by the stamps
+    t1 = 1.0
     commands = [(t1, (0.0, 0.0, 0.004), "body"), (t1 + 0.2, (0.002, 0.0, 0.0), "world"), (t1 + 0.45, (0.0, -0.001, 0.0), "body")]
     for when, torque, frame in commands:
         msg = WrenchStamped()
@@ -94,8 +100,10 @@ def test_torque_commands_change_omega_exactly_as_the_core_predicts(launch_node, 
         msg.header.frame_id = frame
         msg.wrench.torque.x, msg.wrench.torque.y, msg.wrench.torque.z = torque
         publisher.publish(msg)
+    wait_until_recorded(bag, f"{NODE}/torque", len(commands), node)
+    assert collector.call(SetBool, "pause", SetBool.Request(data=False), process=node).success
     t_end = t1 + 1.5  # after the 0.5 s hold timeout of the last command
-    collector.spin_until(lambda: stamp(states[-1]) >= t_end, WAIT, node, f"state at t >= {t_end}")
+    collector.spin_until(lambda: states and stamp(states[-1]) >= t_end, WAIT, node, f"state at t >= {t_end}")
 
     sim = Simulator(load_scene(SCENES / "torque_driven.yaml"), method="rk4")
     for when, torque, frame in commands:

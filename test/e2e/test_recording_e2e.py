@@ -21,12 +21,12 @@ from pathlib import Path
 import numpy as np
 import pytest
 import yaml
+from e2e_helpers import WAIT, recorded_count, wait_until_recorded  # beside this file
 
 from rigid_rot_sim.recording.reader import BagReader, repair
 from rigid_rot_sim.recording.resim import resimulate
 
 REPO = Path(__file__).resolve().parents[2]
-WAIT = 60.0  # s: generous, the condition ends the wait
 TORQUE_TOPIC = "/rigid_rot_sim/torque"
 STATE_TOPIC = "/rigid_rot_sim/state"
 
@@ -71,23 +71,6 @@ def first_state_time(ros_node, process, timeout: float = WAIT) -> float:
     return got[0]
 
 
-def recorded_count(bag: Path, topic: str) -> int:
-    """Messages of ``topic`` in a recording, also while it is being written (flushed parts)."""
-    try:
-        return BagReader(bag).counts().get(topic, 0)
-    except Exception:  # noqa: BLE001 - a file caught in the middle of its first chunk: try again
-        return 0
-
-
-def wait_until_recorded(bag: Path, topic: str, count: int, process, what: str) -> None:
-    """Wait until the node's recording holds ``count`` messages on ``topic`` (it flushes every 0.5 s)."""
-    deadline = time.monotonic() + WAIT
-    while recorded_count(bag, topic) < count:
-        process.check_alive()
-        assert time.monotonic() < deadline, f"{what}: {recorded_count(bag, topic)} of {count} recorded\n{process.log()}"
-        time.sleep(0.1)
-
-
 def send_commands(ros_node, commands, process, bag: Path) -> None:
     """Publish WrenchStamped commands [(torque, frame_id, stamp_s, force)] once a subscriber matches,
     and wait until the node has received (and recorded) every one."""
@@ -109,7 +92,7 @@ def send_commands(ros_node, commands, process, bag: Path) -> None:
         publisher.publish(msg)
         time.sleep(0.05)
     # reliable QoS, depth 10 >= the commands sent: each reaches the node; wait until it has taken them
-    wait_until_recorded(bag, TORQUE_TOPIC, before + len(commands), process, "torque commands")
+    wait_until_recorded(bag, TORQUE_TOPIC, before + len(commands), process)
     ros_node.destroy_publisher(publisher)
 
 
@@ -208,7 +191,7 @@ def test_sigkill_loses_at_most_the_last_second_and_repair_recovers_it(tmp_path, 
     bag = tmp_path / "killed.mcap"
     node = launch_node(*node_args(write_scene(tmp_path), bag), name="killed")
     first_state_time(ros_node, node)
-    wait_until_recorded(bag, STATE_TOPIC, 25, node, "states")  # more than 20 flushed to the file
+    wait_until_recorded(bag, STATE_TOPIC, 25, node)  # more than 20 flushed to the file
     killed_at = time.time_ns()
     node.process.kill()
     node.process.wait(timeout=10)
