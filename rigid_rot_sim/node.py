@@ -165,18 +165,7 @@ class RigidRotSimNode(Node):
             self.publishers_by_output[name] = publisher
             self.output_periods[name] = self._period_steps(rate)
             built.append(f"{self._output_topic(name)} {rate:g} Hz ({describe_qos(publisher.qos_profile)})")
-        # fixed frames on /tf_static (latched): the principal-axes frame, where it is not the body frame
-        self.tf_static_publisher = None
-        self.static_transforms = []
-        if "tf" in self.publishers_by_output:
-            _, com, tensor = self._inertia_about_com()
-            pose = principal_frame_pose(tensor, com)
-            if pose is not None:
-                self.static_transforms.append(conversions.static_transform(*pose, self.frames.body, self.frames.principal))
-                self.tf_static_publisher = self.create_publisher(TFMessage, "/tf_static", TF_STATIC_QOS)
-                built.append(f"/tf_static {self.frames.body} -> {self.frames.principal} ({describe_qos(TF_STATIC_QOS)})")
-            else:
-                left_out.append(f"/tf_static (the body axes are the principal axes, {self.frames.principal} not needed)")
+        self._create_tf_static(built, left_out)
         self.mass_properties_publisher = self.create_publisher(InertiaStamped, "~/mass_properties", LATCHED_QOS)
         self.rejected_publisher = self.create_publisher(RejectedCommand, "~/rejected", REJECTED_QOS)
         built += ["~/mass_properties (transient local)", "~/rejected"]
@@ -316,6 +305,21 @@ class RigidRotSimNode(Node):
                     floating_point_range=_float_range(0.0, 1e6),
                 ),
             )
+
+    def _create_tf_static(self, built: list[str], left_out: list[str]) -> None:
+        """Fixed frames on /tf_static (latched), with /tf: the principal-axes frame where it is not the body frame."""
+        self.tf_static_publisher = None
+        self.static_transforms = []
+        if "tf" not in self.publishers_by_output:
+            return
+        _, com, tensor = self._inertia_about_com()
+        pose = principal_frame_pose(tensor, com)
+        if pose is None:
+            left_out.append(f"/tf_static (the body axes are the principal axes, {self.frames.principal} not needed)")
+            return
+        self.static_transforms.append(conversions.static_transform(*pose, self.frames.body, self.frames.principal))
+        self.tf_static_publisher = self.create_publisher(TFMessage, "/tf_static", TF_STATIC_QOS)
+        built.append(f"/tf_static {self.frames.body} -> {self.frames.principal} ({describe_qos(TF_STATIC_QOS)})")
 
     @staticmethod
     def _output_topic(name: str) -> str:
