@@ -42,6 +42,7 @@ import time
 from typing import Any
 
 import rclpy
+from rclpy.exceptions import ParameterException
 from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
 from rclpy.node import Node
 from rclpy.parameter import Parameter
@@ -663,7 +664,7 @@ def main(args: list[str] | None = None) -> int:
             node.flush_publishers()
     except (KeyboardInterrupt, ExternalShutdownException):
         pass
-    except ValueError as exc:  # SceneError, or a scene the integrator cannot run
+    except (ValueError, ParameterException) as exc:  # SceneError, a scene the integrator cannot run, a bad -p value
         print(f"rigid_rot_sim_node: {exc}", flush=True)
         return 2
     finally:

@@ -349,3 +349,18 @@ def test_tf_static_carries_the_principal_frame_only_where_it_differs(harness):
     top.close()
     plain = harness("torque_driven", real_time_factor=0.0)
     assert plain.node.static_transforms == [] and plain.node.tf_static_publisher is None
+
+
+@pytest.mark.parametrize("override,expected", [
+    ("qos.depth:=2.5", "'qos.depth' to '2.5' of type 'DOUBLE', expecting type 'INTEGER'"),
+    ("qos.reliability:=sometimes", "qos.reliability must be one of reliable, best_effort, got 'sometimes'"),
+    ("dt:=fast", "'dt' to 'fast' of type 'STRING', expecting type 'DOUBLE'"),
+])
+def test_bad_start_up_parameters_exit_2_with_one_line(override, expected):
+    import subprocess
+    import sys
+
+    done = subprocess.run([sys.executable, "-m", "rigid_rot_sim.node", "--ros-args", "-p", "scene:=free_tumble",
+                           "-p", override], capture_output=True, text=True, timeout=120)
+    output = (done.stdout + done.stderr).strip()
+    assert done.returncode == 2 and expected in output and "Traceback" not in output, output
