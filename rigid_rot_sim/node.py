@@ -20,9 +20,10 @@ Vector3Stamped).
 Services
 --------
 ~/compute_inertia, ~/set_state, ~/reset, ~/pause (std_srvs/SetBool), ~/step (while
-paused; replies after the steps are done: they run in the service callback itself, so a
-single-threaded executor cannot deadlock), ~/apply_torque. A bad request gets
-``success = false`` and the reason; nothing raises out of a callback.
+paused; at most ``limits.MAX_STEPS_PER_REQUEST`` steps, run in the service callback for at
+most ``STEP_REQUEST_WALL`` s: the reply says how many were done), ~/apply_torque. A bad
+request gets ``success = false`` and the reason; nothing raises out of a callback.
+Every limit is in :mod:`rigid_rot_sim.core.limits` (README, "Limits and failure behaviour").
 
 Pacing
 ------
@@ -30,22 +31,29 @@ Pacing
 ``r * (wall time since the anchor)`` each tick (at most ``MAX_TICK_WALL`` of work per
 tick, so commands and services are served in between); r = 0: as fast as possible, in
 batches of at most ``MAX_TICK_WALL`` wall time per tick. The states do not depend on r
-or on the publish rates (see the Simulator's determinism notes).
+or on the publish rates (see the Simulator's determinism notes). The timer runs on the
+steady clock: the node is the source of sim time (/clock), so ``use_sim_time`` true is
+refused (at start-up and at run time).
 """
 
 from __future__ import annotations
 
 import math
 import signal
+import sys
 import threading
 import time
 from typing import Any
 
 import rclpy
-from rclpy.exceptions import ParameterException
+from rclpy.clock import Clock as SteadyClock
+from rclpy.clock_type import ClockType
+from rclpy.exceptions import NameValidationException, ParameterException
 from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
+from rclpy.impl.implementation_singleton import rclpy_implementation as _rclpy
 from rclpy.node import Node
 from rclpy.parameter import Parameter
+from rclpy.qos import QoSProfile
 from rclpy.signals import SignalHandlerOptions
 from rcl_interfaces.msg import FloatingPointRange, IntegerRange, ParameterDescriptor, SetParametersResult
 from geometry_msgs.msg import InertiaStamped, QuaternionStamped, Vector3Stamped, WrenchStamped
@@ -55,7 +63,9 @@ from rosgraph_msgs.msg import Clock
 from std_srvs.srv import SetBool
 
 from rigid_rot_sim import conversions
+from rigid_rot_sim.core import limits
 from rigid_rot_sim.core.inertia import mass_properties, parallel_axis_shift, principal_frame_pose
+from rigid_rot_sim.core.pacing import StepCost, falling_behind_message
 from rigid_rot_sim.core.scene import MAX_QOS_DEPTH, OUTPUT_NAMES, OutputQos, Scene, load_scene
 from rigid_rot_sim.core.simulator import CommandRejected, Simulator
 from rigid_rot_sim.parameters import accept_integers_for_doubles, integer_overrides_as_doubles
@@ -81,8 +91,10 @@ NODE_NAME = "rigid_rot_sim"
 
 #: Most wall time (s) one timer tick spends stepping, so the executor serves commands between.
 MAX_TICK_WALL = 0.02
-#: Most steps between two checks of the wall-clock deadline.
+#: Most steps between two checks of the wall-clock deadline (fewer when steps are slow: core.pacing).
 MAX_CHUNK = 256
+#: Most wall time (s) one ~/step request spends stepping; the reply says if it stopped short.
+STEP_REQUEST_WALL = 0.25
 #: Wall-clock timer period bounds (s).
 MIN_TICK = 0.001
 MAX_TICK = 0.02
@@ -104,6 +116,12 @@ def _float_range(low: float, high: float) -> list[FloatingPointRange]:
     return [FloatingPointRange(from_value=low, to_value=high, step=0.0)]
 
 
+USE_SIM_TIME_REFUSAL = (
+    "use_sim_time true is refused: this node is the source of sim time (it publishes /clock and "
+    "stamps every output with sim time); its pacing runs on the steady clock"
+)
+
+
 class RigidRotSimNode(Node):
     """Node ``rigid_rot_sim``; keyword arguments go to :class:`rclpy.node.Node`."""
 
@@ -111,11 +129,12 @@ class RigidRotSimNode(Node):
         super().__init__(NODE_NAME, **kwargs)
         log = self.get_logger()
         accept_integers_for_doubles(self)  # `ros2 param set ... real_time_factor 2` stores 2.0
+        self.sim: Simulator | None = None
+        self.add_on_set_parameters_callback(self.validate_parameters_callback)  # also for use_sim_time
         self.compute_inertia_service = self.create_service(
             ComputeInertia, "~/compute_inertia", self.compute_inertia_callback
         )
         self.finished = False
-        self.sim: Simulator | None = None
         self.recorder = None  # the recording wiring (rigid_rot_sim.recording) sets this
         scene_path = self.declare_parameter(
             "scene",
@@ -129,11 +148,15 @@ class RigidRotSimNode(Node):
         if not scene_path:
             log.info("no scene parameter: serving ~/compute_inertia only (rigid-rot run SCENE starts a simulation)")
             return
+        if self.get_parameter("use_sim_time").value is True:
+            raise ValueError(USE_SIM_TIME_REFUSAL)
         scene = load_scene(resolve_scene(scene_path))  # SceneError names the file, key and problem
         self.scene = scene
+        self.step_cost = StepCost()
         self._declare_parameters(scene)
         params = {name: self.get_parameter(name).value for name in ("integrator", "dt", "real_time_factor", "duration")}
         self.sim = Simulator(scene, method=params["integrator"], dt=params["dt"])
+        self.sim.max_torque = float(self.get_parameter("commands.max_torque").value)
         self.real_time_factor = float(params["real_time_factor"])
         self.duration = float(params["duration"]) if params["duration"] > 0.0 else None
         self.record_path = self.get_parameter("record_path").value or None
@@ -174,14 +197,22 @@ class RigidRotSimNode(Node):
         # --- torque inputs: one subscription per topic input, none for a torque-free scene
         self.torque_subscriptions = []
         self._reject_warned: dict[str, tuple[float, int]] = {}
+        command_qos = QoSProfile(
+            depth=self.get_parameter("commands.qos_depth").value,
+            reliability=COMMAND_QOS.reliability,
+            durability=COMMAND_QOS.durability,
+        )
         for spec in scene.topic_inputs:
             msg_type = WrenchStamped if spec.message_type == "WrenchStamped" else Vector3Stamped
             subscription = self.create_subscription(
-                msg_type, spec.topic, lambda msg, source=spec.topic: self.torque_callback(msg, source), COMMAND_QOS
+                msg_type, spec.topic, lambda msg, source=spec.topic: self.torque_callback(msg, source), command_qos
             )
             self.torque_subscriptions.append(subscription)
             hold = "hold until replaced" if spec.timeout is None else f"zero {spec.timeout:g} s after the last command"
-            built.append(f"torque input {subscription.topic_name} ({spec.message_type}, frame {spec.frame}, {hold})")
+            built.append(
+                f"torque input {subscription.topic_name} ({spec.message_type}, frame {spec.frame}, {hold}, "
+                f"depth {command_qos.depth})"
+            )
             if spec.message_type == "WrenchStamped":
                 log.info(
                     f"{subscription.topic_name}: only wrench.torque acts on the body; "
@@ -213,12 +244,14 @@ class RigidRotSimNode(Node):
         else:
             left_out.append("recorder (nothing recorded)")
 
-        self.add_on_set_parameters_callback(self.validate_parameters_callback)
         self.add_post_set_parameters_callback(self.apply_parameters_callback)
 
         self.sim.pause(self.get_parameter("start_paused").value)
         self._anchor()
-        self.timer = self.create_timer(self._tick_period(), self.timer_callback)
+        # steady clock: the pacing never depends on /clock, which this node itself publishes
+        self.timer = self.create_timer(
+            self._tick_period(), self.timer_callback, clock=SteadyClock(clock_type=ClockType.STEADY_TIME)
+        )
         log.info(
             f"scene {scene.name!r} ({scene.source}), rtf {self.real_time_factor:g}, "
             f"{'paused, ' if self.sim.paused else ''}"
@@ -236,7 +269,8 @@ class RigidRotSimNode(Node):
 
     def _declare_parameters(self, scene: Scene) -> None:
         """Declare every parameter once, with the scene's values as defaults."""
-        doubles = ["dt", "real_time_factor", "duration", *(f"rates.{name}" for name in scene.outputs.as_dict())]
+        doubles = ["dt", "real_time_factor", "duration", "commands.max_torque",
+                   *(f"rates.{name}" for name in scene.outputs.as_dict())]
         integer_overrides_as_doubles(self, doubles)  # `-p dt:=1` or `dt: 1` in a params file: 1.0
         self.declare_parameter(
             "integrator",
@@ -246,14 +280,14 @@ class RigidRotSimNode(Node):
         self.declare_parameter(
             "dt",
             scene.integrator.dt,
-            ParameterDescriptor(description="Physics step, s of sim time", floating_point_range=_float_range(1e-7, 10.0)),
+            ParameterDescriptor(description="Physics step, s of sim time", floating_point_range=_float_range(*limits.DT_RANGE)),
         )
         self.declare_parameter(
             "real_time_factor",
             scene.real_time_factor,
             ParameterDescriptor(
                 description="Sim seconds per wall second; 0 = as fast as possible",
-                floating_point_range=_float_range(0.0, 1000.0),
+                floating_point_range=_float_range(*limits.REAL_TIME_FACTOR_RANGE),
             ),
         )
         self.declare_parameter(
@@ -261,7 +295,7 @@ class RigidRotSimNode(Node):
             scene.duration if scene.duration is not None else 0.0,
             ParameterDescriptor(
                 description="Sim time (s) after which the node stops and exits; 0 = unbounded",
-                floating_point_range=_float_range(0.0, 1e9),
+                floating_point_range=_float_range(*limits.DURATION_RANGE),
             ),
         )
         self.declare_parameter(
@@ -303,9 +337,26 @@ class RigidRotSimNode(Node):
                 ParameterDescriptor(
                     description=f"Publish rate of {self._output_topic(name)}, Hz of sim time (rounded to whole steps); "
                     "0 = not built (set at start-up)",
-                    floating_point_range=_float_range(0.0, 1e6),
+                    floating_point_range=_float_range(*limits.RATE_RANGE),
                 ),
             )
+        self.declare_parameter(
+            "commands.max_torque",
+            float(scene.commands.max_torque),
+            ParameterDescriptor(
+                description="Largest accepted |torque| (N*m) of a command or ~/apply_torque; 0 = no limit",
+                floating_point_range=_float_range(*limits.MAX_TORQUE_RANGE),
+            ),
+        )
+        self.declare_parameter(
+            "commands.qos_depth",
+            int(scene.commands.qos_depth),
+            ParameterDescriptor(
+                description="Keep-last depth of the torque subscriptions (a larger burst loses its oldest commands)",
+                integer_range=[IntegerRange(from_value=limits.COMMAND_DEPTH_RANGE[0], to_value=limits.COMMAND_DEPTH_RANGE[1], step=1)],
+                read_only=True,
+            ),
+        )
 
     def _create_tf_static(self, built: list[str], left_out: list[str]) -> None:
         """Fixed frames on /tf_static (latched), with /tf: the principal-axes frame where it is not the body frame."""
@@ -345,6 +396,14 @@ class RigidRotSimNode(Node):
     # ------------------------------------------------------------------ stepping
 
     def timer_callback(self) -> None:
+        try:
+            self._tick()
+        except Exception as exc:  # never out of a callback: the run pauses with the reason, the node serves on
+            self.get_logger().error(f"simulation paused: internal error {exc!r} (reset or set_state to continue)")
+            if self.sim is not None:
+                self.sim.fail(f"internal error: {exc!r}")
+
+    def _tick(self) -> None:
         sim = self.sim
         if sim is None or sim.paused or self.finished:
             return
@@ -354,9 +413,12 @@ class RigidRotSimNode(Node):
             target_t = self._anchor_t + (now - self._anchor_wall) * self.real_time_factor
             behind_wall = (target_t - sim.t) / self.real_time_factor
             if behind_wall > MAX_BACKLOG_WALL:
+                snapshot = sim.snapshot()
                 self.get_logger().warning(
-                    f"cannot keep up with real_time_factor {self.real_time_factor:g} "
-                    f"({behind_wall:.2f} s of wall time behind): dropping the backlog",
+                    falling_behind_message(
+                        self.real_time_factor, behind_wall, sim.method, sim.dt, self.step_cost.per_step,
+                        math.hypot(*snapshot.angular_velocity_body.tolist()), math.hypot(*snapshot.torque_body.tolist()),
+                    ),
                     throttle_duration_sec=5.0,
                 )
                 self._anchor_wall = now - MAX_TICK_WALL * 0.5
@@ -378,13 +440,16 @@ class RigidRotSimNode(Node):
                 self._finish()
                 return
             stop = min(self._next_due(k), k + MAX_CHUNK)
+            if deadline is not None:  # as many steps as the measured cost per step lets fit
+                stop = min(stop, k + self.step_cost.steps_within(deadline - time.monotonic()))
             if target is not None:
                 stop = min(stop, target)
             if end_step is not None:
                 stop = min(stop, end_step)
             if stop <= k:
                 break
-            sim.advance_to(stop)
+            began = time.monotonic()
+            self.step_cost.record(sim.advance_to(stop), time.monotonic() - began)
             if sim.failure is not None:
                 self.get_logger().error(f"simulation paused: {sim.failure} (reset or set_state to continue)")
                 self._publish_due(force=True)
@@ -461,6 +526,9 @@ class RigidRotSimNode(Node):
     def _reject(self, source: str, reason: str, frame_id: str, torque: Any) -> None:
         """Publish a RejectedCommand and warn (at most every REJECT_WARN_PERIOD s per source)."""
         assert self.sim is not None
+        # the frame_id is echoed, but never more than MAX_NAME_LENGTH characters of it
+        frame_id = limits.clip_text(frame_id)
+        reason = limits.clip_text(reason, limits.MAX_TEXT_LENGTH)
         self.rejected_publisher.publish(conversions.rejected_command(source, reason, self.sim.t, frame_id, torque))
         now = time.monotonic()
         last, suppressed = self._reject_warned.get(source, (-math.inf, 0))
@@ -481,6 +549,8 @@ class RigidRotSimNode(Node):
             self.sim.receive_torque(source, torque, frame_id, stamp, force)
         except CommandRejected as exc:
             self._reject(self.resolve_topic_name(source), exc.reason, frame_id, torque)
+        except Exception as exc:  # never out of a callback: rejected with the reason
+            self._reject(self.resolve_topic_name(source), f"internal error: {exc!r}", frame_id, torque)
         if self.recorder is not None:
             self.recorder.record_command(self.resolve_topic_name(source), msg, received_ns)
 
@@ -491,7 +561,7 @@ class RigidRotSimNode(Node):
         sim = self.sim
         sim.set_state(conversions.quaternion_to_array(request.orientation), conversions.vector3_to_array(request.angular_velocity))
         self._publish_due(force=True)
-        return f"state set at t = {sim.t:.9g} s"
+        return f"state set at t = {sim.t:.9g} s; {self._run_state()}"
 
     def reset_callback(self, request, response):
         return self._serve(response, "~/reset", self._reset)
@@ -501,7 +571,13 @@ class RigidRotSimNode(Node):
         self.finished = False
         self._anchor()
         self._publish_due(force=True)
-        return "reset to the scene's initial state at t = 0"
+        return f"reset to the scene's initial state at t = 0; {self._run_state()}"
+
+    def _run_state(self) -> str:
+        """What the run does after a reset or set_state (a failure's pause is lifted, a requested one stays)."""
+        if not self.sim.paused:
+            return "running"
+        return "still paused as requested before (~/pause data=false resumes)"
 
     def pause_callback(self, request, response):
         return self._serve(response, "~/pause", lambda: self._pause(bool(request.data)))
@@ -522,14 +598,25 @@ class RigidRotSimNode(Node):
                 raise ValueError("not paused: call ~/pause with data=true first")
             if request.steps < 1:
                 raise ValueError("steps must be >= 1")
+            if request.steps > limits.MAX_STEPS_PER_REQUEST:
+                raise ValueError(
+                    f"steps = {request.steps} exceeds the limit of {limits.MAX_STEPS_PER_REQUEST} per request "
+                    "(call ~/step again, or resume with ~/pause data=false)"
+                )
             start = sim.step_index
-            # the steps run here, in the callback: the reply comes after they are done
-            self._run(start + int(request.steps), None)
+            # the steps run here, in the callback, for at most STEP_REQUEST_WALL s of wall time
+            self._run(start + int(request.steps), time.monotonic() + STEP_REQUEST_WALL)
             snapshot = sim.snapshot()
             conversions.fill_rigid_body_state(response.state, snapshot, self.frames.world, self.frames.body)
+            done = sim.step_index - start
             if sim.failure is not None:
-                raise ValueError(f"stopped after {sim.step_index - start} steps: {sim.failure}")
-            return f"{sim.step_index - start} steps done, t = {sim.t:.9g} s"
+                raise ValueError(f"stopped after {done} steps: {sim.failure}")
+            if done < request.steps:
+                raise ValueError(
+                    f"only {done} of {request.steps} steps done within the {STEP_REQUEST_WALL:g} s budget of a request "
+                    f"(t = {sim.t:.9g} s): call ~/step again for the rest"
+                )
+            return f"{done} steps done, t = {sim.t:.9g} s"
 
         return self._serve(response, "~/step", step)
 
@@ -569,6 +656,13 @@ class RigidRotSimNode(Node):
         return response
 
     def compute_inertia_callback(self, request, response):
+        count = max(len(request.masses), len(request.positions))
+        if count > limits.MAX_POINT_MASSES:  # refused before converting anything
+            return self._reject_inertia(response, f"invalid request: {count} masses, more than the limit of {limits.MAX_POINT_MASSES}")
+        if len(request.frame_id) > limits.MAX_NAME_LENGTH:
+            return self._reject_inertia(
+                response, f"invalid request: frame_id of {len(request.frame_id)} characters exceeds the limit of {limits.MAX_NAME_LENGTH}"
+            )
         try:
             masses, positions, origin = conversions.compute_inertia_request_to_arrays(request)
             props = mass_properties(masses, positions, origin)
@@ -583,7 +677,7 @@ class RigidRotSimNode(Node):
         return response
 
     def _reject_inertia(self, response, message: str):
-        self.get_logger().warning(message)
+        self.get_logger().warning(message, throttle_duration_sec=REJECT_WARN_PERIOD)
         response.success = False
         response.message = message
         return response
@@ -600,6 +694,10 @@ class RigidRotSimNode(Node):
         values = {p.name: p.value for p in parameters}
         sim = self.sim
         try:
+            if values.get("use_sim_time") is True:
+                raise ValueError(USE_SIM_TIME_REFUSAL)
+            if sim is None:
+                return SetParametersResult(successful=True)
             if "integrator" in values or "dt" in values:
                 method = values.get("integrator", self.get_parameter("integrator").value)
                 dt = values.get("dt", sim.dt)
@@ -636,6 +734,8 @@ class RigidRotSimNode(Node):
             self._anchor()
         if "duration" in values:
             self.duration = values["duration"] if values["duration"] > 0.0 else None
+        if "commands.max_torque" in values:
+            sim.max_torque = float(values["commands.max_torque"])
         if {"integrator", "dt", "real_time_factor"} & values.keys():
             self.timer.timer_period_ns = int(self._tick_period() * 1e9)
         if {"integrator", "dt"} & values.keys() or any(name.startswith("rates.") for name in values):
@@ -644,18 +744,41 @@ class RigidRotSimNode(Node):
                 self.output_periods[output] = self._period_steps(self.get_parameter(f"rates.{output}").value)
 
 
+#: What a bad scene, parameter or name raises while the node starts: exit code 2, one line.
+STARTUP_ERRORS = (ValueError, ParameterException, NameValidationException)
+
+
+def startup_error_line(exc: BaseException) -> str:
+    """The one line (at most ``limits.MAX_ERROR_CHARS``) that reports a start-up error."""
+    return limits.one_line(f"{NODE_NAME}: error: {exc}")
+
+
+def _interrupt(signum: int, frame: Any) -> None:
+    raise KeyboardInterrupt
+
+
 def main(args: list[str] | None = None) -> int:
-    """Run the node until shut down or until the scene's duration is reached (exit code 0)."""
-    # SIGINT and SIGTERM only ask the loop below to stop: the node (and its recording) then
-    # closes in `finally`, never interrupted in the middle of a callback or a file write
+    """Run the node until shut down or until the scene's duration is reached (exit code 0).
+
+    A bad scene, parameter or ROS argument: one line on stderr, exit code 2.
+    """
     ensure_ament_prefix_path()  # the console script works without activating the venv
-    rclpy.init(args=args, signal_handler_options=SignalHandlerOptions.NO)
-    stop = threading.Event()
+    try:
+        rclpy.init(args=args, signal_handler_options=SignalHandlerOptions.NO)
+    except _rclpy.RCLError as exc:  # e.g. an unparsable --ros-args rule
+        print(startup_error_line(f"bad ROS arguments: {exc}"), file=sys.stderr, flush=True)
+        return 2
+    # while the node starts (the scene loads), Ctrl-C / SIGTERM stop it at once
     for signum in (signal.SIGINT, signal.SIGTERM):
-        signal.signal(signum, lambda *_: stop.set())
+        signal.signal(signum, _interrupt)
+    stop = threading.Event()
     node = None
     try:
         node = RigidRotSimNode()
+        # from here SIGINT and SIGTERM only ask the loop below to stop: the node (and its
+        # recording) then closes in `finally`, never interrupted in a callback or a file write
+        for signum in (signal.SIGINT, signal.SIGTERM):
+            signal.signal(signum, lambda *_: stop.set())
         executor = SingleThreadedExecutor()
         executor.add_node(node)
         while rclpy.ok() and not node.finished and not stop.is_set():
@@ -664,8 +787,8 @@ def main(args: list[str] | None = None) -> int:
             node.flush_publishers()
     except (KeyboardInterrupt, ExternalShutdownException):
         pass
-    except (ValueError, ParameterException) as exc:  # SceneError, a scene the integrator cannot run, a bad -p value
-        print(f"rigid_rot_sim_node: {exc}", flush=True)
+    except STARTUP_ERRORS as exc:  # SceneError, a scene the integrator cannot run, a bad parameter
+        print(startup_error_line(exc), file=sys.stderr, flush=True)
         return 2
     finally:
         if node is not None:

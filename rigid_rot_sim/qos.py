@@ -11,19 +11,22 @@ The README (section "The simulation node") documents each profile and why:
 * ``/clock``: reliable, keep last 1 (rclpy's TimeSource subscribes best effort, depth 1).
 * ``~/mass_properties``: reliable, keep last 1, transient local (published once, latched).
 * ``~/rejected``: reliable, keep last 50: a burst of bad commands is reported in full.
-* torque inputs: reliable, keep last 10.
+* torque inputs: reliable, keep last ``commands.qos_depth`` (default limits.DEFAULT_COMMAND_DEPTH).
 """
 
 from __future__ import annotations
 
 from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
 
+from rigid_rot_sim.core import limits
 from rigid_rot_sim.core.scene import MAX_QOS_DEPTH, QOS_RELIABILITIES, OutputQos
 
 STATE_QOS = QoSProfile(depth=10, reliability=ReliabilityPolicy.RELIABLE, durability=DurabilityPolicy.VOLATILE)
 LATCHED_QOS = QoSProfile(depth=1, reliability=ReliabilityPolicy.RELIABLE, durability=DurabilityPolicy.TRANSIENT_LOCAL)
 REJECTED_QOS = QoSProfile(depth=50, reliability=ReliabilityPolicy.RELIABLE, durability=DurabilityPolicy.VOLATILE)
-COMMAND_QOS = QoSProfile(depth=10, reliability=ReliabilityPolicy.RELIABLE, durability=DurabilityPolicy.VOLATILE)
+COMMAND_QOS = QoSProfile(
+    depth=limits.DEFAULT_COMMAND_DEPTH, reliability=ReliabilityPolicy.RELIABLE, durability=DurabilityPolicy.VOLATILE
+)
 TF_QOS = QoSProfile(depth=100, reliability=ReliabilityPolicy.RELIABLE, durability=DurabilityPolicy.VOLATILE)
 TF_STATIC_QOS = QoSProfile(depth=1, reliability=ReliabilityPolicy.RELIABLE, durability=DurabilityPolicy.TRANSIENT_LOCAL)
 CLOCK_QOS = QoSProfile(depth=1, reliability=ReliabilityPolicy.RELIABLE, durability=DurabilityPolicy.VOLATILE)

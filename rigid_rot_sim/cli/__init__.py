@@ -70,8 +70,10 @@ def main(argv: Sequence[str] | None = None) -> int:
     try:
         return int(args.handler(args) or 0)
     except (ValueError, OSError) as exc:
-        message = " ".join(str(exc).split())  # one line, whatever the exception held
-        print(f"{PROG} {args.command}: error: {message}", file=sys.stderr)
+        from rigid_rot_sim.core.limits import one_line
+
+        # one short line on stderr, whatever the exception held (newlines, an echoed 1 MB value)
+        print(one_line(f"{PROG} {args.command}: error: {exc}"), file=sys.stderr)
         return 2
     except KeyboardInterrupt:
         return 130

@@ -26,6 +26,7 @@ from pathlib import Path
 import numpy as np
 
 from rigid_rot_sim.core.inertia import MassProperties, mass_properties, principal_orientation
+from rigid_rot_sim.core.limits import clip_text
 
 DEFAULT_SERVICE = "/rigid_rot_sim/compute_inertia"
 BODY_KEYS = ("name", "frame_id", "origin", "point_masses")
@@ -74,14 +75,13 @@ def load_body_file(path: str | os.PathLike) -> BodyInput:
     The numbers themselves (positive masses, finite positions, matching lengths) are
     checked by :func:`rigid_rot_sim.core.inertia.mass_properties`.
     """
-    import yaml
+    from rigid_rot_sim.core.bounded_yaml import BoundedYAMLError, load_bounded, read_bounded
 
     path = Path(path)
-    with open(path, encoding="utf-8") as stream:
-        try:
-            raw = yaml.safe_load(stream)
-        except yaml.YAMLError as exc:
-            raise ValueError(f"{path}: not valid YAML: {exc}") from None
+    try:
+        raw = load_bounded(read_bounded(path))  # size, depth, list lengths bounded; no aliases
+    except BoundedYAMLError as exc:
+        raise ValueError(f"{path}: {exc}") from None
     if not isinstance(raw, Mapping):
         raise ValueError(f"{path}: must be a mapping with a point_masses key")
     unknown = sorted(set(raw) - set(BODY_KEYS))
@@ -103,14 +103,15 @@ def load_body_file(path: str | os.PathLike) -> BodyInput:
 
 
 def _numbers(value, where: str, ndim: int) -> np.ndarray:
+    shown = clip_text(repr(value), 60)
     try:
         array = np.array(value, dtype=float)
-    except (TypeError, ValueError):
+    except (TypeError, ValueError, OverflowError):
         raise ValueError(f"{where} must be {'a list of numbers' if ndim == 1 else 'a list of [x, y, z]'}, "
-                         f"got {value!r}") from None
+                         f"got {shown}") from None
     if array.ndim != ndim or (ndim == 2 and array.shape[1] != 3):
         raise ValueError(f"{where} must be {'a list of numbers' if ndim == 1 else 'a list of [x, y, z]'}, "
-                         f"got {value!r}")
+                         f"got {shown}")
     return array
 
 

@@ -94,12 +94,18 @@ def _run_with_echo(argv: list[str], period: float) -> int:
     from rigid_rot_msgs.msg import RigidBodyState
 
     from rigid_rot_sim import conversions
-    from rigid_rot_sim.node import STATE_QOS, RigidRotSimNode
+    from rigid_rot_sim.node import STARTUP_ERRORS, STATE_QOS, RigidRotSimNode
 
-    rclpy.init(args=argv)
+    try:
+        rclpy.init(args=argv)
+    except RuntimeError as exc:  # rclpy's RCLError: an unparsable --ros-args rule
+        raise ValueError(f"bad ROS arguments: {exc}") from None
     node = echo = None
     try:
-        node = RigidRotSimNode()
+        try:
+            node = RigidRotSimNode()
+        except STARTUP_ERRORS as exc:  # printed as one line by rigid-rot's main, exit code 2
+            raise ValueError(str(exc)) from None
         echo = rclpy.create_node("rigid_rot_echo")
         state_topic = node.resolve_topic_name("~/state")
         next_print = [0.0]

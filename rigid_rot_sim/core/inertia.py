@@ -25,7 +25,7 @@ from typing import Any
 import numpy as np
 from scipy.spatial.transform import Rotation
 
-from rigid_rot_sim.core import validation
+from rigid_rot_sim.core import limits, validation
 
 #: Symmetry labels, from the most to the least degenerate.
 SYMMETRY_LABELS = ("point", "linear", "spherical", "symmetric", "asymmetric")
@@ -75,8 +75,9 @@ class MassProperties:
 def validate_point_masses(masses: Any, positions: Any) -> tuple[np.ndarray, np.ndarray]:
     """Return ``masses`` (n,) and ``positions`` (n, 3) as float arrays, or raise ValueError.
 
-    Rules: at least one mass; as many positions as masses; every mass finite and > 0 (kg);
-    every position finite (m). Errors name the argument and the first bad index.
+    Rules: at least one mass and at most ``limits.MAX_POINT_MASSES``; as many positions as
+    masses; every mass finite and > 0 (kg); every position finite (m). Errors name the
+    argument and the first bad index.
     """
     try:
         mass_array = np.asarray(masses, dtype=float)
@@ -86,6 +87,8 @@ def validate_point_masses(masses: Any, positions: Any) -> tuple[np.ndarray, np.n
         raise ValueError(f"masses must be one-dimensional, got shape {mass_array.shape}")
     if mass_array.size == 0:
         raise ValueError("masses must contain at least one mass")
+    if mass_array.size > limits.MAX_POINT_MASSES:
+        raise ValueError(f"{mass_array.size} masses, more than the limit of {limits.MAX_POINT_MASSES}")
     try:
         position_array = np.asarray(positions, dtype=float)
     except (TypeError, ValueError) as exc:
@@ -222,16 +225,35 @@ def mass_properties(masses: Any, positions: Any, origin: Any = (0.0, 0.0, 0.0)) 
     Raises
     ------
     ValueError
-        Naming the argument and index of the first invalid entry.
+        Naming the argument and index of the first invalid entry, or the result that
+        overflows (finite inputs can still give an infinite total mass or tensor: every
+        result is finite or refused).
     """
     mass_array, position_array = validate_point_masses(masses, positions)
     origin_vector = validation.finite_vector("origin", origin)
+    with np.errstate(all="ignore"):  # overflow is checked on the results below, never warned
+        props = _mass_properties(mass_array, position_array, origin_vector)
+    _check_finite(principal_moments=props.principal_moments, principal_axes=props.principal_axes)
+    return props
+
+
+def _check_finite(**results: Any) -> None:
+    for name, value in results.items():
+        if not np.all(np.isfinite(value)):
+            raise ValueError(
+                f"{name} overflows (not finite) for these masses and positions: "
+                "scale the units (e.g. tonnes, km) so that sums of m * r^2 stay below 1e308"
+            )
+
+
+def _mass_properties(mass_array: np.ndarray, position_array: np.ndarray, origin_vector: np.ndarray) -> MassProperties:
     total_mass = float(np.sum(mass_array))
     center_of_mass = (mass_array @ position_array) / total_mass
     inertia_com = _point_mass_inertia(mass_array, position_array - center_of_mass)
     # Computed directly (not by the parallel-axis shift) so each tensor has its own rounding;
     # the tests check the theorem between the two.
     inertia_origin = _point_mass_inertia(mass_array, position_array - origin_vector)
+    _check_finite(total_mass=total_mass, center_of_mass=center_of_mass, inertia_origin=inertia_origin, inertia_com=inertia_com)
     principal_moments, principal_axes = principal_frame(inertia_com)
     return MassProperties(
         total_mass=total_mass,

@@ -51,6 +51,15 @@ Schema (SI units; frames REP 103; quaternions scalar-last, body -> world)::
       reliability: reliable            # reliable | best_effort
       depth: 10                        # keep-last history depth, 1..MAX_QOS_DEPTH
     recording: null                    # or a path to an .mcap file
+    commands:                          # optional, for the torque inputs
+      max_torque: 0                    # N*m; a command whose |torque| exceeds it is rejected (0 = no limit)
+      qos_depth: 10                    # keep-last depth of the torque subscriptions
+
+Limits (:mod:`rigid_rot_sim.core.limits`, README "Limits and failure behaviour"): the
+file size, YAML nesting depth and list lengths are bounded and YAML aliases are refused
+(:mod:`bounded_yaml`); physical numbers have at most ``MAX_MAGNITUDE`` in magnitude; dt,
+real-time factor, duration and rates lie in the ranges of the node's parameters; topic
+names follow the ROS 2 rules (:mod:`names`).
 
 With ``gravity`` the body frame's origin is the pivot, and the inertia (principal
 moments or tensor) is about the pivot; point masses give the inertia about the origin
@@ -67,8 +76,8 @@ from dataclasses import dataclass
 from typing import Any, Mapping
 
 import numpy as np
-import yaml
-from rigid_rot_sim.core import validation
+from rigid_rot_sim.core import limits, names, validation
+from rigid_rot_sim.core.bounded_yaml import BoundedYAMLError, load_bounded, read_bounded
 from rigid_rot_sim.core.exact import zxz_to_quaternion
 
 __all__ = [
@@ -83,6 +92,7 @@ __all__ = [
     "IntegratorSpec",
     "Outputs",
     "OutputQos",
+    "CommandSettings",
     "Scene",
     "load_scene",
     "parse_scene",
@@ -251,6 +261,20 @@ class OutputQos:
 
 
 @dataclass(frozen=True)
+class CommandSettings:
+    """Settings of the torque command inputs.
+
+    ``max_torque`` (N*m): a command (topic or ``~/apply_torque``) whose torque norm exceeds it
+    is rejected with the reason; 0 = no limit. ``qos_depth``: keep-last depth of the torque
+    subscriptions (a burst larger than this between two executor turns loses its oldest
+    commands before the node sees them).
+    """
+
+    max_torque: float = 0.0
+    qos_depth: int = limits.DEFAULT_COMMAND_DEPTH
+
+
+@dataclass(frozen=True)
 class Scene:
     """A validated scene. ``source`` is the file it came from, ``text`` the YAML as given."""
 
@@ -267,6 +291,7 @@ class Scene:
     outputs: Outputs = Outputs()
     qos: OutputQos = OutputQos()
     recording: str | None = None
+    commands: CommandSettings = CommandSettings()
     description: str = ""
     source: str = "<string>"
     text: str = ""
@@ -313,31 +338,67 @@ def _mapping(ctx: _Ctx, value: Any, key: str, allowed: tuple[str, ...]) -> Mappi
         raise ctx.error(key, f"must be a mapping, got {type(value).__name__}")
     for name in value:
         if name not in allowed:
-            raise ctx.error(f"{key}.{name}" if key else str(name), f"unknown key (allowed: {', '.join(allowed)})")
+            shown = limits.clip_text(str(name), 60)
+            raise ctx.error(f"{key}.{shown}" if key else shown, f"unknown key (allowed: {', '.join(allowed)})")
     return value
 
 
-def _number(ctx: _Ctx, value: Any, key: str, *, minimum: float | None = None, strict: bool = False) -> float:
+def _show(value: Any) -> str:
+    """A value as echoed in an error message: its repr, cut to a readable length."""
+    return limits.clip_text(repr(value), 60)
+
+
+def _number(
+    ctx: _Ctx,
+    value: Any,
+    key: str,
+    *,
+    minimum: float | None = None,
+    strict: bool = False,
+    maximum: float = limits.MAX_MAGNITUDE,
+) -> float:
+    """A finite number; ``minimum`` (exclusive when ``strict``) and ``maximum`` on its value,
+    which by default bounds its magnitude by MAX_MAGNITUDE."""
     if isinstance(value, bool) or not isinstance(value, (int, float)):
-        raise ctx.error(key, f"must be a number, got {value!r}")
-    number = float(value)
+        raise ctx.error(key, f"must be a number, got {_show(value)}")
+    try:
+        number = float(value)
+    except OverflowError:  # a YAML integer too large for a float
+        raise ctx.error(key, f"must be a number of magnitude <= {maximum:g}, got an integer of {len(str(abs(value)))} digits") from None
     if not math.isfinite(number):
         raise ctx.error(key, f"must be finite, got {number}")
     if minimum is not None and (number < minimum or (strict and number == minimum)):
         raise ctx.error(key, f"must be {'>' if strict else '>='} {minimum:g}, got {number:g}")
+    if number > maximum or (minimum is None and -number > maximum):
+        raise ctx.error(key, f"must be {'<=' if minimum is not None else 'of magnitude <='} {maximum:g}, got {number:g}")
     return number
+
+
+def _in_range(ctx: _Ctx, value: Any, key: str, bounds: tuple[float, float], *, strict: bool = False) -> float:
+    """A number within a parameter's range (the node's descriptor range)."""
+    return _number(ctx, value, key, minimum=bounds[0], strict=strict, maximum=bounds[1])
 
 
 def _vector(ctx: _Ctx, value: Any, key: str, length: int) -> tuple[float, ...]:
     if not isinstance(value, (list, tuple)) or len(value) != length:
-        raise ctx.error(key, f"must be a list of {length} numbers, got {value!r}")
+        raise ctx.error(key, f"must be a list of {length} numbers, got {_show(value)}")
     return tuple(_number(ctx, v, f"{key}[{i}]") for i, v in enumerate(value))
 
 
-def _string(ctx: _Ctx, value: Any, key: str) -> str:
+def _string(ctx: _Ctx, value: Any, key: str, max_length: int = limits.MAX_NAME_LENGTH) -> str:
     if not isinstance(value, str) or not value.strip():
-        raise ctx.error(key, f"must be a non-empty string, got {value!r}")
+        raise ctx.error(key, f"must be a non-empty string, got {_show(value)}")
+    if len(value) > max_length:
+        raise ctx.error(key, f"longer than {max_length} characters (limit)")
     return value.strip()
+
+
+def _frame(ctx: _Ctx, value: Any, key: str) -> str:
+    name = _string(ctx, value, key)
+    try:
+        return names.check_frame_id(name, "frame name")
+    except ValueError as exc:
+        raise ctx.error(key, str(exc)) from None
 
 
 def _parse_body(ctx: _Ctx, raw: Any, gravity_raw: Any) -> Body:
@@ -350,9 +411,13 @@ def _parse_body(ctx: _Ctx, raw: Any, gravity_raw: Any) -> Body:
     key = f"body.{form}"
     mass = com = masses = positions = None
     if form == "principal_moments":
-        tensor = np.diag(ctx.checked(validation.principal_moments, key, body[form]))
+        tensor = np.diag(ctx.checked(validation.principal_moments, key, _vector(ctx, body[form], key, 3)))
     elif form == "inertia_tensor":
-        tensor = ctx.checked(validation.inertia_tensor, key, body[form])
+        rows = body[form]
+        if not isinstance(rows, (list, tuple)) or len(rows) != 3:
+            raise ctx.error(key, f"must be a 3x3 list of lists, got {_show(rows)}")
+        rows = [_vector(ctx, row, f"{key}[{i}]", 3) for i, row in enumerate(rows)]
+        tensor = ctx.checked(validation.inertia_tensor, key, rows)
         ctx.checked(validation.principal_moments, f"{key} eigenvalues", np.linalg.eigvalsh(tensor))
     else:
         from rigid_rot_sim.core.inertia import mass_properties
@@ -364,6 +429,8 @@ def _parse_body(ctx: _Ctx, raw: Any, gravity_raw: Any) -> Body:
         raw_positions = spec["positions"]
         if not isinstance(raw_masses, (list, tuple)) or not isinstance(raw_positions, (list, tuple)):
             raise ctx.error(key, "masses and positions must be lists")
+        if max(len(raw_masses), len(raw_positions)) > limits.MAX_POINT_MASSES:
+            raise ctx.error(key, f"more than {limits.MAX_POINT_MASSES} point masses (limit)")
         masses = tuple(_number(ctx, m, f"{key}.masses[{i}]") for i, m in enumerate(raw_masses))
         positions = tuple(_vector(ctx, p, f"{key}.positions[{i}]", 3) for i, p in enumerate(raw_positions))
         try:
@@ -416,6 +483,8 @@ def _parse_torque_inputs(ctx: _Ctx, raw: Any) -> tuple[tuple[TopicInput, ...], t
         return (), ()
     if not isinstance(raw, (list, tuple)):
         raise ctx.error("torque_inputs", f"must be a list, got {type(raw).__name__}")
+    if len(raw) > limits.MAX_TORQUE_INPUTS:
+        raise ctx.error("torque_inputs", f"more than {limits.MAX_TORQUE_INPUTS} inputs (limit)")
     topics: list[TopicInput] = []
     schedules: list[TorqueSchedule] = []
     for index, item in enumerate(raw):
@@ -428,23 +497,25 @@ def _parse_torque_inputs(ctx: _Ctx, raw: Any) -> tuple[tuple[TopicInput, ...], t
         if "topic" not in spec:
             raise ctx.error(key, "needs a topic (or a schedule)")
         topic = _string(ctx, spec["topic"], f"{key}.topic")
-        if any(c.isspace() for c in topic):
-            raise ctx.error(f"{key}.topic", f"must not contain whitespace, got {topic!r}")
+        try:
+            names.check_topic_name(topic)
+        except ValueError as exc:
+            raise ctx.error(f"{key}.topic", str(exc)) from None
         message_type = spec.get("type", "WrenchStamped")
         if message_type not in TORQUE_MESSAGE_TYPES:
-            raise ctx.error(f"{key}.type", f"must be one of {', '.join(TORQUE_MESSAGE_TYPES)}, got {message_type!r}")
+            raise ctx.error(f"{key}.type", f"must be one of {', '.join(TORQUE_MESSAGE_TYPES)}, got {_show(message_type)}")
         frame = spec.get("frame", "body")
         if frame not in TORQUE_FRAMES:
-            raise ctx.error(f"{key}.frame", f"must be one of {', '.join(TORQUE_FRAMES)}, got {frame!r}")
+            raise ctx.error(f"{key}.frame", f"must be one of {', '.join(TORQUE_FRAMES)}, got {_show(frame)}")
         hold = spec.get("hold", "hold")
         timeout = None
         if isinstance(hold, Mapping):
             hold = _mapping(ctx, hold, f"{key}.hold", ("timeout",))
             if "timeout" not in hold:
                 raise ctx.error(f"{key}.hold", "must be 'hold' or {timeout: seconds}")
-            timeout = _number(ctx, hold["timeout"], f"{key}.hold.timeout", minimum=0.0, strict=True)
+            timeout = _in_range(ctx, hold["timeout"], f"{key}.hold.timeout", limits.DURATION_RANGE, strict=True)
         elif hold != "hold":
-            raise ctx.error(f"{key}.hold", f"must be 'hold' or {{timeout: seconds}}, got {hold!r}")
+            raise ctx.error(f"{key}.hold", f"must be 'hold' or {{timeout: seconds}}, got {_show(hold)}")
         if any(t.topic == topic for t in topics):
             raise ctx.error(f"{key}.topic", f"topic {topic!r} is listed twice")
         topics.append(TopicInput(topic=topic, message_type=message_type, frame=frame, timeout=timeout))
@@ -455,7 +526,7 @@ def _parse_schedule(ctx: _Ctx, raw: Any, key: str) -> TorqueSchedule:
     spec = _mapping(ctx, raw, key, ("frame", "segments"))
     frame = spec.get("frame", "body")
     if frame not in ("body", "world"):
-        raise ctx.error(f"{key}.frame", f"must be body or world, got {frame!r}")
+        raise ctx.error(f"{key}.frame", f"must be body or world, got {_show(frame)}")
     raw_segments = spec.get("segments")
     if not isinstance(raw_segments, (list, tuple)) or not raw_segments:
         raise ctx.error(f"{key}.segments", "must be a non-empty list of {start, torque}")
@@ -466,7 +537,7 @@ def _parse_schedule(ctx: _Ctx, raw: Any, key: str) -> TorqueSchedule:
         segment = _mapping(ctx, item, item_key, ("start", "torque"))
         if "start" not in segment or "torque" not in segment:
             raise ctx.error(item_key, "needs start (s) and torque [x, y, z] (N*m)")
-        start = _number(ctx, segment["start"], f"{item_key}.start", minimum=0.0)
+        start = _in_range(ctx, segment["start"], f"{item_key}.start", limits.DURATION_RANGE)
         if start <= previous:
             raise ctx.error(f"{item_key}.start", f"must be later than the previous segment's start {previous:g}, got {start:g}")
         previous = start
@@ -505,13 +576,17 @@ def _parse_integrator(ctx: _Ctx, raw: Any) -> IntegratorSpec:
             get_method(method)
         except ValueError as exc:
             raise ctx.error("integrator.method", str(exc)) from None
-    dt = _number(ctx, spec.get("dt", 0.001), "integrator.dt", minimum=0.0, strict=True)
+    dt = _in_range(ctx, spec.get("dt", 0.001), "integrator.dt", limits.DT_RANGE)
     options = spec.get("options") or {}
     if not isinstance(options, Mapping):
-        raise ctx.error("integrator.options", f"must be a mapping of option names to values, got {options!r}")
+        raise ctx.error("integrator.options", f"must be a mapping of option names to values, got {_show(options)}")
     for name, value in options.items():
         if isinstance(value, (Mapping, list)):
-            raise ctx.error(f"integrator.options.{name}", f"must be a number, string or null, got {value!r}")
+            raise ctx.error(f"integrator.options.{name}", f"must be a number, string or null, got {_show(value)}")
+        if isinstance(value, (int, float)) and not isinstance(value, bool):
+            _number(ctx, value, f"integrator.options.{name}")
+        elif isinstance(value, str):
+            _string(ctx, value, f"integrator.options.{name}")
     return IntegratorSpec(method=method, dt=dt, options=tuple(sorted((str(k), v) for k, v in options.items())))
 
 
@@ -519,7 +594,7 @@ def _parse_outputs(ctx: _Ctx, raw: Any) -> Outputs:
     if raw is None:
         return Outputs()
     spec = _mapping(ctx, raw, "outputs", OUTPUT_NAMES)
-    rates = {name: _number(ctx, value, f"outputs.{name}", minimum=0.0) for name, value in spec.items()}
+    rates = {name: _in_range(ctx, value, f"outputs.{name}", limits.RATE_RANGE) for name, value in spec.items()}
     return Outputs(**rates)
 
 
@@ -536,8 +611,26 @@ def _parse_qos(ctx: _Ctx, raw: Any) -> OutputQos:
     return OutputQos(reliability=reliability, depth=depth)
 
 
+def _parse_commands(ctx: _Ctx, raw: Any) -> CommandSettings:
+    if raw is None:
+        return CommandSettings()
+    spec = _mapping(ctx, raw, "commands", ("max_torque", "qos_depth"))
+    max_torque = _in_range(ctx, spec.get("max_torque", 0.0), "commands.max_torque", limits.MAX_TORQUE_RANGE)
+    depth = spec.get("qos_depth", limits.DEFAULT_COMMAND_DEPTH)
+    low, high = limits.COMMAND_DEPTH_RANGE
+    if isinstance(depth, bool) or not isinstance(depth, int) or not low <= depth <= high:
+        raise ctx.error("commands.qos_depth", f"must be an integer from {low} to {high}, got {_show(depth)}")
+    return CommandSettings(max_torque=max_torque, qos_depth=depth)
+
+
 def parse_scene(data: Any, source: str = "<string>", text: str = "") -> Scene:
     """Validate a scene given as parsed YAML (a mapping); ``source`` names it in errors."""
+    # numpy overflows (a tensor near the magnitude limit) are checked as results, never warned
+    with np.errstate(all="ignore"):
+        return _parse_scene(data, source, text)
+
+
+def _parse_scene(data: Any, source: str, text: str) -> Scene:
     ctx = _Ctx(source)
     top_keys = (
         "name",
@@ -553,6 +646,7 @@ def parse_scene(data: Any, source: str = "<string>", text: str = "") -> Scene:
         "outputs",
         "qos",
         "recording",
+        "commands",
     )
     spec = _mapping(ctx, data, "", top_keys)
     if "body" not in spec:
@@ -562,11 +656,13 @@ def parse_scene(data: Any, source: str = "<string>", text: str = "") -> Scene:
     description = spec.get("description", "") or ""
     if not isinstance(description, str):
         raise ctx.error("description", "must be a string")
+    if len(description) > limits.MAX_TEXT_LENGTH:
+        raise ctx.error("description", f"longer than {limits.MAX_TEXT_LENGTH} characters (limit)")
 
     frames_raw = _mapping(ctx, spec.get("frames") or {}, "frames", ("world", "body"))
     frames = Frames(
-        world=_string(ctx, frames_raw.get("world", "world"), "frames.world"),
-        body=_string(ctx, frames_raw.get("body", "body"), "frames.body"),
+        world=_frame(ctx, frames_raw.get("world", "world"), "frames.world"),
+        body=_frame(ctx, frames_raw.get("body", "body"), "frames.body"),
     )
     if frames.world == frames.body:
         raise ctx.error("frames", f"world and body frames must differ, both are {frames.world!r}")
@@ -588,13 +684,14 @@ def parse_scene(data: Any, source: str = "<string>", text: str = "") -> Scene:
 
     duration = spec.get("duration")
     if duration is not None:
-        duration = _number(ctx, duration, "duration", minimum=0.0, strict=True)
-    rtf = _number(ctx, spec.get("real_time_factor", 1.0), "real_time_factor", minimum=0.0)
+        duration = _in_range(ctx, duration, "duration", limits.DURATION_RANGE, strict=True)
+    rtf = _in_range(ctx, spec.get("real_time_factor", 1.0), "real_time_factor", limits.REAL_TIME_FACTOR_RANGE)
     outputs = _parse_outputs(ctx, spec.get("outputs"))
     qos = _parse_qos(ctx, spec.get("qos"))
     recording = spec.get("recording")
     if recording is not None:
-        recording = _string(ctx, recording, "recording")
+        recording = _string(ctx, recording, "recording", limits.MAX_TEXT_LENGTH)
+    commands = _parse_commands(ctx, spec.get("commands"))
     return Scene(
         name=name,
         description=description.strip(),
@@ -610,6 +707,7 @@ def parse_scene(data: Any, source: str = "<string>", text: str = "") -> Scene:
         outputs=outputs,
         qos=qos,
         recording=recording,
+        commands=commands,
         source=source,
         text=text,
     )
@@ -618,9 +716,9 @@ def parse_scene(data: Any, source: str = "<string>", text: str = "") -> Scene:
 def parse_scene_text(text: str, source: str = "<string>") -> Scene:
     """Validate a scene given as YAML text (e.g. from a recording's metadata)."""
     try:
-        data = yaml.safe_load(text)
-    except yaml.YAMLError as exc:
-        raise SceneError(f"{os.path.basename(source)}: not valid YAML: {exc}") from None
+        data = load_bounded(text)
+    except BoundedYAMLError as exc:
+        raise SceneError(f"{os.path.basename(source)}: {exc}") from None
     return parse_scene(data, source=source, text=text)
 
 
@@ -628,8 +726,9 @@ def load_scene(path: str | os.PathLike[str]) -> Scene:
     """Read and validate the scene file at ``path``."""
     path = os.fspath(path)
     try:
-        with open(path, encoding="utf-8") as f:
-            text = f.read()
+        text = read_bounded(path)
     except OSError as exc:
         raise SceneError(f"{path}: cannot read scene file: {exc.strerror}") from None
+    except BoundedYAMLError as exc:
+        raise SceneError(f"{path}: {exc}") from None
     return parse_scene_text(text, source=path)

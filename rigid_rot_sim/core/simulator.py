@@ -22,6 +22,17 @@ Torque between boundaries is constant in the body frame. A command in the world 
 stays fixed in the world: it is re-expressed in the body frame at every step boundary
 (a zero-order hold at the physics rate, like a controller running at that rate).
 Hold-policy timeouts are in sim time and also end on a step boundary.
+
+Failures and limits
+-------------------
+Every number that enters is finite and within :mod:`~rigid_rot_sim.core.limits`: torque
+components at most ``MAX_MAGNITUDE`` N*m (and a norm of at most :attr:`Simulator.max_torque`
+when that is > 0), frame ids at most ``MAX_NAME_LENGTH`` characters, and a state whose ω
+turns the body at most ``MAX_ROTATION_PER_STEP`` rad per step. A run stops (``paused``, the
+reason in :attr:`Simulator.failure`, the last good state kept, every snapshot field finite)
+when a step fails (:class:`NonFiniteStateError`, whatever the method) or when ω, with the
+torque acting, would exceed the rotation limit before the next step. :meth:`Simulator.reset`
+and :meth:`Simulator.set_state` clear the failure and resume a run that the failure paused.
 """
 
 from __future__ import annotations
@@ -35,12 +46,12 @@ from typing import Any
 import numpy as np
 from scipy.spatial.transform import Rotation
 
-from rigid_rot_sim.core import advice
+from rigid_rot_sim.core import advice, limits
 from rigid_rot_sim.core import quaternion as quat
 from rigid_rot_sim.core.dynamics import RigidBody
 from rigid_rot_sim.core.exact import quaternion_to_zxz
 from rigid_rot_sim.core.integrators import get_method
-from rigid_rot_sim.core.integrators.base import Integrator
+from rigid_rot_sim.core.integrators.base import Integrator, NonFiniteStateError
 from rigid_rot_sim.core.scene import Scene, TopicInput
 from rigid_rot_sim.core.torque import ConstantTorque, GravityTorque
 from rigid_rot_sim.core import validation
@@ -65,6 +76,14 @@ _STEPWISE_METHODS = frozenset({"dop853"})
 #: almost certainly stamps with wall-clock time instead of the sim time on /clock, and
 #: would otherwise wait for decades of sim time.
 STAMP_HORIZON = 60.0
+
+#: A drift reference (J, kg*m^2/s) below this counts as zero (drift 0, as for a body at rest):
+#: relative to it, any real change would overflow a float.
+_TINY_REFERENCE = 1e-250
+
+#: Largest kinetic energy (J), |L| (kg*m^2/s) and |omega| (rad/s) a state may have: the snapshot's
+#: rotations and drifts of such values stay finite (a NaN compares false: refused too).
+_DERIVED_CEILING = 1e300
 
 
 class CommandRejected(ValueError):
@@ -186,6 +205,10 @@ class Simulator:
         self._serial = itertools.count()
         self.paused = False
         self.failure: str | None = None
+        self._paused_by_failure = False
+        #: Largest accepted torque norm (N*m) of a command or apply_torque request; 0 = no limit.
+        self.max_torque = float(scene.commands.max_torque)
+        self._i_min = float(np.min(self.body.principal_moments))
         self._integrator: Integrator | None = None
         self.method = ""
         self.dt = 0.0
@@ -197,6 +220,9 @@ class Simulator:
             first=True,
         )
         self.reset()
+        reason = self._rotation_failure(0.0)
+        if reason is not None:
+            raise ValueError(f"initial angular velocity: {reason}")
 
     # ------------------------------------------------------------------ integrator
 
@@ -317,6 +343,10 @@ class Simulator:
         CommandRejected otherwise.
         """
         names = {self.frames.body: "body", self.frames.world: "world"}
+        if len(frame_id) > limits.MAX_NAME_LENGTH:
+            raise CommandRejected(
+                source, f"frame_id of {len(frame_id)} characters exceeds the limit of {limits.MAX_NAME_LENGTH}"
+            )
         if frame_id and frame_id not in names:
             raise CommandRejected(
                 source, f"frame {frame_id!r} is neither the body frame {self.frames.body!r} nor the world frame {self.frames.world!r}"
@@ -332,12 +362,19 @@ class Simulator:
             raise CommandRejected(source, f"frame {frame_id!r} given, but this input is expressed in {expected!r}")
         return policy
 
-    @staticmethod
-    def _finite_torque(source: str, torque: Any, what: str = "torque") -> tuple[float, float, float]:
+    def _finite_torque(self, source: str, torque: Any, what: str = "torque") -> tuple[float, float, float]:
         values = tuple(float(v) for v in np.asarray(torque, dtype=float).reshape(3))
         for axis, value in zip("xyz", values):
             if not math.isfinite(value):
                 raise CommandRejected(source, f"non-finite {what}.{axis} = {value}")
+            if abs(value) > limits.MAX_MAGNITUDE:
+                raise CommandRejected(source, f"{what}.{axis} = {value:g} beyond the limit of {limits.MAX_MAGNITUDE:g}")
+        if what == "torque" and self.max_torque > 0.0:
+            norm = math.hypot(*values)
+            if norm > self.max_torque:
+                raise CommandRejected(
+                    source, f"|torque| = {norm:.6g} N*m exceeds max_torque = {self.max_torque:g} N*m"
+                )
         return values  # type: ignore[return-value]
 
     def receive_torque(
@@ -535,6 +572,11 @@ class Simulator:
             else:
                 stop = min(end, self._next_event)
             chunk = stop - self._k
+            reason = self._rotation_failure(self.dt)
+            if reason is not None:
+                self.fail(f"rotation limit: {reason}")
+                return done
+            chunk = min(chunk, self._steps_within_rotation_limit())
             start = (integrator.t, integrator.q, integrator.omega, integrator.n_steps)
             try:
                 if integrator.name in _STEPWISE_METHODS:
@@ -545,18 +587,71 @@ class Simulator:
             except (ArithmeticError, ValueError) as exc:
                 # NonFiniteStateError, or a math error on the way to it (sin(inf), overflow)
                 good = integrator.n_steps - start[3]
-                if good < chunk and np.all(np.isfinite(integrator.q)) and np.all(np.isfinite(integrator.omega)):
-                    self._k += good  # the method stopped at its last good step
+                kept = good < chunk and np.all(np.isfinite(integrator.q)) and np.all(np.isfinite(integrator.omega))
+                if kept and self._derived_failure() is None:
+                    self._k += good  # the method stopped at its last good step (energy and momentum finite)
                     done += good
                 else:
                     integrator.set_state(*start[:3])
                     integrator.n_steps = start[3]
-                self.failure = f"{type(exc).__name__}: {exc}"
-                self.paused = True
+                name = "NonFiniteStateError" if isinstance(exc, NonFiniteStateError) else type(exc).__name__
+                self.fail(f"{name}: {exc}")
+                return done
+            reason = self._derived_failure()
+            if reason is not None:  # a finite state whose energy or momentum overflows
+                integrator.set_state(*start[:3])
+                integrator.n_steps = start[3]
+                self.fail(f"NonFiniteStateError: {reason}")
                 return done
             self._k += chunk
             done += chunk
         return done
+
+    def fail(self, reason: str) -> None:
+        """Stop the run at the current (good) state with ``reason`` (cleared by reset / set_state)."""
+        self.failure = reason
+        self._paused_by_failure = self._paused_by_failure or not self.paused
+        self.paused = True
+
+    def _torque_bound(self) -> float:
+        """A bound (N*m) on the torque norm over the next steps."""
+        if self.gravity is not None:
+            return self._weight * float(np.linalg.norm(self._com_body))
+        return math.hypot(*self._torque_body_sum) + (math.hypot(*self._torque_world_sum) if self._torque_world_sum else 0.0)
+
+    def _rotation_failure(self, dt_ahead: float) -> str | None:
+        """Why the state violates the rotation limit after ``dt_ahead`` s under the current torque (None: it does not)."""
+        omega = math.hypot(*self._integrator.omega.tolist())  # type: ignore[union-attr]
+        reach = omega + dt_ahead * self._torque_bound() / self._i_min
+        rotation = reach * self.dt
+        if rotation <= limits.MAX_ROTATION_PER_STEP:
+            return None
+        return (
+            f"|omega| {'would reach' if dt_ahead else 'is'} {reach:.3g} rad/s, {rotation:.3g} rad per step of {self.dt:g} s "
+            f"(limit {limits.MAX_ROTATION_PER_STEP:g} rad per step): lower the torque or dt, then reset or set_state"
+        )
+
+    def _steps_within_rotation_limit(self) -> int:
+        """How many steps the current torque may act before |ω| dt could pass the rotation limit."""
+        torque = self._torque_bound()
+        if torque == 0.0:
+            return 1 << 62
+        omega = math.hypot(*self._integrator.omega.tolist())  # type: ignore[union-attr]
+        gain_per_step = self.dt * torque / self._i_min
+        if not gain_per_step > 0.0:  # a torque so small that its effect underflows
+            return 1 << 62
+        return max(1, int(min((limits.MAX_ROTATION_PER_STEP / self.dt - omega) / gain_per_step, 1 << 62)))
+
+    def _derived_failure(self) -> str | None:
+        """Why a snapshot of the current state would hold a non-finite number (None: it would not)."""
+        i1, i2, i3 = (float(v) for v in self.body.principal_moments)
+        w1, w2, w3 = self._integrator.omega.tolist()  # type: ignore[union-attr]
+        kinetic = 0.5 * (i1 * w1 * w1 + i2 * w2 * w2 + i3 * w3 * w3)
+        momentum = math.hypot(i1 * w1, i2 * w2, i3 * w3)
+        # a margin below the float range: the snapshot rotates these vectors and forms drifts
+        if max(kinetic, momentum, math.hypot(w1, w2, w3)) <= _DERIVED_CEILING:
+            return None
+        return f"kinetic energy {kinetic} J or |L| {momentum} kg*m^2/s overflows at t = {self.t:.9g} s"
 
     def advance_to(self, k: int) -> int:
         """Advance to step boundary ``k`` (no-op when already there); returns steps done."""
@@ -573,6 +668,7 @@ class Simulator:
     def pause(self, paused: bool = True) -> None:
         """Pause (True) or resume (False) the free-running simulation."""
         self.paused = bool(paused)
+        self._paused_by_failure = False
 
     # ------------------------------------------------------------------ state
 
@@ -589,7 +685,7 @@ class Simulator:
         self._torque_body_sum: tuple[float, float, float] = _ZERO3
         self._torque_world_sum: tuple[float, float, float] | None = None
         self._step_torque_body: tuple[float, float, float] = _ZERO3
-        self.failure = None
+        self._clear_failure()
         for index, schedule in enumerate(self.scene.schedules):
             for segment in schedule.segments:
                 self._push(self.step_at_or_after(segment.start), "schedule", (segment.start, index, segment.torque))
@@ -608,10 +704,23 @@ class Simulator:
         """
         q = validation.quaternion("orientation", orientation)
         omega = validation.finite_vector("angular_velocity", angular_velocity)
+        rotation = math.hypot(*omega.tolist()) * self.dt
+        if rotation > limits.MAX_ROTATION_PER_STEP:
+            raise ValueError(
+                f"angular_velocity of norm {rotation / self.dt:.3g} rad/s turns the body {rotation:.3g} rad per step of "
+                f"{self.dt:g} s (limit {limits.MAX_ROTATION_PER_STEP:g} rad per step)"
+            )
         self._set_principal_state(self.t, self.body.attitude_to_principal(q), self.body.vector_to_principal(omega))
-        self.failure = None
+        self._clear_failure()
         if self._torque_world_sum is not None:
             self._set_command_torque()
+
+    def _clear_failure(self) -> None:
+        """Forget a failure; a run the failure paused runs again (a pause asked for stays)."""
+        if self.failure is not None and self._paused_by_failure:
+            self.paused = False
+        self.failure = None
+        self._paused_by_failure = False
 
     def _set_principal_state(self, t: float, q_principal: np.ndarray, omega_principal: np.ndarray) -> None:
         assert self._integrator is not None
@@ -674,6 +783,6 @@ class Simulator:
 
 
 def _relative_change(value: float, reference: float) -> float:
-    if reference == 0.0:
+    if abs(reference) < _TINY_REFERENCE:
         return 0.0
     return (value - reference) / abs(reference)

@@ -70,10 +70,11 @@ def finite_vector(name: str, value: Any, size: int = 3) -> np.ndarray:
 def quaternion(name: str, value: Any) -> np.ndarray:
     """Return the finite, non-zero quaternion (x, y, z, w) normalised to unit length."""
     q = finite_vector(name, value, 4)
-    norm = float(np.linalg.norm(q))
-    if not norm > 0.0:
+    scale = float(np.max(np.abs(q)))  # first to O(1): |q| of components near 1e308 overflows
+    if not scale > 0.0:
         raise ValueError(f"{name} must be a non-zero quaternion (x, y, z, w), got {q}")
-    return q / norm
+    q = q / scale
+    return q / float(np.linalg.norm(q))
 
 
 def principal_moments(name: str, value: Any) -> np.ndarray:

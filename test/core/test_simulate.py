@@ -210,7 +210,11 @@ def test_non_finite_state_is_reported_with_step_and_time():
     assert match and int(match.group(1)) == 26 and float(match.group(2)) == pytest.approx(0.26)
 
 
-@pytest.mark.parametrize("module_name", ["rigid_rot_sim.core.simulate", "rigid_rot_sim.core.integrators"])
+@pytest.mark.parametrize(
+    "module_name",
+    ["rigid_rot_sim.core.simulate", "rigid_rot_sim.core.integrators", "rigid_rot_sim.core.bounded_yaml",
+     "rigid_rot_sim.core.names", "rigid_rot_sim.core.pacing"],
+)
 def test_docstring_examples_run(module_name):
     import doctest
     import importlib

@@ -14,6 +14,12 @@ Rules for whoever implements a method:
   unknown ones with a ValueError naming them.
 * Never return NaN: :meth:`step` checks the new state and raises
   :class:`NonFiniteStateError` naming the step number and the time.
+* Every failure of a step is a :class:`NonFiniteStateError`, whatever the method: an
+  ArithmeticError or ValueError raised on the way (``math domain error`` from ``sin(inf)``,
+  OverflowError, ZeroDivisionError) is re-raised as one, chained to the original. This is
+  done here, for :meth:`step`, :meth:`advance` and :meth:`advance_saving` of every
+  subclass (:meth:`Integrator.__init_subclass__` wraps its overrides), so it holds for
+  compiled kernels too.
 * ``self.torque`` may be replaced between steps (the node holds topic commands
   piecewise constant); methods that cache anything about it must re-read it each step.
   Likewise ``self.dt`` may be changed between steps (``simulate`` shortens the last one).
@@ -24,8 +30,9 @@ Rules for whoever implements a method:
 
 from __future__ import annotations
 
+import functools
 import math
-from typing import Any, ClassVar
+from typing import Any, Callable, ClassVar
 
 import numpy as np
 
@@ -33,7 +40,37 @@ from rigid_rot_sim.core.torque import TorqueFunction
 
 
 class NonFiniteStateError(FloatingPointError):
-    """Raised when a step produced a non-finite state."""
+    """Raised when a step produced a non-finite state, or failed on the way to one."""
+
+
+class UnsupportedTorqueError(ValueError):
+    """The torque set on the integrator is one the method cannot take: a usage error, raised as is."""
+
+
+#: What a failing step may raise besides NonFiniteStateError (math domain error, overflow).
+_STEP_ERRORS = (ArithmeticError, ValueError)
+
+
+def _failing_as_non_finite(method: Callable) -> Callable:
+    """``method`` with every step error turned into NonFiniteStateError (the documented failure)."""
+
+    @functools.wraps(method)
+    def wrapper(self, *args, **kwargs):
+        try:
+            return method(self, *args, **kwargs)
+        except (NonFiniteStateError, UnsupportedTorqueError):
+            raise
+        except _STEP_ERRORS as exc:
+            raise NonFiniteStateError(
+                f"{self.name or type(self).__name__}: step {self.n_steps + 1}, t = {self.t:.9g} s failed: "
+                f"{type(exc).__name__}: {exc}"
+            ) from exc
+
+    wrapper.fails_as_non_finite = True  # type: ignore[attr-defined]
+    return wrapper
+
+
+_STEPPING_METHODS = ("step", "advance", "advance_saving")
 
 
 class Integrator:
@@ -58,6 +95,13 @@ class Integrator:
     name: ClassVar[str] = ""
     order: ClassVar[int] = 0
     fixed_step: ClassVar[bool] = True
+
+    def __init_subclass__(cls, **kwargs: Any) -> None:
+        super().__init_subclass__(**kwargs)
+        for attribute in _STEPPING_METHODS:
+            method = cls.__dict__.get(attribute)
+            if callable(method) and not getattr(method, "fails_as_non_finite", False):
+                setattr(cls, attribute, _failing_as_non_finite(method))
 
     def __init__(
         self,
@@ -100,8 +144,13 @@ class Integrator:
         """Hook for methods that cache quantities derived from the state."""
 
     def step(self) -> None:
-        """Advance the state by one step of ``dt``."""
-        self._step_impl()
+        """Advance the state by one step of ``dt`` (on failure the state is the one before it)."""
+        before = (self.t, self.q.copy(), self.omega.copy())
+        try:
+            self._step_impl()
+        except _STEP_ERRORS:
+            self.set_state(*before)  # also for UnsupportedTorqueError: nothing was stepped
+            raise
         self.n_steps += 1
         if not (np.all(np.isfinite(self.q)) and np.all(np.isfinite(self.omega))):
             raise NonFiniteStateError(
@@ -128,3 +177,7 @@ class Integrator:
 
     def _step_impl(self) -> None:
         raise NotImplementedError
+
+
+for _attribute in _STEPPING_METHODS:
+    setattr(Integrator, _attribute, _failing_as_non_finite(getattr(Integrator, _attribute)))

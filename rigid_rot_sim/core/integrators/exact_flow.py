@@ -29,7 +29,7 @@ from typing import Any
 import numpy as np
 
 from rigid_rot_sim.core.exact import TorqueFreeSolution, _solution, torque_free_flow
-from rigid_rot_sim.core.integrators.base import Integrator, NonFiniteStateError
+from rigid_rot_sim.core.integrators.base import Integrator, NonFiniteStateError, UnsupportedTorqueError
 from rigid_rot_sim.core.integrators.fixed_step import FixedStepIntegrator, float_torque
 from rigid_rot_sim.core.integrators.splitting import COMPOSITIONS, _adjoint_kick
 
@@ -38,7 +38,7 @@ EXACT_SPLIT_ORDERS = (2, 4)
 
 def _refuse_torque(torque: Any) -> None:
     if float_torque(torque)[0] is not None:
-        raise ValueError(
+        raise UnsupportedTorqueError(
             "exact: torque must be None or zero (the exact flow is torque-free); "
             "use exact_split for a body under torque"
         )

@@ -67,7 +67,7 @@ from typing import Any, ClassVar
 
 import numpy as np
 
-from rigid_rot_sim.core.integrators.base import Integrator, NonFiniteStateError
+from rigid_rot_sim.core.integrators.base import Integrator, NonFiniteStateError, UnsupportedTorqueError
 from rigid_rot_sim.core.torque import ConstantTorque, GravityTorque, PolynomialTorque, TorqueFunction
 
 SUPPORTED_TORQUES = "None (free body), ConstantTorque, PolynomialTorque, GravityTorque"
@@ -233,7 +233,7 @@ class Taylor(Integrator):
         torque = self.torque
         gravity = torque if isinstance(torque, GravityTorque) else None
         if not (torque is None or gravity is not None or isinstance(torque, (ConstantTorque, PolynomialTorque))):
-            raise ValueError(
+            raise UnsupportedTorqueError(
                 f"taylor: unsupported torque {torque!r}. The Taylor method expands the torque in "
                 f"its recurrence and supports only {SUPPORTED_TORQUES} (from "
                 "rigid_rot_sim.core.torque); for an arbitrary callable torque use method "
