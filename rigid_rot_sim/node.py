@@ -244,26 +244,31 @@ class RigidRotSimNode(Node):
         else:
             left_out.append("recorder (nothing recorded)")
 
-        self.add_post_set_parameters_callback(self.apply_parameters_callback)
+        try:
+            self.add_post_set_parameters_callback(self.apply_parameters_callback)
 
-        self.sim.pause(self.get_parameter("start_paused").value)
-        self._anchor()
-        # steady clock: the pacing never depends on /clock, which this node itself publishes
-        self.timer = self.create_timer(
-            self._tick_period(), self.timer_callback, clock=SteadyClock(clock_type=ClockType.STEADY_TIME)
-        )
-        log.info(
-            f"scene {scene.name!r} ({scene.source}), rtf {self.real_time_factor:g}, "
-            f"{'paused, ' if self.sim.paused else ''}"
-            f"duration {'unbounded' if self.duration is None else f'{self.duration:g} s'}; "
-            f"built: {'; '.join(built)}; left out: {'; '.join(left_out) or 'nothing'}"
-        )
-        for warning in self.sim.warnings():
-            log.warning(warning)
-        self._publish_mass_properties()
-        if self.tf_static_publisher is not None:
-            self.tf_static_publisher.publish(TFMessage(transforms=self.static_transforms))
-        self._publish_due(force=True)
+            self.sim.pause(self.get_parameter("start_paused").value)
+            self._anchor()
+            # steady clock: the pacing never depends on /clock, which this node itself publishes
+            self.timer = self.create_timer(
+                self._tick_period(), self.timer_callback, clock=SteadyClock(clock_type=ClockType.STEADY_TIME)
+            )
+            log.info(
+                f"scene {scene.name!r} ({scene.source}), rtf {self.real_time_factor:g}, "
+                f"{'paused, ' if self.sim.paused else ''}"
+                f"duration {'unbounded' if self.duration is None else f'{self.duration:g} s'}; "
+                f"built: {'; '.join(built)}; left out: {'; '.join(left_out) or 'nothing'}"
+            )
+            for warning in self.sim.warnings():
+                log.warning(warning)
+            self._publish_mass_properties()
+            if self.tf_static_publisher is not None:
+                self.tf_static_publisher.publish(TFMessage(transforms=self.static_transforms))
+            self._publish_due(force=True)
+        except BaseException:  # e.g. Ctrl-C / SIGTERM while starting (main's start-up handler)
+            if self.recorder is not None:
+                self.recorder.close()  # the recording started above ends as a complete file
+            raise
 
     # ------------------------------------------------------------------ set-up helpers
 
