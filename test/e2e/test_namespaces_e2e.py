@@ -51,8 +51,9 @@ def test_two_namespaced_nodes_run_side_by_side_without_cross_talk(launch_node, c
     publisher = collector.node.create_publisher(WrenchStamped, "/sat1/rigid_rot_sim/torque", COMMAND_QOS)
     collector.spin_until(lambda: all(states.values()) and publisher.get_subscription_count() > 0, WAIT, None,
                          "states of both nodes and sat1's torque subscription")
-    for ns, process in nodes.items():
-        process.check_alive()
+    for ns, process in nodes.items():  # each node subscribes to its own torque topic only (graph data: awaited)
+        collector.spin_until(lambda: collector.node.count_subscribers(f"/{ns}/rigid_rot_sim/torque") >= 1,
+                             WAIT, process, f"/{ns}/rigid_rot_sim/torque's subscriber")
         assert collector.node.count_subscribers(f"/{ns}/rigid_rot_sim/torque") == 1
     collector.spin_until(  # node names reach the graph with the participants' data, a little after the endpoints
         lambda: {("rigid_rot_sim", "/sat1"), ("rigid_rot_sim", "/sat2")} <= set(collector.node.get_node_names_and_namespaces()),
