@@ -3,6 +3,8 @@
 #
 #   make setup   create or update .venv, build + install rigid_rot_msgs, install rigid_rot_sim,
 #                compile (and cache) the numba kernels
+#                its share directory and ament index entry; `. .venv/bin/activate` then gives a
+#                shell that is a sourced ROS 2 workspace (AMENT_PREFIX_PATH & co.)
 #   make demo    setup, then the main job
 #   make test    setup, then the whole test suite
 #   make clean   remove build/ and the set-up stamps (keeps the downloaded .venv packages)
@@ -71,9 +73,69 @@ print(f"setup: include paths fixed in {changed} CMake file(s) -> {py_inc}, {np_i
 endef
 export FIX_CMAKE_INCLUDES
 
+# The venv as a ROS workspace. (1) The share directory and the ament index marker that
+# `colcon build` installs from setup.py's data_files (an editable pip install skips data_files):
+# relative symlinks to the checkout, so the share directory stays in step with the sources as
+# the editable install does (like `colcon build --symlink-install`), and the links move with
+# the checkout that holds .venv. (2) bin/activate exports AMENT_PREFIX_PATH and
+# CMAKE_PREFIX_PATH (the venv prepended), ROS_VERSION, ROS_PYTHON_VERSION and ROS_DISTRO, as
+# a sourced setup.bash does, and `deactivate` restores the previous values. Idempotent: the
+# block between the markers is replaced, never appended twice.
+define INSTALL_WORKSPACE
+import os, re, sys
+checkout, prefix = sys.argv[1], sys.prefix
+share = os.path.join(prefix, "share", "rigid_rot_sim")
+index = os.path.join(prefix, "share", "ament_index", "resource_index", "packages")
+def link(target, path):
+    os.makedirs(os.path.dirname(path), exist_ok=True)
+    relative = os.path.relpath(target, os.path.dirname(path))
+    if os.path.islink(path) and os.readlink(path) == relative:
+        return
+    if os.path.islink(path) or os.path.isfile(path):
+        os.remove(path)
+    elif os.path.isdir(path):
+        import shutil; shutil.rmtree(path)
+    os.symlink(relative, path)
+for name in ("package.xml", "config", "launch"):
+    link(os.path.join(checkout, name), os.path.join(share, name))
+link(os.path.join(checkout, "resource", "rigid_rot_sim"), os.path.join(index, "rigid_rot_sim"))
+variables = [("AMENT_PREFIX_PATH", "prepend"), ("CMAKE_PREFIX_PATH", "prepend"),
+             ("ROS_VERSION", "2"), ("ROS_PYTHON_VERSION", "3"), ("ROS_DISTRO", "jazzy")]
+begin, end = "# >>> rigid_rot_sim workspace (make setup) >>>", "# <<< rigid_rot_sim workspace <<<"
+restore = [f"    {begin}"]
+apply = [begin]
+for name, value in variables:
+    old = f"_RIGID_ROT_OLD_{name}"
+    restore += [f'    if [ -n "$${{{old}+x}}" ] ; then',
+                f'        if [ "$${old}" = "@unset@" ] ; then unset {name} ; else {name}="$${old}" ; export {name} ; fi',
+                f"        unset {old}", "    fi"]
+    apply.append(f'{old}="$${{{name}-@unset@}}"')
+    if value == "prepend":
+        apply += [f'case ":$${{{name}:-}}:" in',
+                  f'    *":$$VIRTUAL_ENV:"*) ;;',
+                  f'    *) {name}="$$VIRTUAL_ENV$${{{name}:+:$${name}}}" ; export {name} ;;',
+                  "esac"]
+    else:
+        apply.append(f"{name}={value} ; export {name}")
+restore.append(f"    {end}")
+apply.append(end)
+path = os.path.join(prefix, "bin", "activate")
+with open(path, encoding="utf-8") as f:
+    text = f.read()
+text = re.sub(r"\n[ \t]*" + re.escape(begin) + r".*?" + re.escape(end), "", text, flags=re.S)
+head = "deactivate () {\n"
+if head not in text:
+    sys.exit(f"setup: {path}: no 'deactivate () {{' to extend (not a venv activate script?)")
+text = text.replace(head, head + "\n".join(restore) + "\n", 1).rstrip("\n") + "\n\n" + "\n".join(apply) + "\n"
+with open(path, "w", encoding="utf-8") as f:
+    f.write(text)
+print(f"setup: {share} and the ament index entry link to {checkout}; {path} sets AMENT_PREFIX_PATH & co.")
+endef
+export INSTALL_WORKSPACE
+
 .PHONY: setup demo test clean check-tools FORCE
 
-setup: check-tools $(STAMPS)/kernels
+setup: check-tools $(STAMPS)/kernels $(STAMPS)/workspace
 
 # Cheap, runs every time: a missing tool must fail before anything is downloaded or built.
 check-tools:
@@ -147,6 +209,12 @@ $(STAMPS)/package: $(STAMPS)/msgs $(VENDOR_STAMPS) setup.py setup.cfg package.xm
 # pay JIT time. Rerun when a core source changes (the cache is keyed on all of them).
 $(STAMPS)/kernels: $(STAMPS)/package $(CORE_SOURCES)
 	"$(VPY)" -m rigid_rot_sim.core.precompile
+	touch $@
+
+# After the package: the ament index must list rigid_rot_sim only once it imports.
+$(STAMPS)/workspace: $(STAMPS)/package Makefile $(VENV)/bin/activate
+	"$(VPY)" -c "$$INSTALL_WORKSPACE" "$(CURDIR)"
+	env -u AMENT_PREFIX_PATH "$(VPY)" -c "from rigid_rot_sim.share import share_directory as s; import sys; sys.exit(0 if (s() / 'config' / 'scenes').is_dir() and str(s()).startswith(sys.prefix) else 'setup: the ament index does not find rigid_rot_sim in ' + sys.prefix)"
 	touch $@
 
 # The main job: the free_tumble scene (embedded defaults), 12 s of sim time at 4x wall pace on a private

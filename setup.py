@@ -1,5 +1,6 @@
 """Packaging of rigid_rot_sim: an ament_python package that is also a plain pip package."""
 
+import glob
 import os
 
 from setuptools import find_packages, setup
@@ -24,6 +25,7 @@ setup(
     data_files=[
         ("share/ament_index/resource_index/packages", ["resource/" + package_name]),
         ("share/" + package_name, ["package.xml"]),
+        ("share/" + package_name + "/launch", sorted(glob.glob("launch/*.launch.py"))),
         *config_data_files(),
     ],
     python_requires=">=3.10",

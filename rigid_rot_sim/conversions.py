@@ -287,6 +287,19 @@ def transform_stamped(snapshot: StateSnapshot, world_frame: str, body_frame: str
     return msg
 
 
+def static_transform(translation, quaternion, parent_frame: str, child_frame: str) -> TransformStamped:
+    """A fixed parent -> child transform (translation m, quaternion x y z w child -> parent), stamped t = 0.
+
+    For /tf_static: tf2 ignores the stamp of a static transform.
+    """
+    msg = TransformStamped()
+    msg.header.frame_id = parent_frame
+    msg.child_frame_id = child_frame
+    msg.transform.translation = array_to_vector3(translation)
+    msg.transform.rotation = array_to_quaternion(quaternion)
+    return msg
+
+
 def rejected_command(source: str, reason: str, t: float, frame_id: str, torque) -> RejectedCommand:
     """RejectedCommand at sim time t (s); ``torque`` as received (non-finite values kept)."""
     msg = RejectedCommand(source=source, reason=reason)

@@ -12,7 +12,9 @@ Topics (names relative to the node; QoS in the README, section "The simulation n
 world frame), ~/mass_properties (geometry_msgs/InertiaStamped, transient local, once),
 ~/top_state (rigid_rot_msgs/HeavyTopState, gravity scenes), ~/rejected
 (rigid_rot_msgs/RejectedCommand), ~/imu (sensor_msgs/Imu) and ~/odom (nav_msgs/Odometry)
-when the scene asks for them, /tf (when tf2_msgs imports), /clock (sim time).
+when the scene asks for them, /tf (world -> body) and /tf_static (body -> principal
+frame, where it differs from the body frame), both where tf2_msgs imports (``make setup``
+builds it into the venv), /clock (sim time). QoS: rigid_rot_sim.qos.
 Every header stamp is sim time. Frame names: the ``world_frame`` / ``body_frame``
 parameters (default: the scene's ``frames``, REP 105 ``odom`` / ``base_link``), used by
 every output, /tf and the recording. Torque inputs: the scene's topics (WrenchStamped or
@@ -58,7 +60,7 @@ from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
 from rclpy.impl.implementation_singleton import rclpy_implementation as _rclpy
 from rclpy.node import Node
 from rclpy.parameter import Parameter
-from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
+from rclpy.qos import QoSProfile
 from rclpy.signals import SignalHandlerOptions
 from rcl_interfaces.msg import FloatingPointRange, IntegerRange, ParameterDescriptor, SetParametersResult
 from geometry_msgs.msg import InertiaStamped, QuaternionStamped, Vector3Stamped, WrenchStamped
@@ -71,10 +73,23 @@ from std_srvs.srv import SetBool, Trigger
 
 from rigid_rot_sim import conversions, simulation_services
 from rigid_rot_sim.core import limits
-from rigid_rot_sim.core.inertia import mass_properties, parallel_axis_shift
+from rigid_rot_sim.core.inertia import mass_properties, parallel_axis_shift, principal_frame_pose
 from rigid_rot_sim.core.pacing import StepCost, falling_behind_message
-from rigid_rot_sim.core.scene import OUTPUT_NAMES, Frames, Scene, load_scene
+from rigid_rot_sim.core.scene import MAX_QOS_DEPTH, OUTPUT_NAMES, Frames, OutputQos, Scene, load_scene
 from rigid_rot_sim.core.simulator import CommandRejected, Simulator
+from rigid_rot_sim.parameters import accept_integers_for_doubles, integer_overrides_as_doubles
+from rigid_rot_sim.qos import (  # noqa: F401 (the profiles are part of this module's API)
+    CLOCK_QOS,
+    COMMAND_QOS,
+    LATCHED_QOS,
+    REJECTED_QOS,
+    STATE_QOS,
+    TF_QOS,
+    TF_STATIC_QOS,
+    describe as describe_qos,
+    output_qos,
+)
+from rigid_rot_sim.share import ensure_ament_prefix_path, resolve_scene
 from rigid_rot_sim.recording import LOG_TIME_BASES  # the package itself is light (no mcap)
 
 try:  # never required: /tf exists only where tf2_msgs is installed
@@ -97,16 +112,6 @@ MAX_TICK = 0.02
 MAX_BACKLOG_WALL = 0.5
 #: Seconds between two warnings about rejected commands from the same source.
 REJECT_WARN_PERIOD = 2.0
-
-# QoS (documented in the README): state-like topics reliable, keep last 10, volatile.
-STATE_QOS = QoSProfile(depth=10, reliability=ReliabilityPolicy.RELIABLE, durability=DurabilityPolicy.VOLATILE)
-LATCHED_QOS = QoSProfile(depth=1, reliability=ReliabilityPolicy.RELIABLE, durability=DurabilityPolicy.TRANSIENT_LOCAL)
-REJECTED_QOS = QoSProfile(depth=50, reliability=ReliabilityPolicy.RELIABLE, durability=DurabilityPolicy.VOLATILE)
-COMMAND_QOS = QoSProfile(
-    depth=limits.DEFAULT_COMMAND_DEPTH, reliability=ReliabilityPolicy.RELIABLE, durability=DurabilityPolicy.VOLATILE
-)
-TF_QOS = QoSProfile(depth=100, reliability=ReliabilityPolicy.RELIABLE, durability=DurabilityPolicy.VOLATILE)
-CLOCK_QOS = QoSProfile(depth=1, reliability=ReliabilityPolicy.RELIABLE, durability=DurabilityPolicy.VOLATILE)
 
 _OUTPUT_TYPES = {
     "state": RigidBodyState,
@@ -135,6 +140,7 @@ class RigidRotSimNode(Node):
     def __init__(self, **kwargs: Any) -> None:
         super().__init__(NODE_NAME, **kwargs)
         log = self.get_logger()
+        accept_integers_for_doubles(self)  # `ros2 param set ... real_time_factor 2` stores 2.0
         self.sim: Simulator | None = None
         self.add_on_set_parameters_callback(self.validate_parameters_callback)  # also for use_sim_time
         self.compute_inertia_service = self.create_service(
@@ -145,14 +151,18 @@ class RigidRotSimNode(Node):
         scene_path = self.declare_parameter(
             "scene",
             "",
-            ParameterDescriptor(description="Path of the scene YAML file; empty: serve ~/compute_inertia only", read_only=True),
+            ParameterDescriptor(
+                description="Scene YAML path, or the name of a shipped scene (e.g. free_tumble); "
+                "empty: serve ~/compute_inertia only",
+                read_only=True,
+            ),
         ).value
         if not scene_path:
             log.info("no scene parameter: serving ~/compute_inertia only (rigid-rot run SCENE starts a simulation)")
             return
         if self.get_parameter("use_sim_time").value is True:
             raise ValueError(USE_SIM_TIME_REFUSAL)
-        scene = load_scene(scene_path)  # SceneError names the file, key and problem
+        scene = load_scene(resolve_scene(scene_path))  # SceneError names the file, key and problem
         self.scene = scene
         self.step_cost = StepCost()
         self._declare_parameters(scene)
@@ -171,6 +181,9 @@ class RigidRotSimNode(Node):
         self.record_path = self.get_parameter("record_path").value or None
         self.frames = scene.frames
         self.ground_truth_variance = float(self.get_parameter("ground_truth_variance").value)
+        self.state_qos = output_qos(
+            OutputQos(self.get_parameter("qos.reliability").value, self.get_parameter("qos.depth").value)
+        )
         built: list[str] = [f"integrator {self.sim.method} (dt {self.sim.dt:g} s{', auto' if params['integrator'] == 'auto' else ''})"]
         left_out: list[str] = []
 
@@ -192,10 +205,11 @@ class RigidRotSimNode(Node):
             elif name == "clock":
                 publisher = self.create_publisher(Clock, "/clock", CLOCK_QOS)
             else:
-                publisher = self.create_publisher(_OUTPUT_TYPES[name], f"~/{name}", STATE_QOS)
+                publisher = self.create_publisher(_OUTPUT_TYPES[name], f"~/{name}", self.state_qos)
             self.publishers_by_output[name] = publisher
             self.output_periods[name] = self._period_steps(rate)
-            built.append(f"{self._output_topic(name)} {rate:g} Hz")
+            built.append(f"{self._output_topic(name)} {rate:g} Hz ({describe_qos(publisher.qos_profile)})")
+        self._create_tf_static(built, left_out)
         self.mass_properties_publisher = self.create_publisher(InertiaStamped, "~/mass_properties", LATCHED_QOS)
         self.rejected_publisher = self.create_publisher(RejectedCommand, "~/rejected", REJECTED_QOS)
         built += ["~/mass_properties (transient local)", "~/rejected"]
@@ -255,24 +269,31 @@ class RigidRotSimNode(Node):
         else:
             left_out.append("recorder (nothing recorded)")
 
-        self.add_post_set_parameters_callback(self.apply_parameters_callback)
+        try:
+            self.add_post_set_parameters_callback(self.apply_parameters_callback)
 
-        self.sim.pause(self.get_parameter("start_paused").value)
-        self._anchor()
-        # steady clock: the pacing never depends on /clock, which this node itself publishes
-        self.timer = self.create_timer(
-            self._tick_period(), self.timer_callback, clock=SteadyClock(clock_type=ClockType.STEADY_TIME)
-        )
-        log.info(
-            f"scene {scene.name!r} ({scene.source}), rtf {self.real_time_factor:g}, "
-            f"{'paused, ' if self.sim.paused else ''}"
-            f"duration {'unbounded' if self.duration is None else f'{self.duration:g} s'}; "
-            f"built: {'; '.join(built)}; left out: {'; '.join(left_out) or 'nothing'}"
-        )
-        for warning in self.sim.warnings():
-            log.warning(warning)
-        self._publish_mass_properties()
-        self._publish_due(force=True)
+            self.sim.pause(self.get_parameter("start_paused").value)
+            self._anchor()
+            # steady clock: the pacing never depends on /clock, which this node itself publishes
+            self.timer = self.create_timer(
+                self._tick_period(), self.timer_callback, clock=SteadyClock(clock_type=ClockType.STEADY_TIME)
+            )
+            log.info(
+                f"scene {scene.name!r} ({scene.source}), rtf {self.real_time_factor:g}, "
+                f"{'paused, ' if self.sim.paused else ''}"
+                f"duration {'unbounded' if self.duration is None else f'{self.duration:g} s'}; "
+                f"built: {'; '.join(built)}; left out: {'; '.join(left_out) or 'nothing'}"
+            )
+            for warning in self.sim.warnings():
+                log.warning(warning)
+            self._publish_mass_properties()
+            if self.tf_static_publisher is not None:
+                self.tf_static_publisher.publish(TFMessage(transforms=self.static_transforms))
+            self._publish_due(force=True)
+        except BaseException:  # e.g. Ctrl-C / SIGTERM while starting (main's start-up handler)
+            if self.recorder is not None:
+                self.recorder.close()  # the recording started above ends as a complete file
+            raise
 
     # ------------------------------------------------------------------ set-up helpers
 
@@ -290,6 +311,9 @@ class RigidRotSimNode(Node):
 
     def _declare_parameters(self, scene: Scene) -> None:
         """Declare every parameter once, with the scene's values as defaults."""
+        doubles = ["dt", "real_time_factor", "duration", "commands.max_torque", "ground_truth_variance",
+                   *(f"rates.{name}" for name in scene.outputs.as_dict())]
+        integer_overrides_as_doubles(self, doubles)  # `-p dt:=1` or `dt: 1` in a params file: 1.0
         self.declare_parameter(
             "integrator",
             scene.integrator.method,
@@ -361,6 +385,25 @@ class RigidRotSimNode(Node):
                 read_only=True,
             ),
         )
+        self.declare_parameter(
+            "qos.reliability",
+            scene.qos.reliability,
+            ParameterDescriptor(
+                description="Reliability of the state-like outputs (~/state ... ~/top_state): reliable | best_effort "
+                "(set at start-up; /tf, /tf_static, /clock keep their standard profiles)",
+                read_only=True,
+                additional_constraints="reliable | best_effort",
+            ),
+        )
+        self.declare_parameter(
+            "qos.depth",
+            scene.qos.depth,
+            ParameterDescriptor(
+                description="Keep-last depth of the state-like outputs (set at start-up)",
+                read_only=True,
+                integer_range=[IntegerRange(from_value=1, to_value=MAX_QOS_DEPTH, step=1)],
+            ),
+        )
         for name, rate in scene.outputs.as_dict().items():
             self.declare_parameter(
                 f"rates.{name}",
@@ -388,6 +431,21 @@ class RigidRotSimNode(Node):
                 read_only=True,
             ),
         )
+
+    def _create_tf_static(self, built: list[str], left_out: list[str]) -> None:
+        """Fixed frames on /tf_static (latched), with /tf: the principal-axes frame where it is not the body frame."""
+        self.tf_static_publisher = None
+        self.static_transforms = []
+        if "tf" not in self.publishers_by_output:
+            return
+        _, com, tensor = self._inertia_about_com()
+        pose = principal_frame_pose(tensor, com)
+        if pose is None:
+            left_out.append(f"/tf_static (the body axes are the principal axes, {self.frames.principal} not needed)")
+            return
+        self.static_transforms.append(conversions.static_transform(*pose, self.frames.body, self.frames.principal))
+        self.tf_static_publisher = self.create_publisher(TFMessage, "/tf_static", TF_STATIC_QOS)
+        built.append(f"/tf_static {self.frames.body} -> {self.frames.principal} ({describe_qos(TF_STATIC_QOS)})")
 
     @staticmethod
     def _output_topic(name: str) -> str:
@@ -527,15 +585,20 @@ class RigidRotSimNode(Node):
         for publisher in self.publishers:
             publisher.wait_for_all_acked(rclpy.duration.Duration(seconds=timeout))
 
-    def _publish_mass_properties(self) -> None:
-        assert self.sim is not None
+    def _inertia_about_com(self) -> tuple[float, Any, Any]:
+        """Mass (kg; 0 when the scene gives none), centre of mass (m, body frame), tensor about it."""
         body = self.scene.body
         tensor = body.inertia_array
         mass = body.mass or 0.0
         com = body.center_of_mass or (0.0, 0.0, 0.0)
         if self.scene.gravity is not None:
-            # the scene's tensor is about the pivot; the message wants it about the centre of mass
+            # the scene's tensor is about the pivot
             tensor = tensor - parallel_axis_shift(tensor * 0.0, mass, com)
+        return mass, com, tensor
+
+    def _publish_mass_properties(self) -> None:
+        assert self.sim is not None
+        mass, com, tensor = self._inertia_about_com()
         self.mass_properties_publisher.publish(conversions.inertia_stamped(mass, com, tensor, self.sim.t, self.frames.body))
 
     def _reject(self, source: str, reason: str, frame_id: str, torque: Any) -> None:
@@ -795,6 +858,7 @@ def main(args: list[str] | None = None) -> int:
 
     A bad scene, parameter or ROS argument: one line on stderr, exit code 2.
     """
+    ensure_ament_prefix_path()  # the console script works without activating the venv
     try:
         rclpy.init(args=args, signal_handler_options=SignalHandlerOptions.NO)
     except _rclpy.RCLError as exc:  # e.g. an unparsable --ros-args rule

@@ -1,15 +1,67 @@
 """Session-wide DDS isolation for every test that touches ROS (in-process or subprocess).
 
-One ROS_DOMAIN_ID per pytest session (from the pid, so parallel sessions differ) and
-localhost-only discovery, set in ``os.environ`` when pytest imports this file, before any
-test calls ``rclpy.init`` or starts a subprocess.
+One ROS_DOMAIN_ID per pytest session (from the pid, locked, and probed for other nodes, so
+parallel sessions differ) and localhost-only discovery, set in ``os.environ`` when pytest
+imports this file, before any test calls ``rclpy.init`` or starts a subprocess.
 """
 
+import fcntl
 import os
 import tempfile
 
-ROS_DOMAIN_ID = os.getpid() % 100 + 1  # 1..100: clear of the default 0, below the 101 port limit
+
+PROBE_SECONDS = 1.0  # s of listening for other ROS nodes on a candidate domain
+
+
+def _domain_is_quiet(domain: int) -> bool:
+    """No other ROS node on ``domain`` (localhost): no /rosout publisher besides the probe's own."""
+    import time
+
+    import rclpy
+
+    context = rclpy.Context()
+    rclpy.init(context=context, domain_id=domain)
+    try:
+        node = rclpy.create_node("rigid_rot_sim_domain_probe", context=context)
+        deadline = time.monotonic() + PROBE_SECONDS
+        while time.monotonic() < deadline:
+            if node.count_publishers("/rosout") > 1:
+                return False
+            time.sleep(0.05)
+        node.destroy_node()
+        return True
+    finally:
+        rclpy.try_shutdown(context=context)
+
+
+def _claim_domain_id() -> int:
+    """A domain id that no other test session on the machine uses.
+
+    Several developers' suites run at once on a shared machine; two in one domain would see
+    each other's nodes. A lock file per domain keeps this project's sessions apart; a short
+    probe skips a domain where other ROS nodes already run (sessions that take no lock). The
+    lock is released when this process exits.
+    """
+    start = os.getpid() % 100
+    for offset in range(100):
+        domain = (start + offset) % 100 + 1  # 1..100: clear of the default 0, below the 101 port limit
+        handle = open(os.path.join(tempfile.gettempdir(), f"rigid_rot_sim_ros_domain_{domain}.lock"), "w")
+        try:
+            fcntl.flock(handle, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        except OSError:
+            handle.close()
+            continue
+        if not _domain_is_quiet(domain):
+            handle.close()
+            continue
+        _DOMAIN_LOCKS.append(handle)  # held for the whole session
+        return domain
+    return start + 1  # all taken: share one (as before)
+
+
+_DOMAIN_LOCKS: list = []
+os.environ["ROS_AUTOMATIC_DISCOVERY_RANGE"] = "LOCALHOST"  # before the probe: it listens on localhost only
+ROS_DOMAIN_ID = _claim_domain_id()
 os.environ["ROS_DOMAIN_ID"] = str(ROS_DOMAIN_ID)
-os.environ["ROS_AUTOMATIC_DISCOVERY_RANGE"] = "LOCALHOST"
 os.environ.setdefault("ROS_LOG_DIR", tempfile.mkdtemp(prefix="rigid_rot_ros_log_"))
 os.environ["PYTHONUNBUFFERED"] = "1"  # a subprocess's prints reach its log even if it is killed

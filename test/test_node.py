@@ -362,3 +362,114 @@ def test_without_simulation_interfaces_the_node_runs_without_the_standard_servic
         executor.shutdown()
         probe.destroy_node()
         node.destroy_node()
+
+
+def test_integer_values_for_double_parameters_are_stored_as_floats(context, tmp_path):
+    """`ros2 param set /rigid_rot_sim real_time_factor 2` (an INTEGER over SetParameters), `-p x:=1`
+    and a params file with integers all give DOUBLE parameters."""
+    from rcl_interfaces.msg import Parameter as ParameterMsg, ParameterType, ParameterValue
+    from rcl_interfaces.srv import SetParameters
+
+    params = tmp_path / "params.yaml"
+    params.write_text(
+        "rigid_rot_sim:\n  ros__parameters:\n"
+        f"    scene: {SCENES / 'torque_driven.yaml'}\n    real_time_factor: 0\n    duration: 5\n"
+        "    rates:\n      state: 50\n"
+    )
+    node = RigidRotSimNode(context=context, cli_args=["--ros-args", "--params-file", str(params), "-p", "dt:=1"])
+    client = rclpy.create_node("param_client", context=context)
+    executor = SingleThreadedExecutor(context=context)
+    executor.add_node(node)
+    executor.add_node(client)
+    try:
+        for name, value in (("real_time_factor", 0.0), ("duration", 5.0), ("rates.state", 50.0), ("dt", 1.0)):
+            stored = node.get_parameter(name)
+            assert stored.type_ == Parameter.Type.DOUBLE and stored.value == value and isinstance(stored.value, float)
+        assert node.real_time_factor == 0.0 and node.duration == 5.0 and node.sim.dt == 1.0
+        # what `ros2 param set` sends: the SetParameters service of the node, an INTEGER value
+        service = client.create_client(SetParameters, "/rigid_rot_sim/set_parameters")
+        assert service.wait_for_service(timeout_sec=30.0)
+        request = SetParameters.Request(parameters=[
+            ParameterMsg(name="real_time_factor", value=ParameterValue(type=ParameterType.PARAMETER_INTEGER, integer_value=2))
+        ])
+        future = service.call_async(request)
+        executor.spin_until_future_complete(future, timeout_sec=30.0)
+        (result,) = future.result().results
+        assert result.successful, result.reason
+        stored = node.get_parameter("real_time_factor")
+        assert stored.type_ == Parameter.Type.DOUBLE and stored.value == 2.0 and node.real_time_factor == 2.0
+        # the ranges still apply, and other types are still refused
+        assert not node.set_parameters([Parameter("real_time_factor", value=5000)])[0].successful
+        assert not node.set_parameters([Parameter("dt", value="fast")])[0].successful
+        assert node.set_parameters([Parameter("rates.state", value=20)])[0].successful
+        assert node.get_parameter("rates.state").value == 20.0 and node.output_periods["state"] == 1  # dt = 1 s
+    finally:
+        executor.shutdown()
+        client.destroy_node()
+        node.destroy_node()
+
+
+def test_output_qos_from_parameters_and_scene(harness, context, tmp_path):
+    from rclpy.qos import DurabilityPolicy, ReliabilityPolicy
+
+    from rigid_rot_sim.node import TF_QOS
+
+    h = harness("free_tumble", real_time_factor=0.0, **{"qos.reliability": "best_effort", "qos.depth": 1000})
+    for name in ("state", "orientation", "angular_velocity", "angular_momentum"):
+        profile = h.node.publishers_by_output[name].qos_profile
+        assert profile.reliability == ReliabilityPolicy.BEST_EFFORT and profile.depth == 1000
+        assert profile.durability == DurabilityPolicy.VOLATILE
+    assert h.node.publishers_by_output["tf"].qos_profile.depth == TF_QOS.depth  # /tf keeps tf2's profile
+    assert h.node.publishers_by_output["tf"].qos_profile.reliability == ReliabilityPolicy.RELIABLE
+    assert not h.node.set_parameters([Parameter("qos.depth", value=5)])[0].successful  # read only
+    h.close()
+
+    scene = tmp_path / "scene.yaml"
+    scene.write_text((SCENES / "free_tumble.yaml").read_text() + "qos: {reliability: reliable, depth: 3}\n")
+    node = RigidRotSimNode(context=context, parameter_overrides=[Parameter("scene", value=str(scene))])
+    try:
+        profile = node.publishers_by_output["state"].qos_profile
+        assert profile.reliability == ReliabilityPolicy.RELIABLE and profile.depth == 3
+        assert node.get_parameter("qos.depth").value == 3
+    finally:
+        node.destroy_node()
+    with pytest.raises(ValueError, match="qos.reliability must be one of reliable, best_effort, got 'sometimes'"):
+        RigidRotSimNode(context=context, parameter_overrides=[
+            Parameter("scene", value="free_tumble"), Parameter("qos.reliability", value="sometimes")])
+
+
+def test_tf_static_carries_the_principal_frame_only_where_it_differs(harness):
+    from rigid_rot_sim.core.inertia import principal_frame, principal_orientation
+
+    h = harness("from_point_masses", real_time_factor=0.0)
+    (transform,) = h.node.static_transforms
+    assert (transform.header.frame_id, transform.child_frame_id) == ("base_link", "base_link_principal")
+    tensor = h.node.scene.body.inertia_array
+    r = transform.transform.rotation
+    assert [r.x, r.y, r.z, r.w] == principal_orientation(principal_frame(tensor)[1]).tolist()
+    t = transform.transform.translation
+    assert [t.x, t.y, t.z] == list(h.node.scene.body.center_of_mass)
+    assert h.spin_until(lambda: "/tf_static" in h.published_topics())
+    h.close()
+    top = harness("heavy_top", real_time_factor=0.0)  # principal moments about the pivot, centre of mass on z
+    (shifted,) = top.node.static_transforms
+    assert shifted.transform.rotation.w == 1.0
+    assert shifted.transform.translation.z == top.node.scene.body.center_of_mass[2] > 0.0
+    top.close()
+    plain = harness("torque_driven", real_time_factor=0.0)
+    assert plain.node.static_transforms == [] and plain.node.tf_static_publisher is None
+
+
+@pytest.mark.parametrize("override,expected", [
+    ("qos.depth:=2.5", "'qos.depth' to '2.5' of type 'DOUBLE', expecting type 'INTEGER'"),
+    ("qos.reliability:=sometimes", "qos.reliability must be one of reliable, best_effort, got 'sometimes'"),
+    ("dt:=fast", "'dt' to 'fast' of type 'STRING', expecting type 'DOUBLE'"),
+])
+def test_bad_start_up_parameters_exit_2_with_one_line(override, expected):
+    import subprocess
+    import sys
+
+    done = subprocess.run([sys.executable, "-m", "rigid_rot_sim.node", "--ros-args", "-p", "scene:=free_tumble",
+                           "-p", override], capture_output=True, text=True, timeout=120)
+    output = (done.stdout + done.stderr).strip()
+    assert done.returncode == 2 and expected in output and "Traceback" not in output, output

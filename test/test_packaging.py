@@ -30,11 +30,11 @@ PYTHON_KEYS: dict[str, set[str]] = {
     "hypothesis": {"python3-hypothesis"},
     "rosbags": {"python3-rosbags-pip"},
     "numba": {"python3-numba"},
-    "psutil": {"python3-psutil"},
 }
 #: Modules without any rosdep key (rosdistro's python.yaml has no dask, distributed or pyarrow):
 #: optional, for sweeps only; declared for pip as setup.py's `sweep` extra, installed by make setup.
-PIP_ONLY = {"dask": "dask[distributed]", "distributed": "dask[distributed]", "pyarrow": "pyarrow"}
+#: psutil (used by the distributed-sweep tests) is a dependency of distributed.
+PIP_ONLY = {"dask": "dask[distributed]", "distributed": "dask[distributed]", "psutil": "dask[distributed]", "pyarrow": "pyarrow"}
 #: ROS packages imported as Python modules: the key is the package name.
 ROS_PACKAGES = {
     "rclpy", "rcl_interfaces", "builtin_interfaces", "geometry_msgs", "std_msgs", "std_srvs", "sensor_msgs",

@@ -26,6 +26,8 @@ import importlib
 import sys
 from typing import Sequence
 
+from rigid_rot_sim.share import ensure_ament_prefix_path
+
 #: Subcommand modules of rigid_rot_sim.cli, in the order ``--help`` lists them.
 SUBCOMMANDS = ["inertia", "report", "stability", "sweep", "bag", "resim", "plot", "replay", "run", "torque"]
 
@@ -62,6 +64,7 @@ def _requested_subcommand(argv: Sequence[str]) -> str | None:
 def main(argv: Sequence[str] | None = None) -> int:
     """Entry point of ``rigid-rot``; returns the exit code (0 ok, 1 failure, 2 bad input)."""
     argv = list(sys.argv[1:] if argv is None else argv)
+    ensure_ament_prefix_path()  # the console script works without activating the venv
     parser = build_parser(only=_requested_subcommand(argv))
     args = parser.parse_args(argv)
     try:

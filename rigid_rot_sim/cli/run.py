@@ -4,7 +4,8 @@
     rigid-rot run torque_driven --realtime-factor 0 --record out.mcap
     rigid-rot run heavy_top --ros-args --params-file config/params/example.yaml
 
-SCENE is a path, or the name of a scene shipped in config/scenes. The options become
+SCENE is a path, or the name of a scene shipped in config/scenes (found through the ament
+index: the installed share directory, or the checkout when not installed). The options become
 node parameters (``scene``, ``duration``, ``real_time_factor``, ``integrator``, ``dt``,
 ``record_path``, ``record_log_time``); anything after ``--ros-args`` goes to ROS unchanged, so a params file,
 ``-p`` or remappings work as with ``ros2 run`` (and win over the options). ``--echo PERIOD`` adds a subscriber
@@ -17,31 +18,10 @@ from __future__ import annotations
 import argparse
 import math
 import os
-import sys
-from pathlib import Path
 
 from rigid_rot_sim.cli.ros_args import add_ros_args
 from rigid_rot_sim.recording import LOG_TIME_BASES
-
-
-def scene_search_dirs() -> list[Path]:
-    """Where scene names are looked up: the source tree's and the installed config/scenes."""
-    source_tree = Path(__file__).resolve().parents[2] / "config" / "scenes"
-    installed = Path(sys.prefix) / "share" / "rigid_rot_sim" / "config" / "scenes"
-    return [source_tree, installed]
-
-
-def resolve_scene(scene: str) -> str:
-    """A scene path (returned absolute) or a shipped scene's name; ValueError if neither exists."""
-    if os.path.isfile(scene):
-        return os.path.abspath(scene)
-    name = scene if scene.endswith(".yaml") else scene + ".yaml"
-    for directory in scene_search_dirs():
-        candidate = directory / name
-        if candidate.is_file():
-            return str(candidate)
-    shipped = sorted({p.stem for d in scene_search_dirs() if d.is_dir() for p in d.glob("*.yaml")})
-    raise ValueError(f"scene {scene!r} not found (a path, or one of: {', '.join(shipped) or 'none shipped'})")
+from rigid_rot_sim.share import resolve_scene, scene_search_dirs  # noqa: F401 (both: API of this module)
 
 
 def _nonnegative(text: str) -> float:

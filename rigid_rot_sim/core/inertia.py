@@ -184,6 +184,28 @@ def principal_orientation(principal_axes: Any) -> np.ndarray:
     return -quat if quat[3] < 0.0 else quat
 
 
+def principal_frame_pose(inertia_com: Any, center_of_mass: Any = (0.0, 0.0, 0.0)) -> tuple[np.ndarray, np.ndarray] | None:
+    """Pose of the principal-axes frame in the body frame, or None where the two coincide.
+
+    The principal frame has its origin at the centre of mass (m, body frame) and its axes
+    along the principal axes of ``inertia_com`` (kg*m^2, about the centre of mass, body
+    axes), ascending moments. Returns (translation (3,) m, quaternion (4,) x y z w,
+    principal -> body). A diagonal tensor (off-diagonal terms within ``SYMMETRY_RTOL`` of the
+    largest moment) already has principal body axes: the rotation is then the identity,
+    whatever the order of the moments. None when, in addition, the centre of mass is the
+    body origin.
+    """
+    tensor = validation.finite_array("inertia_com", inertia_com, (3, 3))
+    offset = validation.finite_vector("center_of_mass", center_of_mass)
+    off_diagonal = np.abs(tensor - np.diag(np.diag(tensor))).max()
+    if off_diagonal <= SYMMETRY_RTOL * np.abs(np.diag(tensor)).max():
+        if not offset.any():
+            return None
+        return offset.copy(), np.array([0.0, 0.0, 0.0, 1.0])
+    _, axes = principal_frame(tensor)
+    return offset.copy(), principal_orientation(axes)
+
+
 def mass_properties(masses: Any, positions: Any, origin: Any = (0.0, 0.0, 0.0)) -> MassProperties:
     """Mass properties of point masses.
 

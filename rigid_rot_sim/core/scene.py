@@ -49,6 +49,9 @@ Schema (SI units; frames REP 103; quaternions scalar-last, body -> world)::
       clock: 100
       imu: 0                           # sensor_msgs/Imu on ~/imu (0: not built, the default)
       odom: 0                          # nav_msgs/Odometry on ~/odom (0: not built, the default)
+    qos:                               # QoS of the state-like outputs (~/state ... ~/top_state)
+      reliability: reliable            # reliable | best_effort
+      depth: 10                        # keep-last history depth, 1..MAX_QOS_DEPTH
     recording: null                    # or a path to an .mcap file
     commands:                          # optional, for the torque inputs
       max_torque: 0                    # N*m; a command whose |torque| exceeds it is rejected (0 = no limit)
@@ -90,6 +93,7 @@ __all__ = [
     "Gravity",
     "IntegratorSpec",
     "Outputs",
+    "OutputQos",
     "CommandSettings",
     "Scene",
     "load_scene",
@@ -113,6 +117,10 @@ DEFAULT_OUTPUT_RATES = {
     "imu": 0.0,  # sensor_msgs/Imu and nav_msgs/Odometry: built only when the scene asks
     "odom": 0.0,
 }
+
+QOS_RELIABILITIES = ("reliable", "best_effort")
+#: Largest keep-last depth of an output (a bound on the memory a slow subscriber can pin).
+MAX_QOS_DEPTH = 100_000
 
 Vector3 = tuple[float, float, float]
 
@@ -149,6 +157,11 @@ class Frames:
         if self.world == self.body:
             raise ValueError(f"world and body frames must differ, both are {self.world!r}")
         return self
+
+    @property
+    def principal(self) -> str:
+        """Name of the principal-axes frame (child of the body frame on /tf_static)."""
+        return f"{self.body}_principal"
 
 
 @dataclass(frozen=True)
@@ -262,6 +275,20 @@ class Outputs:
 
 
 @dataclass(frozen=True)
+class OutputQos:
+    """QoS of the state-like outputs: ``reliability`` (reliable | best_effort), keep-last ``depth``.
+
+    Defaults, reliable with depth 10: every subscriber matches (reliable or best effort), a
+    reliable one gets every message unless it falls 10 behind, and memory stays bounded.
+    A depth sized to a run (rate x duration) makes a reliable subscriber that keeps up
+    within it receive every message of the run.
+    """
+
+    reliability: str = "reliable"
+    depth: int = 10
+
+
+@dataclass(frozen=True)
 class CommandSettings:
     """Settings of the torque command inputs.
 
@@ -290,6 +317,7 @@ class Scene:
     duration: float | None = None
     real_time_factor: float = 1.0
     outputs: Outputs = Outputs()
+    qos: OutputQos = OutputQos()
     recording: str | None = None
     commands: CommandSettings = CommandSettings()
     description: str = ""
@@ -603,6 +631,19 @@ def _parse_outputs(ctx: _Ctx, raw: Any) -> Outputs:
     return Outputs(**rates)
 
 
+def _parse_qos(ctx: _Ctx, raw: Any) -> OutputQos:
+    if raw is None:
+        return OutputQos()
+    spec = _mapping(ctx, raw, "qos", ("reliability", "depth"))
+    reliability = spec.get("reliability", OutputQos.reliability)
+    if reliability not in QOS_RELIABILITIES:
+        raise ctx.error("qos.reliability", f"must be one of {', '.join(QOS_RELIABILITIES)}, got {reliability!r}")
+    depth = spec.get("depth", OutputQos.depth)
+    if isinstance(depth, bool) or not isinstance(depth, int) or not 1 <= depth <= MAX_QOS_DEPTH:
+        raise ctx.error("qos.depth", f"must be an integer from 1 to {MAX_QOS_DEPTH}, got {depth!r}")
+    return OutputQos(reliability=reliability, depth=depth)
+
+
 def _parse_commands(ctx: _Ctx, raw: Any) -> CommandSettings:
     if raw is None:
         return CommandSettings()
@@ -636,6 +677,7 @@ def _parse_scene(data: Any, source: str, text: str) -> Scene:
         "duration",
         "real_time_factor",
         "outputs",
+        "qos",
         "recording",
         "commands",
     )
@@ -680,6 +722,7 @@ def _parse_scene(data: Any, source: str, text: str) -> Scene:
         duration = _in_range(ctx, duration, "duration", limits.DURATION_RANGE, strict=True)
     rtf = _in_range(ctx, spec.get("real_time_factor", 1.0), "real_time_factor", limits.REAL_TIME_FACTOR_RANGE)
     outputs = _parse_outputs(ctx, spec.get("outputs"))
+    qos = _parse_qos(ctx, spec.get("qos"))
     recording = spec.get("recording")
     if recording is not None:
         recording = _string(ctx, recording, "recording", limits.MAX_TEXT_LENGTH)
@@ -697,6 +740,7 @@ def _parse_scene(data: Any, source: str, text: str) -> Scene:
         duration=duration,
         real_time_factor=rtf,
         outputs=outputs,
+        qos=qos,
         recording=recording,
         commands=commands,
         source=source,

@@ -16,7 +16,8 @@ and returns the :class:`NodeRecording` the node keeps as ``node.recorder``.
 
 The node itself records the torque commands as received, with their receive time
 (:meth:`NodeRecording.record_command`), and closes the recording in ``destroy_node``.
-When ``tf2_msgs`` is not installed the node publishes no ``/tf``; the recording still
+``/tf`` and ``/tf_static`` are recorded as published (``make setup`` installs tf2_msgs into
+the venv). When ``tf2_msgs`` is not installed the node publishes no ``/tf``; the recording still
 gets ``/tf`` (world -> body), built from the state messages at the ``rates.tf`` rate.
 
 A recording that cannot start or that fails (full disk) is logged as an error and the
@@ -207,8 +208,11 @@ def attach(node: Any, path: str, log_time: str = "sim") -> NodeRecording | None:
         if name == state_for_tf and "tf" not in node.publishers_by_output and tf_period:
             after = _tf_from(node, recording, name, tf_period)
         node.publishers_by_output[name] = RecordingPublisher(publisher, recording, after)
-    for attribute, role in (("rejected_publisher", "rejected"), ("mass_properties_publisher", "mass_properties")):
-        publisher = getattr(node, attribute)
+    for attribute, role in (("rejected_publisher", "rejected"), ("mass_properties_publisher", "mass_properties"),
+                            ("tf_static_publisher", None)):
+        publisher = getattr(node, attribute, None)
+        if publisher is None:  # no /tf_static: no fixed frame, or tf2_msgs not installed
+            continue
         run.add_topic(publisher.topic_name, publisher.msg_type, publisher.qos_profile, role=role)
         setattr(node, attribute, RecordingPublisher(publisher, recording))
     for subscription in node.torque_subscriptions:

@@ -14,6 +14,7 @@ from rigid_rot_sim.core.inertia import (
     mass_properties,
     parallel_axis_shift,
     principal_frame,
+    principal_frame_pose,
     principal_orientation,
 )
 
@@ -316,3 +317,21 @@ def test_moments_obey_the_triangle_inequality(body):
     assert i1 + i2 >= i3 - 1e-12 * max(i3, 1e-300)
     assert props.symmetry in SYMMETRY_LABELS
     assert_proper_principal_frame(props)
+
+
+def test_principal_frame_pose_is_none_for_principal_body_axes_at_the_centre_of_mass():
+    assert principal_frame_pose(np.diag([3.0, 1.0, 2.0])) is None  # unsorted moments: still the body axes
+
+
+def test_principal_frame_pose_of_an_offset_diagonal_body_is_a_pure_translation():
+    translation, rotation = principal_frame_pose(np.diag([1.0, 2.0, 3.0]), (0.0, 0.0, 0.1))
+    assert translation.tolist() == [0.0, 0.0, 0.1] and rotation.tolist() == [0.0, 0.0, 0.0, 1.0]
+
+
+def test_principal_frame_pose_rotates_the_tensor_to_ascending_diagonal_form():
+    turn = Rotation.from_euler("zyx", [0.4, -0.3, 1.1]).as_matrix()
+    tensor = turn @ np.diag([1.0, 2.0, 3.0]) @ turn.T
+    translation, rotation = principal_frame_pose(tensor, (0.1, -0.2, 0.3))
+    assert translation.tolist() == [0.1, -0.2, 0.3]
+    axes = Rotation.from_quat(rotation).as_matrix()  # principal -> body: columns are the principal axes
+    np.testing.assert_allclose(axes.T @ tensor @ axes, np.diag([1.0, 2.0, 3.0]), atol=1e-12)

@@ -52,6 +52,17 @@ def test_defaults_of_a_minimal_scene():
     assert scene.topic_inputs == () and scene.schedules == () and scene.gravity is None
     assert scene.integrator.method == "auto" and scene.duration is None and scene.recording is None
     assert scene.torque_kind == "none"
+    assert (scene.qos.reliability, scene.qos.depth) == ("reliable", 10)
+    assert scene.frames.principal == "body_principal"
+
+
+def test_output_qos_is_read_and_validated():
+    scene = parse(MINIMAL + "qos: {reliability: best_effort, depth: 500}\n", "q.yaml")
+    assert (scene.qos.reliability, scene.qos.depth) == ("best_effort", 500)
+    for bad, key in (("{reliability: sometimes}", "qos.reliability"), ("{depth: 0}", "qos.depth"),
+                     ("{depth: 2.5}", "qos.depth"), ("{history: all}", "qos")):
+        with pytest.raises(SceneError, match=f"q.yaml: {key}"):
+            parse(MINIMAL + f"qos: {bad}\n", "q.yaml")
 
 
 @pytest.mark.parametrize(

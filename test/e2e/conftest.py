@@ -18,6 +18,9 @@ the node dies while waiting):
 ``wait_for_service(client, timeout=30, process=None)``
 ``wait_for_topic(node, name, timeout=30, process=None) -> [type names]``
 ``call_service(node, client, request, timeout=10) -> response``
+``collector``          a :class:`Collector` on ``ros_node``: subscribe, spin until a condition, call.
+
+Plain helpers (no fixtures) are in ``e2e_helpers.py`` beside this file.
 
 The ROS wheels' bootstrapper re-executes every venv Python once at start-up (``os.execve``,
 same pid) unless ``_ROS_WHEELS_BOOTSTRAP_COMPLETE`` is set. Subprocesses here inherit the
@@ -41,6 +44,7 @@ import pytest
 # test/conftest.py set the session's domain and discovery range before this file loads.
 ROS_DOMAIN_ID = int(os.environ["ROS_DOMAIN_ID"])
 
+NODE = "/rigid_rot_sim"  # the node's default fully qualified name
 NODE_START_TIMEOUT = 30.0  # s; a cold start on a loaded 2-core machine takes a few seconds
 STOP_TIMEOUT = 10.0  # s to wait after SIGINT before SIGKILL
 
@@ -218,3 +222,49 @@ def wait_for_topic():
 @pytest.fixture(scope="session")
 def call_service():
     return _call_service
+
+
+class Collector:
+    """Subscribes in the test's rclpy node and spins until a condition holds."""
+
+    def __init__(self, ros_node):
+        from rclpy.executors import SingleThreadedExecutor
+
+        self.node = ros_node
+        self.executor = SingleThreadedExecutor(context=ros_node.context)
+        self.executor.add_node(ros_node)
+        self.messages: dict[str, list] = {}
+
+    def subscribe(self, msg_type, topic: str, qos):
+        self.messages[topic] = []
+        self.node.create_subscription(msg_type, topic, self.messages[topic].append, qos)
+        return self.messages[topic]
+
+    def spin_until(self, condition, timeout: float, process=None, what: str = "condition"):
+        deadline = time.monotonic() + timeout
+        while time.monotonic() < deadline:
+            if condition():
+                return
+            if process is not None:
+                process.check_alive()
+            self.executor.spin_once(timeout_sec=0.05)
+        raise AssertionError(f"timed out after {timeout} s waiting for {what}" + (f"\n{process.log()}" if process else ""))
+
+    def call(self, srv_type, name: str, request, timeout: float = 10.0, process=None):
+        """Call service ``name`` (relative: of the default node ``/rigid_rot_sim``) and return the reply."""
+        client = self.node.create_client(srv_type, name if name.startswith("/") else f"{NODE}/{name}")
+        self.spin_until(lambda: client.service_is_ready(), 2 * NODE_START_TIMEOUT, process, f"service {name}")
+        future = client.call_async(request)
+        self.spin_until(future.done, max(timeout, 30.0), process, f"reply of {name}")
+        return future.result()
+
+    def close(self):
+        self.executor.remove_node(self.node)
+        self.executor.shutdown()
+
+
+@pytest.fixture
+def collector(ros_node):
+    c = Collector(ros_node)
+    yield c
+    c.close()

@@ -8,14 +8,7 @@ import pytest
 from rigid_rot_msgs.srv import Step
 from std_srvs.srv import SetBool
 
-from test_node_e2e import Collector, scene_args  # noqa: F401  (same directory)
-
-
-@pytest.fixture
-def collector(ros_node):
-    c = Collector(ros_node)
-    yield c
-    c.close()
+from test_node_e2e import scene_args  # same directory; the collector fixture is in conftest.py
 
 
 @pytest.mark.parametrize("signum", [signal.SIGTERM, signal.SIGINT])

@@ -3,6 +3,10 @@
 The recorded file is read with independent readers (rosbags, the mcap library), survives
 SIGINT / SIGTERM / SIGKILL as documented, re-simulates bit for bit, and its torque
 commands replayed into a fresh node reproduce the original states.
+
+Robust on a loaded machine: what a test counts comes from the recording (every published
+message and every command the node received is in it), and a test that needs the node to have
+received something waits until the file (read while it is written) shows it.
 """
 
 from __future__ import annotations
@@ -17,6 +21,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 import yaml
+from e2e_helpers import WAIT, recorded_count, wait_until_recorded  # beside this file
 
 from rigid_rot_sim.recording.events import decode_event
 from rigid_rot_sim.recording.reader import BagReader, repair
@@ -44,7 +49,7 @@ def node_args(scene: Path, record: Path, *extra: str) -> list[str]:
     return ["--ros-args", "-p", f"scene:={scene}", "-p", f"record_path:={record}", *extra]
 
 
-def first_state_time(ros_node, process, timeout: float = 30.0) -> float:
+def first_state_time(ros_node, process, timeout: float = WAIT) -> float:
     """Sim time (s) of the first ~/state message the test process receives."""
     from rclpy.executors import SingleThreadedExecutor
     from rigid_rot_msgs.msg import RigidBodyState
@@ -67,12 +72,14 @@ def first_state_time(ros_node, process, timeout: float = 30.0) -> float:
     return got[0]
 
 
-def send_commands(ros_node, commands, process) -> None:
-    """Publish WrenchStamped commands [(torque, frame_id, stamp_s, force)] once a subscriber matches."""
+def send_commands(ros_node, commands, process, bag: Path) -> None:
+    """Publish WrenchStamped commands [(torque, frame_id, stamp_s, force)] once a subscriber matches,
+    and wait until the node has received (and recorded) every one."""
     from geometry_msgs.msg import WrenchStamped
 
+    before = recorded_count(bag, TORQUE_TOPIC)
     publisher = ros_node.create_publisher(WrenchStamped, TORQUE_TOPIC, 10)
-    deadline = time.monotonic() + 30.0
+    deadline = time.monotonic() + WAIT
     while publisher.get_subscription_count() == 0:
         process.check_alive()
         assert time.monotonic() < deadline, "the node never subscribed to its torque topic"
@@ -85,7 +92,8 @@ def send_commands(ros_node, commands, process) -> None:
         msg.wrench.force.x, msg.wrench.force.y, msg.wrench.force.z = force
         publisher.publish(msg)
         time.sleep(0.05)
-    time.sleep(0.3)  # reliable QoS: let the last ones arrive before the caller stops the node
+    # reliable QoS, depth 10 >= the commands sent: each reaches the node; wait until it has taken them
+    wait_until_recorded(bag, TORQUE_TOPIC, before + len(commands), process)
     ros_node.destroy_publisher(publisher)
 
 
@@ -106,7 +114,7 @@ def recorded_run(tmp_path_factory, launch_node_module, ros_node_module):
     bag = directory / "run.mcap"
     node = launch_node_module(*node_args(write_scene(directory), bag), name="recorder")
     first_state_time(ros_node_module, node)
-    send_commands(ros_node_module, COMMANDS, node)
+    send_commands(ros_node_module, COMMANDS, node, bag)
     assert node.stop() == 0, node.log()
     return bag, node
 
@@ -190,7 +198,7 @@ def test_sigkill_loses_at_most_the_last_second_and_repair_recovers_it(tmp_path, 
     # wall-clock log times (the option), so that the loss is measured against the wall clock
     node = launch_node(*node_args(write_scene(tmp_path), bag, "-p", "record_log_time:=wall"), name="killed")
     first_state_time(ros_node, node)
-    time.sleep(2.5)
+    wait_until_recorded(bag, STATE_TOPIC, 25, node)  # more than 20 flushed to the file
     killed_at = time.time_ns()
     node.process.kill()
     node.process.wait(timeout=10)
@@ -271,7 +279,7 @@ def test_replayed_commands_reproduce_the_states_of_the_original_run(
     stamps = tuple(round(t_pause + 1.0 + 0.4 * i, 1) for i in range(3))
     send_commands(ros_node, [((0.0, 0.0, 0.004), "base_link", stamps[0], (0.0, 0.0, 0.0)),
                              ((0.003, 0.0, 0.0), "odom", stamps[1], (0.0, 0.0, 0.0)),
-                             ((0.0, -0.002, 0.0), "base_link", stamps[2], (0.0, 0.0, 0.0))], node)
+                             ((0.0, -0.002, 0.0), "base_link", stamps[2], (0.0, 0.0, 0.0))], node, original)
     set_paused(ros_node, node, False, wait_for_service, call_service)
     end = stamps[-1] + 0.6
     wait_for_sim_time(ros_node, node, end)
@@ -285,8 +293,10 @@ def test_replayed_commands_reproduce_the_states_of_the_original_run(
     done = subprocess.run([str(rigid_rot), "replay", str(original), "--wait", "20"],
                           capture_output=True, text=True, timeout=120, env=os.environ)
     assert done.returncode == 0 and "replayed 3 messages" in done.stdout, done.stdout + done.stderr
-    deadline = time.monotonic() + 20.0
-    while len(_events(replayed, complete=False)) < 4 and time.monotonic() < deadline:  # reset + 3 commands
+    deadline = time.monotonic() + WAIT
+    while len(_events(replayed, complete=False)) < 4:  # reset + 3 commands, received before resuming
+        node.check_alive()
+        assert time.monotonic() < deadline, f"events recorded: {_events(replayed, complete=False)}\n{node.log()}"
         time.sleep(0.2)
     set_paused(ros_node, node, False, wait_for_service, call_service)
     wait_for_sim_time(ros_node, node, end)

@@ -3,6 +3,7 @@
 from pathlib import Path
 
 import pytest
+import yaml
 
 pytest.importorskip("rigid_rot_msgs.msg")
 from rigid_rot_msgs.msg import RigidBodyState  # noqa: E402
@@ -70,3 +71,34 @@ def test_rejected_commands_record_no_event(tmp_path):
         with pytest.raises(CommandRejected):
             recorded.receive_torque("~/torque", (float("inf"), 0.0, 0.0), "base_link", 0.0)
     assert BagReader(bag).counts().get("/e/sim_events", 0) == 0
+
+
+def test_tf_and_the_latched_tf_static_are_recorded_as_published(tmp_path):
+    import rclpy
+
+    from rigid_rot_sim.node import RigidRotSimNode
+    from rigid_rot_sim.recording.reader import BagReader
+
+    bag = tmp_path / "tf.mcap"
+    context = rclpy.Context()
+    rclpy.init(context=context)
+    try:
+        node = RigidRotSimNode(context=context, parameter_overrides=[
+            rclpy.parameter.Parameter("scene", value="from_point_masses"),
+            rclpy.parameter.Parameter("record_path", value=str(bag)),
+            rclpy.parameter.Parameter("real_time_factor", value=0.0),
+            rclpy.parameter.Parameter("duration", value=0.5),
+        ])
+        while not node.finished:
+            node.timer_callback()
+        node.destroy_node()
+    finally:
+        rclpy.try_shutdown(context=context)
+    reader = BagReader(bag)
+    assert reader.complete
+    assert reader.counts()["/tf_static"] == 1 and reader.counts()["/tf"] == 26  # 50 Hz over 0.5 s, both ends
+    assert reader.topics["/tf_static"].type_name == "tf2_msgs/msg/TFMessage"
+    (offered,) = yaml.safe_load(reader.topics["/tf_static"].channel_metadata["offered_qos_profiles"])
+    assert offered["durability"] == 1 and offered["depth"] == 1  # transient local, as published
+    (_, static), = reader.decoded(["/tf_static"])
+    assert static.transforms[0].child_frame_id == "body_principal"

@@ -107,12 +107,15 @@ def test_clock_follows_the_bag_time_at_the_replay_rate(tmp_path, ros_context):
     spinner.start()
     try:
         report = replay(bag, rate=2.0, clock=True, node=publisher_node, wait_for_subscribers=10.0)
-        time.sleep(0.2)
+        # the newest /clock is never dropped (keep last): wait until the end of the bag's time arrives
+        deadline = time.monotonic() + 30.0
+        while not (clocks and clocks[-1] >= 1.5) and time.monotonic() < deadline:
+            time.sleep(0.01)
     finally:
         executor.shutdown()
         listener.destroy_node()
         publisher_node.destroy_node()
     assert report.published == {"/robot/torque_cmd": 3}
-    assert len(clocks) >= 5
-    assert clocks == sorted(clocks)
-    assert 1.0 <= clocks[0] < 1.1 and 1.5 <= clocks[-1] <= 1.7  # bag time, 0.6 s of it in 0.3 s of wall time
+    # how many of the 100 Hz clocks arrive depends on the machine's load; their values do not
+    assert clocks and clocks == sorted(clocks)
+    assert all(1.0 <= c <= 1.7 for c in clocks) and clocks[-1] >= 1.5  # bag time: 0.6 s of it, from 1.0 s
