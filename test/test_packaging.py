@@ -30,6 +30,8 @@ PYTHON_KEYS: dict[str, set[str]] = {
     "hypothesis": {"python3-hypothesis"},
     "rosbags": {"python3-rosbags-pip"},
     "numba": {"python3-numba"},
+    "catkin_pkg": {"python3-catkin-pkg", "python3-catkin-pkg-modules"},
+    "setuptools": {"python3-setuptools"},
 }
 #: Modules without any rosdep key (rosdistro's python.yaml has no dask, distributed or pyarrow):
 #: optional, for sweeps only; declared for pip as setup.py's `sweep` extra, installed by make setup.

@@ -53,7 +53,7 @@ def test_defaults_of_a_minimal_scene():
     assert scene.integrator.method == "auto" and scene.duration is None and scene.recording is None
     assert scene.torque_kind == "none"
     assert (scene.qos.reliability, scene.qos.depth) == ("reliable", 10)
-    assert scene.frames.principal == "body_principal"
+    assert scene.frames.principal == "base_link_principal"
 
 
 def test_output_qos_is_read_and_validated():

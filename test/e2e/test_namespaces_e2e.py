@@ -32,7 +32,7 @@ def write_scene(directory: Path, body_frame: str) -> Path:
 def test_two_namespaced_nodes_run_side_by_side_without_cross_talk(launch_node, collector, tmp_path):
     from geometry_msgs.msg import WrenchStamped
     from rigid_rot_msgs.msg import RigidBodyState
-    from rigid_rot_msgs.srv import StepSimulation
+    from rigid_rot_msgs.srv import Step
     from std_srvs.srv import SetBool
     from tf2_msgs.msg import TFMessage
 
@@ -97,9 +97,9 @@ def test_two_namespaced_nodes_run_side_by_side_without_cross_talk(launch_node, c
     # services are per node: pausing sat1 leaves sat2 running
     paused = collector.call(SetBool, "/sat1/rigid_rot_sim/pause", SetBool.Request(data=True), process=nodes["sat1"])
     assert paused.success, paused.message
-    assert collector.call(StepSimulation, "/sat1/rigid_rot_sim/step", StepSimulation.Request(steps=1),
+    assert collector.call(Step, "/sat1/rigid_rot_sim/step", Step.Request(steps=1),
                           process=nodes["sat1"]).success
-    refused = collector.call(StepSimulation, "/sat2/rigid_rot_sim/step", StepSimulation.Request(steps=1),
+    refused = collector.call(Step, "/sat2/rigid_rot_sim/step", Step.Request(steps=1),
                              process=nodes["sat2"])
     assert not refused.success and "not paused" in refused.message
     later = stamp(states["sat2"][-1]) + 0.5

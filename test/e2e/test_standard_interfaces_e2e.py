@@ -17,7 +17,7 @@ import yaml
 
 pytest.importorskip("simulation_interfaces.srv", reason="simulation_interfaces is not installed (make setup builds it)")
 sys.path.insert(0, str(Path(__file__).resolve().parent))
-from test_node_e2e import NODE, SCENES, collector, stamp  # noqa: E402,F401 (collector: the fixture)
+from test_node_e2e import NODE, SCENES, stamp  # noqa: E402 (collector: a conftest fixture)
 
 WORLD, BODY = "map_test", "satellite"
 

@@ -101,4 +101,4 @@ def test_tf_and_the_latched_tf_static_are_recorded_as_published(tmp_path):
     (offered,) = yaml.safe_load(reader.topics["/tf_static"].channel_metadata["offered_qos_profiles"])
     assert offered["durability"] == 1 and offered["depth"] == 1  # transient local, as published
     (_, static), = reader.decoded(["/tf_static"])
-    assert static.transforms[0].child_frame_id == "body_principal"
+    assert static.transforms[0].child_frame_id == "base_link_principal"
