@@ -3,10 +3,11 @@
 :class:`Simulator` owns the rigid body, the integrator from the registry, pause / step /
 reset / set_state and the run's failure state, and reports every outside change to its
 observers (:class:`~rigid_rot_sim.core.observer.SimulationObserver`). It delegates to
-three parts, each in its own module: the step clock (:mod:`~rigid_rot_sim.core.clock`),
+four parts, each in its own module: the step clock (:mod:`~rigid_rot_sim.core.clock`),
 the torque commands with their hold / timeout state, the scene's torque schedules and
-the torques applied for a duration (:mod:`~rigid_rot_sim.core.commands`), and the
-user-frame view of the state with its drifts (:mod:`~rigid_rot_sim.core.observables`).
+the torques applied for a duration (:mod:`~rigid_rot_sim.core.commands`), the integrator
+stepped within the run's limits (:mod:`~rigid_rot_sim.core.stepper`), and the user-frame
+view of the state with its drifts (:mod:`~rigid_rot_sim.core.observables`).
 It returns plain :class:`StateSnapshot` values (numpy, user body frame, SI units).
 
 Time and determinism
@@ -40,38 +41,20 @@ and :meth:`Simulator.set_state` clear the failure and resume a run that the fail
 
 from __future__ import annotations
 
-import math
 from typing import Any
 
-import numpy as np
-
-from rigid_rot_sim.core import advice, limits
-from rigid_rot_sim.core import quaternion as quat
-from rigid_rot_sim.core import validation
+from rigid_rot_sim.core import advice, validation
 from rigid_rot_sim.core.clock import StepClock
 from rigid_rot_sim.core.commands import APPLY_TORQUE_SOURCE, CommandRejected, CommandSchedule, TorqueCommand
 from rigid_rot_sim.core.dynamics import RigidBody
-from rigid_rot_sim.core.integrators import get_method
-from rigid_rot_sim.core.integrators.base import Integrator, NonFiniteStateError
 from rigid_rot_sim.core.observables import Observables, StateSnapshot
 from rigid_rot_sim.core.observer import SimulationObserver
 from rigid_rot_sim.core.scene import Scene
-from rigid_rot_sim.core.torque import ConstantTorque
+from rigid_rot_sim.core.stepper import Stepper
 
 # CommandRejected, TorqueCommand, APPLY_TORQUE_SOURCE and StateSnapshot are what the Simulator's
 # methods raise, return and take: part of its API, importable from here.
 __all__ = ["Simulator", "StateSnapshot", "TorqueCommand", "CommandRejected", "APPLY_TORQUE_SOURCE"]
-
-_ZERO3 = (0.0, 0.0, 0.0)
-
-#: Methods whose ``advance(n)`` differs in the last bits from n single steps: dop853 lands
-#: on ``t + n * dt`` (one rounding) instead of n additions. Stepped one at a time so that
-#: states do not depend on how the node chunks the run (publish rates, wall clock).
-_STEPWISE_METHODS = frozenset({"dop853"})
-
-#: Largest kinetic energy (J), |L| (kg*m^2/s) and |omega| (rad/s) a state may have: the snapshot's
-#: rotations and drifts of such values stay finite (a NaN compares false: refused too).
-_DERIVED_CEILING = 1e300
 
 
 class Simulator:
@@ -90,12 +73,7 @@ class Simulator:
     """
 
     def __init__(
-        self,
-        scene: Scene,
-        *,
-        method: str | None = None,
-        dt: float | None = None,
-        options: dict[str, Any] | None = None,
+        self, scene: Scene, *, method: str | None = None, dt: float | None = None, options: dict[str, Any] | None = None
     ) -> None:
         self.scene = scene
         self.body = RigidBody.from_inertia(scene.body.inertia_array, name="body.inertia")
@@ -107,20 +85,15 @@ class Simulator:
         self.paused = False
         self.failure: str | None = None
         self._paused_by_failure = False
-        self._i_min = float(np.min(self.body.principal_moments))
-        self._integrator: Integrator | None = None
-        self.method = ""
-        self.options: dict[str, Any] = {}
-        self._configure_integrator(
-            scene.integrator.method if method is None else method,
-            scene.integrator.dt if dt is None else dt,
-            dict(scene.integrator.options) if options is None else dict(options),
-            first=True,
-        )
+        self.clock = StepClock(validation.positive_scalar("dt", scene.integrator.dt if dt is None else dt))
         self.commands = CommandSchedule(scene, self.clock)
-        self.inputs = self.commands.inputs
+        self.stepper = Stepper(
+            scene, self.body, self.observables, self.clock, self.commands,
+            scene.integrator.method if method is None else method,
+            dict(scene.integrator.options) if options is None else dict(options),
+        )
         self.reset()
-        reason = self._rotation_failure(0.0)
+        reason = self.stepper.rotation_failure(0.0)
         if reason is not None:
             raise ValueError(f"initial angular velocity: {reason}")
 
@@ -137,70 +110,32 @@ class Simulator:
     def max_torque(self, value: float) -> None:
         self.commands.max_torque = float(value)
 
-    # ------------------------------------------------------------------ integrator
+    # ------------------------------------------------------------------ integrator (the stepper)
 
-    def omega_bound(self) -> float:
-        """A bound on |ω| (rad/s) over the run, for :mod:`advice` (:func:`advice.omega_bound`)."""
-        return advice.omega_bound(self.scene, self.body)
+    @property
+    def method(self) -> str:
+        """The integrator's registry name (``auto`` resolved)."""
+        return self.stepper.method
 
-    def _configure_integrator(
-        self, method: str, dt: float, options: dict[str, Any], *, first: bool = False, dry_run: bool = False
-    ) -> None:
-        """Switch to ``method`` (or ``auto``) at step ``dt`` (s); ValueError, nothing changed, if invalid.
-
-        ``dry_run``: only check that the method can run this scene at ``dt`` (no options).
-        """
-        dt = validation.positive_scalar("dt", dt)
-        if method == "auto":
-            method = advice.choose_integrator(self.body.principal_moments, self.omega_bound(), dt, self.scene.torque_kind)
-        cls = get_method(method)  # ValueError listing the valid names
-        commanded = bool(self.scene.topic_inputs or self.scene.schedules)
-        if commanded or dry_run:
-            # commands give the method a ConstantTorque between boundaries: refuse now, not mid-run,
-            # a method that cannot take one (the exact flow is torque-free)
-            try:
-                cls(self.body.principal_moments, dt, ConstantTorque(np.ones(3)) if commanded else self.gravity, **options)
-            except ValueError as exc:
-                what = "this scene" if dry_run else "this scene's torque inputs"
-                raise ValueError(f"integrator {method!r} cannot run {what}: {exc}") from None
-        if dry_run:
-            return
-        if first:
-            state = (0.0, self.body.attitude_to_principal(np.array(self.scene.initial.orientation)), np.zeros(3))
-        else:
-            assert self._integrator is not None
-            state = (self._integrator.t, self._integrator.q, self._integrator.omega)
-        integrator = cls(
-            self.body.principal_moments, dt, self._integrator.torque if self._integrator else self.gravity,
-            t0=state[0], q0=state[1], omega0=state[2], **options,
-        )
-        self._integrator = integrator
-        self.method = method
-        self.options = dict(options)
-        if first:
-            self.clock = StepClock(dt)
-        else:
-            self.clock.change_dt(dt)  # keeps t = t_epoch + (k - k_epoch) dt exact from here on
-            self.commands.reschedule()
+    @property
+    def options(self) -> dict[str, Any]:
+        """The integrator's keyword options."""
+        return self.stepper.options
 
     def set_integrator(self, method: str | None = None, dt: float | None = None, options: dict[str, Any] | None = None) -> None:
         """Switch method and/or step at the current state (ValueError, nothing changed, if invalid)."""
         step = self.clock.k
-        self._configure_integrator(
-            self.method if method is None else method,
-            self.dt if dt is None else dt,
-            self.options if options is None and method in (None, self.method) else dict(options or {}),
-        )
+        self.stepper.reconfigure(method, dt, options)
         for observer in self.observers:
             observer.integrator_changed(step, self.method, self.dt, dict(self.options))
 
     def check_integrator(self, method: str, dt: float) -> None:
         """ValueError (the reason) if :meth:`set_integrator` would refuse ``method`` at ``dt``; no change."""
-        self._configure_integrator(method, dt, {}, dry_run=True)
+        self.stepper.configure(method, dt, {}, dry_run=True)
 
     def warnings(self) -> list[str]:
         """Stability / accuracy warnings for the current method and step (:mod:`advice`)."""
-        return advice.step_warnings(self.method, self.body.principal_moments, self.omega_bound(), self.dt)
+        return advice.step_warnings(self.method, self.body.principal_moments, advice.omega_bound(self.scene, self.body), self.dt)
 
     # ------------------------------------------------------------------ time (the step clock)
 
@@ -238,12 +173,7 @@ class Simulator:
         return self.commands.resolve_frame(source, frame_id, policy)
 
     def receive_torque(
-        self,
-        source: str,
-        torque: Any,
-        frame_id: str = "",
-        stamp: float | None = None,
-        force: Any = None,
+        self, source: str, torque: Any, frame_id: str = "", stamp: float | None = None, force: Any = None
     ) -> TorqueCommand:
         """Accept a command that arrived now on topic input ``source``, or raise CommandRejected.
 
@@ -253,7 +183,6 @@ class Simulator:
         command. Effective time: the stamp when non-zero and not in the past, else now.
         The observers hear of a rejection (then it is raised) or of the accepted command.
         """
-        self.commands.input_spec(source)  # ValueError for an unknown input: no command at all
         try:
             values, frame, effective, stamp = self.commands.admit(source, torque, frame_id, stamp, force)
         except CommandRejected as rejected:
@@ -262,14 +191,8 @@ class Simulator:
         return self.submit_torque(source, values, frame, effective, receipt_time=self.t, stamp=stamp)
 
     def submit_torque(
-        self,
-        source: str,
-        torque: Any,
-        frame: str,
-        effective_time: float,
-        *,
-        receipt_time: float | None = None,
-        stamp: float | None = None,
+        self, source: str, torque: Any, frame: str, effective_time: float, *,
+        receipt_time: float | None = None, stamp: float | None = None,
     ) -> TorqueCommand:
         """Schedule a command on input ``source`` for an explicit effective time (resim's entry).
 
@@ -308,81 +231,17 @@ class Simulator:
         """What each topic input holds now: {source: (torque N*m, frame)} (absent = zero)."""
         return self.commands.held_torques()
 
-    def _set_command_torque(self) -> None:
-        """Give the integrator the torque for the next step (principal frame)."""
-        if self.gravity is not None:
-            return  # gravity scenes have no command inputs (scene validation)
-        principal_from_body = self.observables.principal_from_body
-        body = self.commands.body_sum
-        world = self.commands.world_sum
-        if world is not None:
-            q_body = quat.multiply(self._integrator.q, principal_from_body)  # type: ignore[union-attr]
-            world_in_body = quat.rotate_inverse(q_body, world)
-            body = (body[0] + world_in_body[0], body[1] + world_in_body[1], body[2] + world_in_body[2])
-        self._step_torque_body = body
-        if not any(body):
-            torque = None
-        else:
-            torque = ConstantTorque(np.array(quat.rotate(principal_from_body, body)))
-        self._integrator.torque = torque  # type: ignore[union-attr]
-
     # ------------------------------------------------------------------ stepping
 
     def advance(self, n: int) -> int:
         """Advance up to ``n`` steps (fewer if a step fails); returns the number done.
 
-        A non-finite state (an integrator diverging) pauses the simulation, restores the
-        last good state and records the reason in :attr:`failure`.
+        A failing step (a non-finite state, the rotation limit) pauses the simulation,
+        keeps the last good state and records the reason in :attr:`failure`.
         """
-        integrator = self._integrator
-        assert integrator is not None
-        clock = self.clock
-        commands = self.commands
-        end = clock.k + int(n)
-        done = 0
-        while clock.k < end:
-            if clock.k >= commands.next_event:
-                commands.process_due()
-                self._set_command_torque()
-            if commands.world_sum is not None:
-                self._set_command_torque()  # re-expressed in the body frame at every boundary
-                stop = clock.k + 1
-            else:
-                stop = min(end, commands.next_event)
-            chunk = stop - clock.k
-            reason = self._rotation_failure(self.dt)
-            if reason is not None:
-                self.fail(f"rotation limit: {reason}")
-                return done
-            chunk = min(chunk, self._steps_within_rotation_limit())
-            start = (integrator.t, integrator.q, integrator.omega, integrator.n_steps)
-            try:
-                if integrator.name in _STEPWISE_METHODS:
-                    for _ in range(chunk):
-                        integrator.advance(1)
-                else:
-                    integrator.advance(chunk)
-            except (ArithmeticError, ValueError) as exc:
-                # NonFiniteStateError, or a math error on the way to it (sin(inf), overflow)
-                good = integrator.n_steps - start[3]
-                kept = good < chunk and np.all(np.isfinite(integrator.q)) and np.all(np.isfinite(integrator.omega))
-                if kept and self._derived_failure() is None:
-                    clock.k += good  # the method stopped at its last good step (energy and momentum finite)
-                    done += good
-                else:
-                    integrator.set_state(*start[:3])
-                    integrator.n_steps = start[3]
-                name = "NonFiniteStateError" if isinstance(exc, NonFiniteStateError) else type(exc).__name__
-                self.fail(f"{name}: {exc}")
-                return done
-            reason = self._derived_failure()
-            if reason is not None:  # a finite state whose energy or momentum overflows
-                integrator.set_state(*start[:3])
-                integrator.n_steps = start[3]
-                self.fail(f"NonFiniteStateError: {reason}")
-                return done
-            clock.k += chunk
-            done += chunk
+        done, reason = self.stepper.advance(n)
+        if reason is not None:
+            self.fail(reason)
         return done
 
     def fail(self, reason: str) -> None:
@@ -392,46 +251,6 @@ class Simulator:
         self.paused = True
         for observer in self.observers:
             observer.failed(self.clock.k, reason)
-
-    def _torque_bound(self) -> float:
-        """A bound (N*m) on the torque norm over the next steps."""
-        if self.gravity is not None:
-            return self.observables.gravity_torque_bound()
-        return self.commands.norm_bound()
-
-    def _rotation_failure(self, dt_ahead: float) -> str | None:
-        """Why the state violates the rotation limit after ``dt_ahead`` s under the current torque (None: it does not)."""
-        omega = math.hypot(*self._integrator.omega.tolist())  # type: ignore[union-attr]
-        reach = omega + dt_ahead * self._torque_bound() / self._i_min
-        rotation = reach * self.dt
-        if rotation <= limits.MAX_ROTATION_PER_STEP:
-            return None
-        return (
-            f"|omega| {'would reach' if dt_ahead else 'is'} {reach:.3g} rad/s, {rotation:.3g} rad per step of {self.dt:g} s "
-            f"(limit {limits.MAX_ROTATION_PER_STEP:g} rad per step): lower the torque or dt, then reset or set_state"
-        )
-
-    def _steps_within_rotation_limit(self) -> int:
-        """How many steps the current torque may act before |ω| dt could pass the rotation limit."""
-        torque = self._torque_bound()
-        if torque == 0.0:
-            return 1 << 62
-        omega = math.hypot(*self._integrator.omega.tolist())  # type: ignore[union-attr]
-        gain_per_step = self.dt * torque / self._i_min
-        if not gain_per_step > 0.0:  # a torque so small that its effect underflows
-            return 1 << 62
-        return max(1, int(min((limits.MAX_ROTATION_PER_STEP / self.dt - omega) / gain_per_step, 1 << 62)))
-
-    def _derived_failure(self) -> str | None:
-        """Why a snapshot of the current state would hold a non-finite number (None: it would not)."""
-        i1, i2, i3 = (float(v) for v in self.body.principal_moments)
-        w1, w2, w3 = self._integrator.omega.tolist()  # type: ignore[union-attr]
-        kinetic = 0.5 * (i1 * w1 * w1 + i2 * w2 * w2 + i3 * w3 * w3)
-        momentum = math.hypot(i1 * w1, i2 * w2, i3 * w3)
-        # a margin below the float range: the snapshot rotates these vectors and forms drifts
-        if max(kinetic, momentum, math.hypot(w1, w2, w3)) <= _DERIVED_CEILING:
-            return None
-        return f"kinetic energy {kinetic} J or |L| {momentum} kg*m^2/s overflows at t = {self.t:.9g} s"
 
     def advance_to(self, k: int) -> int:
         """Advance to step boundary ``k`` (no-op when already there); returns steps done."""
@@ -457,14 +276,8 @@ class Simulator:
         step = self.clock.k
         self.clock.reset()
         self.commands.clear()
-        self._step_torque_body: tuple[float, float, float] = _ZERO3
         self._clear_failure()
-        self._set_principal_state(
-            0.0,
-            self.body.attitude_to_principal(np.array(self.scene.initial.orientation)),
-            self.body.vector_to_principal(np.array(self.scene.initial.angular_velocity)),
-        )
-        self._set_command_torque()
+        self.stepper.restart()
         for observer in self.observers:
             observer.reset(step)
 
@@ -477,16 +290,8 @@ class Simulator:
         step = self.clock.k
         q = validation.quaternion("orientation", orientation)
         omega = validation.finite_vector("angular_velocity", angular_velocity)
-        rotation = math.hypot(*omega.tolist()) * self.dt
-        if rotation > limits.MAX_ROTATION_PER_STEP:
-            raise ValueError(
-                f"angular_velocity of norm {rotation / self.dt:.3g} rad/s turns the body {rotation:.3g} rad per step of "
-                f"{self.dt:g} s (limit {limits.MAX_ROTATION_PER_STEP:g} rad per step)"
-            )
-        self._set_principal_state(self.t, self.body.attitude_to_principal(q), self.body.vector_to_principal(omega))
+        self.stepper.set_body_state(q, omega)
         self._clear_failure()
-        if self.commands.world_sum is not None:
-            self._set_command_torque()
         for observer in self.observers:
             observer.state_set(step, tuple(float(v) for v in orientation), tuple(float(v) for v in angular_velocity))
 
@@ -497,13 +302,6 @@ class Simulator:
         self.failure = None
         self._paused_by_failure = False
 
-    def _set_principal_state(self, t: float, q_principal: np.ndarray, omega_principal: np.ndarray) -> None:
-        assert self._integrator is not None
-        self._integrator.set_state(t, q_principal, omega_principal)
-        self.observables.set_reference(self.snapshot())
-
     def snapshot(self) -> StateSnapshot:
         """The state at the current step boundary (user body frame; see :class:`StateSnapshot`)."""
-        integrator = self._integrator
-        assert integrator is not None
-        return self.observables.snapshot(self.t, self.clock.k, integrator.q, integrator.omega, self._step_torque_body)
+        return self.stepper.snapshot()
