@@ -29,7 +29,7 @@ from rigid_rot_sim.core import quaternion as quat
 from rigid_rot_sim.core.exact import free_flow
 from rigid_rot_sim.core.integrators import kernels
 from rigid_rot_sim.core.integrators.base import NonFiniteStateError
-from rigid_rot_sim.core.integrators.fixed_step import NEWTON_FAILED, NON_FINITE, OK
+from rigid_rot_sim.core.integrators.status import NEWTON_FAILED, NON_FINITE, OK
 from rigid_rot_sim.core.jit import compiled
 from rigid_rot_sim.core.torque import TORQUE_NONE, TORQUE_TIME
 

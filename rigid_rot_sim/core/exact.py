@@ -218,16 +218,6 @@ def _separatrix_distance(moments, omega, i_min, i_mid, i_max):
 
 
 @register_jitable
-def _zxz(phi, theta, psi):
-    """Quaternion of ``Rz(phi) Rx(theta) Rz(psi)`` (floats, or arrays from Python)."""
-    half_sum = 0.5 * (phi + psi)
-    half_diff = 0.5 * (phi - psi)
-    ch = np.cos(0.5 * theta)
-    sh = np.sin(0.5 * theta)
-    return (sh * np.cos(half_diff), sh * np.sin(half_diff), ch * np.sin(half_sum), ch * np.cos(half_sum))
-
-
-@register_jitable
 def _phase(params, agm_a, agm_c, u):
     """sn, cn, dn at u and the two parts of Pi(n; am u | m) beyond u: (j, g)."""
     n = params[_E_N]
@@ -271,7 +261,7 @@ def _elliptic_state(params, agm_a, agm_c, tau):
     q_wl = (params[_E_QWL], params[_E_QWL + 1], params[_E_QWL + 2], params[_E_QWL + 3])
     q_perm = (params[_E_QPERM], params[_E_QPERM + 1], params[_E_QPERM + 2], params[_E_QPERM + 3])
     # a product of unit quaternions: normalised against the rounding of the products
-    q = quat.normalize(quat.multiply(quat.multiply(q_wl, _zxz(phi, theta, psi)), q_perm))
+    q = quat.normalize(quat.multiply(quat.multiply(q_wl, quat.from_zxz(phi, theta, psi)), q_perm))
     omega = np.zeros(3)
     omega[int(params[_E_ORDER])] = params[_E_AXIS_SIGNS] * w0
     omega[int(params[_E_ORDER + 1])] = params[_E_AXIS_SIGNS + 1] * w1
@@ -531,6 +521,10 @@ class TorqueFreeSolution:
         q, w = self._flow.evaluate(tau.reshape(-1))
         return q.reshape(tau.shape + (4,)), w.reshape(tau.shape + (3,))
 
+    def state_floats(self, t: float) -> tuple[tuple, tuple]:
+        """``(q, omega)`` at one time t (s) as float tuples, unchecked: the exact integrator's step."""
+        return self._flow.evaluate_scalar(t - self.t0)
+
     def omega(self, t: Any) -> np.ndarray:
         """Angular velocity at time(s) t (s), rad/s, principal body frame; shape t.shape + (3,)."""
         return self.state(t)[1]
@@ -548,40 +542,6 @@ class TorqueFreeSolution:
     def energy(self) -> float:
         """The conserved kinetic energy T = 1/2 omega . I omega, J."""
         return 0.5 * float(np.dot(self.moments * self.omega0, self.omega0))
-
-
-def zxz_to_quaternion(phi: Any, theta: Any, psi: Any) -> np.ndarray:
-    """Quaternion (x, y, z, w) of ``Rz(phi) Rx(theta) Rz(psi)`` (intrinsic z-x-z, rad).
-
-    Equals ``Rotation.from_euler('ZXZ', [phi, theta, psi]).as_quat()`` up to sign;
-    vectorised over the (broadcast) angle arrays.
-    """
-    broadcast = np.broadcast_arrays(*(np.asarray(a, dtype=float) for a in (phi, theta, psi)))
-    return np.stack(_zxz(*broadcast), axis=-1)
-
-
-def quaternion_to_zxz(q: Any) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """z-x-z Euler angles ``(phi, theta, psi)`` (rad) with ``R(q) = Rz(phi) Rx(theta) Rz(psi)``.
-
-    theta in [0, pi]; phi and psi in (-pi, pi]. Computed from the half-angle form of
-    :func:`zxz_to_quaternion` (``phi + psi = 2 atan2(z, w)``, ``phi - psi = 2 atan2(y, x)``),
-    so every angle is finite for every unit q: at theta = 0 only phi + psi is defined and
-    the split reported is phi = psi; at theta = pi, phi = -psi. For output only: nothing
-    divides by sin(theta). q: (..., 4) scalar-last, sign irrelevant.
-    """
-    q = np.asarray(q, dtype=float)
-    x, y, z, w = q[..., 0], q[..., 1], q[..., 2], q[..., 3]
-    theta = 2.0 * np.arctan2(np.hypot(x, y), np.hypot(z, w))
-    half_sum = np.arctan2(z, w)
-    half_diff = np.arctan2(y, x)
-    phi = _wrap_angle(half_sum + half_diff)
-    psi = _wrap_angle(half_sum - half_diff)
-    return phi, theta, psi
-
-
-def _wrap_angle(a: np.ndarray) -> np.ndarray:
-    """a reduced to (-pi, pi]."""
-    return np.pi - np.mod(np.pi - a, 2.0 * np.pi)
 
 
 def torque_free_solution(moments: Any, omega0: Any, q0: Any = (0.0, 0.0, 0.0, 1.0), t0: float = 0.0) -> TorqueFreeSolution:
@@ -615,7 +575,7 @@ def torque_free_solution(moments: Any, omega0: Any, q0: Any = (0.0, 0.0, 0.0, 1.
     omega0 = validation.finite_vector("omega0", omega0)
     q0 = validation.quaternion("q0", q0)
     t0 = validation.finite_scalar("t0", t0)
-    return _solution(moments, omega0, q0, t0)
+    return solution_from_state(moments, omega0, q0, t0)
 
 
 def torque_free_flow(moments: np.ndarray, q: Any, omega: Any, tau: float) -> tuple[tuple, tuple]:
@@ -627,6 +587,11 @@ def torque_free_flow(moments: np.ndarray, q: Any, omega: Any, tau: float) -> tup
     return _free_flow_compiled(_floats3(moments), _floats4(q), _floats3(omega), float(tau))
 
 
-def _solution(moments: np.ndarray, omega0: np.ndarray, q0: np.ndarray, t0: float) -> TorqueFreeSolution:
+def solution_from_state(moments: np.ndarray, omega0: np.ndarray, q0: np.ndarray, t0: float) -> TorqueFreeSolution:
+    """:func:`torque_free_solution` without the input checks, for callers holding a checked state.
+
+    ``moments`` (3,) kg*m^2, ``omega0`` (3,) rad/s in the principal frame, ``q0`` (4,) a unit
+    quaternion principal -> world, ``t0`` s.
+    """
     flow = _Flow(moments, omega0, q0)
     return TorqueFreeSolution(moments, omega0.copy(), q0, t0, flow.case, flow)

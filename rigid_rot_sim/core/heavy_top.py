@@ -54,7 +54,7 @@ from scipy.special import ellipj, ellipk, ellipkinc
 
 from rigid_rot_sim.core import validation
 from rigid_rot_sim.core.dynamics import angular_momentum_world, kinetic_energy, world_to_body
-from rigid_rot_sim.core.exact import quaternion_to_zxz, zxz_to_quaternion
+from rigid_rot_sim.core.quaternion import quaternion_to_zxz, zxz_to_quaternion
 from rigid_rot_sim.core.inertia import parallel_axis_shift
 from rigid_rot_sim.core.simulate import simulate
 from rigid_rot_sim.core.torque import GravityTorque

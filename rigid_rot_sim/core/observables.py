@@ -18,7 +18,6 @@ from scipy.spatial.transform import Rotation
 
 from rigid_rot_sim.core import quaternion as quat
 from rigid_rot_sim.core.dynamics import RigidBody
-from rigid_rot_sim.core.exact import quaternion_to_zxz
 from rigid_rot_sim.core.scene import Scene
 from rigid_rot_sim.core.torque import GravityTorque
 
@@ -120,7 +119,7 @@ class Observables:
             potential = self.weight * quat.rotate(q, self.com_body)[2]
             gravity = quat.rotate(body_from_principal, self.gravity(0.0, np.array(q_principal), np.array((w1, w2, w3))))
             torque_body = tuple(a + b for a, b in zip(torque_body, gravity))
-            euler = np.array(quaternion_to_zxz(quat.multiply(q, self._body_from_top)))
+            euler = np.array(quat.quaternion_to_zxz(quat.multiply(q, self._body_from_top)))
             p_phi = momentum_world[2]
             p_psi = float(np.dot(momentum_body, self._symmetry_axis))
         energy = kinetic + potential

@@ -11,13 +11,17 @@ For arrays of many quaternions (output, plotting) use ``scipy.spatial.transform.
 They are also the compiled integrator kernels' quaternion algebra: ``register_jitable``
 leaves them plain Python functions for Python callers and lets numba compile them into
 the kernels (on tuples), so each formula exists once.
+
+The z-x-z Euler angles of scenes and of the heavy top (:func:`zxz_to_quaternion`,
+:func:`quaternion_to_zxz`) work on numpy arrays, vectorised over leading axes.
 """
 
 from __future__ import annotations
 
 import math
-from typing import Sequence
+from typing import Any, Sequence
 
+import numpy as np
 from numba.extending import register_jitable
 
 Quaternion = tuple[float, float, float, float]
@@ -115,3 +119,50 @@ def rotate_inverse(q: Sequence[float], v: Sequence[float]) -> Vector:
     """Rotate v by the inverse of the unit quaternion q: world -> body, ``R(q)^T v``."""
     x, y, z, w = q
     return rotate((-x, -y, -z, w), v)
+
+
+# -- z-x-z Euler angles (the heavy top's precession, nutation, spin) ------------------------
+
+
+@register_jitable
+def from_zxz(phi, theta, psi):
+    """Quaternion (x, y, z, w) of ``Rz(phi) Rx(theta) Rz(psi)`` (rad; floats, or arrays from Python)."""
+    half_sum = 0.5 * (phi + psi)
+    half_diff = 0.5 * (phi - psi)
+    ch = np.cos(0.5 * theta)
+    sh = np.sin(0.5 * theta)
+    return (sh * np.cos(half_diff), sh * np.sin(half_diff), ch * np.sin(half_sum), ch * np.cos(half_sum))
+
+
+def zxz_to_quaternion(phi: Any, theta: Any, psi: Any) -> np.ndarray:
+    """Quaternion (x, y, z, w) of ``Rz(phi) Rx(theta) Rz(psi)`` (intrinsic z-x-z, rad).
+
+    Equals ``Rotation.from_euler('ZXZ', [phi, theta, psi]).as_quat()`` up to sign;
+    vectorised over the (broadcast) angle arrays.
+    """
+    broadcast = np.broadcast_arrays(*(np.asarray(a, dtype=float) for a in (phi, theta, psi)))
+    return np.stack(from_zxz(*broadcast), axis=-1)
+
+
+def quaternion_to_zxz(q: Any) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """z-x-z Euler angles ``(phi, theta, psi)`` (rad) with ``R(q) = Rz(phi) Rx(theta) Rz(psi)``.
+
+    theta in [0, pi]; phi and psi in (-pi, pi]. Computed from the half-angle form of
+    :func:`zxz_to_quaternion` (``phi + psi = 2 atan2(z, w)``, ``phi - psi = 2 atan2(y, x)``),
+    so every angle is finite for every unit q: at theta = 0 only phi + psi is defined and
+    the split reported is phi = psi; at theta = pi, phi = -psi. For output only: nothing
+    divides by sin(theta). q: (..., 4) scalar-last, sign irrelevant.
+    """
+    q = np.asarray(q, dtype=float)
+    x, y, z, w = q[..., 0], q[..., 1], q[..., 2], q[..., 3]
+    theta = 2.0 * np.arctan2(np.hypot(x, y), np.hypot(z, w))
+    half_sum = np.arctan2(z, w)
+    half_diff = np.arctan2(y, x)
+    phi = _wrap_angle(half_sum + half_diff)
+    psi = _wrap_angle(half_sum - half_diff)
+    return phi, theta, psi
+
+
+def _wrap_angle(a: np.ndarray) -> np.ndarray:
+    """a reduced to (-pi, pi]."""
+    return np.pi - np.mod(np.pi - a, 2.0 * np.pi)

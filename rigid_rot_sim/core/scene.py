@@ -80,7 +80,7 @@ from typing import Any, Mapping
 import numpy as np
 from rigid_rot_sim.core import limits, names, validation
 from rigid_rot_sim.core.bounded_yaml import BoundedYAMLError, load_bounded, read_bounded
-from rigid_rot_sim.core.exact import zxz_to_quaternion
+from rigid_rot_sim.core.quaternion import zxz_to_quaternion
 
 __all__ = [
     "SceneError",

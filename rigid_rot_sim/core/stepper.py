@@ -165,7 +165,7 @@ class Stepper:
         if not any(body):
             torque = None
         else:
-            torque = ConstantTorque(np.array(quat.rotate(principal_from_body, body)))
+            torque = ConstantTorque(quat.rotate(principal_from_body, body))
         self.integrator.torque = torque  # type: ignore[union-attr]
 
     # ------------------------------------------------------------------ stepping

@@ -19,6 +19,7 @@ from dataclasses import dataclass, field
 from typing import Any, Callable, NamedTuple, Protocol
 
 import numpy as np
+from numba.core.extending import overload
 from numba.extending import register_jitable
 
 from rigid_rot_sim.core.quaternion import rotate_inverse as _rotate_inverse
@@ -155,7 +156,7 @@ def evaluate_torque_data(kind, polynomial, gravity, t, q, w):
 
     Horner's rule on the polynomial rows (highest power first), plus
     ``lever_arm x (R^T (-weight e_z))`` for gravity: compiled into the kernels, and the
-    float evaluation :func:`~rigid_rot_sim.core.integrators.fixed_step.float_torque` uses.
+    float evaluation :func:`float_torque` uses.
     """
     n1 = n2 = n3 = 0.0
     rows = polynomial.shape[0]
@@ -171,3 +172,57 @@ def evaluate_torque_data(kind, polynomial, gravity, t, q, w):
             return n1 + g1, n2 + g2, n3 + g3
         return g1, g2, g3
     return n1, n2, n3
+
+
+# -- the torque as the kernels see it: data (compiled) or a Python callable (interpreted) ----
+
+FloatTorque = Callable[[float, tuple, tuple], tuple]
+
+
+@register_jitable
+def has_torque(torque):
+    """False for a free body (no torque, or an all-zero constant); ``torque`` a TorqueData tuple."""
+    return torque[0] != TORQUE_NONE
+
+
+@register_jitable
+def attitude_dependent(torque):
+    """True when the torque may depend on the attitude (gravity, or any callable)."""
+    return torque[0] >= TORQUE_GRAVITY
+
+
+def torque_at(torque: Any, t: float, q: tuple, w: tuple) -> tuple[float, float, float]:
+    """The torque (N1, N2, N3) at (t, q, omega) for a kernel: data, or a Python callable.
+
+    Compiled kernels get the data-only version below (numba ``overload``).
+    """
+    if torque[0] == TORQUE_CALLABLE:
+        n1, n2, n3 = np.asarray(torque[3](t, np.array(q), np.array(w)), dtype=float).reshape(3).tolist()
+        return n1, n2, n3
+    return evaluate_torque_data(torque[0], torque[1], torque[2], t, q, w)
+
+
+@overload(torque_at)
+def _torque_at_compiled(torque, t, q, w):
+    def impl(torque, t, q, w):
+        return evaluate_torque_data(torque[0], torque[1], torque[2], t, q, w)
+
+    return impl
+
+
+def float_torque(torque: Any) -> tuple[FloatTorque | None, bool]:
+    """Adapt a torque model to ``f(t, q, omega) -> (N1, N2, N3)`` on float tuples.
+
+    Returns ``(f, attitude_dependent)``; ``f`` is None for a free body. The structured
+    models of this module are evaluated by the kernels' formula
+    (:func:`evaluate_torque_data`); any other callable is called with small numpy arrays
+    and counts as depending on the attitude.
+    """
+    data = torque_data(torque)
+    if data.kind == TORQUE_NONE:
+        return None, False
+
+    def f(t: float, q: tuple, w: tuple) -> tuple:
+        return torque_at(data, t, tuple(q), tuple(w))
+
+    return f, data.kind >= TORQUE_GRAVITY

@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 from scipy.spatial.transform import Rotation
 
-from rigid_rot_sim.core.exact import quaternion_to_zxz
+from rigid_rot_sim.core.quaternion import quaternion_to_zxz
 from rigid_rot_sim.core.heavy_top import (
     HeavyTop,
     heavy_top_reference,

@@ -9,6 +9,7 @@ import pytest
 from rigid_rot_sim.core.integrators import METHODS, NonFiniteStateError
 from rigid_rot_sim.core.integrators.base import Integrator
 from rigid_rot_sim.core.integrators.fixed_step import FixedStepIntegrator
+from rigid_rot_sim.core.torque import ConstantTorque
 
 MOMENTS = [1.0, 2.0, 3.0]
 
@@ -73,3 +74,43 @@ def test_the_rule_holds_for_subclasses_that_override_the_loop(cls):
             call()
         assert isinstance(info.value.__cause__, ArithmeticError | ValueError)
     assert integrator.omega.tolist() == [1.0, 0.0, 0.0]
+
+
+class _Doubling(Integrator):
+    """A method giving only ``_step_impl``: the base class loops, counts and checks it."""
+
+    name = "doubling"
+
+    def _step_impl(self):
+        self.omega = self.omega * 2.0
+        self.t = self.t + self.dt
+        if self.omega[0] == 4.0:
+            raise ZeroDivisionError("float division by zero")  # after a partial update
+        if self.omega[0] > 5.0:
+            self.omega = self.omega * math.inf  # a non-finite state, caught after the step
+
+
+def test_the_base_loop_counts_checks_and_restores_a_step_impl():
+    integrator = _Doubling(MOMENTS, 0.5, omega0=[1.0, 0.0, 0.0])
+    integrator.step()
+    assert integrator.n_steps == 1 and integrator.omega.tolist() == [2.0, 0.0, 0.0] and integrator.t == 0.5
+    with pytest.raises(NonFiniteStateError) as info:
+        integrator.advance(3)  # 4.0: the step raises; the state is the one before it
+    assert isinstance(info.value.__cause__, ZeroDivisionError)
+    assert integrator.n_steps == 1 and integrator.omega.tolist() == [2.0, 0.0, 0.0] and integrator.t == 0.5
+    integrator.set_state(0.0, [0.0, 0.0, 0.0, 1.0], [3.0, 0.0, 0.0])
+    with pytest.raises(NonFiniteStateError, match="non-finite state at step 2"):
+        integrator.step()  # 6.0 -> inf: counted, then refused
+
+
+@pytest.mark.parametrize("method", sorted(METHODS))
+def test_step_is_one_counted_step_with_the_bits_of_advance_one(method):
+    torque = None if method == "exact" else ConstantTorque(np.array([0.01, -0.02, 0.03]))
+    stepped = METHODS[method](MOMENTS, 0.05, torque, omega0=[0.3, 1.0, -0.2])
+    advanced = METHODS[method](MOMENTS, 0.05, torque, omega0=[0.3, 1.0, -0.2])
+    for k in range(1, 4):
+        stepped.step()
+        advanced.advance(1)
+        assert stepped.n_steps == advanced.n_steps == k
+        assert stepped.t == advanced.t and stepped.q.tolist() == advanced.q.tolist()
+        assert stepped.omega.tolist() == advanced.omega.tolist()

@@ -428,8 +428,7 @@ def test_implicit_midpoint_is_stable_on_stiff_damping():
 
 
 def test_float_torque_matches_the_torque_models():
-    from rigid_rot_sim.core.integrators.fixed_step import float_torque
-    from rigid_rot_sim.core.torque import PolynomialTorque
+    from rigid_rot_sim.core.torque import PolynomialTorque, float_torque
 
     rng = np.random.default_rng(7)
     models = [

@@ -102,3 +102,10 @@ def test_normalize(q):
     n = quat.normalize(q)
     assert math.isclose(math.fsum(x * x for x in n), 1.0, abs_tol=1e-15)
     assert np.allclose(np.asarray(n) * np.linalg.norm(q), q, rtol=1e-14, atol=1e-14)
+
+
+def test_zxz_quaternion_matches_scipy():
+    angles = np.array([[0.3, 1.1, -0.7], [2.5, 0.0, 1.0], [-3.0, 3.0, 0.2]])
+    q = quat.zxz_to_quaternion(angles[:, 0], angles[:, 1], angles[:, 2])
+    distance = (Rotation.from_quat(q).inv() * Rotation.from_euler("ZXZ", angles)).magnitude()
+    assert np.max(distance) < 1e-15 * 8

@@ -7,6 +7,8 @@
 
 from __future__ import annotations
 
+# kernels imports every fixed-step method's kernel and installs the compiled loop that runs them
+from rigid_rot_sim.core.integrators import kernels  # noqa: F401
 from rigid_rot_sim.core.integrators.adaptive import DOP853Integrator
 from rigid_rot_sim.core.integrators.base import Integrator, NonFiniteStateError
 from rigid_rot_sim.core.integrators.exact_flow import ExactFlow, ExactSplit
@@ -24,12 +26,9 @@ METHODS: dict[str, type[Integrator]] = {
     "lie_rk4": LieRK4,
     "splitting": Splitting,
     "taylor": Taylor,
+    "exact": ExactFlow,
+    "exact_split": ExactSplit,
 }
-
-# Methods in their own modules register here, one line each:
-# METHODS["exact"] = ...           (integrators/exact_flow.py)
-# METHODS["exact_split"] = ...     (integrators/exact_flow.py)
-METHODS.update(exact=ExactFlow, exact_split=ExactSplit)
 
 
 def get_method(name: str) -> type[Integrator]:

@@ -22,7 +22,7 @@ from rigid_rot_sim.core import quaternion as quat
 from rigid_rot_sim.core import validation
 from rigid_rot_sim.core.dynamics import euler_rhs_components
 from rigid_rot_sim.core.integrators.base import Integrator, NonFiniteStateError
-from rigid_rot_sim.core.integrators.fixed_step import float_torque
+from rigid_rot_sim.core.torque import float_torque
 
 _ZERO = (0.0, 0.0, 0.0)
 
@@ -81,14 +81,16 @@ class DOP853Integrator(Integrator):
             self._rhs, self.t, y0, math.inf, rtol=self.rtol, atol=self.atol, max_step=self.max_step
         )
 
-    def _step_impl(self) -> None:
-        self._advance_to(self.t + self.dt)
-
     def advance(self, n: int) -> None:
         """Take ``n`` steps of ``dt``: one pass of the solver to the last of them."""
         if n > 0:
             self._advance_to(self.t + n * self.dt)
             self.n_steps += n
+            if not (np.all(np.isfinite(self.q)) and np.all(np.isfinite(self.omega))):
+                raise NonFiniteStateError(
+                    f"{self.name}: non-finite state at step {self.n_steps}, t = {self.t:.9g} s "
+                    f"(q = {self.q}, omega = {self.omega})"
+                )
 
     def _advance_to(self, target: float) -> None:
         solver = self._solver

@@ -5,14 +5,18 @@ Rules for whoever implements a method:
 * Subclass :class:`Integrator`, set the class attributes ``name`` (the registry key),
   ``order`` (nominal order of accuracy) and ``fixed_step`` (False for adaptive methods,
   which still land exactly on every multiple of ``dt``).
-* Implement ``_step_impl(self) -> None``: advance ``self.t``, ``self.q`` and
-  ``self.omega`` by ``self.dt``. State lives in the *principal* body frame: ``q`` is a
+* Implement one of two things. Either ``_step_impl(self) -> None``: advance ``self.t``,
+  ``self.q`` and ``self.omega`` by ``self.dt`` (the base class's :meth:`advance` loops
+  it, counts the steps in ``n_steps``, checks each new state and restores the last good
+  one on failure); or :meth:`advance` itself, a faster loop that keeps the same
+  per-step semantics: it counts the steps it takes, stops at the first bad one with the
+  state left at the last good step, and raises. :meth:`step` is ``advance(1)``. State lives in the *principal* body frame: ``q`` is a
   unit quaternion (x, y, z, w) rotating principal -> world, ``omega`` (rad/s) and the
   torque (N*m, from ``self.torque(t, q, omega)`` or ``None`` for a free body) are in
   principal coordinates. ``self.moments`` holds (I1, I2, I3) in kg*m^2.
 * Accept method-specific options as keyword arguments in ``__init__`` and reject
   unknown ones with a ValueError naming them.
-* Never return NaN: :meth:`step` checks the new state and raises
+* Never return NaN: a step whose new state is not finite raises
   :class:`NonFiniteStateError` naming the step number and the time.
 * Every failure of a step is a :class:`NonFiniteStateError`, whatever the method: an
   ArithmeticError or ValueError raised on the way (``math domain error`` from ``sin(inf)``,
@@ -24,8 +28,6 @@ Rules for whoever implements a method:
   piecewise constant); methods that cache anything about it must re-read it each step.
   Likewise ``self.dt`` may be changed between steps (``simulate`` shortens the last one).
 * Change the state only through :meth:`set_state` (methods may keep it in a faster form).
-* :meth:`advance` takes many steps; methods may override it with a faster loop that
-  keeps the same per-step semantics and non-finite check.
 """
 
 from __future__ import annotations
@@ -147,6 +149,16 @@ class Integrator:
 
     def step(self) -> None:
         """Advance the state by one step of ``dt`` (on failure the state is the one before it)."""
+        self.advance(1)
+
+    def advance(self, n: int) -> None:
+        """Take ``n`` steps of ``dt``: the state of n calls of :meth:`step` (for adaptive
+        methods, up to their tolerance, as they may step past the intermediate outputs)."""
+        for _ in range(n):
+            self._checked_step()
+
+    def _checked_step(self) -> None:
+        """One step of :meth:`_step_impl`, counted and checked; the state before it on failure."""
         before = (self.t, self.q.copy(), self.omega.copy())
         try:
             self._step_impl()
@@ -159,12 +171,6 @@ class Integrator:
                 f"{self.name}: non-finite state at step {self.n_steps}, t = {self.t:.9g} s "
                 f"(q = {self.q}, omega = {self.omega})"
             )
-
-    def advance(self, n: int) -> None:
-        """Take ``n`` steps of ``dt``: the state of n calls of :meth:`step` (for adaptive
-        methods, up to their tolerance, as they may step past the intermediate outputs)."""
-        for _ in range(n):
-            self.step()
 
     def advance_saving(self, n_saves: int, save_every: int) -> tuple[np.ndarray, np.ndarray]:
         """Take ``n_saves * save_every`` steps; return q (n_saves, 4) and omega (n_saves, 3)

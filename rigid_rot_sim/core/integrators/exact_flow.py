@@ -29,10 +29,12 @@ from typing import Any
 import numpy as np
 from numba.extending import register_jitable
 
-from rigid_rot_sim.core.exact import TorqueFreeSolution, _solution, free_flow
+from rigid_rot_sim.core.exact import TorqueFreeSolution, free_flow, solution_from_state
 from rigid_rot_sim.core.integrators.base import Integrator, NonFiniteStateError, UnsupportedTorqueError
-from rigid_rot_sim.core.integrators.fixed_step import KICK_FAILED, OK, FixedStepIntegrator, float_torque, has_torque, torque_at
+from rigid_rot_sim.core.integrators.fixed_step import FixedStepIntegrator
 from rigid_rot_sim.core.integrators.splitting import KICK_ERROR, adjoint_kick, kick
+from rigid_rot_sim.core.integrators.status import KICK_FAILED, OK
+from rigid_rot_sim.core.torque import float_torque, has_torque, torque_at
 
 EXACT_SPLIT_ORDERS = (2, 4)
 
@@ -63,26 +65,18 @@ class ExactFlow(Integrator):
         # Re-read the torque every step: the node may replace it between steps.
         _refuse_torque(self.torque)
         if self._solution is None:
-            self._solution = _solution(self.moments, self.omega, self.q, self.t)
+            self._solution = solution_from_state(self.moments, self.omega, self.q, self.t)
             self._anchor_t, self._anchor_dt, self._anchor_k = self.t, self.dt, 0
         elif self.dt != self._anchor_dt:
             self._anchor_t, self._anchor_dt, self._anchor_k = self.t, self.dt, 0
         return self._solution
-
-    def step(self) -> None:
-        """Advance the state by one step of ``dt``."""
-        self.advance(1)
-
-    def _step_impl(self) -> None:
-        self._advance_by(1)
-        self.n_steps -= 1  # base.step() counts this step
 
     def _advance_by(self, steps: int) -> None:
         """One evaluation, on floats, at ``steps`` steps past the current state."""
         solution = self._anchor()
         k = self._anchor_k + steps
         t = self._anchor_t + k * self._anchor_dt
-        q, omega = solution._flow.evaluate_scalar(t - solution.t0)
+        q, omega = solution.state_floats(t)
         if not math.isfinite(sum(q) + sum(omega)):
             raise NonFiniteStateError(
                 f"{self.name}: non-finite state at step {self.n_steps + steps}, t = {t:.9g} s (q = {q}, omega = {omega})"

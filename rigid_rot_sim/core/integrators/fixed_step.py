@@ -18,93 +18,55 @@ small numpy arrays, as the torque contract says). There is no second copy of a f
 step k is ``t_anchor + k * dt`` from the last ``set_state`` (or change of dt), never
 accumulated, so advancing k steps in one call gives the same bits as k single steps
 (the node steps in chunks whose lengths depend on publish rates and the wall clock).
+
+The loop over the kernels lives in ``integrators/kernels.py``, which imports every method
+module (for its kernel), and so this one: it installs itself here when imported
+(:func:`install_kernel_loop`; importing ``rigid_rot_sim.core.integrators`` imports it), so
+that imports run one way only: method modules -> this module, kernels -> method modules.
+The status codes are in ``status.py`` and the torque evaluation (:func:`~rigid_rot_sim.core.torque.torque_at`,
+:func:`~rigid_rot_sim.core.torque.float_torque`) in ``core/torque.py``.
 """
 
 from __future__ import annotations
 
+from dataclasses import dataclass
 from typing import Any, Callable, ClassVar
 
 import numpy as np
-from numba.core.extending import overload
-from numba.extending import register_jitable
 
 from rigid_rot_sim.core.integrators.base import Integrator, NonFiniteStateError
-from rigid_rot_sim.core.torque import (
-    TORQUE_CALLABLE,
-    TORQUE_GRAVITY,
-    TORQUE_NONE,
-    TorqueData,
-    evaluate_torque_data,
-    torque_data,
-)
-
-State = tuple[float, float, float, float, float, float, float]
-FloatTorque = Callable[[float, tuple, tuple], tuple]
-
-#: Kernel status codes.
-OK, NON_FINITE, NEWTON_FAILED, KICK_FAILED = 0, 1, 2, 3
-
-
-@register_jitable
-def has_torque(torque):
-    """False for a free body (no torque, or an all-zero constant)."""
-    return torque[0] != TORQUE_NONE
-
-
-@register_jitable
-def attitude_dependent(torque):
-    """True when the torque may depend on the attitude (gravity, or any callable)."""
-    return torque[0] >= TORQUE_GRAVITY
-
-
-def torque_at(torque: Any, t: float, q: tuple, w: tuple) -> tuple[float, float, float]:
-    """The torque (N1, N2, N3) at (t, q, omega) for a kernel: data, or a Python callable.
-
-    Compiled kernels get the data-only version below (numba ``overload``).
-    """
-    if torque[0] == TORQUE_CALLABLE:
-        n1, n2, n3 = np.asarray(torque[3](t, np.array(q), np.array(w)), dtype=float).reshape(3).tolist()
-        return n1, n2, n3
-    return evaluate_torque_data(torque[0], torque[1], torque[2], t, q, w)
-
-
-@overload(torque_at)
-def _torque_at_compiled(torque, t, q, w):
-    def impl(torque, t, q, w):
-        return evaluate_torque_data(torque[0], torque[1], torque[2], t, q, w)
-
-    return impl
-
-
-def float_torque(torque: Any) -> tuple[FloatTorque | None, bool]:
-    """Adapt a torque model to ``f(t, q, omega) -> (N1, N2, N3)`` on float tuples.
-
-    Returns ``(f, attitude_dependent)``; ``f`` is None for a free body. The structured
-    models of ``core/torque.py`` are evaluated by the kernels' formula
-    (:func:`~rigid_rot_sim.core.torque.evaluate_torque_data`); any other callable is
-    called with small numpy arrays and counts as depending on the attitude.
-    """
-    data = torque_data(torque)
-    if data.kind == TORQUE_NONE:
-        return None, False
-
-    def f(t: float, q: tuple, w: tuple) -> tuple:
-        return torque_at(data, t, tuple(q), tuple(w))
-
-    return f, data.kind >= TORQUE_GRAVITY
-
+from rigid_rot_sim.core.integrators.status import OK, State
+from rigid_rot_sim.core.torque import TORQUE_CALLABLE, TorqueData, torque_data
 
 _NO_SAVES = np.empty((0, 7))
-_KERNELS_MODULE: list = []
 
 
-def _kernels() -> Any:
-    """``integrators.kernels`` (imported on first use: it imports every kernel module)."""
-    if not _KERNELS_MODULE:
-        from rigid_rot_sim.core.integrators import kernels
+@dataclass(frozen=True)
+class KernelLoop:
+    """The loop over the kernels: ``ids`` maps a ``kernel_name`` to what the loops dispatch on.
 
-        _KERNELS_MODULE.append(kernels)
-    return _KERNELS_MODULE[0]
+    ``compiled`` and ``interpreted`` are ``advance_steps(method, t_anchor, k0, dt, n, state,
+    moments, torque, save_every, saved) -> (state, steps done, status, bad state)``, compiled
+    (data torques) and plain Python (callable torques).
+    """
+
+    ids: dict[str, int]
+    compiled: Callable[..., tuple]
+    interpreted: Callable[..., tuple]
+
+
+_LOOP: list[KernelLoop] = []
+
+
+def install_kernel_loop(loop: KernelLoop) -> None:
+    """Run the fixed-step methods with ``loop`` (called once, by ``integrators.kernels``)."""
+    _LOOP[:] = [loop]
+
+
+def _kernel_loop() -> KernelLoop:
+    if not _LOOP:
+        raise RuntimeError("no kernel loop installed: import rigid_rot_sim.core.integrators (it imports kernels)")
+    return _LOOP[0]
 
 
 class FixedStepIntegrator(Integrator):
@@ -128,14 +90,6 @@ class FixedStepIntegrator(Integrator):
             self._torque_compiled = self._torque_cache.compiled
         return self._torque_cache
 
-    def step(self) -> None:
-        """Advance the state by one step of ``dt``."""
-        self.advance(1)
-
-    def _step_impl(self) -> None:
-        self.advance(1)
-        self.n_steps -= 1  # base.step() counts this step
-
     def advance(self, n: int) -> None:
         """Take ``n`` steps of ``dt``; raise NonFiniteStateError at the first bad step.
 
@@ -149,17 +103,17 @@ class FixedStepIntegrator(Integrator):
         return saved[:, :4], saved[:, 4:]
 
     def _run(self, n: int, save_every: int) -> np.ndarray:
-        kernels = _kernels()
+        loop = _kernel_loop()
         if self.dt != self._anchor_dt:  # dt changed: time restarts from here
             self._anchor_t, self._anchor_k, self._anchor_dt = self.t, 0, self.dt
         saved = np.empty((n // save_every, 7)) if save_every > 0 else _NO_SAVES
         if n <= 0:
             return saved
         data = self._torque_data()
-        method = kernels.KERNEL_IDS[self.kernel_name]
+        method = loop.ids[self.kernel_name]
         start_k = self._anchor_k
         if data.kind != TORQUE_CALLABLE:
-            state, done, status, bad = kernels.advance_compiled(
+            state, done, status, bad = loop.compiled(
                 method, self._anchor_t, start_k, self.dt, n, self._state, self._moments, self._torque_compiled, save_every,
                 saved,
             )
@@ -170,7 +124,7 @@ class FixedStepIntegrator(Integrator):
             row = np.empty((1, 7))
             try:
                 while done < n and status == OK:
-                    state, one, status, bad = kernels.advance_steps(
+                    state, one, status, bad = loop.interpreted(
                         method, self._anchor_t, start_k + done, self.dt, 1, state, self._moments, data, 1, row
                     )
                     done += one

@@ -31,14 +31,9 @@ from numba.extending import register_jitable
 from rigid_rot_sim.core import quaternion as quat
 from rigid_rot_sim.core.dynamics import euler_rhs_components
 from rigid_rot_sim.core.integrators.base import NonFiniteStateError
-from rigid_rot_sim.core.integrators.fixed_step import (
-    NEWTON_FAILED,
-    OK,
-    FixedStepIntegrator,
-    attitude_dependent,
-    has_torque,
-    torque_at,
-)
+from rigid_rot_sim.core.integrators.fixed_step import FixedStepIntegrator
+from rigid_rot_sim.core.integrators.status import NEWTON_FAILED, OK
+from rigid_rot_sim.core.torque import attitude_dependent, has_torque, torque_at
 
 _EPS = 2.220446049250313e-16
 _MAX_ITERATIONS = 60

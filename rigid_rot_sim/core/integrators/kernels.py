@@ -5,7 +5,8 @@ registered kernel for n steps: time of step k ``t_anchor + k * dt``, a non-finit
 after every step, the state saved after every ``save_every``-th. It is compiled once per
 machine (``make setup`` does it; see ``core/jit.py`` for where the cache lives) and
 reused by every later process. :func:`advance_steps` is
-the same loop uncompiled, for torques given as Python callables.
+the same loop uncompiled, for torques given as Python callables. Importing this module
+installs both in ``fixed_step.py`` (:func:`~.fixed_step.install_kernel_loop`), which runs them.
 """
 
 from __future__ import annotations
@@ -16,10 +17,11 @@ from numba.extending import register_jitable
 
 from rigid_rot_sim.core.integrators.exact_flow import exact_split_step
 from rigid_rot_sim.core.integrators.explicit import euler_step, rk4_step
-from rigid_rot_sim.core.integrators.fixed_step import NON_FINITE, OK
+from rigid_rot_sim.core.integrators.fixed_step import KernelLoop, install_kernel_loop
 from rigid_rot_sim.core.integrators.implicit import implicit_midpoint_step
 from rigid_rot_sim.core.integrators.lie import cf4_step
 from rigid_rot_sim.core.integrators.splitting import COMPOSITIONS, splitting_step
+from rigid_rot_sim.core.integrators.status import NON_FINITE, OK
 from rigid_rot_sim.core.jit import compiled
 
 EULER, RK4, LIE_RK4, IMPLICIT_MIDPOINT, SPLITTING2, SPLITTING4, SPLITTING6, EXACT_SPLIT2, EXACT_SPLIT4 = range(9)
@@ -94,3 +96,5 @@ def advance_steps(method, t_anchor, k0, dt, n, state, moments, torque, save_ever
 
 
 advance_compiled = compiled(advance_steps)
+
+install_kernel_loop(KernelLoop(KERNEL_IDS, advance_compiled, advance_steps))

@@ -19,7 +19,9 @@ from numba.extending import register_jitable
 
 from rigid_rot_sim.core import quaternion as quat
 from rigid_rot_sim.core.dynamics import euler_rhs_components
-from rigid_rot_sim.core.integrators.fixed_step import OK, FixedStepIntegrator, attitude_dependent, has_torque, torque_at
+from rigid_rot_sim.core.integrators.fixed_step import FixedStepIntegrator
+from rigid_rot_sim.core.integrators.status import OK
+from rigid_rot_sim.core.torque import attitude_dependent, has_torque, torque_at
 
 
 @register_jitable

@@ -37,7 +37,9 @@ from numba.extending import register_jitable
 from rigid_rot_sim.core import quaternion as quat
 from rigid_rot_sim.core.dynamics import axes_by_moment
 from rigid_rot_sim.core.integrators.base import NonFiniteStateError
-from rigid_rot_sim.core.integrators.fixed_step import KICK_FAILED, OK, FixedStepIntegrator, has_torque, torque_at
+from rigid_rot_sim.core.integrators.fixed_step import FixedStepIntegrator
+from rigid_rot_sim.core.integrators.status import KICK_FAILED, OK
+from rigid_rot_sim.core.torque import has_torque, torque_at
 
 _CBRT2 = 2.0 ** (1.0 / 3.0)
 # Yoshida 1990, Table 1, solution A (w1, w2, w3); w0 = 1 - 2 (w1 + w2 + w3)

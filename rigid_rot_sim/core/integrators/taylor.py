@@ -276,10 +276,6 @@ class Taylor(Integrator):
         self._rho = None
         self._series = None
 
-    def _step_impl(self) -> None:
-        self._advance_steps(1)
-        self.n_steps -= 1  # base.step() counts this step
-
     def advance(self, n: int) -> None:
         """Take ``n`` API steps of ``dt`` in one compiled loop (the same bits as n calls of
         :meth:`step`: each API step is the same computation either way)."""
