@@ -227,17 +227,9 @@ class CommandSchedule:
             raise ValueError(f"frame must be 'body' or 'world', got {frame!r}")
         values = self.finite_torque(source, torque)
         effective_time = validation.finite_scalar("effective_time", effective_time)
-        command = TorqueCommand(
-            source=source,
-            torque=values,
-            frame=frame,
-            effective_time=effective_time,
-            step=self.clock.step_at_or_after(effective_time),
-            receipt_time=receipt_time,
-            stamp=stamp,
+        return self._schedule(
+            EventKind.COMMAND, source, values, frame, effective_time, receipt_time=receipt_time, stamp=stamp
         )
-        self._push(command.step, EventKind.COMMAND, command)
-        return command
 
     def apply(self, torque: Any, frame_id: str, duration: float, effective_time: float | None = None) -> TorqueCommand:
         """Add ``torque`` (N*m, in ``frame_id``; empty = body) for ``duration`` s from now (or ``effective_time``)."""
@@ -248,16 +240,18 @@ class CommandSchedule:
             raise CommandRejected(source, f"duration must be finite and > 0 s, got {duration}")
         now = self.clock.t
         start = now if effective_time is None else validation.finite_scalar("effective_time", effective_time)
-        command = TorqueCommand(
-            source=source,
-            torque=values,
-            frame=frame,
-            effective_time=start,
-            step=self.clock.step_at_or_after(start),
-            receipt_time=now if effective_time is None else None,
-            duration=float(duration),
+        receipt_time = now if effective_time is None else None
+        return self._schedule(
+            EventKind.APPLY_START, source, values, frame, start, receipt_time=receipt_time, duration=float(duration)
         )
-        self._push(command.step, EventKind.APPLY_START, command)
+
+    def _schedule(
+        self, kind: EventKind, source: str, torque: Torque, frame: str, effective_time: float, **details: Any
+    ) -> TorqueCommand:
+        """The command of ``kind`` taking effect on the first boundary at or after ``effective_time``, queued."""
+        step = self.clock.step_at_or_after(effective_time)
+        command = TorqueCommand(source, torque, frame, effective_time, step, **details)
+        self._push(step, kind, command)
         return command
 
     def reschedule(self) -> None:
