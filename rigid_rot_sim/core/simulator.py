@@ -1,9 +1,11 @@
 """The simulation of one scene, step by step, without ROS: what the node (and resim) drive.
 
-:class:`Simulator` owns the rigid body, the integrator from the registry, pause / step /
-reset / set_state and the run's failure state, and reports every outside change to its
-observers (:class:`~rigid_rot_sim.core.observer.SimulationObserver`). It delegates to
-four parts, each in its own module: the step clock (:mod:`~rigid_rot_sim.core.clock`),
+:class:`Simulator` is the one entry point of a run: it owns the scene's rigid body, pause /
+step / reset / set_state and the run's failure state, and reports every outside change to
+its observers (:class:`~rigid_rot_sim.core.observer.SimulationObserver`: a command accepted
+in :meth:`~Simulator.submit_torque`, where :meth:`~Simulator.receive_torque` leads too, or
+rejected, an applied torque, set_state, reset, an integrator change, a failure). It
+delegates to four parts, each in its own module: the step clock (:mod:`~rigid_rot_sim.core.clock`),
 the torque commands with their hold / timeout state, the scene's torque schedules and
 the torques applied for a duration (:mod:`~rigid_rot_sim.core.commands`), the integrator
 stepped within the run's limits (:mod:`~rigid_rot_sim.core.stepper`), and the user-frame
