@@ -8,14 +8,15 @@ from rigid_rot_sim.core.clock import StepClock
 from rigid_rot_sim.core.commands import APPLY_TORQUE_SOURCE, STAMP_HORIZON, CommandRejected, CommandSchedule
 from rigid_rot_sim.core.scene import parse_scene_text
 
+# three inputs: held for ever (body frame), held 0.05 s (frame from the header), world frame
 SCENE = """
+integrator: {method: rk4, dt: 0.01}
 body: {principal_moments: [2.0, 3.0, 4.0]}
-frames: {world: map, body: base}
 torque_inputs:
   - {topic: hold_in, frame: body}
   - {topic: timeout_in, frame: header, hold: {timeout: 0.05}}
   - {topic: world_in, type: Vector3Stamped, frame: world}
-integrator: {method: rk4, dt: 0.01}
+frames: {world: map, body: base}
 """
 
 SCHEDULED = """
