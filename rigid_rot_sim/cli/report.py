@@ -31,7 +31,8 @@ def add_parser(subparsers) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from rigid_rot_sim.analysis.workprecision import TARGETS, run_report, summary
+    from rigid_rot_sim.analysis.workprecision import TARGETS, summary
+    from rigid_rot_sim.analysis.workprecision_report import run_report
 
     command = "rigid-rot report" + (" --quick" if args.quick else "") + f" --out {args.out}"
     if args.problems:

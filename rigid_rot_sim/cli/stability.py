@@ -30,7 +30,7 @@ def add_parser(subparsers) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from rigid_rot_sim.analysis.stability import run_suite
+    from rigid_rot_sim.analysis.stability_report import run_suite
 
     if args.long_steps is not None and args.long_steps < 10:
         raise ValueError(f"--long-steps must be >= 10, got {args.long_steps}")

@@ -9,6 +9,7 @@ import math
 import pytest
 
 from rigid_rot_sim.analysis import workprecision as wp
+from rigid_rot_sim.analysis.workprecision_report import run_report
 from rigid_rot_sim.cli import main
 from rigid_rot_sim.core.integrators import METHODS
 
@@ -19,7 +20,7 @@ TINY = dict(repeats=1, budget_seconds=0.03, max_step_points=4, tolerances=(1e-3,
 def report(tmp_path_factory):
     out = tmp_path_factory.mktemp("report")
     settings = wp.Settings.quick_mode(**TINY)
-    results, paths = wp.run_report(out, problem_keys=["P1", "P2"], settings=settings, progress=False)
+    results, paths = run_report(out, problem_keys=["P1", "P2"], settings=settings, progress=False)
     return out, {r.problem: r for r in results}, paths
 
 
