@@ -60,7 +60,7 @@ BISECTED = ("euler", "rk4", "lie_rk4", "implicit_midpoint", "splitting")
 
 
 @dataclass
-class Run:
+class CaseRun:
     """What one method did on one case."""
 
     method: str
@@ -89,7 +89,8 @@ def _invariants(problem: Problem, q: np.ndarray, omega: np.ndarray) -> tuple[flo
     return problem.energy(q, omega), norm, norm
 
 
-def _make(method: str, case: Case, dt: float, torque: Any) -> Any:
+def _integrator(method: str, case: Case, dt: float, torque: Any) -> Any:
+    """The integrator of ``method`` (a label such as 'splitting(order=4)') on ``case``'s body, at step ``dt``."""
     problem = case.problem
     name, options = _method_and_options(method)
     options.update(case.options.get(method, {}))
@@ -108,10 +109,10 @@ def _method_and_options(label: str) -> tuple[str, dict[str, Any]]:
     return name, options
 
 
-def run_case(case: Case, method: str) -> Run:
+def run_case(case: Case, method: str) -> CaseRun:
     """One method on one case (all steps, ~SAMPLES samples of the invariants)."""
     problem = case.problem
-    run = Run(method, "stable")
+    run = CaseRun(method, "stable")
     n = case.n_steps
     dt = problem.t_end / n
     samples = min(SAMPLES, n)
@@ -119,12 +120,12 @@ def run_case(case: Case, method: str) -> Run:
     start = time.perf_counter()
     try:
         if case.impulse is not None:
-            integrator = _make(method, case, dt, ConstantTorque(np.asarray(case.impulse)))
+            integrator = _integrator(method, case, dt, ConstantTorque(np.asarray(case.impulse)))
             integrator.advance(1)
             integrator.torque = None
             chunks[0] -= 1
         else:
-            integrator = _make(method, case, dt, problem.torque)
+            integrator = _integrator(method, case, dt, problem.torque)
         # conserved from here on (right after the kick, for an impulse)
         first = _invariants(problem, integrator.q, integrator.omega)
         drift_e = drift_m = qnorm = 0.0
@@ -163,7 +164,7 @@ def run_case(case: Case, method: str) -> Run:
     run.passed = _passes(case.criterion, run)
     if case.same_as is not None and run.status == "stable":
         twin = dataclasses.replace(case, problem=case.same_as, same_as=None)
-        other = _make(method, twin, dt, case.same_as.torque)
+        other = _integrator(method, twin, dt, case.same_as.torque)
         other.advance(n)
         gap = max(
             omega_error(other.omega, integrator.omega) / float(np.linalg.norm(other.omega)),
@@ -177,7 +178,7 @@ def run_case(case: Case, method: str) -> Run:
     return run
 
 
-def _passes(criterion: Criterion, run: Run) -> bool:
+def _passes(criterion: Criterion, run: CaseRun) -> bool:
     checks = (
         (criterion.energy_drift, run.energy_drift),
         (criterion.momentum_drift, run.momentum_drift),
@@ -198,7 +199,7 @@ def _flip_times_match(case: Case, method: str, tolerance: float = 0.1) -> tuple[
     """Compare the flip times (sign changes of omega_2) with the exact solution's."""
     problem = case.problem
     n = case.n_steps
-    integrator = _make(method, case, problem.t_end / n, problem.torque)
+    integrator = _integrator(method, case, problem.t_end / n, problem.torque)
     t = np.linspace(0.0, problem.t_end, n + 1)
     omega2 = np.empty(n + 1)
     omega2[0] = problem.omega0[1]
@@ -217,7 +218,7 @@ def _is_stable(case: Case, method: str, dt: float, steps: int) -> bool:
     """``steps`` steps of ``dt`` stay finite with energy and momentum growth <= BISECTION_GROWTH."""
     problem = case.problem
     try:
-        integrator = _make(method, case, dt, problem.torque)
+        integrator = _integrator(method, case, dt, problem.torque)
         e0, m0, _ = _invariants(problem, integrator.q, integrator.omega)
         for _ in range(10):
             integrator.advance(steps // 10)

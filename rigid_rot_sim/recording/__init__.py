@@ -5,6 +5,8 @@ Modules, one job each:
 * :mod:`.definitions` - complete ``ros2msg`` definitions and type hashes (installed .msg
   files; ``tf2_msgs/msg/TFMessage`` embedded), CDR encoders/decoders from definitions;
 * :mod:`.writer` - :class:`~.writer.Recorder`, the MCAP file rosbag2 reads as a lone-file bag;
+* :mod:`.bag_metadata` - what rosbag2 reads besides the messages: offered QoS, topic
+  records, the BagMetadata YAML (shared by the writer and ``repair``);
 * :mod:`.session` - :class:`~.session.RunRecorder`, one simulator run (metadata, /tf, events);
 * :mod:`.events` - the simulation event log that makes re-simulation exact;
 * :mod:`.node_recording` - the decorators through which the node records;
