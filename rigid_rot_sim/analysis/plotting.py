@@ -29,7 +29,7 @@ def work_precision_plot(
 ) -> Path:
     """Omega error at the final time (rad/s) against run time (s), log-log, a line per method.
 
-    ``points`` are :class:`rigid_rot_sim.analysis.workprecision.Point` (or dicts with the
+    ``points`` are :class:`rigid_rot_sim.analysis.workprecision.SweepPoint` (or dicts with the
     same keys); only finished runs ("ok") are drawn.
     """
     rows = [p if isinstance(p, dict) else vars(p) for p in points]

@@ -33,7 +33,7 @@ import dataclasses
 import math
 import time
 from dataclasses import dataclass
-from typing import Any
+from typing import Any, Literal
 
 import numpy as np
 
@@ -64,7 +64,7 @@ class CaseRun:
     """What one method did on one case."""
 
     method: str
-    status: str
+    status: Literal["stable", "unstable", "refused"]
     message: str = ""
     passed: bool = False
     energy_drift: float = math.nan
@@ -274,7 +274,7 @@ class LongHorizon:
     last_tenth_mean: float
     final: float
     secular: bool
-    status: str = "stable"
+    status: Literal["stable", "unstable"] = "stable"
     message: str = ""
 
 

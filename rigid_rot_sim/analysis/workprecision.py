@@ -30,7 +30,7 @@ import gc
 import math
 import time
 from dataclasses import asdict, dataclass, field
-from typing import Any, Callable, Iterable
+from typing import Any, Callable, Iterable, Literal
 
 import numpy as np
 from scipy.integrate import solve_ivp
@@ -63,26 +63,26 @@ TOLERANCE_OPTIONS: dict[str, Callable[[float], dict[str, float]]] = {
 
 
 @dataclass(frozen=True)
-class Line:
+class DiagramLine:
     """One curve of a work-precision diagram: a method with fixed options, and its sweep kind."""
 
     label: str
-    family: str  # "ours" or "scipy"
+    family: Literal["ours", "scipy"]
     method: str
     options: tuple[tuple[str, Any], ...] = ()
-    sweep: str = "step"  # "step", "tol" or "single"
+    sweep: Literal["step", "tol", "single"] = "step"  # "single": one run of length t_end
 
 
 @dataclass
-class Point:
+class SweepPoint:
     """One run: the sweep parameter, its errors at t_end and its best run time."""
 
     label: str
-    family: str
+    family: Literal["ours", "scipy"]
     method: str
-    parameter: str  # "dt" or "tol"
+    parameter: Literal["dt", "tol"]
     value: float
-    status: str  # "ok", "unstable" (non-finite state) or "refused" (ValueError)
+    status: Literal["ok", "unstable", "refused"]  # unstable: non-finite state; refused: ValueError
     message: str = ""
     seconds: float = math.nan
     repeats: int = 0
@@ -128,28 +128,28 @@ class ProblemResult:
     t_end: float
     reference: str
     reference_error: float
-    points: list[Point] = field(default_factory=list)
+    points: list[SweepPoint] = field(default_factory=list)
 
 
-def our_lines(methods: Iterable[str], problem: Problem) -> list[Line]:
+def method_lines(methods: Iterable[str], problem: Problem) -> list[DiagramLine]:
     """The curves for our methods (one per order for the splittings)."""
     lines = []
     for name in methods:
         cls = METHODS[name]
         if name in ORDER_VARIANTS:
             for order in ORDER_VARIANTS[name]:
-                lines.append(Line(f"{name}(order={order})", "ours", name, (("order", order),), "step"))
+                lines.append(DiagramLine(f"{name}(order={order})", "ours", name, (("order", order),), "step"))
         elif name == "exact":
-            lines.append(Line(name, "ours", name, (), "single"))
+            lines.append(DiagramLine(name, "ours", name, (), "single"))
         elif not getattr(cls, "fixed_step", True):
-            lines.append(Line(name, "ours", name, (), "tol" if name in TOLERANCE_OPTIONS else "single"))
+            lines.append(DiagramLine(name, "ours", name, (), "tol" if name in TOLERANCE_OPTIONS else "single"))
         else:
-            lines.append(Line(name, "ours", name, (), "step"))
+            lines.append(DiagramLine(name, "ours", name, (), "step"))
     return lines
 
 
-def scipy_lines(methods: Iterable[str]) -> list[Line]:
-    return [Line(f"scipy {m}", "scipy", m, (), "tol") for m in methods]
+def scipy_lines(methods: Iterable[str]) -> list[DiagramLine]:
+    return [DiagramLine(f"scipy {m}", "scipy", m, (), "tol") for m in methods]
 
 
 def _best_time(run: Callable[[], Any], repeats: int) -> tuple[Any, float, int]:
@@ -177,7 +177,7 @@ def _best_time(run: Callable[[], Any], repeats: int) -> tuple[Any, float, int]:
     return result, best, done
 
 
-def _runner(problem: Problem, line: Line, value: float) -> tuple[Callable[[], tuple[np.ndarray, np.ndarray, int]], str]:
+def _runner(problem: Problem, line: DiagramLine, value: float) -> tuple[Callable[[], tuple[np.ndarray, np.ndarray, int]], str]:
     """A zero-argument callable doing the full timed run, and the sweep parameter name."""
     if line.family == "scipy":
         y0 = np.concatenate((problem.q0, problem.omega0))
@@ -210,16 +210,16 @@ def _runner(problem: Problem, line: Line, value: float) -> tuple[Callable[[], tu
     return run_ours, parameter
 
 
-def measure_point(problem: Problem, line: Line, value: float, repeats: int, baseline: bool = False) -> Point:
+def measure_point(problem: Problem, line: DiagramLine, value: float, repeats: int, baseline: bool = False) -> SweepPoint:
     """Run one sweep point and compare its final state with the problem's reference.
 
     ``baseline``: also time scipy's BASELINE_METHOD at BASELINE_TOL on the same problem,
     right before the point, into ``point.baseline_seconds``.
     """
     run, parameter = _runner(problem, line, value)
-    point = Point(line.label, line.family, line.method, parameter, float(value), "ok")
+    point = SweepPoint(line.label, line.family, line.method, parameter, float(value), "ok")
     if baseline:
-        base_run, _ = _runner(problem, Line("scipy baseline", "scipy", BASELINE_METHOD, (), "tol"), BASELINE_TOL)
+        base_run, _ = _runner(problem, DiagramLine("scipy baseline", "scipy", BASELINE_METHOD, (), "tol"), BASELINE_TOL)
         _, point.baseline_seconds, _ = _best_time(base_run, repeats)
     try:
         (q, omega, n), seconds, done = _best_time(run, repeats)
@@ -238,7 +238,7 @@ def measure_point(problem: Problem, line: Line, value: float, repeats: int, base
     return point
 
 
-def sweep_values(problem: Problem, line: Line, settings: Settings) -> list[float]:
+def sweep_values(problem: Problem, line: DiagramLine, settings: Settings) -> list[float]:
     """The sweep parameter values of a line, coarse to fine."""
     if line.sweep == "single":
         return [problem.t_end]
@@ -258,13 +258,13 @@ def run_problem(problem: Problem, settings: Settings, progress: Any = None) -> P
     return result
 
 
-def problem_lines(problem: Problem, settings: Settings) -> list[Line]:
+def problem_lines(problem: Problem, settings: Settings) -> list[DiagramLine]:
     """The lines of one problem's diagram: ours, then scipy's."""
     methods = settings.methods if settings.methods is not None else tuple(METHODS)
-    return our_lines(methods, problem) + scipy_lines(settings.scipy_methods)
+    return method_lines(methods, problem) + scipy_lines(settings.scipy_methods)
 
 
-def run_line(problem: Problem, line: Line, settings: Settings, progress: Any = None, baseline: bool = False) -> list[Point]:
+def run_line(problem: Problem, line: DiagramLine, settings: Settings, progress: Any = None, baseline: bool = False) -> list[SweepPoint]:
     """One line's sweep, coarse to fine, until a point exceeds the time budget or the error floor.
 
     ``baseline``: time every point together with the scipy baseline (see measure_point).
@@ -299,7 +299,7 @@ def run_line(problem: Problem, line: Line, settings: Settings, progress: Any = N
     return points
 
 
-def line_task(problem_key: str, line: Line, settings: Settings) -> list[Point]:
+def line_task(problem_key: str, line: DiagramLine, settings: Settings) -> list[SweepPoint]:
     """A Dask task: one line of one problem, each point timed with the scipy baseline on this worker."""
     return run_line(get_problem(problem_key), line, settings, baseline=True)
 
@@ -309,12 +309,12 @@ def planned_points(problems: Iterable[Problem], settings: Settings) -> int:
     return sum(len(sweep_values(p, line, settings)) for p in problems for line in problem_lines(p, settings))
 
 
-def cost(point: Point) -> float:
+def cost(point: SweepPoint) -> float:
     """A point's run time in units of its scipy baseline when it has one (cluster runs), else in s."""
     return point.seconds / point.baseline_seconds if point.baseline_seconds > 0.0 else point.seconds
 
 
-def fastest_at(points: Iterable[Point], target: float, family: str) -> Point | None:
+def fastest_at(points: Iterable[SweepPoint], target: float, family: str) -> SweepPoint | None:
     """The cheapest measured point of ``family`` whose omega error is <= target (by :func:`cost`)."""
     meeting = [p for p in points if p.family == family and p.status == "ok" and p.omega_error <= target]
     return min(meeting, key=cost) if meeting else None
@@ -338,7 +338,7 @@ def summary(result: ProblemResult, targets: Iterable[float] = TARGETS) -> list[d
     return rows
 
 
-def errors_fall_with_step(points: Iterable[Point], label: str, floor: float = 1e-12) -> bool:
+def errors_fall_with_step(points: Iterable[SweepPoint], label: str, floor: float = 1e-12) -> bool:
     """True if the omega error of a fixed-step line falls from its coarsest to its finest stable point.
 
     Points below ``floor`` (round-off and reference accuracy) are left out.
@@ -368,7 +368,7 @@ def run_problems(
         return results
     tasks = [(key, line, settings) for key, problem in problems.items() for line in problem_lines(problem, settings)]
 
-    def done(index: int, points: list[Point]) -> None:
+    def done(index: int, points: list[SweepPoint]) -> None:
         key, line, _ = tasks[index]
         bar.set_postfix_str(f"{key} {line.label}", refresh=False)
         bar.update(len(sweep_values(problems[key], line, settings)))

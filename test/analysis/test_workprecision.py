@@ -104,11 +104,11 @@ def test_structure_preserving_methods_conserve_on_free_body(report):
 
 def test_fastest_at_target_is_cheapest_point_meeting_it():
     pts = [
-        wp.Point("a", "ours", "a", "dt", 0.1, "ok", seconds=1.0, omega_error=1e-7),
-        wp.Point("b", "ours", "b", "dt", 0.1, "ok", seconds=0.5, omega_error=1e-5),
-        wp.Point("c", "ours", "c", "dt", 0.1, "ok", seconds=2.0, omega_error=1e-11),
-        wp.Point("s", "scipy", "s", "tol", 1e-8, "ok", seconds=4.0, omega_error=1e-7),
-        wp.Point("u", "ours", "u", "dt", 1.0, "unstable", message="boom"),
+        wp.SweepPoint("a", "ours", "a", "dt", 0.1, "ok", seconds=1.0, omega_error=1e-7),
+        wp.SweepPoint("b", "ours", "b", "dt", 0.1, "ok", seconds=0.5, omega_error=1e-5),
+        wp.SweepPoint("c", "ours", "c", "dt", 0.1, "ok", seconds=2.0, omega_error=1e-11),
+        wp.SweepPoint("s", "scipy", "s", "tol", 1e-8, "ok", seconds=4.0, omega_error=1e-7),
+        wp.SweepPoint("u", "ours", "u", "dt", 1.0, "unstable", message="boom"),
     ]
     assert wp.fastest_at(pts, 1e-6, "ours").label == "a"
     assert wp.fastest_at(pts, 1e-10, "ours").label == "c"
