@@ -144,6 +144,7 @@ def scipy_rhs(problem: Problem) -> Callable[[float, np.ndarray], np.ndarray]:
 
 
 def exact_reference(problem: Problem) -> Reference:
+    """The torque-free final state in closed form (Jacobi elliptic functions, core/exact.py)."""
     solution = torque_free_solution(problem.moments, problem.omega0, problem.q0)
     q, omega = solution.state(problem.t_end)
     return Reference(np.asarray(q, float), np.asarray(omega, float), f"exact ({solution.case})")
