@@ -9,7 +9,7 @@
   :mod:`.stability` runs a case against its criterion, bisects for stable steps and runs
   the long horizon; :mod:`.stability_report` runs the suite and writes its outputs.
 * :mod:`.report_io`: machine facts, number formats, markdown tables and JSON of both reports.
-* :mod:`.plotting`: matplotlib (Agg) figures of both.
+* :mod:`.plot`: matplotlib (Agg) figures of both (as :mod:`rigid_rot_sim.recording.plot` draws a recording).
 * :mod:`.sweep_spec`: sweep specs (a base scene, dispersions, grids) validated from YAML.
 * :mod:`.sweep`: a sweep's seeded inputs, its chunks, and the batch simulation of one chunk.
 * :mod:`.engine`: dask.distributed (local or existing cluster) for sweeps, report and stability.

@@ -12,7 +12,7 @@ from typing import Any
 
 from tqdm import tqdm
 
-from rigid_rot_sim.analysis.plotting import long_horizon_plot, stability_plot
+from rigid_rot_sim.analysis.plot import long_horizon_plot, stability_plot
 from rigid_rot_sim.analysis.report_io import machine_info, machine_line, markdown_table, number, write_json
 from rigid_rot_sim.analysis.stability import (
     BISECTION_GROWTH,
