@@ -116,7 +116,7 @@ _INITIAL = nullable(mapping(
                             "(instead of orientation).", 3),
         "angular_velocity": vector("Angular velocity [wx, wy, wz], rad/s, body frame.", 3),
     },
-    **{"not": {"required": ["orientation", "euler_zxz"]}},
+    **{"not": {"type": "object", "required": ["orientation", "euler_zxz"]}},
 ))
 
 _TOPIC_INPUT = mapping(

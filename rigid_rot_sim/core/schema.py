@@ -326,7 +326,7 @@ def _explain(error: ValidationError) -> tuple[list[Any], str]:
     if kind == "oneOf" and (keys := _keys_alternatives(value)) is not None:
         given = [name for name in keys if name in instance]
         return path, f"must give exactly one of {', '.join(keys)}, got {given or 'none'}"
-    if kind == "not" and list(value) == ["required"]:
+    if kind == "not" and set(value) <= {"type", "required"} and "required" in value:
         return path, f"give {' or '.join(value['required'])}, not both"
     if "errorMessage" in schema:
         return path, f"{schema['errorMessage']}, got {_show(instance)}"
