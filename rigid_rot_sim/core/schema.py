@@ -308,7 +308,9 @@ def _plural(words: str) -> str:
 def _hint(description: str | None) -> str:
     """A short description, in parentheses, to say what a missing key is."""
     text = (description or "").rstrip(".")
-    return f" ({text[:1].lower()}{text[1:]})" if text and len(text) <= 80 else ""
+    if text[1:2].islower():  # a capitalised word, not a unit or an acronym
+        text = text[:1].lower() + text[1:]
+    return f" ({text})" if text and len(text) <= 80 else ""
 
 
 def _explain(error: ValidationError) -> tuple[list[Any], str]:
