@@ -51,9 +51,9 @@ import numpy as np
 
 from rigid_rot_sim.analysis.sweep_schema import DISPERSION_KINDS, SWEEP_SCHEMA
 from rigid_rot_sim.core.batch import BATCH_METHODS
-from rigid_rot_sim.core.bounded_yaml import BoundedYAMLError, load_bounded, read_bounded
+from rigid_rot_sim.core.bounded_yaml import load_input, read_input
 from rigid_rot_sim.core.scene import Scene, SceneError, load_scene
-from rigid_rot_sim.core.schema import check
+from rigid_rot_sim.core.schema import validated
 from rigid_rot_sim.core.validation import TRIANGLE_RTOL
 from rigid_rot_sim.share import resolve_scene
 
@@ -160,32 +160,18 @@ class SweepSpec:
 def load_sweep_spec(path: str | os.PathLike[str], quick: bool = False) -> SweepSpec:
     """Read and validate the sweep spec at ``path`` (``quick``: with its quick overrides)."""
     path = os.fspath(path)
-    try:
-        text = read_bounded(path)
-    except OSError as exc:
-        raise SweepSpecError(f"{path}: cannot read sweep spec: {exc.strerror}") from None
-    except BoundedYAMLError as exc:
-        raise SweepSpecError(f"{path}: {exc}") from None
-    return parse_sweep_text(text, source=path, quick=quick)
+    return parse_sweep_text(read_input(path, "sweep spec", SweepSpecError), source=path, quick=quick)
 
 
 def parse_sweep_text(text: str, source: str = "<string>", quick: bool = False) -> SweepSpec:
     """Validate a sweep spec given as YAML text."""
-    try:
-        data = load_bounded(text)
-    except BoundedYAMLError as exc:
-        raise SweepSpecError(f"{os.path.basename(source)}: {exc}") from None
-    return parse_sweep_spec(data, source=source, text=text, quick=quick)
+    return parse_sweep_spec(load_input(text, source, SweepSpecError), source=source, text=text, quick=quick)
 
 
 def parse_sweep_spec(data: Any, source: str = "<string>", text: str = "", quick: bool = False) -> SweepSpec:
     """Validate a sweep spec given as parsed YAML; ``quick`` applies its ``quick`` overrides."""
-    label = os.path.basename(source) if source else "<string>"
-    check(data, SWEEP_SCHEMA, label, SweepSpecError)
-    try:
-        return _sweep(_with_quick(data) if quick else data, source, text)
-    except ValueError as exc:  # "<key>: <problem>" from the checks below
-        raise SweepSpecError(f"{label}: {exc}") from None
+    return validated(data, SWEEP_SCHEMA, source, SweepSpecError,
+                     lambda spec: _sweep(_with_quick(spec) if quick else spec, source, text))
 
 
 def with_samples(spec: SweepSpec, samples: int) -> SweepSpec:

@@ -36,11 +36,11 @@ from typing import Any, Callable, Mapping
 
 import numpy as np
 from rigid_rot_sim.core import limits, names, validation
-from rigid_rot_sim.core.bounded_yaml import BoundedYAMLError, load_bounded, read_bounded
+from rigid_rot_sim.core.bounded_yaml import load_input, read_input
 from rigid_rot_sim.core.exact import zxz_to_quaternion
 from rigid_rot_sim.core.inertia import mass_properties
 from rigid_rot_sim.core.integrators import get_method
-from rigid_rot_sim.core.schema import check
+from rigid_rot_sim.core.schema import validated
 from rigid_rot_sim.core.scene_schema import (
     DEFAULT_BODY_FRAME,
     DEFAULT_GRAVITY,
@@ -303,34 +303,19 @@ class Scene:
 def load_scene(path: str | os.PathLike[str]) -> Scene:
     """Read and validate the scene file at ``path``."""
     path = os.fspath(path)
-    try:
-        text = read_bounded(path)
-    except OSError as exc:
-        raise SceneError(f"{path}: cannot read scene file: {exc.strerror}") from None
-    except BoundedYAMLError as exc:
-        raise SceneError(f"{path}: {exc}") from None
-    return parse_scene_text(text, source=path)
+    return parse_scene_text(read_input(path, "scene file", SceneError), source=path)
 
 
 def parse_scene_text(text: str, source: str = "<string>") -> Scene:
     """Validate a scene given as YAML text (e.g. from a recording's metadata)."""
-    try:
-        data = load_bounded(text)
-    except BoundedYAMLError as exc:
-        raise SceneError(f"{os.path.basename(source)}: {exc}") from None
-    return parse_scene(data, source=source, text=text)
+    return parse_scene(load_input(text, source, SceneError), source=source, text=text)
 
 
 def parse_scene(data: Any, source: str = "<string>", text: str = "") -> Scene:
     """Validate a scene given as parsed YAML (a mapping); ``source`` names it in errors."""
-    label = os.path.basename(source) if source else "<string>"
-    check(data, SCENE_SCHEMA, label, SceneError)
     # numpy overflows (a tensor near the magnitude limit) are checked as results, never warned
     with np.errstate(all="ignore"):
-        try:
-            return _scene(data, source, text)
-        except ValueError as exc:  # "<key>: <problem>" from the checks below
-            raise SceneError(f"{label}: {exc}") from None
+        return validated(data, SCENE_SCHEMA, source, SceneError, lambda spec: _scene(spec, source, text))
 
 
 # ------------------------------------------- what the schema cannot say (the data passed it)

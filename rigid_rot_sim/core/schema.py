@@ -31,7 +31,8 @@ from __future__ import annotations
 
 import json
 import math
-from typing import Any, Iterable, Mapping, Sequence
+import os
+from typing import Any, Callable, Iterable, Mapping, Sequence, TypeVar
 
 from jsonschema import Draft202012Validator, validators
 from jsonschema.exceptions import ValidationError
@@ -41,6 +42,7 @@ from rigid_rot_sim.core import limits
 __all__ = [
     "DIALECT",
     "check",
+    "validated",
     "dump",
     "number",
     "magnitude",
@@ -213,6 +215,21 @@ def check(data: Any, schema: Mapping[str, Any], label: str, error_class: type[Va
     path, problem = _explain(_focus(error))
     where = _key_path(data, path)
     raise error_class(f"{label}: {where}: {problem}" if where else f"{label}: {problem}")
+
+
+T = TypeVar("T")
+
+
+def validated(data: Any, schema: Mapping[str, Any], source: str, error_class: type[ValueError], build: Callable[[Any], T]) -> T:
+    """``build(data)`` once ``data`` passed ``schema``: the loaders' one path from parsed YAML to
+    their dataclasses. A schema problem, or a ValueError of ``build`` (``"<key>: <problem>"``),
+    is raised as one ``error_class`` line starting with the file name of ``source``."""
+    label = os.path.basename(source) if source else "<string>"
+    check(data, schema, label, error_class)
+    try:
+        return build(data)
+    except ValueError as exc:
+        raise error_class(f"{label}: {exc}") from None
 
 
 def _loose_type(kind: str, instance: Any) -> bool:
