@@ -122,7 +122,7 @@ _INITIAL = nullable(mapping(
 _TOPIC_INPUT = mapping(
     "A torque command topic.",
     {
-        "topic": text("The ROS topic name, e.g. ~/torque (in the node's namespace) or /cmd."),
+        "topic": text("The ROS topic name, e.g. ~/torque or /cmd; or give a schedule instead."),
         "type": choice("Message type of the commands.", TORQUE_MESSAGE_TYPES, default=TORQUE_MESSAGE_TYPES[0]),
         "frame": choice("Frame the torque is expressed in: body, world, or header (header.frame_id names "
                         "the body or the world frame).", TORQUE_FRAMES, default=TORQUE_FRAMES[0]),

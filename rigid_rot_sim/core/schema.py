@@ -308,14 +308,14 @@ def _describe_type(kind: str, schema: Mapping[str, Any]) -> str:
         count = schema.get("minItems")
         if count is not None and count == schema.get("maxItems"):
             return f"a list of {count} {item}"
-        return f"a list of {item}"
+        return f"a non-empty list of {item}" if count else f"a list of {item}"
     if kind == "string":
         return "a non-empty string" if schema.get("pattern") == r"\S" or schema.get("minLength") else "a string"
     return {"number": "a number", "integer": "an integer", "object": "a mapping", "boolean": "a boolean", "null": "null"}[kind]
 
 
 def _plural(words: str) -> str:
-    for single, plural in (("a list of", "lists of"), ("a non-empty string", "non-empty strings"), ("a number", "numbers"),
+    for single, plural in (("a list of", "lists of"), ("a non-empty list of", "non-empty lists of"), ("a non-empty string", "non-empty strings"), ("a number", "numbers"),
                            ("an integer", "integers"), ("a mapping", "mappings"), ("a string", "strings")):
         if words.startswith(single):
             return plural + words[len(single):]
