@@ -52,6 +52,7 @@ from rigid_rot_sim.core.dynamics import RigidBody
 from rigid_rot_sim.core.exact import quaternion_to_zxz
 from rigid_rot_sim.core.integrators import get_method
 from rigid_rot_sim.core.integrators.base import Integrator, NonFiniteStateError
+from rigid_rot_sim.core.observer import SimulationObserver
 from rigid_rot_sim.core.scene import Scene, TopicInput
 from rigid_rot_sim.core.torque import ConstantTorque, GravityTorque
 from rigid_rot_sim.core import validation
@@ -203,6 +204,9 @@ class Simulator:
         self._body_from_principal = tuple(float(v) for v in self.body.body_from_principal)
         self._principal_from_body = quat.conjugate(self._body_from_principal)
         self._serial = itertools.count()
+        #: Told what happens to the run, in order (:class:`SimulationObserver`); add with :meth:`add_observer`.
+        self.observers: list[SimulationObserver] = []
+        self._k = 0
         self.paused = False
         self.failure: str | None = None
         self._paused_by_failure = False
@@ -223,6 +227,10 @@ class Simulator:
         reason = self._rotation_failure(0.0)
         if reason is not None:
             raise ValueError(f"initial angular velocity: {reason}")
+
+    def add_observer(self, observer: SimulationObserver) -> None:
+        """Report what happens to the run to ``observer`` from now on (after those added before)."""
+        self.observers.append(observer)
 
     # ------------------------------------------------------------------ integrator
 
@@ -286,11 +294,14 @@ class Simulator:
 
     def set_integrator(self, method: str | None = None, dt: float | None = None, options: dict[str, Any] | None = None) -> None:
         """Switch method and/or step at the current state (ValueError, nothing changed, if invalid)."""
+        step = self._k
         self._configure_integrator(
             self.method if method is None else method,
             self.dt if dt is None else dt,
             self.options if options is None and method in (None, self.method) else dict(options or {}),
         )
+        for observer in self.observers:
+            observer.integrator_changed(step, self.method, self.dt, dict(self.options))
 
     def check_integrator(self, method: str, dt: float) -> None:
         """ValueError (the reason) if :meth:`set_integrator` would refuse ``method`` at ``dt``; no change."""
@@ -395,6 +406,15 @@ class Simulator:
         spec = self.inputs.get(source)
         if spec is None:
             raise ValueError(f"source {source!r} is not a torque input of this scene (inputs: {sorted(self.inputs)})")
+        try:
+            return self._receive_torque(spec, source, torque, frame_id, stamp, force)
+        except CommandRejected as rejected:
+            self._notify_rejected(rejected, frame_id, torque)
+            raise
+
+    def _receive_torque(
+        self, spec: TopicInput, source: str, torque: Any, frame_id: str, stamp: float | None, force: Any
+    ) -> TorqueCommand:
         values = self._finite_torque(source, torque)
         if force is not None:
             force_values = self._finite_torque(source, force, "force")
@@ -437,6 +457,7 @@ class Simulator:
             raise ValueError(f"frame must be 'body' or 'world', got {frame!r}")
         values = self._finite_torque(source, torque)
         effective_time = validation.finite_scalar("effective_time", effective_time)
+        step = self._k
         command = TorqueCommand(
             source=source,
             torque=values,
@@ -447,6 +468,8 @@ class Simulator:
             stamp=stamp,
         )
         self._push(command.step, "command", command)
+        for observer in self.observers:
+            observer.command_accepted(step, command)
         return command
 
     def apply_torque(self, torque: Any, frame_id: str, duration: float, effective_time: float | None = None) -> TorqueCommand:
@@ -457,10 +480,15 @@ class Simulator:
         non-finite torque, an unknown frame or a duration that is not finite and > 0.
         """
         source = APPLY_TORQUE_SOURCE
-        values = self._finite_torque(source, torque)
-        frame = self.resolve_frame(source, frame_id, "header" if frame_id else "body")
-        if not (math.isfinite(duration) and duration > 0.0):
-            raise CommandRejected(source, f"duration must be finite and > 0 s, got {duration}")
+        try:
+            values = self._finite_torque(source, torque)
+            frame = self.resolve_frame(source, frame_id, "header" if frame_id else "body")
+            if not (math.isfinite(duration) and duration > 0.0):
+                raise CommandRejected(source, f"duration must be finite and > 0 s, got {duration}")
+        except CommandRejected as rejected:
+            self._notify_rejected(rejected, frame_id, torque)
+            raise
+        step = self._k
         start = self.t if effective_time is None else validation.finite_scalar("effective_time", effective_time)
         command = TorqueCommand(
             source=source,
@@ -472,7 +500,13 @@ class Simulator:
             duration=float(duration),
         )
         self._push(command.step, "apply_start", command)
+        for observer in self.observers:
+            observer.torque_applied(step, command)
         return command
+
+    def _notify_rejected(self, rejected: CommandRejected, frame_id: str, torque: Any) -> None:
+        for observer in self.observers:
+            observer.command_rejected(self._k, rejected.source, rejected.reason, frame_id, torque)
 
     # ------------------------------------------------------------------ events
 
@@ -612,6 +646,8 @@ class Simulator:
         self.failure = reason
         self._paused_by_failure = self._paused_by_failure or not self.paused
         self.paused = True
+        for observer in self.observers:
+            observer.failed(self._k, reason)
 
     def _torque_bound(self) -> float:
         """A bound (N*m) on the torque norm over the next steps."""
@@ -674,6 +710,7 @@ class Simulator:
 
     def reset(self) -> None:
         """Back to the scene's initial state at step 0, with no torque held or applied."""
+        step = self._k
         self._k = 0
         self._k_epoch = 0
         self._t_epoch = 0.0
@@ -695,6 +732,8 @@ class Simulator:
             self.body.vector_to_principal(np.array(self.scene.initial.angular_velocity)),
         )
         self._update_torque_sums()
+        for observer in self.observers:
+            observer.reset(step)
 
     def set_state(self, orientation: Any, angular_velocity: Any) -> None:
         """Replace attitude (x, y, z, w; body -> world) and ω (rad/s, body frame) at the current time.
@@ -702,6 +741,7 @@ class Simulator:
         The quaternion is normalised; ValueError (state unchanged) for a zero or
         non-finite one or a non-finite ω. The drift references restart here.
         """
+        step = self._k
         q = validation.quaternion("orientation", orientation)
         omega = validation.finite_vector("angular_velocity", angular_velocity)
         rotation = math.hypot(*omega.tolist()) * self.dt
@@ -714,6 +754,8 @@ class Simulator:
         self._clear_failure()
         if self._torque_world_sum is not None:
             self._set_command_torque()
+        for observer in self.observers:
+            observer.state_set(step, tuple(float(v) for v in orientation), tuple(float(v) for v in angular_velocity))
 
     def _clear_failure(self) -> None:
         """Forget a failure; a run the failure paused runs again (a pause asked for stays)."""
