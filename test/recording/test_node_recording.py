@@ -102,3 +102,39 @@ def test_tf_and_the_latched_tf_static_are_recorded_as_published(tmp_path):
     assert offered["durability"] == 1 and offered["depth"] == 1  # transient local, as published
     (_, static), = reader.decoded(["/tf_static"])
     assert static.transforms[0].child_frame_id == "base_link_principal"
+
+
+def test_without_tf2_msgs_the_recording_still_gets_tf_from_the_states(tmp_path, monkeypatch):
+    import rclpy
+
+    from rigid_rot_sim.recording.reader import BagReader
+    from rigid_rot_sim.ros import outputs
+    from rigid_rot_sim.ros.node import RigidRotSimNode
+
+    monkeypatch.setattr(outputs, "TFMessage", None)  # as on an install without tf2_msgs
+    bag = tmp_path / "no_tf2.mcap"
+    context = rclpy.Context()
+    rclpy.init(context=context)
+    try:
+        node = RigidRotSimNode(context=context, parameter_overrides=[
+            rclpy.parameter.Parameter("scene", value="from_point_masses"),
+            rclpy.parameter.Parameter("record_path", value=str(bag)),
+            rclpy.parameter.Parameter("real_time_factor", value=0.0),
+            rclpy.parameter.Parameter("duration", value=0.5),
+        ])
+        assert "tf" not in node.outputs.publishers and node.count_publishers("/tf") == 0
+        while not node.finished:
+            node.timer_callback()
+        node.destroy_node()
+    finally:
+        rclpy.try_shutdown(context=context)
+    reader = BagReader(bag)
+    assert reader.complete and "/tf_static" not in reader.counts()
+    assert reader.counts()["/tf"] == 26  # 50 Hz over 0.5 s, both ends, built from ~/state
+    states = {(m.header.stamp.sec, m.header.stamp.nanosec): m for _, m in reader.decoded(["/rigid_rot_sim/state"])}
+    for _, tf in reader.decoded(["/tf"]):
+        (transform,) = tf.transforms
+        state = states[(transform.header.stamp.sec, transform.header.stamp.nanosec)]
+        assert transform.child_frame_id == "base_link" and transform.header.frame_id == "odom"
+        rotation, orientation = transform.transform.rotation, state.orientation
+        assert (rotation.x, rotation.y, rotation.z, rotation.w) == (orientation.x, orientation.y, orientation.z, orientation.w)
