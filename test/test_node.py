@@ -118,7 +118,7 @@ def test_torque_free_scene_builds_no_subscription_and_picks_exact(harness):
                   "/rigid_rot_sim/angular_momentum", "/rigid_rot_sim/mass_properties", "/rigid_rot_sim/rejected", "/clock"):
         assert topic in topics, topic
     assert "/rigid_rot_sim/top_state" not in topics
-    assert h.node.recorder is None
+    assert h.node.recording is None
 
 
 def test_top_scene_builds_top_state_and_torque_scene_subscribes(harness):
@@ -289,7 +289,7 @@ def test_rep105_frames_by_default_on_every_output_and_recorded_tf(harness, tmp_p
     assert "/rigid_rot_sim/imu" not in h.published_topics() and "imu" not in h.node.outputs.publishers  # not asked for
     h.node.sim.pause(False)
     assert h.spin_until(lambda: h.node.finished)
-    h.node.recorder.close()
+    h.node.recording.close()
     frames = {(m.transforms[0].header.frame_id, m.transforms[0].child_frame_id) for _, m in BagReader(bag).decoded(["/tf"])}
     assert frames == {("odom", "base_link")}
 
@@ -329,7 +329,7 @@ def test_recording_without_the_mcap_package_is_disabled_with_a_message(context, 
     node = RigidRotSimNode(context=context, parameter_overrides=[
         Parameter("scene", value=str(SCENES / "free_tumble.yaml")), Parameter("record_path", value=str(tmp_path / "x.mcap"))])
     try:
-        assert node.recorder is None and node.sim is not None and not (tmp_path / "x.mcap").exists()
+        assert node.recording is None and node.sim is not None and not (tmp_path / "x.mcap").exists()
         assert "recording disabled: mcap is not installed" in capfd.readouterr().err
         k = node.sim.step_index  # the run itself goes on
         node.sim.advance_to(k + 3)

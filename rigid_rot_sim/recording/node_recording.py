@@ -170,7 +170,7 @@ class NodeRecording(SimulationObserver):
             self.file.close()
             path = self.file.path
             self.logger.info(
-                f"recording finished: {path} ({self.file.recorder.message_count} messages); "
+                f"recording finished: {path} ({self.file.message_count} messages); "
                 f"inspect with `rigid-rot bag info {path}`, `rigid-rot plot {path}`, `rigid-rot resim {path}`"
             )
         else:

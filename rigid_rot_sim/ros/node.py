@@ -90,7 +90,7 @@ class RigidRotSimNode(Node):
         accept_integers_for_doubles(self)  # `ros2 param set ... real_time_factor 2` stores 2.0
         self.sim: Simulator | None = None
         self.run: RunDriver | None = None
-        self.recorder = None
+        self.recording = None
         self.parameter_callbacks = ParameterCallbacks(self)  # refuses use_sim_time, with or without a scene
         self.inertia_service = InertiaService(self)
         scene_path = declare_scene_parameter(self)
@@ -129,9 +129,9 @@ class RigidRotSimNode(Node):
         else:
             left_out.append("simulation_interfaces services (package not installed)")
         if settings.record_path:
-            self.recorder = self._start_recording(settings.record_path, settings.record_log_time)
+            self.recording = self._start_recording(settings.record_path, settings.record_log_time)
             built.append(f"recording to {settings.record_path} (log time: {settings.record_log_time})"
-                         if self.recorder else "no recording (see the error above)")
+                         if self.recording else "no recording (see the error above)")
         else:
             left_out.append("recorder (nothing recorded)")
 
@@ -153,8 +153,8 @@ class RigidRotSimNode(Node):
             self.outputs.publish_latched(sim.t)
             self.run.publish_due(force=True)
         except BaseException:  # e.g. Ctrl-C / SIGTERM while starting (main's start-up handler)
-            if self.recorder is not None:
-                self.recorder.close()  # the recording started above ends as a complete file
+            if self.recording is not None:
+                self.recording.close()  # the recording started above ends as a complete file
             raise
 
     def _start_recording(self, path: str, log_time: str) -> Any:
@@ -166,12 +166,12 @@ class RigidRotSimNode(Node):
             missing = (exc.name or "").split(".")[0] or str(exc)
             self.get_logger().error(f"recording disabled: {missing} is not installed (pip install mcap mcap-ros2-support)")
             return None
-        recorder = NodeRecording.start(self, self.sim, self.outputs, self.inputs.subscriptions, path, log_time)
-        if recorder is not None:
-            self.sim.add_observer(recorder)  # events: commands accepted, torques applied, set_state, ...
-            self.outputs.listeners.append(recorder)  # every message published, as the bytes published
-            self.inputs.listeners.append(recorder)  # every torque command as received
-        return recorder
+        recording = NodeRecording.start(self, self.sim, self.outputs, self.inputs.subscriptions, path, log_time)
+        if recording is not None:
+            self.sim.add_observer(recording)  # events: commands accepted, torques applied, set_state, ...
+            self.outputs.listeners.append(recording)  # every message published, as the bytes published
+            self.inputs.listeners.append(recording)  # every torque command as received
+        return recording
 
     @property
     def finished(self) -> bool:
@@ -201,8 +201,8 @@ class RigidRotSimNode(Node):
             publisher.wait_for_all_acked(rclpy.duration.Duration(seconds=timeout))
 
     def destroy_node(self) -> None:
-        if self.recorder is not None:
-            self.recorder.close()  # summary and indexes: the file is complete (also on SIGINT / SIGTERM)
+        if self.recording is not None:
+            self.recording.close()  # summary and indexes: the file is complete (also on SIGINT / SIGTERM)
         super().destroy_node()
 
 
