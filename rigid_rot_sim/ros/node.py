@@ -26,7 +26,7 @@ Services
 --------
 ~/compute_inertia, ~/set_state, ~/reset (std_srvs/Trigger), ~/pause (std_srvs/SetBool),
 ~/step (rigid_rot_msgs/Step, while paused; at most ``limits.MAX_STEPS_PER_REQUEST`` steps,
-run in the service callback for at most ``STEP_REQUEST_WALL`` s: the reply says how many
+run in the service callback for at most ``services.STEP_REQUEST_WALL`` s: the reply says how many
 were done), ~/apply_torque. A bad request gets ``success = false`` and the reason; nothing
 raises out of a callback. Where simulation_interfaces is installed, also the standard
 simulator services (:mod:`.simulation_services`), through the same actions
@@ -36,7 +36,7 @@ Every limit is in :mod:`rigid_rot_sim.core.limits` (README, "Limits and failure 
 Pacing
 ------
 ``real_time_factor`` r > 0: a wall-clock timer advances the simulation to
-``r * (wall time since the anchor)`` each tick (at most ``MAX_TICK_WALL`` of work per
+``r * (wall time since the anchor)`` each tick (at most ``core.pacing.MAX_TICK_WALL`` of work per
 tick, so commands and services are served in between); r = 0: as fast as possible, in
 batches of at most ``MAX_TICK_WALL`` wall time per tick. The states do not depend on r
 or on the publish rates (see the Simulator's determinism notes). The timer runs on the

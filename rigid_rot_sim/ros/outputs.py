@@ -128,10 +128,6 @@ class Outputs(SimulationObserver):
             return []
         return [conversions.static_transform(*pose, self.frames.body, self.frames.principal)]
 
-    @property
-    def tf_static_publisher(self) -> Any:
-        return self.publishers.get("tf_static")
-
     def publish(self, name: str, msg: Any) -> None:
         """Publish ``msg`` on output ``name``: serialised once when someone listens, the same bytes to each."""
         publisher = self.publishers[name]
