@@ -21,7 +21,8 @@ from __future__ import annotations
 from typing import TYPE_CHECKING, Any, Sequence
 
 if TYPE_CHECKING:  # the dataclasses only; nothing here depends on the simulator at run time
-    from rigid_rot_sim.core.simulator import StateSnapshot, TorqueCommand
+    from rigid_rot_sim.core.commands import TorqueCommand
+    from rigid_rot_sim.core.observables import StateSnapshot
 
 
 class SimulationObserver:
