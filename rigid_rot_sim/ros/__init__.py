@@ -21,23 +21,26 @@ A torque command's route, top to bottom
    (one per topic input of the scene, created in ``TorqueInputs.__init__``).
 2. ``conversions.torque_command_from_msg(msg)``: torque, force (WrenchStamped), frame_id and
    header stamp (s) as numpy arrays and floats.
-3. ``Simulator.receive_torque(source, torque, frame_id, stamp, force)``: the checks (finite,
-   ``commands.max_torque``, zero force, frame policy, stamp horizon) and the effective time
-   (the stamp, or now); a refusal raises ``CommandRejected``, which
-   ``Simulator`` reports to its observers (``command_rejected``) and ``torque_callback``
-   publishes on ``~/rejected`` (``inputs.Rejections.reject`` -> ``outputs.Outputs.publish``).
-4. ``Simulator.submit_torque(...)``: a ``TorqueCommand`` with the step at which it takes
-   effect goes into the command schedule (the simulator's event heap), and every observer of
-   the simulator is told ``command_accepted(step, command)``; the recorder
+3. ``core.simulator.Simulator.receive_torque(source, torque, frame_id, stamp, force)`` ->
+   ``core.commands.CommandSchedule.admit``: the checks (finite, ``commands.max_torque``,
+   zero force, the input's frame policy, the stamp horizon) and the effective time (the
+   stamp, or now). A refusal raises ``CommandRejected``: the simulator reports it to its
+   observers (``command_rejected``) and ``torque_callback`` publishes it on ``~/rejected``
+   (``inputs.Rejections.reject`` -> ``outputs.Outputs.publish``).
+4. ``Simulator.submit_torque`` -> ``CommandSchedule.submit``: a ``TorqueCommand`` goes on
+   the schedule's event heap at the step where it takes effect; then every observer of the
+   simulator hears ``command_accepted(step, command)``. The recorder
    (``recording.node_recording.NodeRecording.command_accepted``) writes it to
    ``~/sim_events`` as a ``torque`` event: what resim replays.
-5. ``inputs.TorqueInputs.torque_callback`` then hands the message as received to its
-   listeners: ``NodeRecording.received`` records it on the torque topic.
+5. Back in ``torque_callback``: the message as received goes to the input listeners;
+   ``NodeRecording.received`` records it on the torque topic.
 6. Later, on the wall-clock timer: ``node.RigidRotSimNode.timer_callback`` ->
    ``core.pacing.RunDriver.tick`` (``Pacer.target_step``: the step due now) ->
-   ``RunDriver.run`` -> ``Simulator.advance_to(stop)`` -> ``Simulator.advance``: at the
-   command's step the due events are processed and the held torques summed, and the
-   integrator steps with that torque.
+   ``RunDriver.run`` -> ``Simulator.advance_to`` -> ``Simulator.advance`` ->
+   ``core.stepper.Stepper.advance``: at the command's step ``CommandSchedule.process_due``
+   makes it the input's held torque and sums what the inputs hold,
+   ``Stepper.set_command_torque`` gives that sum to the integrator (principal frame), and
+   the integrator steps with it.
 7. After each slice, ``RunDriver.publish_due`` -> ``outputs.Outputs.outputs_due(step,
    snapshot, names)`` builds each due message (``outputs.OUTPUTS``) and
    ``Outputs.publish`` serialises it once, publishes the bytes and hands the same bytes
