@@ -12,8 +12,9 @@ Modules, one job each:
 * :mod:`.replay`, :mod:`.resim`, :mod:`.plot` - what the ``rigid-rot`` subcommands run;
 * :mod:`.provenance` - package and dependency versions stored with each recording.
 
-Nothing here is imported by :mod:`rigid_rot_sim.core`; rclpy is imported only inside the
-functions that need it, so reading, resim and plots work without ROS.
+Nothing here is imported by :mod:`rigid_rot_sim.core`; ROS message packages are imported by
+the node-side :mod:`.node_recording` (through :mod:`rigid_rot_sim.conversions`) and otherwise
+only inside the functions that need them, so reading, resim and plots work without ROS.
 """
 
 #: Time bases of a recording's MCAP log times, the default first (see :mod:`.session`).

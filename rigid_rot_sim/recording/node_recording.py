@@ -29,6 +29,7 @@ import json
 from pathlib import Path
 from typing import Any, Sequence
 
+from rigid_rot_sim import conversions
 from rigid_rot_sim.core.observer import SimulationObserver
 from rigid_rot_sim.core.pacing import OutputSchedule
 from rigid_rot_sim.recording import LOG_TIME_BASES
@@ -116,9 +117,9 @@ class NodeRecording(SimulationObserver):
             return
         self.file.record_serialized(topic, data)
         if name == self.tf_from and self.sim.step_index % self.tf_period == 0:
-            q = msg.orientation if name == "state" else msg.quaternion
+            orientation = conversions.quaternion_to_array(msg.orientation if name == "state" else msg.quaternion)
             stamp = msg.header.stamp
-            self.file.record_tf(stamp.sec, stamp.nanosec, (q.x, q.y, q.z, q.w), msg.header.frame_id, self.body_frame)
+            self.file.record_tf(stamp.sec, stamp.nanosec, orientation, msg.header.frame_id, self.body_frame)
 
     def received(self, topic: str, msg: Any, received_ns: int) -> None:
         """A torque command message as received (log time: receive time in the run's time base)."""
