@@ -41,7 +41,7 @@ setup(
     entry_points={
         "console_scripts": [
             "rigid-rot = rigid_rot_sim.cli:main",
-            "rigid_rot_sim_node = rigid_rot_sim.node:main",
+            "rigid_rot_sim_node = rigid_rot_sim.ros.node:main",
         ],
     },
 )

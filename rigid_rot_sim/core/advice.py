@@ -48,9 +48,15 @@ symmetric and generic triaxial bodies:
 from __future__ import annotations
 
 import math
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
+
+from rigid_rot_sim.core import quaternion as quat
+
+if TYPE_CHECKING:
+    from rigid_rot_sim.core.dynamics import RigidBody
+    from rigid_rot_sim.core.scene import Scene
 
 #: Extent of classical RK4's stability region along the imaginary axis.
 RK4_IMAGINARY_LIMIT = 2.0 * math.sqrt(2.0)
@@ -220,3 +226,32 @@ def choose_integrator(principal_moments: Any, omega_max: float, dt: float, torqu
     if torque_kind == "gravity":
         return "exact_split"
     return "taylor"
+
+
+def omega_bound(scene: "Scene", body: "RigidBody") -> float:
+    """A bound on |ω| (rad/s) over a run of ``scene`` (exact where physics gives one).
+
+    Free body: |L| / I_min (|L| is conserved). Gravity: energy conservation,
+    ``T <= E - V_min`` so ``|ω| <= sqrt(2 (E + m g l) / I_min)``. Driven by
+    torques: the initial |L| / I_min plus the schedules' total angular impulse /
+    I_min; a topic-driven run has no a-priori bound (its commands are unknown).
+    """
+    i_min = float(np.min(body.principal_moments))
+    omega0 = np.array(scene.initial.angular_velocity, dtype=float)
+    l0 = float(np.linalg.norm(body.inertia_tensor @ omega0))
+    if scene.gravity is not None:
+        assert scene.body.mass is not None and scene.body.center_of_mass is not None
+        com_body = np.array(scene.body.center_of_mass, dtype=float)
+        weight = scene.body.mass * scene.gravity.acceleration
+        v0 = weight * quat.rotate(scene.initial.orientation, com_body)[2]  # type: ignore[arg-type]
+        t0 = 0.5 * float(omega0 @ body.inertia_tensor @ omega0)
+        reach = weight * float(np.linalg.norm(com_body))
+        return math.sqrt(2.0 * max(t0 + v0 + reach, 0.0) / i_min)
+    impulse = 0.0
+    for schedule in scene.schedules:
+        segments = schedule.segments
+        for this, following in zip(segments, segments[1:]):
+            impulse += math.hypot(*this.torque) * (following.start - this.start)
+        if math.hypot(*segments[-1].torque) > 0.0 and scene.duration is not None:
+            impulse += math.hypot(*segments[-1].torque) * max(scene.duration - segments[-1].start, 0.0)
+    return (l0 + impulse) / i_min
