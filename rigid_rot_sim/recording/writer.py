@@ -45,6 +45,16 @@ class RecorderError(RuntimeError):
     """The recording could not be started or had to stop; the message says why and where."""
 
 
+def _check_options(chunk_size: int, compression: str, flush_period: float) -> None:
+    """ValueError naming the first of :class:`Recorder`'s options that is out of range."""
+    if not flush_period > 0.0:
+        raise ValueError(f"flush_period must be > 0 s, got {flush_period}")
+    if not chunk_size > 0:
+        raise ValueError(f"chunk_size must be > 0 bytes, got {chunk_size}")
+    if compression not in _COMPRESSIONS:
+        raise ValueError(f"compression must be one of {sorted(_COMPRESSIONS)}, got {compression!r}")
+
+
 class Recorder:
     """Write serialised ROS 2 messages to an MCAP file (a lone-file rosbag2 bag).
 
@@ -81,12 +91,7 @@ class Recorder:
         on_error: Callable[[RecorderError], None] | None = None,
         ros_distro: str | None = None,
     ) -> None:
-        if not flush_period > 0.0:
-            raise ValueError(f"flush_period must be > 0 s, got {flush_period}")
-        if not chunk_size > 0:
-            raise ValueError(f"chunk_size must be > 0 bytes, got {chunk_size}")
-        if compression not in _COMPRESSIONS:
-            raise ValueError(f"compression must be one of {sorted(_COMPRESSIONS)}, got {compression!r}")
+        _check_options(chunk_size, compression, flush_period)
         self.path = Path(path)
         self.flush_period = float(flush_period)
         self.ros_distro = ros_distro or os.environ.get("ROS_DISTRO") or "jazzy"
