@@ -35,7 +35,8 @@ ROS_PINS := \
 # setuptools 65 (what ensurepip gives Python 3.11) needs `wheel` for pip's editable install.
 PY_PINS := \
 	setuptools==65.5.0 wheel==0.45.1 numpy==2.4.6 scipy==1.17.1 mcap==1.6.0 mcap-ros2-support==0.6.0 \
-	PyYAML==6.0.3 matplotlib==3.11.2 tqdm==4.70.1 numba==0.68.1 llvmlite==0.50.0
+	PyYAML==6.0.3 matplotlib==3.11.2 tqdm==4.70.1 numba==0.68.1 llvmlite==0.50.0 \
+	jsonschema==4.26.0
 # Sweeps: dask.distributed is the engine (local cluster or `dask scheduler`/`dask worker`), Parquet output.
 SWEEP_PINS := dask==2026.8.0 distributed==2026.8.0 pyarrow==26.0.1
 TEST_PINS := pytest==9.2.0 hypothesis==6.170.15 rosbags==0.11.9

@@ -29,7 +29,7 @@ setup(
         *config_data_files(),
     ],
     python_requires=">=3.10",
-    install_requires=["setuptools", "numpy", "scipy", "pyyaml", "numba"],
+    install_requires=["setuptools", "numpy", "scipy", "pyyaml", "jsonschema>=4.0", "numba"],  # jsonschema: Draft 2020-12
     # sweeps (`rigid-rot sweep`, --scheduler): no rosdep keys exist for these; pip installs them
     extras_require={"sweep": ["dask[distributed]", "pyarrow"]},
     zip_safe=True,
@@ -41,7 +41,7 @@ setup(
     entry_points={
         "console_scripts": [
             "rigid-rot = rigid_rot_sim.cli:main",
-            "rigid_rot_sim_node = rigid_rot_sim.node:main",
+            "rigid_rot_sim_node = rigid_rot_sim.ros.node:main",
         ],
     },
 )

@@ -53,7 +53,7 @@ from std_srvs.srv import SetBool, Trigger  # noqa: E402
 
 import generators  # noqa: E402
 from rigid_rot_sim.core import limits  # noqa: E402
-from rigid_rot_sim.node import COMMAND_QOS, REJECTED_QOS, STATE_QOS  # noqa: E402
+from rigid_rot_sim.ros.qos import COMMAND_QOS, REJECTED_QOS, STATE_QOS  # noqa: E402
 
 SCENES = ROOT / "config" / "scenes"
 NODE = "/rigid_rot_sim"
@@ -182,7 +182,7 @@ def parameter_request(rng: random.Random) -> SetParameters.Request:
 
 def running_node_campaign(args, rng: random.Random, log_dir: Path) -> dict:
     log_path = log_dir / "node.log"
-    command = [sys.executable, "-m", "rigid_rot_sim.node", "--ros-args", "-p", f"scene:={SCENES / 'torque_driven.yaml'}",
+    command = [sys.executable, "-m", "rigid_rot_sim.ros.node", "--ros-args", "-p", f"scene:={SCENES / 'torque_driven.yaml'}",
                "-p", "integrator:=rk4", "-p", "commands.max_torque:=0.0", "-p", "rates.state:=200.0"]
     with open(log_path, "wb") as log:
         process = subprocess.Popen(command, stdout=log, stderr=subprocess.STDOUT, stdin=subprocess.DEVNULL)
@@ -259,7 +259,7 @@ def scene_campaign(args, rng: random.Random, work: Path) -> dict:
         path = work / f"scene_{index}.yaml"
         # one in five a shipped scene as is: the started path is exercised too
         path.write_text(generators.mutated_scene(rng) if index % 5 else rng.choice(sorted(SCENES.glob("*.yaml"))).read_text())
-        command = [sys.executable, "-m", "rigid_rot_sim.node", "--ros-args", "-p", f"scene:={path}",
+        command = [sys.executable, "-m", "rigid_rot_sim.ros.node", "--ros-args", "-p", f"scene:={path}",
                    "-p", "duration:=0.2", "-p", "real_time_factor:=0.0"]
         figures["scenes"] += 1
         try:
@@ -284,7 +284,7 @@ def scene_campaign(args, rng: random.Random, work: Path) -> dict:
     big = work / "largest.yaml"
     big.write_text("body:\n  point_masses:\n    masses: [" + ", ".join("1" for _ in range(n)) + "]\n    positions: ["
                    + ", ".join(f"[{i % 7}, {i % 5}, {i % 3}]" for i in range(n)) + "]\n")
-    process = subprocess.Popen([sys.executable, "-m", "rigid_rot_sim.node", "--ros-args", "-p", f"scene:={big}"],
+    process = subprocess.Popen([sys.executable, "-m", "rigid_rot_sim.ros.node", "--ros-args", "-p", f"scene:={big}"],
                                stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, stdin=subprocess.DEVNULL)
     time.sleep(1.0)
     figures["ctrl_c_during_load_s"] = signal_and_wait(process, signal.SIGINT)

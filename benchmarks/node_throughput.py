@@ -47,7 +47,7 @@ METHODS_FREE = ["exact", "exact_split", "taylor", "rk4", "lie_rk4", "splitting",
 
 def make_node(scene: str, method: str, **params: float):
     """(context, node): the simulation node in this process at dt = 1 ms, warnings only."""
-    from rigid_rot_sim.node import RigidRotSimNode
+    from rigid_rot_sim.ros.node import RigidRotSimNode
 
     context = rclpy.Context()
     rclpy.init(context=context, args=["--ros-args", "--log-level", "warn"])
@@ -95,7 +95,7 @@ def physics_steps_per_second(method: str, seconds: float) -> float:
 PUBLISHER_SCRIPT = """
 import sys, time, rclpy
 from geometry_msgs.msg import WrenchStamped
-from rigid_rot_sim.node import COMMAND_QOS
+from rigid_rot_sim.ros.qos import COMMAND_QOS
 n = int(sys.argv[1])
 rclpy.init()
 node = rclpy.create_node("latency_commands")
@@ -118,13 +118,13 @@ def command_latency(n_commands: int, method: str) -> None:
     context, node = make_node("torque_driven", method, real_time_factor=1.0, **{"rates.state": 1000.0})
     arrivals: dict[float, float] = {}
     latencies: list[float] = []
-    received = node.torque_callback
-    state_publisher = node.publishers_by_output["state"]
+    received = node.inputs.torque_callback
+    state_publisher = node.outputs.publishers["state"]
     publish = state_publisher.publish
 
-    def timed_callback(msg, source):
+    def timed_callback(msg, source, topic):
         arrivals.setdefault(msg.wrench.torque.z, time.perf_counter())
-        received(msg, source)
+        received(msg, source, topic)
 
     def timed_publish(msg):
         publish(msg)
@@ -132,7 +132,7 @@ def command_latency(n_commands: int, method: str) -> None:
         if arrived is not None:
             latencies.append(time.perf_counter() - arrived)
 
-    node.torque_callback = timed_callback
+    node.inputs.torque_callback = timed_callback
     state_publisher.publish = timed_publish
     executor = SingleThreadedExecutor(context=context)
     executor.add_node(node)

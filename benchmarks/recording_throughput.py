@@ -14,7 +14,7 @@
 
 3. The node itself (rclpy, in-process, no subscriber): torque_driven scene, rk4 at
    1 kHz, real-time factor 0, every output at its scene rate (100 Hz), spun like
-   ``rigid_rot_sim.node.main`` until ``--sim-seconds`` of sim time are done, with
+   ``rigid_rot_sim.ros.node.main`` until ``--sim-seconds`` of sim time are done, with
    ``record_path`` unset and set.
 
 Figures are printed, never asserted.
@@ -143,7 +143,7 @@ def node_rate(sim_seconds: float, record: Path | None) -> float:
     from rclpy.executors import SingleThreadedExecutor
     from rclpy.parameter import Parameter
 
-    from rigid_rot_sim.node import RigidRotSimNode
+    from rigid_rot_sim.ros.node import RigidRotSimNode
 
     scene = SCENE.with_name("torque_driven.yaml")
     context = rclpy.Context()

@@ -21,7 +21,8 @@ from rigid_rot_msgs.msg import RejectedCommand, RigidBodyState  # noqa: E402
 from rigid_rot_msgs.srv import ApplyTorque, ComputeInertia, SetState, Step  # noqa: E402
 from std_srvs.srv import SetBool, Trigger  # noqa: E402
 
-from rigid_rot_sim.node import COMMAND_QOS, REJECTED_QOS, STATE_QOS, RigidRotSimNode  # noqa: E402
+from rigid_rot_sim.ros.node import RigidRotSimNode  # noqa: E402
+from rigid_rot_sim.ros.qos import COMMAND_QOS, REJECTED_QOS, STATE_QOS  # noqa: E402
 
 ROOT = Path(__file__).resolve().parents[1]
 SCENES = ROOT / "config" / "scenes"
@@ -107,7 +108,7 @@ def _point(x, y, z):
 def test_torque_free_scene_builds_no_subscription_and_picks_exact(harness):
     h = harness("free_tumble", real_time_factor=0.0)
     assert h.node.sim.method == "exact"
-    assert h.node.torque_subscriptions == []
+    assert h.node.inputs.subscriptions == []
     subscriptions = dict(h.client.get_subscriber_names_and_types_by_node("rigid_rot_sim", "/"))
     assert not any("torque" in topic for topic in subscriptions)
     assert h.spin_until(lambda: "/rigid_rot_sim/state" in h.published_topics())
@@ -116,7 +117,7 @@ def test_torque_free_scene_builds_no_subscription_and_picks_exact(harness):
                   "/rigid_rot_sim/angular_momentum", "/rigid_rot_sim/mass_properties", "/rigid_rot_sim/rejected", "/clock"):
         assert topic in topics, topic
     assert "/rigid_rot_sim/top_state" not in topics
-    assert h.node.recorder is None
+    assert h.node.recording is None
 
 
 def test_top_scene_builds_top_state_and_torque_scene_subscribes(harness):
@@ -125,7 +126,7 @@ def test_top_scene_builds_top_state_and_torque_scene_subscribes(harness):
     assert top.node.sim.method == "exact_split"
     top.close()
     driven = harness("torque_driven", real_time_factor=0.0)
-    assert [s.topic_name for s in driven.node.torque_subscriptions] == ["/rigid_rot_sim/torque"]
+    assert [s.topic_name for s in driven.node.inputs.subscriptions] == ["/rigid_rot_sim/torque"]
     assert driven.node.sim.method == "taylor"
 
 
@@ -146,9 +147,9 @@ def test_parameters_are_validated_and_applied(harness):
     assert ok.successful
     assert node.sim.method == "rk4" and node.sim.dt == 0.002
     assert node.set_parameters([Parameter("real_time_factor", value=2.0)])[0].successful
-    assert node.real_time_factor == 2.0
+    assert node.run.pacer.real_time_factor == 2.0
     assert node.set_parameters([Parameter("rates.state", value=25.0)])[0].successful
-    assert node.output_periods["state"] == 20  # 25 Hz at dt = 2 ms
+    assert node.run.schedule.periods["state"] == 20  # 25 Hz at dt = 2 ms
     # the run continues
     k = node.sim.step_index
     assert h.spin_until(lambda: node.sim.step_index > k + 100)
@@ -163,8 +164,8 @@ def test_params_file_overrides_the_scene(context, tmp_path):
     )
     node = RigidRotSimNode(context=context, cli_args=["--ros-args", "--params-file", str(params)])
     try:
-        assert node.sim.method == "rk4" and node.sim.dt == 0.0005 and node.real_time_factor == 0.0
-        assert node.output_periods["state"] == 10 and "clock" not in node.output_periods
+        assert node.sim.method == "rk4" and node.sim.dt == 0.0005 and node.run.pacer.real_time_factor == 0.0
+        assert node.run.schedule.periods["state"] == 10 and "clock" not in node.run.schedule.periods
     finally:
         node.destroy_node()
 
@@ -259,7 +260,7 @@ def test_rep105_frames_by_default_on_every_output_and_recorded_tf(harness, tmp_p
     from geometry_msgs.msg import InertiaStamped, QuaternionStamped, Vector3Stamped
     from tf2_msgs.msg import TFMessage
 
-    from rigid_rot_sim.node import LATCHED_QOS, TF_QOS
+    from rigid_rot_sim.ros.qos import LATCHED_QOS, TF_QOS
     from rigid_rot_sim.recording.reader import BagReader
 
     bag = tmp_path / "frames.mcap"
@@ -274,7 +275,7 @@ def test_rep105_frames_by_default_on_every_output_and_recorded_tf(harness, tmp_p
     got["tf"] = []
     h.client.create_subscription(TFMessage, "/tf", got["tf"].append, TF_QOS)
     h.node.sim.pause(True)
-    publishers = [p for name, p in h.node.publishers_by_output.items() if name in got]
+    publishers = [p for name, p in h.node.outputs.publishers.items() if name in got]
     assert h.spin_until(lambda: all(p.get_subscription_count() > 0 for p in publishers))
     assert h.call(Trigger, "reset", Trigger.Request()).success  # republishes every output at t = 0, matched now
     assert h.spin_until(lambda: all(got.values()))
@@ -284,10 +285,10 @@ def test_rep105_frames_by_default_on_every_output_and_recorded_tf(harness, tmp_p
     assert got["mass_properties"][0].header.frame_id == "base_link"
     transform = got["tf"][0].transforms[0]
     assert (transform.header.frame_id, transform.child_frame_id) == ("odom", "base_link")
-    assert "/rigid_rot_sim/imu" not in h.published_topics() and "imu" not in h.node.publishers_by_output  # not asked for
+    assert "/rigid_rot_sim/imu" not in h.published_topics() and "imu" not in h.node.outputs.publishers  # not asked for
     h.node.sim.pause(False)
     assert h.spin_until(lambda: h.node.finished)
-    h.node.recorder.close()
+    h.node.recording.close()
     frames = {(m.transforms[0].header.frame_id, m.transforms[0].child_frame_id) for _, m in BagReader(bag).decoded(["/tf"])}
     assert frames == {("odom", "base_link")}
 
@@ -296,13 +297,13 @@ def test_frame_parameters_override_the_scene_and_bad_names_are_refused(context):
     scene = str(SCENES / "heavy_top.yaml")  # frames {world: world, body: top} in the file
     node = RigidRotSimNode(context=context, parameter_overrides=[Parameter("scene", value=scene)])
     try:
-        assert (node.frames.world, node.frames.body) == ("world", "top") and node.sim.frames == node.frames
+        assert (node.scene.frames.world, node.scene.frames.body) == ("world", "top") and node.sim.frames == node.scene.frames
     finally:
         node.destroy_node()
     node = RigidRotSimNode(context=context, parameter_overrides=[
         Parameter("scene", value=scene), Parameter("world_frame", value="map"), Parameter("body_frame", value="base_link")])
     try:
-        assert (node.frames.world, node.frames.body) == ("map", "base_link") and node.sim.frames == node.frames
+        assert (node.scene.frames.world, node.scene.frames.body) == ("map", "base_link") and node.sim.frames == node.scene.frames
     finally:
         node.destroy_node()
     for world, body, reason in (("map", "map", "must differ"), ("", "base_link", "non-empty")):
@@ -327,7 +328,7 @@ def test_recording_without_the_mcap_package_is_disabled_with_a_message(context, 
     node = RigidRotSimNode(context=context, parameter_overrides=[
         Parameter("scene", value=str(SCENES / "free_tumble.yaml")), Parameter("record_path", value=str(tmp_path / "x.mcap"))])
     try:
-        assert node.recorder is None and node.sim is not None and not (tmp_path / "x.mcap").exists()
+        assert node.recording is None and node.sim is not None and not (tmp_path / "x.mcap").exists()
         assert "recording disabled: mcap is not installed" in capfd.readouterr().err
         k = node.sim.step_index  # the run itself goes on
         node.sim.advance_to(k + 3)
@@ -337,7 +338,7 @@ def test_recording_without_the_mcap_package_is_disabled_with_a_message(context, 
 
 
 def test_without_simulation_interfaces_the_node_runs_without_the_standard_services(context, monkeypatch):
-    from rigid_rot_sim import simulation_services
+    from rigid_rot_sim.ros import simulation_services
 
     monkeypatch.setattr(simulation_services, "AVAILABLE", False)  # as on an install without the package
     # a node name of its own, so that no other test's node can answer the graph query below
@@ -385,7 +386,7 @@ def test_integer_values_for_double_parameters_are_stored_as_floats(context, tmp_
         for name, value in (("real_time_factor", 0.0), ("duration", 5.0), ("rates.state", 50.0), ("dt", 1.0)):
             stored = node.get_parameter(name)
             assert stored.type_ == Parameter.Type.DOUBLE and stored.value == value and isinstance(stored.value, float)
-        assert node.real_time_factor == 0.0 and node.duration == 5.0 and node.sim.dt == 1.0
+        assert node.run.pacer.real_time_factor == 0.0 and node.run.duration == 5.0 and node.sim.dt == 1.0
         # what `ros2 param set` sends: the SetParameters service of the node, an INTEGER value
         service = client.create_client(SetParameters, "/rigid_rot_sim/set_parameters")
         assert service.wait_for_service(timeout_sec=30.0)
@@ -397,12 +398,12 @@ def test_integer_values_for_double_parameters_are_stored_as_floats(context, tmp_
         (result,) = future.result().results
         assert result.successful, result.reason
         stored = node.get_parameter("real_time_factor")
-        assert stored.type_ == Parameter.Type.DOUBLE and stored.value == 2.0 and node.real_time_factor == 2.0
+        assert stored.type_ == Parameter.Type.DOUBLE and stored.value == 2.0 and node.run.pacer.real_time_factor == 2.0
         # the ranges still apply, and other types are still refused
         assert not node.set_parameters([Parameter("real_time_factor", value=5000)])[0].successful
         assert not node.set_parameters([Parameter("dt", value="fast")])[0].successful
         assert node.set_parameters([Parameter("rates.state", value=20)])[0].successful
-        assert node.get_parameter("rates.state").value == 20.0 and node.output_periods["state"] == 1  # dt = 1 s
+        assert node.get_parameter("rates.state").value == 20.0 and node.run.schedule.periods["state"] == 1  # dt = 1 s
     finally:
         executor.shutdown()
         client.destroy_node()
@@ -412,15 +413,15 @@ def test_integer_values_for_double_parameters_are_stored_as_floats(context, tmp_
 def test_output_qos_from_parameters_and_scene(harness, context, tmp_path):
     from rclpy.qos import DurabilityPolicy, ReliabilityPolicy
 
-    from rigid_rot_sim.node import TF_QOS
+    from rigid_rot_sim.ros.qos import TF_QOS
 
     h = harness("free_tumble", real_time_factor=0.0, **{"qos.reliability": "best_effort", "qos.depth": 1000})
     for name in ("state", "orientation", "angular_velocity", "angular_momentum"):
-        profile = h.node.publishers_by_output[name].qos_profile
+        profile = h.node.outputs.publishers[name].qos_profile
         assert profile.reliability == ReliabilityPolicy.BEST_EFFORT and profile.depth == 1000
         assert profile.durability == DurabilityPolicy.VOLATILE
-    assert h.node.publishers_by_output["tf"].qos_profile.depth == TF_QOS.depth  # /tf keeps tf2's profile
-    assert h.node.publishers_by_output["tf"].qos_profile.reliability == ReliabilityPolicy.RELIABLE
+    assert h.node.outputs.publishers["tf"].qos_profile.depth == TF_QOS.depth  # /tf keeps tf2's profile
+    assert h.node.outputs.publishers["tf"].qos_profile.reliability == ReliabilityPolicy.RELIABLE
     assert not h.node.set_parameters([Parameter("qos.depth", value=5)])[0].successful  # read only
     h.close()
 
@@ -428,7 +429,7 @@ def test_output_qos_from_parameters_and_scene(harness, context, tmp_path):
     scene.write_text((SCENES / "free_tumble.yaml").read_text() + "qos: {reliability: reliable, depth: 3}\n")
     node = RigidRotSimNode(context=context, parameter_overrides=[Parameter("scene", value=str(scene))])
     try:
-        profile = node.publishers_by_output["state"].qos_profile
+        profile = node.outputs.publishers["state"].qos_profile
         assert profile.reliability == ReliabilityPolicy.RELIABLE and profile.depth == 3
         assert node.get_parameter("qos.depth").value == 3
     finally:
@@ -442,7 +443,7 @@ def test_tf_static_carries_the_principal_frame_only_where_it_differs(harness):
     from rigid_rot_sim.core.inertia import principal_frame, principal_orientation
 
     h = harness("from_point_masses", real_time_factor=0.0)
-    (transform,) = h.node.static_transforms
+    (transform,) = h.node.outputs.static_transforms
     assert (transform.header.frame_id, transform.child_frame_id) == ("base_link", "base_link_principal")
     tensor = h.node.scene.body.inertia_array
     r = transform.transform.rotation
@@ -452,12 +453,12 @@ def test_tf_static_carries_the_principal_frame_only_where_it_differs(harness):
     assert h.spin_until(lambda: "/tf_static" in h.published_topics())
     h.close()
     top = harness("heavy_top", real_time_factor=0.0)  # principal moments about the pivot, centre of mass on z
-    (shifted,) = top.node.static_transforms
+    (shifted,) = top.node.outputs.static_transforms
     assert shifted.transform.rotation.w == 1.0
     assert shifted.transform.translation.z == top.node.scene.body.center_of_mass[2] > 0.0
     top.close()
     plain = harness("torque_driven", real_time_factor=0.0)
-    assert plain.node.static_transforms == [] and plain.node.tf_static_publisher is None
+    assert plain.node.outputs.static_transforms == [] and "tf_static" not in plain.node.outputs.publishers
 
 
 @pytest.mark.parametrize("override,expected", [
@@ -469,7 +470,7 @@ def test_bad_start_up_parameters_exit_2_with_one_line(override, expected):
     import subprocess
     import sys
 
-    done = subprocess.run([sys.executable, "-m", "rigid_rot_sim.node", "--ros-args", "-p", "scene:=free_tumble",
+    done = subprocess.run([sys.executable, "-m", "rigid_rot_sim.ros.node", "--ros-args", "-p", "scene:=free_tumble",
                            "-p", override], capture_output=True, text=True, timeout=120)
     output = (done.stdout + done.stderr).strip()
     assert done.returncode == 2 and expected in output and "Traceback" not in output, output

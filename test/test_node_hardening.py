@@ -16,7 +16,8 @@ from rigid_rot_msgs.srv import ApplyTorque, ComputeInertia, SetState, Step  # no
 from std_srvs.srv import SetBool, Trigger  # noqa: E402
 
 from rigid_rot_sim.core import limits  # noqa: E402
-from rigid_rot_sim.node import COMMAND_QOS, REJECTED_QOS, STATE_QOS, RigidRotSimNode  # noqa: E402
+from rigid_rot_sim.ros.node import RigidRotSimNode  # noqa: E402
+from rigid_rot_sim.ros.qos import COMMAND_QOS, REJECTED_QOS, STATE_QOS  # noqa: E402
 from test_node import SCENES, Harness, context, harness  # noqa: E402,F401  (fixtures)
 
 STATE_FIELDS = (
@@ -155,7 +156,7 @@ def test_max_torque_and_long_frame_ids_are_rejected_on_the_rejected_topic(harnes
 
 def test_command_qos_depth_is_a_read_only_parameter(harness):
     h = harness("torque_driven", real_time_factor=0.0, **{"commands.qos_depth": 500})
-    subscription = h.node.torque_subscriptions[0]
+    subscription = h.node.inputs.subscriptions[0]
     assert subscription.qos_profile.depth == 500
     assert not h.node.set_parameters([Parameter("commands.qos_depth", value=5)])[0].successful
     with pytest.raises(rclpy.exceptions.InvalidParameterValueException):

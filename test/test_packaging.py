@@ -22,6 +22,7 @@ PYTHON_KEYS: dict[str, set[str]] = {
     "numpy": {"python3-numpy"},
     "scipy": {"python3-scipy"},
     "yaml": {"python3-yaml"},
+    "jsonschema": {"python3-jsonschema"},
     "matplotlib": {"python3-matplotlib"},
     "tqdm": {"python3-tqdm"},
     "mcap": {"python3-mcap-pip", "mcap-ros2-support"},

@@ -1,10 +1,15 @@
 """Analysis of the numerical core: work-precision report and stability suite.
 
-* :mod:`.problems`: the benchmark problems P1 to P4 as data, with their references.
+* :mod:`.problems`: the benchmark problems P1 to P4 as data, with their references, and
+  :meth:`~.problems.Problem.final_state`, a method's run of a problem to its end.
 * :mod:`.metrics`: errors at the final time (omega, attitude angle, energy, |L|).
-* :mod:`.workprecision`: error against run time for every integrator and scipy's solve_ivp.
-* :mod:`.stability`: the catalogue of stiff and extreme cases, and bisection for stable steps.
-* :mod:`.plotting`: matplotlib (Agg) figures of both.
+* :mod:`.workprecision`: error against run time for every integrator and scipy's solve_ivp;
+  :mod:`.workprecision_report` runs it on the problems and writes the report.
+* :mod:`.stability_cases`: the catalogue of stiff and extreme cases (data);
+  :mod:`.stability` runs a case against its criterion, bisects for stable steps and runs
+  the long horizon; :mod:`.stability_report` runs the suite and writes its outputs.
+* :mod:`.report_io`: machine facts, number formats, markdown tables and JSON of both reports.
+* :mod:`.plot`: matplotlib (Agg) figures of both (as :mod:`rigid_rot_sim.recording.plot` draws a recording).
 * :mod:`.sweep_spec`: sweep specs (a base scene, dispersions, grids) validated from YAML.
 * :mod:`.sweep`: a sweep's seeded inputs, its chunks, and the batch simulation of one chunk.
 * :mod:`.engine`: dask.distributed (local or existing cluster) for sweeps, report and stability.

@@ -20,14 +20,18 @@ Where the cluster comes from:
 from __future__ import annotations
 
 import contextlib
+import importlib.util
 import logging
 import os
+import signal
+import threading
 import time
 import uuid
 from dataclasses import dataclass, field
 from typing import Any, Callable, Iterator
 
 import numpy as np
+from tqdm import tqdm
 
 from rigid_rot_sim.analysis.sweep import COLUMNS, Chunk, choose_chunk_size, plan_chunks, run_chunk, run_nominal
 from rigid_rot_sim.analysis.sweep_spec import SweepSpec
@@ -54,8 +58,6 @@ def require(*modules: str) -> None:
 
     Sweeps and cluster runs need packages a plain ROS install may lack; say so before any work.
     """
-    import importlib.util
-
     missing = [name for name in modules if importlib.util.find_spec(name) is None]
     if missing:
         raise OSError(
@@ -173,9 +175,6 @@ def map_tasks(
 @contextlib.contextmanager
 def _sigint_deferred() -> Iterator[list[bool]]:
     """Hold SIGINT back inside the block; the yielded list is non-empty if one arrived."""
-    import signal
-    import threading
-
     received: list[bool] = []
     if threading.current_thread() is not threading.main_thread():
         yield received
@@ -193,8 +192,6 @@ def _sigint_deferred() -> Iterator[list[bool]]:
 
 def _kill_worker_processes(cluster: Any) -> None:
     """SIGKILL the worker processes a LocalCluster's nannies started (ours, by pid)."""
-    import signal
-
     for nanny in list(getattr(cluster, "workers", {}).values()):
         pid = getattr(getattr(getattr(nanny, "process", None), "process", None), "pid", None)
         if pid:
@@ -232,7 +229,6 @@ def run_sweep(
     instead of opening one from ``scheduler`` / ``workers``.
     """
     from distributed import as_completed
-    from tqdm import tqdm
 
     start = time.perf_counter()
     local = client is None and scheduler_address(scheduler) is None

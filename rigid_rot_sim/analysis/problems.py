@@ -25,15 +25,19 @@ from typing import Any, Callable
 
 import numpy as np
 from scipy.integrate import solve_ivp
+from scipy.special import ellipj
 
+from rigid_rot_sim.analysis.metrics import attitude_error_angle, omega_error
 from rigid_rot_sim.core import quaternion as quat
 from rigid_rot_sim.core.dynamics import euler_rhs_components, kinetic_energy
+from rigid_rot_sim.core.exact import torque_free_solution
 from rigid_rot_sim.core.heavy_top import (
     HeavyTop,
     heavy_top_reference,
     separatrix_solution,
     separatrix_state,
 )
+from rigid_rot_sim.core.simulate import simulate
 from rigid_rot_sim.core.torque import ConstantTorque
 
 IDENTITY = (0.0, 0.0, 0.0, 1.0)
@@ -92,6 +96,18 @@ class Problem:
         """|L| = |I omega|, kg m^2/s."""
         return float(np.linalg.norm(self.moments * np.asarray(omega, dtype=float)))
 
+    def final_state(self, method: str, dt: float, **options: Any) -> tuple[np.ndarray, np.ndarray]:
+        """Final ``(q, omega)`` of ``method`` at step ``dt`` (adaptive: output interval), as a user runs it.
+
+        One ``core.simulate.simulate(...)`` call from t = 0 to ``t_end``, keeping only the
+        final state; ``options`` go to the integrator.
+        """
+        n_steps = max(1, round(self.t_end / dt))
+        traj = simulate(
+            self.moments, self.omega0, self.t_end, dt, method, self.q0, self.torque, save_every=n_steps, **options
+        )
+        return np.asarray(traj.q[-1]), np.asarray(traj.omega[-1])
+
 
 _REFERENCES: dict[str, Reference] = {}
 
@@ -127,23 +143,15 @@ def scipy_rhs(problem: Problem) -> Callable[[float, np.ndarray], np.ndarray]:
     return fun
 
 
-def _exact_reference(problem: Problem) -> Reference:
-    from rigid_rot_sim.core.exact import torque_free_solution
-
+def exact_reference(problem: Problem) -> Reference:
+    """The torque-free final state in closed form (Jacobi elliptic functions, core/exact.py)."""
     solution = torque_free_solution(problem.moments, problem.omega0, problem.q0)
     q, omega = solution.state(problem.t_end)
     return Reference(np.asarray(q, float), np.asarray(omega, float), f"exact ({solution.case})")
 
 
 def _certified_reference(problem: Problem) -> Reference:
-    """scipy DOP853 at rtol = atol = 1e-14, checked against our taylor method at tol = 1e-15.
-
-    (scipy Radau at rtol = atol = 1e-13 is the second method while taylor is not registered.)
-    """
-    from rigid_rot_sim.analysis.metrics import attitude_error_angle, omega_error
-    from rigid_rot_sim.analysis.workprecision import run_to_end
-    from rigid_rot_sim.core.integrators import METHODS
-
+    """scipy DOP853 at rtol = atol = 1e-14, checked against our taylor method at tol = 1e-15."""
     y0 = np.concatenate((problem.q0, problem.omega0))
     with warnings.catch_warnings():
         # scipy raises rtol to 100 eps = 2.2e-14 and says so; the reference is what it is
@@ -153,13 +161,8 @@ def _certified_reference(problem: Problem) -> Reference:
         raise RuntimeError(f"{problem.key}: reference DOP853 failed: {sol.message}")
     q_ref = np.asarray(quat.normalize(sol.y[:4, -1]))
     w_ref = sol.y[4:, -1]
-    if "taylor" in METHODS:
-        second = "taylor tol=1e-15"
-        q_check, w_check = run_to_end(problem, "taylor", problem.t_end, {"tol": 1e-15})
-    else:
-        second = "scipy Radau rtol=atol=1e-13"
-        check = solve_ivp(scipy_rhs(problem), (0.0, problem.t_end), y0, method="Radau", rtol=1e-13, atol=1e-13)
-        q_check, w_check = quat.normalize(check.y[:4, -1]), check.y[4:, -1]
+    second = "taylor tol=1e-15"
+    q_check, w_check = problem.final_state("taylor", problem.t_end, tol=1e-15)
     gap = max(omega_error(w_ref, w_check), attitude_error_angle(q_ref, q_check))
     if not gap <= CERTIFY_TOL:
         raise RuntimeError(f"{problem.key}: DOP853 and {second} references disagree by {gap:.3g} (> {CERTIFY_TOL:g})")
@@ -172,7 +175,7 @@ P1 = Problem(
     principal_moments=(1.0, 2.0, 3.0),
     omega0=(1.0, 0.1, 0.5),
     t_end=100.0,
-    reference_factory=_exact_reference,
+    reference_factory=exact_reference,
     reference_note="exact elliptic-function solution (core/exact.py)",
 )
 
@@ -182,7 +185,7 @@ P1B = Problem(
     principal_moments=(1.0, 2.0, 3.0),
     omega0=(0.01, 2.0, 0.01),
     t_end=100.0,
-    reference_factory=_exact_reference,
+    reference_factory=exact_reference,
     reference_note="exact elliptic-function solution (core/exact.py)",
 )
 
@@ -222,10 +225,8 @@ def _separatrix_reference(problem: Problem) -> Reference:
     return Reference(np.asarray(q, float), np.asarray(omega, float), "closed-form separatrix (core/heavy_top.py)")
 
 
-def _general_top_reference(problem: Problem) -> Reference:
+def general_top_reference(problem: Problem) -> Reference:
     """u = cos(theta) by Jacobi functions, phi and psi by quadrature (core/heavy_top.py)."""
-    from scipy.special import ellipj
-
     top = problem.top
     ref = heavy_top_reference(top, problem.q0, problem.omega0)
     t = problem.t_end
@@ -270,7 +271,7 @@ P3B = Problem(
     torque=TOP.torque,
     torque_kind="gravity",
     top=TOP,
-    reference_factory=_general_top_reference,
+    reference_factory=general_top_reference,
     reference_note="u = cos(theta) in Jacobi functions, phi and psi by adaptive quadrature",
 )
 
@@ -280,7 +281,7 @@ P4 = Problem(
     principal_moments=(500.0, 200.0, 300.0),
     omega0=(0.5, -0.4, 0.7),
     t_end=10.0,
-    reference_factory=_exact_reference,
+    reference_factory=exact_reference,
     reference_note="exact elliptic-function solution (core/exact.py)",
 )
 

@@ -1,6 +1,8 @@
-"""The stability suite: every integrator on a catalogue of stiff and extreme cases.
+"""The stability suite's runner: every integrator on the catalogue of stiff and extreme cases.
 
-Each :class:`Case` is a body, an initial state, a step ``dt`` and a horizon (a
+The cases are :mod:`rigid_rot_sim.analysis.stability_cases` (data); the outputs are
+written by :mod:`rigid_rot_sim.analysis.stability_report`. Each
+:class:`~rigid_rot_sim.analysis.stability_cases.Case` is a body, an initial state, a step ``dt`` and a horizon (a
 :class:`~rigid_rot_sim.analysis.problems.Problem` plus the step), and a pass criterion
 on what a run measures:
 
@@ -30,14 +32,17 @@ from __future__ import annotations
 import dataclasses
 import math
 import time
-from dataclasses import dataclass, field
-from typing import Any, Callable
+from dataclasses import dataclass
+from typing import Any, Literal
 
 import numpy as np
 
-from rigid_rot_sim.analysis import problems as P
-from rigid_rot_sim.analysis.metrics import attitude_error_angle, omega_error
+from rigid_rot_sim.analysis.engine import map_tasks, open_client, wants_cluster
+from rigid_rot_sim.analysis.metrics import attitude_error_angle, omega_error, relative_change
+from rigid_rot_sim.analysis.problems import P1, Problem
+from rigid_rot_sim.analysis.stability_cases import Case, Criterion, case_named
 from rigid_rot_sim.core import advice
+from rigid_rot_sim.core.exact import torque_free_solution
 from rigid_rot_sim.core.integrators import METHODS, get_method
 from rigid_rot_sim.core.integrators.base import NonFiniteStateError
 from rigid_rot_sim.core.torque import ConstantTorque
@@ -54,65 +59,12 @@ BISECTION_GROWTH = 0.01
 BISECTED = ("euler", "rk4", "lie_rk4", "implicit_midpoint", "splitting")
 
 
-@dataclass(frozen=True)
-class Criterion:
-    """Pass thresholds (inclusive); None skips a check."""
-
-    energy_drift: float | None = None
-    momentum_drift: float | None = None
-    quaternion_norm: float | None = 1e-12
-    omega_error: float | None = None
-    attitude_error: float | None = None
-    text: str = ""
-
-    def describe(self) -> str:
-        parts = [self.text] if self.text else []
-        for name, label in (
-            ("energy_drift", "energy drift"),
-            ("momentum_drift", "momentum drift"),
-            ("quaternion_norm", "| |q| - 1 |"),
-            ("omega_error", "ω error [rad/s]"),
-            ("attitude_error", "attitude error [rad]"),
-        ):
-            value = getattr(self, name)
-            if value is not None:
-                parts.append(f"{label} ≤ {value:g}")
-        return "; ".join(parts)
-
-
-@dataclass(frozen=True)
-class Case:
-    """One stability case: a problem, the step, and what passing means.
-
-    ``impulse`` (N*m, principal frame) is a torque applied for the first step only, as
-    the node applies a one-step topic command (the integrator's torque is replaced after
-    one step). ``reference`` says whether ``problem.reference()`` exists for this case.
-    """
-
-    name: str
-    description: str
-    problem: P.Problem
-    dt: float
-    criterion: Criterion
-    reference: bool = True
-    impulse: tuple[float, float, float] | None = None
-    bisect: bool = False
-    conserved: bool = True  # energy and momenta conserved (after the impulse, if any)
-    same_as: P.Problem | None = None  # a problem whose omega(t), q(t) this case must reproduce
-    same_tol: float = 1e-9  # relative omega and attitude agreement with ``same_as``, same method and dt
-    options: dict[str, dict[str, Any]] = field(default_factory=dict)  # per-method options
-
-    @property
-    def n_steps(self) -> int:
-        return max(1, round(self.problem.t_end / self.dt))
-
-
 @dataclass
-class Run:
+class CaseRun:
     """What one method did on one case."""
 
     method: str
-    status: str
+    status: Literal["stable", "unstable", "refused"]
     message: str = ""
     passed: bool = False
     energy_drift: float = math.nan
@@ -125,202 +77,10 @@ class Run:
     theory_stable_dt: float | None = None
 
 
-# ---------------------------------------------------------------- the catalogue
-
-
-def _free(key: str, title: str, moments, omega0, t_end: float, **kw: Any) -> P.Problem:
-    return P.Problem(
-        key=key,
-        title=title,
-        principal_moments=tuple(float(m) for m in moments),
-        omega0=tuple(float(w) for w in omega0),
-        t_end=t_end,
-        reference_factory=P._exact_reference,
-        **kw,
-    )
-
-
-def _impulse_reference(problem: P.Problem) -> P.Reference:
-    """Constant torque over the first step (scipy DOP853 at 1e-13), then the exact free flow."""
-    from scipy.integrate import solve_ivp
-
-    from rigid_rot_sim.core import quaternion as quat
-    from rigid_rot_sim.core.exact import torque_free_solution
-
-    dt = problem.t_end / IMPULSE_STEPS
-    kicked = dataclasses.replace(problem, torque=ConstantTorque(np.asarray(IMPULSE_TORQUE)))
-    y = solve_ivp(
-        P.scipy_rhs(kicked), (0.0, dt), np.concatenate((problem.q0, problem.omega0)),
-        method="DOP853", rtol=1e-13, atol=1e-13,
-    ).y[:, -1]
-    q1 = np.asarray(quat.normalize(y[:4]))
-    solution = torque_free_solution(problem.moments, y[4:], q1, t0=dt)
-    q, omega = solution.state(problem.t_end)
-    return P.Reference(np.asarray(q), np.asarray(omega), "DOP853 rtol=atol=1e-13 over the kick, then exact", 1e-12)
-
-
-IMPULSE_TORQUE = (50.0, -20.0, 30.0)
-IMPULSE_STEPS = 1000
-
-
-def _scaled_p2(scale: float) -> P.Problem:
-    """P2 with every moment and the torque multiplied by ``scale``: omega(t) and q(t) are unchanged."""
-    return dataclasses.replace(
-        P.P2,
-        key=f"P2x{scale:g}",
-        title=f"P2 scaled by {scale:g}",
-        principal_moments=tuple(scale * m for m in P.P2.principal_moments),
-        torque=ConstantTorque(scale * P.P2.torque.value),
-        reference_factory=lambda problem: P.P2.reference(),
-    )
-
-
-def catalogue(quick: bool = False) -> list[Case]:
-    """The cases, shortened (fewer steps, same dt) in quick mode."""
-    short = 0.2 if quick else 1.0
-    top = P.TOP
-    sleeping_q0, sleeping_w0 = top.state_from_euler(0.05, 0.0, 0.0, 0.0, 0.0, 300.0)
-    bounded = Criterion(energy_drift=1e-3, momentum_drift=1e-3, text="bounded to 0.1 %")
-
-    def accurate(problem: P.Problem) -> Criterion:
-        """Bounded to 0.1 %, omega error <= 0.1 % of |omega0| and attitude error <= 0.01 rad at the end."""
-        scale = float(np.linalg.norm(problem.omega0))
-        return dataclasses.replace(bounded, omega_error=1e-3 * scale, attitude_error=1e-2,
-                                   text="bounded to 0.1 %, ω error ≤ 0.1 % of |ω0|")
-
-    cases: list[Case] = []
-    for ratio in (1e-2, 1e-4, 1e-6):
-        cases.append(
-            Case(
-                name=f"thin rod {ratio:g}",
-                description=f"slender body I = (1, 1 + {ratio / 2:g}, {ratio:g}) kg m², spinning 5 rad/s about its "
-                "axis while tumbling, dt = 10 ms",
-                problem=(rod := _free(
-                    f"rod{ratio:g}", "thin rod", (1.0, 1.0 + ratio / 2, ratio), (0.3, 0.2, 5.0), 10.0 * short
-                )),
-                dt=0.01,
-                criterion=accurate(rod),
-                bisect=True,
-            )
-        )
-    cases += [
-        Case(
-            name="MuJoCo rod",
-            description="MuJoCo's diverging case diaginertia (0.00017231, 0.00000658, 0.00017243) kg m², "
-            "ω0 = (2, 50, 3) rad/s, dt = 1 ms",
-            problem=(mujoco := _free(
-                "mujoco", "MuJoCo rod", (0.00017231, 0.00000658, 0.00017243), (2.0, 50.0, 3.0), 10.0 * short
-            )),
-            dt=1e-3,
-            criterion=accurate(mujoco),
-            bisect=True,
-        ),
-        Case(
-            name="near-spherical 1e-9",
-            description="moments equal to 1e-9 relative: I = (1, 1 + 1e-9, 1 + 2e-9) kg m², dt = 10 ms",
-            problem=(near := _free(
-                "nearsphere", "near-spherical", (1.0, 1.0 + 1e-9, 1.0 + 2e-9), (1.0, 2.0, 3.0), 100.0 * short
-            )),
-            dt=0.01,
-            criterion=accurate(near),
-        ),
-        Case(
-            name="symmetric",
-            description="exactly symmetric I = (2, 2, 1) kg m², ω0 = (0.5, 0.3, 4) rad/s, dt = 10 ms",
-            problem=(sym := _free("symmetric", "symmetric", (2.0, 2.0, 1.0), (0.5, 0.3, 4.0), 100.0 * short)),
-            dt=0.01,
-            criterion=accurate(sym),
-            bisect=True,
-        ),
-    ]
-    for rotation in (1.0, 3.0, 10.0):
-        omega0 = np.array([10.0, 1.0, 5.0])
-        dt = rotation / float(np.linalg.norm(omega0))
-        cases.append(
-            Case(
-                name=f"high spin {rotation:g} rad/step",
-                description=f"I = (1, 2, 3) kg m², |ω| = {np.linalg.norm(omega0):.3g} rad/s, ω·dt = {rotation:g} rad "
-                "per step, 1000 steps",
-                problem=_free(f"spin{rotation:g}", "high spin", (1.0, 2.0, 3.0), omega0, dt * 1000 * short),
-                dt=dt,
-                criterion=Criterion(energy_drift=1e-2, momentum_drift=1e-2, text="bounded to 1 %"),
-                bisect=rotation == 1.0,
-            )
-        )
-    cases += [
-        Case(
-            name="intermediate-axis flips",
-            description="ω0 = (1e-3, 1, 1e-3) rad/s about the intermediate axis of I = (1, 2, 3) kg m²: "
-            "about 30 flips in 500 s, dt = 50 ms",
-            problem=_free("flips", "flips", (1.0, 2.0, 3.0), (1e-3, 1.0, 1e-3), 500.0 * short),
-            dt=0.05,
-            criterion=dataclasses.replace(bounded, text="bounded to 0.1 %, flip times within 0.1 s"),
-        ),
-        Case(
-            name="scale 1e-9",
-            description="P2 with moments (1, 2, 3)e-9 kg m² and torque scaled alike (ω(t) unchanged), dt = 10 ms",
-            problem=_scaled_p2(1e-9),
-            dt=0.01,
-            criterion=Criterion(text="same ω(t), q(t) as the unit-scale run of the same method to 1e-9"),
-            conserved=False,
-            same_as=P.P2,
-        ),
-        Case(
-            name="scale 1e9",
-            description="P2 with moments (1, 2, 3)e9 kg m² and torque scaled alike, dt = 10 ms",
-            problem=_scaled_p2(1e9),
-            dt=0.01,
-            criterion=Criterion(text="same ω(t), q(t) as the unit-scale run of the same method to 1e-9"),
-            conserved=False,
-            same_as=P.P2,
-        ),
-        Case(
-            name="sleeping top",
-            description="heavy top (P3's) at θ0 = 0.05 rad spinning 300 rad/s: stiff nutation "
-            f"(~{300 * top.pivot_moments[2] / top.pivot_moments[0]:.0f} rad/s), dt = 1 ms",
-            problem=dataclasses.replace(
-                P.P3B,
-                key="sleeping",
-                title="sleeping top",
-                q0=tuple(sleeping_q0.tolist()),
-                omega0=tuple(sleeping_w0.tolist()),
-                t_end=2.0 * short,
-                reference_factory=P._general_top_reference,
-            ),
-            dt=1e-3,
-            criterion=Criterion(energy_drift=1e-4, momentum_drift=1e-4, omega_error=0.3, text="E, p_φ, p_ψ to 1e-4, ω error ≤ 0.1 % of |ω0|"),
-        ),
-        Case(
-            name="separatrix top → θ = 0",
-            description="P3's separatrix top run until θ ≈ 1e-3 rad (the z-x-z Euler-angle singularity), dt = 1 ms",
-            problem=dataclasses.replace(P.P3, key="separatrix_long", t_end=1.6 if not quick else 1.0),
-            dt=1e-3,
-            criterion=Criterion(energy_drift=1e-4, momentum_drift=1e-4, omega_error=1e-2, text="E, p_φ, p_ψ to 1e-4, ω error ≤ 0.1 % of |ω0|"),
-        ),
-        Case(
-            name="impulsive torque",
-            description=f"I = (1, 2, 3) kg m², ω0 = (1, 0.1, 0.5) rad/s, a torque {IMPULSE_TORQUE} N m for one "
-            "10 ms step, then free",
-            problem=_free(
-                "impulse", "impulse", (1.0, 2.0, 3.0), (1.0, 0.1, 0.5), 0.01 * IMPULSE_STEPS,
-                reference_note="kick by DOP853, then exact",
-            ),
-            dt=0.01,
-            impulse=IMPULSE_TORQUE,
-            criterion=dataclasses.replace(bounded, omega_error=1e-3, attitude_error=1e-2,
-                                          text="after the kick: bounded to 0.1 %; ω error ≤ 1e-3 rad/s"),
-        ),
-    ]
-    cases[-1] = dataclasses.replace(
-        cases[-1], problem=dataclasses.replace(cases[-1].problem, reference_factory=_impulse_reference)
-    )
-    return cases
-
-
 # ---------------------------------------------------------------- running
 
 
-def _invariants(problem: P.Problem, q: np.ndarray, omega: np.ndarray) -> tuple[float, float, float]:
+def _invariants(problem: Problem, q: np.ndarray, omega: np.ndarray) -> tuple[float, float, float]:
     """(energy, momentum 1, momentum 2): |L| (twice) for a free body, (E, p_phi, p_psi) for a heavy top."""
     if problem.top is not None:
         energy, p_phi, p_psi = problem.top.invariants(q, omega)
@@ -329,12 +89,8 @@ def _invariants(problem: P.Problem, q: np.ndarray, omega: np.ndarray) -> tuple[f
     return problem.energy(q, omega), norm, norm
 
 
-def _relative(value: float, reference: float) -> float:
-    scale = abs(reference)
-    return abs(value - reference) / scale if scale > 0 else abs(value - reference)
-
-
-def _make(method: str, case: Case, dt: float, torque: Any) -> Any:
+def _integrator(method: str, case: Case, dt: float, torque: Any) -> Any:
+    """The integrator of ``method`` (a label such as 'splitting(order=4)') on ``case``'s body, at step ``dt``."""
     problem = case.problem
     name, options = _method_and_options(method)
     options.update(case.options.get(method, {}))
@@ -353,10 +109,10 @@ def _method_and_options(label: str) -> tuple[str, dict[str, Any]]:
     return name, options
 
 
-def run_case(case: Case, method: str) -> Run:
+def run_case(case: Case, method: str) -> CaseRun:
     """One method on one case (all steps, ~SAMPLES samples of the invariants)."""
     problem = case.problem
-    run = Run(method, "stable")
+    run = CaseRun(method, "stable")
     n = case.n_steps
     dt = problem.t_end / n
     samples = min(SAMPLES, n)
@@ -364,12 +120,12 @@ def run_case(case: Case, method: str) -> Run:
     start = time.perf_counter()
     try:
         if case.impulse is not None:
-            integrator = _make(method, case, dt, ConstantTorque(np.asarray(case.impulse)))
+            integrator = _integrator(method, case, dt, ConstantTorque(np.asarray(case.impulse)))
             integrator.advance(1)
             integrator.torque = None
             chunks[0] -= 1
         else:
-            integrator = _make(method, case, dt, problem.torque)
+            integrator = _integrator(method, case, dt, problem.torque)
         # conserved from here on (right after the kick, for an impulse)
         first = _invariants(problem, integrator.q, integrator.omega)
         drift_e = drift_m = qnorm = 0.0
@@ -380,8 +136,8 @@ def run_case(case: Case, method: str) -> Run:
             qnorm = max(qnorm, abs(float(np.linalg.norm(q)) - 1.0))
             if case.conserved:
                 e, m1, m2 = _invariants(problem, q, omega)
-                drift_e = max(drift_e, _relative(e, first[0]))
-                drift_m = max(drift_m, _relative(m1, first[1]), _relative(m2, first[2]))
+                drift_e = max(drift_e, relative_change(first[0], e))
+                drift_m = max(drift_m, relative_change(first[1], m1), relative_change(first[2], m2))
                 if drift_e > GROWTH_LIMIT or drift_m > GROWTH_LIMIT:
                     raise NonFiniteStateError(
                         f"{method}: energy or momentum changed by more than {GROWTH_LIMIT:.0%} "
@@ -403,12 +159,12 @@ def run_case(case: Case, method: str) -> Run:
         if not case.conserved:
             e, m1, _ = _invariants(problem, integrator.q, integrator.omega)
             re, rm1, _ = _invariants(problem, ref.q, ref.omega)
-            drift_e, drift_m = _relative(e, re), _relative(m1, rm1)
+            drift_e, drift_m = relative_change(re, e), relative_change(rm1, m1)
     run.energy_drift, run.momentum_drift = drift_e, drift_m
     run.passed = _passes(case.criterion, run)
     if case.same_as is not None and run.status == "stable":
         twin = dataclasses.replace(case, problem=case.same_as, same_as=None)
-        other = _make(method, twin, dt, case.same_as.torque)
+        other = _integrator(method, twin, dt, case.same_as.torque)
         other.advance(n)
         gap = max(
             omega_error(other.omega, integrator.omega) / float(np.linalg.norm(other.omega)),
@@ -416,13 +172,13 @@ def run_case(case: Case, method: str) -> Run:
         )
         run.passed = gap <= case.same_tol
         run.message = f"relative difference from the unit-scale run {gap:.2g}"
-    if case.name == "intermediate-axis flips" and run.passed:
-        run.passed, note = _flip_times_match(case, method)
+    if case.flip_time_tol is not None and run.passed:
+        run.passed, note = _flip_times_match(case, method, case.flip_time_tol)
         run.message = note
     return run
 
 
-def _passes(criterion: Criterion, run: Run) -> bool:
+def _passes(criterion: Criterion, run: CaseRun) -> bool:
     checks = (
         (criterion.energy_drift, run.energy_drift),
         (criterion.momentum_drift, run.momentum_drift),
@@ -439,13 +195,11 @@ def _flip_times(omega2: np.ndarray, t: np.ndarray) -> np.ndarray:
     return t[idx] - omega2[idx] * (t[idx + 1] - t[idx]) / (omega2[idx + 1] - omega2[idx])
 
 
-def _flip_times_match(case: Case, method: str, tolerance: float = 0.1) -> tuple[bool, str]:
+def _flip_times_match(case: Case, method: str, tolerance: float) -> tuple[bool, str]:
     """Compare the flip times (sign changes of omega_2) with the exact solution's."""
-    from rigid_rot_sim.core.exact import torque_free_solution
-
     problem = case.problem
     n = case.n_steps
-    integrator = _make(method, case, problem.t_end / n, problem.torque)
+    integrator = _integrator(method, case, problem.t_end / n, problem.torque)
     t = np.linspace(0.0, problem.t_end, n + 1)
     omega2 = np.empty(n + 1)
     omega2[0] = problem.omega0[1]
@@ -464,7 +218,7 @@ def _is_stable(case: Case, method: str, dt: float, steps: int) -> bool:
     """``steps`` steps of ``dt`` stay finite with energy and momentum growth <= BISECTION_GROWTH."""
     problem = case.problem
     try:
-        integrator = _make(method, case, dt, problem.torque)
+        integrator = _integrator(method, case, dt, problem.torque)
         e0, m0, _ = _invariants(problem, integrator.q, integrator.omega)
         for _ in range(10):
             integrator.advance(steps // 10)
@@ -520,7 +274,7 @@ class LongHorizon:
     last_tenth_mean: float
     final: float
     secular: bool
-    status: str = "stable"
+    status: Literal["stable", "unstable"] = "stable"
     message: str = ""
 
 
@@ -536,7 +290,7 @@ def long_horizon(method: str, steps: int, dt: float = 0.01, samples: int = 1000)
     Secular when the mean error over the last tenth exceeds twice the maximum over the
     first tenth and the round-off floor (1e-11).
     """
-    problem = P.P1
+    problem = P1
     name, options = _method_and_options(method)
     integrator = get_method(name)(problem.moments, dt, None, q0=problem.q0, omega0=problem.omega0, **options)
     e0 = problem.energy(problem.q0, problem.omega0)
@@ -546,7 +300,7 @@ def long_horizon(method: str, steps: int, dt: float = 0.01, samples: int = 1000)
     try:
         for k, chunk in enumerate(chunks):
             integrator.advance(int(chunk))
-            errors[k] = _relative(problem.energy(integrator.q, integrator.omega), e0)
+            errors[k] = relative_change(e0, problem.energy(integrator.q, integrator.omega))
     except (NonFiniteStateError, ArithmeticError) as exc:
         return LongHorizon(method, steps, dt, time.perf_counter() - start, math.nan, math.nan, math.nan, True,
                            "unstable", str(exc)[:240])
@@ -578,18 +332,14 @@ def bisection_rows(cases: list[Case], quick: bool = False) -> list[dict[str, Any
     return [bisection_row(case, method, steps) for case in cases if case.bisect for method in BISECTED]
 
 
-def _case(name: str, quick: bool) -> Case:
-    return next(case for case in catalogue(quick) if case.name == name)
-
-
 def case_task(name: str, quick: bool, method: str) -> dict[str, Any]:
     """A Dask task: :func:`run_case` of the catalogue's case ``name`` (rebuilt on the worker)."""
-    return dataclasses.asdict(run_case(_case(name, quick), method))
+    return dataclasses.asdict(run_case(case_named(name, quick), method))
 
 
 def bisection_task(name: str, quick: bool, method: str) -> dict[str, Any]:
     """A Dask task: :func:`bisection_row` of the catalogue's case ``name``."""
-    return bisection_row(_case(name, quick), method, BISECTION_STEPS // (4 if quick else 1))
+    return bisection_row(case_named(name, quick), method, BISECTION_STEPS // (4 if quick else 1))
 
 
 def long_horizon_task(method: str, steps: int) -> dict[str, Any]:
@@ -602,36 +352,54 @@ def method_labels() -> list[str]:
     return list(METHODS)
 
 
-# ---------------------------------------------------------------- the suite and its outputs
+# ---------------------------------------------------------------- the whole suite, here or on a cluster
 
 
-def _run_here(cases, methods, long_methods, long_steps, quick, progress, total):
-    """The suite in this process: ({case: {method: run}}, bisection rows, long horizons)."""
-    from tqdm import tqdm
+def run_all(
+    cases: list[Case],
+    methods: list[str],
+    long_methods: tuple[str, ...],
+    long_steps: int,
+    quick: bool,
+    bar: Any,
+    scheduler: str | None = None,
+    workers: int | None = None,
+) -> tuple[dict[str, dict[str, Any]], list[dict[str, Any]], list[dict[str, Any]]]:
+    """Every method on every case, the bisections and the long horizons, as dicts.
 
+    Returns ``({case: {method: run}}, bisection rows, long horizons)``; ``bar`` (tqdm)
+    counts one step per run, one for all the bisections and one per long horizon. With
+    ``scheduler`` or ``workers`` (or DASK_SCHEDULER_ADDRESS) each is one Dask task; the
+    results are the same (run times aside).
+    """
+    if wants_cluster(scheduler, workers):
+        with open_client(scheduler, workers) as client:
+            return _run_on_cluster(client, cases, methods, long_methods, long_steps, quick, bar)
+    return _run_here(cases, methods, long_methods, long_steps, quick, bar)
+
+
+def _run_here(cases, methods, long_methods, long_steps, quick, bar):
+    """The suite in this process."""
     case_runs: dict[str, dict[str, Any]] = {}
-    with tqdm(total=total, desc="stability", unit="run", disable=not progress) as bar:
-        for case in cases:
-            runs = case_runs.setdefault(case.name, {})
-            for method in methods:
-                bar.set_postfix_str(f"{case.name} {method}", refresh=False)
-                runs[method] = dataclasses.asdict(run_case(case, method))
-                bar.update(1)
-        bar.set_postfix_str("bisection", refresh=True)
-        bisection = bisection_rows(cases, quick)
-        bar.update(1)
-        horizon = []
-        for method in long_methods:
-            bar.set_postfix_str(f"long horizon {method}", refresh=True)
-            horizon.append(dataclasses.asdict(long_horizon(method, long_steps)))
+    for case in cases:
+        runs = case_runs.setdefault(case.name, {})
+        for method in methods:
+            bar.set_postfix_str(f"{case.name} {method}", refresh=False)
+            runs[method] = dataclasses.asdict(run_case(case, method))
             bar.update(1)
+    bar.set_postfix_str("bisection", refresh=True)
+    bisection = bisection_rows(cases, quick)
+    bar.update(1)
+    horizon = []
+    for method in long_methods:
+        bar.set_postfix_str(f"long horizon {method}", refresh=True)
+        horizon.append(dataclasses.asdict(long_horizon(method, long_steps)))
+        bar.update(1)
     return case_runs, bisection, horizon
 
 
 def _run_on_cluster(client, cases, methods, long_methods, long_steps, quick, bar):
     """The same as :func:`_run_here`, every run, bisection and long horizon one Dask task."""
-    from rigid_rot_sim.analysis.engine import map_tasks
-
     runs_args = [(case.name, quick, method) for case in cases for method in methods]
     bisect_args = [(case.name, quick, method) for case in cases if case.bisect for method in BISECTED]
     horizon_args = [(method, long_steps) for method in long_methods]
@@ -658,178 +426,3 @@ def _run_on_cluster(client, cases, methods, long_methods, long_steps, quick, bar
     for (name, _, method), run in zip(runs_args, results[:first_bisection]):
         case_runs.setdefault(name, {})[method] = run
     return case_runs, results[first_bisection:first_horizon], results[first_horizon:]
-
-
-def run_suite(
-    out_dir: Any,
-    quick: bool = False,
-    long_steps: int | None = None,
-    long_methods: tuple[str, ...] = LONG_HORIZON_METHODS,
-    case_names: list[str] | None = None,
-    methods: list[str] | None = None,
-    command: str = "rigid-rot stability",
-    progress: bool = True,
-    scheduler: str | None = None,
-    workers: int | None = None,
-) -> dict[str, Any]:
-    """Run the catalogue, the bisections and the long horizon; write stability.md/.json/.png.
-
-    With ``scheduler`` or ``workers`` (or DASK_SCHEDULER_ADDRESS) every run, bisection and
-    long horizon is one Dask task; the results are the same (run times aside).
-    """
-    import json
-    from pathlib import Path
-
-    from tqdm import tqdm
-
-    from rigid_rot_sim.analysis.engine import open_client, wants_cluster
-    from rigid_rot_sim.analysis.plotting import long_horizon_plot, stability_plot
-    from rigid_rot_sim.analysis.workprecision import machine_info
-
-    cases = catalogue(quick)
-    if case_names is not None:
-        unknown = sorted(set(case_names) - {c.name for c in cases})
-        if unknown:
-            raise ValueError(f"case_names: unknown case(s) {unknown}; valid: {[c.name for c in cases]}")
-        cases = [c for c in cases if c.name in case_names]
-    methods = list(methods) if methods is not None else method_labels()
-    if long_steps is None:
-        long_steps = 100_000 if quick else 10_000_000
-    start = time.perf_counter()
-    case_rows: list[dict[str, Any]] = []
-    total = len(cases) * len(methods) + len(long_methods) + 1
-    if wants_cluster(scheduler, workers):
-        with tqdm(total=total, desc="stability", unit="run", disable=not progress) as bar, \
-                open_client(scheduler, workers) as client:
-            case_runs, bisection, horizon = _run_on_cluster(client, cases, methods, long_methods, long_steps, quick, bar)
-    else:
-        case_runs, bisection, horizon = _run_here(cases, methods, long_methods, long_steps, quick, progress, total)
-    for case in cases:
-        case_rows.append(
-            {
-                "name": case.name,
-                "description": case.description,
-                "principal_moments": list(case.problem.principal_moments),
-                "omega0": list(case.problem.omega0),
-                "dt": case.dt,
-                "steps": case.n_steps,
-                "criterion": case.criterion.describe(),
-                "reference": case.problem.reference().method if case.reference else None,
-                "runs": case_runs[case.name],
-            }
-        )
-    elapsed = time.perf_counter() - start
-    out = Path(out_dir)
-    out.mkdir(parents=True, exist_ok=True)
-    payload = {
-        "command": command,
-        "quick": quick,
-        "elapsed_seconds": elapsed,
-        "machine": machine_info(),
-        "methods": methods,
-        "cases": case_rows,
-        "bisection": {"steps": BISECTION_STEPS // (4 if quick else 1), "growth": BISECTION_GROWTH, "rows": bisection},
-        "long_horizon": horizon,
-    }
-    (out / "stability.json").write_text(json.dumps(payload, indent=1, allow_nan=True), encoding="utf-8")
-    stability_plot(case_rows, methods, out / "stability.png")
-    long_horizon_plot(horizon, out / "long_horizon.png")
-    (out / "stability.md").write_text(_markdown(payload), encoding="utf-8")
-    return payload
-
-
-def _g(value: Any, spec: str = ".2g") -> str:
-    if value is None or (isinstance(value, float) and not math.isfinite(value)):
-        return "–"
-    return format(value, spec)
-
-
-def _markdown(payload: dict[str, Any]) -> str:
-    machine = payload["machine"]
-    methods = payload["methods"]
-    md = [
-        "# Stability suite",
-        "",
-        f"Command: `{payload['command']}` ({'quick mode' if payload['quick'] else 'full run'}, "
-        f"{payload['elapsed_seconds']:.0f} s). Machine: {machine['cpu']}, {machine['cpus_available']} CPUs; "
-        f"numpy {machine['numpy']}, scipy {machine['scipy']}; commit `{machine['git_commit'][:10]}`.",
-        "",
-        "Status: **stable** (finite; energy and momenta changed by less than 100 %), **unstable** (non-finite state, "
-        "a solver failure, or growth beyond that; the message says which and when), **refused** (the method "
-        "declined the case with ValueError). Pass = stable and within the case's criterion. Drifts are the maximum "
-        "relative change over ~200 samples (|L| for free bodies; p_φ and p_ψ for heavy tops; for torqued cases "
-        "the error against the reference at the end). Errors are at the final time against the reference.",
-        "",
-        "![stability](stability.png)",
-        "",
-        "## Pass / fail overview",
-        "",
-        "| case | " + " | ".join(methods) + " |",
-        "|---|" + "---|" * len(methods),
-    ]
-    for case in payload["cases"]:
-        cells = []
-        for method in methods:
-            run = case["runs"][method]
-            cells.append(
-                "pass" if run["passed"] else ("**unstable**" if run["status"] == "unstable" else
-                                              ("refused" if run["status"] == "refused" else "fail"))
-            )
-        md.append(f"| {case['name']} | " + " | ".join(cells) + " |")
-    md += ["", "## Largest stable step of the explicit methods (bisection)", ""]
-    bis = payload["bisection"]
-    md += [
-        f"Stable = {bis['steps']} steps without non-finite values and with energy and |L| grown by at most "
-        f"{bis['growth']:.0%}. Advice: `core.advice.practical_step_limit`: 2√2 / ν for rk4 and lie_rk4 from linear "
-        "theory (ν the linearised gyroscopic frequency bound |ω|·max_i sqrt(|(Ii−Ij)(Ii−Ik)|/(Ij Ik))); for "
-        "implicit_midpoint (Newton solve) 4 / ν and for splitting 2 rad / |ω|, both measured by this bisection. "
-        "Explicit Euler has no stable step in theory (growth factor sqrt(1 + (ν dt)²) per step), so its bisected "
-        f"step is only the step whose growth stays under {bis['growth']:.0%} over {bis['steps']} steps.",
-        "",
-        "| case | method | largest stable dt [s] | advice dt [s] | measured / advice |",
-        "|---|---|---|---|---|",
-    ]
-    for row in bis["rows"]:
-        md.append(
-            f"| {row['case']} | {row['method']} | {_g(row['largest_stable_dt'], '.4g')} | "
-            f"{_g(row['theory_dt'], '.4g')} | {_g(row['ratio'], '.3f')} |"
-        )
-    md += [
-        "",
-        "## Long horizon: bounded or secular energy drift",
-        "",
-        "P1's body (I = diag(1, 2, 3) kg·m², ω0 = (1, 0.1, 0.5) rad/s), dt = 10 ms. Secular = the mean relative "
-        "energy error over the last tenth exceeds twice its maximum over the first tenth and 1e-11 (round-off).",
-        "",
-        "![long horizon](long_horizon.png)",
-        "",
-        "| method | steps | run time [s] | max error, first tenth | mean error, last tenth | final error | verdict |",
-        "|---|---|---|---|---|---|---|",
-    ]
-    for row in payload["long_horizon"]:
-        verdict = row["status"] if row["status"] != "stable" else ("**secular**" if row["secular"] else "bounded")
-        md.append(
-            f"| {row['method']} | {row['steps']:.0e} | {row['seconds']:.1f} | {_g(row['first_tenth_max'])} | "
-            f"{_g(row['last_tenth_mean'])} | {_g(row['final'])} | {verdict} |"
-        )
-    md += ["", "## Cases in detail", ""]
-    for case in payload["cases"]:
-        md += [
-            f"### {case['name']}",
-            "",
-            f"{case['description']}; {case['steps']} steps. Criterion: {case['criterion']}. "
-            f"Reference: {case['reference'] or 'none'}.",
-            "",
-            "| method | status | pass | energy drift | momentum drift | \\| \\|q\\|−1 \\| | ω error [rad/s] | "
-            "attitude error [rad] | run time [s] | note |",
-            "|---|---|---|---|---|---|---|---|---|---|",
-        ]
-        for method in methods:
-            run = case["runs"][method]
-            md.append(
-                f"| {method} | {run['status']} | {'yes' if run['passed'] else 'no'} | {_g(run['energy_drift'])} | "
-                f"{_g(run['momentum_drift'])} | {_g(run['quaternion_norm_error'])} | {_g(run['omega_error'])} | "
-                f"{_g(run['attitude_error'])} | {_g(run['seconds'], '.3f')} | {run['message'][:160]} |"
-            )
-        md.append("")
-    return "\n".join(md)

@@ -23,6 +23,7 @@ body's own (dispersed) principal frame. Quaternions scalar-last, body -> world.
 from __future__ import annotations
 
 import math
+import time
 from dataclasses import dataclass, fields
 from typing import Any
 
@@ -507,8 +508,6 @@ def measure_step_cost(method: str, sizes: tuple[int, int] = (1, 256), steps: int
 
     Measured here with a short run of a generic body at each size (best of 3).
     """
-    import time
-
     times = []
     for n in sizes:
         moments = np.tile([1.0, 2.0, 2.5], (n, 1))

@@ -25,6 +25,7 @@ import numpy as np
 from rigid_rot_sim.analysis.engine import SweepResult
 from rigid_rot_sim.analysis.sweep import COLUMNS
 from rigid_rot_sim.analysis.sweep_spec import METRICS
+from rigid_rot_sim.recording.provenance import package_versions
 
 __all__ = ["to_table", "write_parquet", "summary_markdown", "write_plots", "write_outputs", "METADATA_KEY", "PERCENTILES"]
 
@@ -39,8 +40,6 @@ _SWEEP_DISTRIBUTIONS = ("dask", "distributed", "pyarrow", "matplotlib", "tqdm")
 
 
 def _metadata(result: SweepResult) -> dict[str, Any]:
-    from rigid_rot_sim.recording.provenance import package_versions
-
     spec = result.spec
     versions = package_versions()
     for name in _SWEEP_DISTRIBUTIONS:

@@ -10,6 +10,8 @@ from __future__ import annotations
 import argparse
 import sys
 
+from rigid_rot_sim.cli.suite_options import add_suite_options, check_workers
+
 
 def add_parser(subparsers) -> None:
     parser = subparsers.add_parser(
@@ -22,22 +24,18 @@ def add_parser(subparsers) -> None:
     parser.add_argument(
         "--problems", nargs="+", metavar="KEY", help="only these problems (default: all; e.g. P1 P2)"
     )
-    parser.add_argument("--scheduler", metavar="ADDRESS", help="run the points on this Dask scheduler "
-                        "(tcp://host:port; default $DASK_SCHEDULER_ADDRESS), each timed with a scipy baseline")
-    parser.add_argument("--workers", type=int, metavar="N", help="run the points on a local Dask cluster of N "
-                        "workers (with --scheduler: wait for N workers)")
-    parser.add_argument("--no-progress", action="store_true", help="no progress bar")
+    add_suite_options(parser, "points", ", each timed with a scipy baseline")
     parser.set_defaults(handler=run)
 
 
 def run(args: argparse.Namespace) -> int:
-    from rigid_rot_sim.analysis.workprecision import TARGETS, run_report, summary
+    from rigid_rot_sim.analysis.workprecision import TARGETS, summary
+    from rigid_rot_sim.analysis.workprecision_report import run_report
 
     command = "rigid-rot report" + (" --quick" if args.quick else "") + f" --out {args.out}"
     if args.problems:
         command += " --problems " + " ".join(args.problems)
-    if args.workers is not None and args.workers < 1:
-        raise ValueError(f"--workers must be >= 1, got {args.workers}")
+    check_workers(args)
     results, paths = run_report(
         args.out, quick=args.quick, problem_keys=args.problems, command=command, progress=not args.no_progress,
         scheduler=args.scheduler, workers=args.workers,

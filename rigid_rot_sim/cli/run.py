@@ -84,7 +84,7 @@ def node_arguments(args: argparse.Namespace) -> list[str]:
 def run(args: argparse.Namespace) -> int:
     argv = node_arguments(args)  # ValueError for an unknown scene, before ROS starts
     if args.echo is None:
-        from rigid_rot_sim.node import main
+        from rigid_rot_sim.ros.node import main
 
         return main(argv)
     return _run_with_echo(argv, args.echo)
@@ -97,7 +97,8 @@ def _run_with_echo(argv: list[str], period: float) -> int:
     from rigid_rot_msgs.msg import RigidBodyState
 
     from rigid_rot_sim import conversions
-    from rigid_rot_sim.node import STARTUP_ERRORS, STATE_QOS, RigidRotSimNode
+    from rigid_rot_sim.ros.node import STARTUP_ERRORS, RigidRotSimNode
+    from rigid_rot_sim.ros.qos import STATE_QOS
 
     try:
         rclpy.init(args=argv)

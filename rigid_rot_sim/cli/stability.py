@@ -11,6 +11,8 @@ from __future__ import annotations
 import argparse
 import sys
 
+from rigid_rot_sim.cli.suite_options import add_suite_options, check_workers
+
 
 def add_parser(subparsers) -> None:
     parser = subparsers.add_parser(
@@ -21,24 +23,19 @@ def add_parser(subparsers) -> None:
     parser.add_argument("--out", default="out/stability", metavar="DIR", help="output directory (default: out/stability)")
     parser.add_argument("--quick", action="store_true", help="shorter cases and a 1e5-step long horizon")
     parser.add_argument("--long-steps", type=int, metavar="N", help="steps of the long horizon (default 1e7, quick 1e5)")
-    parser.add_argument("--scheduler", metavar="ADDRESS", help="run the cases on this Dask scheduler "
-                        "(tcp://host:port; default $DASK_SCHEDULER_ADDRESS)")
-    parser.add_argument("--workers", type=int, metavar="N", help="run the cases on a local Dask cluster of N "
-                        "workers (with --scheduler: wait for N workers)")
-    parser.add_argument("--no-progress", action="store_true", help="no progress bar")
+    add_suite_options(parser, "cases")
     parser.set_defaults(handler=run)
 
 
 def run(args: argparse.Namespace) -> int:
-    from rigid_rot_sim.analysis.stability import run_suite
+    from rigid_rot_sim.analysis.stability_report import run_suite
 
     if args.long_steps is not None and args.long_steps < 10:
         raise ValueError(f"--long-steps must be >= 10, got {args.long_steps}")
     command = "rigid-rot stability" + (" --quick" if args.quick else "") + f" --out {args.out}"
     if args.long_steps is not None:
         command += f" --long-steps {args.long_steps}"
-    if args.workers is not None and args.workers < 1:
-        raise ValueError(f"--workers must be >= 1, got {args.workers}")
+    check_workers(args)
     payload = run_suite(args.out, quick=args.quick, long_steps=args.long_steps, command=command,
                         progress=not args.no_progress, scheduler=args.scheduler, workers=args.workers)
     failures = 0

@@ -70,7 +70,7 @@ def run(args: argparse.Namespace) -> int:
     from geometry_msgs.msg import WrenchStamped
 
     from rigid_rot_sim.conversions import array_to_vector3
-    from rigid_rot_sim.node import COMMAND_QOS
+    from rigid_rot_sim.ros.qos import COMMAND_QOS
 
     def message(values) -> WrenchStamped:
         msg = WrenchStamped()

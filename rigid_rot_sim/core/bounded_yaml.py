@@ -24,7 +24,7 @@ import yaml
 
 from rigid_rot_sim.core import limits
 
-__all__ = ["BoundedYAMLError", "load_bounded", "read_bounded"]
+__all__ = ["BoundedYAMLError", "load_bounded", "read_bounded", "read_input", "load_input"]
 
 # libyaml's parser where PyYAML was built with it (the PyPI wheels, Debian's python3-yaml)
 _Loader = getattr(yaml, "CSafeLoader", yaml.SafeLoader)
@@ -107,3 +107,22 @@ def read_bounded(path: str | os.PathLike[str], *, max_bytes: int = limits.MAX_SC
         return data.decode("utf-8")
     except UnicodeDecodeError as exc:
         raise BoundedYAMLError(f"not UTF-8 text (byte {exc.start})") from None
+
+
+def read_input(path: str, what: str, error_class: type[ValueError]) -> str:
+    """:func:`read_bounded` for a loader: its errors as one ``error_class`` line naming ``path``
+    (``<path>: cannot read <what>: <reason>``)."""
+    try:
+        return read_bounded(path)
+    except OSError as exc:
+        raise error_class(f"{path}: cannot read {what}: {exc.strerror}") from None
+    except BoundedYAMLError as exc:
+        raise error_class(f"{path}: {exc}") from None
+
+
+def load_input(text: str, source: str, error_class: type[ValueError]) -> Any:
+    """:func:`load_bounded` for a loader: its errors as one ``error_class`` line naming the file."""
+    try:
+        return load_bounded(text)
+    except BoundedYAMLError as exc:
+        raise error_class(f"{os.path.basename(source)}: {exc}") from None

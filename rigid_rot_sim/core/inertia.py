@@ -132,6 +132,22 @@ def parallel_axis_shift(inertia_com: Any, mass: float, offset: Any) -> np.ndarra
     return tensor + mass * (float(shift @ shift) * np.eye(3) - np.outer(shift, shift))
 
 
+
+def inertia_about_center_of_mass(inertia: Any, mass: float, offset: Any) -> np.ndarray:
+    """Inertia tensor about the centre of mass from the one about a point ``offset`` from it.
+
+    The inverse of :func:`parallel_axis_shift`: ``I_com = I_p - mass * (|s|^2 E - s s^T)``
+    (a gravity scene's tensor is about the pivot, its /tf_static and ~/mass_properties are
+    about the centre of mass). Units and axes as there.
+
+    >>> inertia_about_center_of_mass(parallel_axis_shift(np.eye(3), 2.0, (0.0, 0.0, 0.5)), 2.0, (0.0, 0.0, 0.5))
+    array([[1., 0., 0.],
+           [0., 1., 0.],
+           [0., 0., 1.]])
+    """
+    tensor = np.asarray(inertia, dtype=float)
+    return tensor - parallel_axis_shift(tensor * 0.0, mass, offset)
+
 def _symmetry_label(moments: np.ndarray, point_scale: float) -> str:
     """Label of ascending principal moments.
 

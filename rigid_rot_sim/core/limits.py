@@ -27,6 +27,7 @@ __all__ = [
     "RATE_RANGE",
     "MAX_TORQUE_RANGE",
     "COMMAND_DEPTH_RANGE",
+    "QOS_DEPTH_RANGE",
     "DEFAULT_COMMAND_DEPTH",
     "clip_text",
     "one_line",
@@ -58,7 +59,7 @@ MAX_STEPS_PER_REQUEST = 10_000
 #: Longest error line printed by a command line tool (characters).
 MAX_ERROR_CHARS = 300
 
-# Parameter ranges (inclusive), shared by the scene's validation and the node's descriptors.
+# Parameter ranges (inclusive), shared by the scene schema (core/scene_schema.py) and the node's descriptors.
 DT_RANGE = (1e-7, 10.0)  # s
 REAL_TIME_FACTOR_RANGE = (0.0, 1000.0)  # 0 = as fast as possible
 DURATION_RANGE = (0.0, 1e9)  # s of sim time; 0 = unbounded (parameter)
@@ -66,6 +67,8 @@ RATE_RANGE = (0.0, 1e6)  # Hz of sim time; 0 = not published
 MAX_TORQUE_RANGE = (0.0, MAX_MAGNITUDE)  # N*m; 0 = no limit
 COMMAND_DEPTH_RANGE = (1, 10_000)  # keep-last depth of the torque subscriptions
 DEFAULT_COMMAND_DEPTH = 10
+#: Keep-last depth of the state-like outputs (the upper bound limits the memory a slow subscriber can pin).
+QOS_DEPTH_RANGE = (1, 100_000)
 
 
 def clip_text(text: str, limit: int = MAX_NAME_LENGTH) -> str:

@@ -1,11 +1,23 @@
-"""Wall-clock cost of physics steps, so that stepping never holds the node longer than a budget.
+"""Pacing a run: wall clock against sim time, outputs due per step, slices of bounded wall time.
 
-The node steps in slices between executor turns. A slice used to be a fixed number of
-steps; but the wall time of one step depends on the method and the state (taylor at
-|ω| dt = 25 rad needs ~0.2 s per step), so a fixed slice could block the executor for
-seconds. :class:`StepCost` keeps a running estimate of the wall time per step and says how
-many steps fit in what is left of a budget; the slices then hold the executor for about the
-budget plus one step, whatever a step costs.
+Plain classes, no ROS, every clock injected, so the rules are tested with a fake clock
+(``test/core/test_pacing.py``); the ROS node only calls :meth:`RunDriver.tick` from its
+timer and :meth:`RunDriver.run` from ``~/step``.
+
+* :class:`Pacer`: the real-time factor r. At r > 0 the run is due at step
+  ``r * (wall time since the anchor)`` after the anchor's sim time; a backlog of more than
+  ``MAX_BACKLOG_WALL`` of wall time is dropped (the run re-anchors). r = 0: as fast as possible.
+* :class:`OutputSchedule`: each output's period in whole steps (from its rate in Hz of sim
+  time) and the outputs due at a step.
+* :class:`StepCost`: wall time per physics step, so that a slice holds the executor for
+  about its budget whatever a step costs (taylor at |ω| dt = 25 rad needs ~0.2 s per step).
+* :class:`RunDriver`: advances the :class:`~rigid_rot_sim.core.simulator.Simulator` in
+  slices up to the next due output, the paced target, the wall deadline or the duration,
+  and tells its observers (:class:`~rigid_rot_sim.core.observer.SimulationObserver`) which
+  outputs are due at each step, with the state there.
+
+The states never depend on r, the rates or the slices (the Simulator's determinism notes):
+pacing decides only *when* (wall clock) a step is computed.
 
 >>> cost = StepCost()
 >>> cost.record(steps=100, wall=0.01)
@@ -16,8 +28,29 @@ budget plus one step, whatever a step costs.
 from __future__ import annotations
 
 import math
+import time
+from dataclasses import dataclass
+from typing import TYPE_CHECKING, Callable, Iterable, Mapping, Sequence
 
-__all__ = ["StepCost", "falling_behind_message"]
+if TYPE_CHECKING:  # annotations only
+    from rigid_rot_sim.core.observer import SimulationObserver
+    from rigid_rot_sim.core.simulator import Simulator
+
+__all__ = ["OutputSchedule", "Pacer", "Progress", "RunDriver", "StepCost", "falling_behind_message"]
+
+#: Most wall time (s) one timer tick spends stepping, so the executor serves commands between.
+MAX_TICK_WALL = 0.02
+#: Most steps between two checks of the wall-clock deadline (fewer when steps are slow: StepCost).
+MAX_CHUNK = 256
+#: Wall-clock timer period bounds (s).
+MIN_TICK = 0.001
+MAX_TICK = 0.02
+#: At r > 0, a backlog beyond this much wall time is dropped (the run re-anchors), with a warning.
+MAX_BACKLOG_WALL = 0.5
+#: Steps to the next due output when no output is scheduled at all.
+NEVER = 10**9
+
+Clock = Callable[[], float]
 
 
 class StepCost:
@@ -55,3 +88,187 @@ def falling_behind_message(
         f"(at most {pace:.3g}x real time) at |omega| = {omega:.3g} rad/s, |torque| = {torque:.3g} N*m; "
         "dropping the backlog (a smaller torque, max_torque or another integrator helps)"
     )
+
+
+class Pacer:
+    """Wall clock against sim time at ``real_time_factor`` r (sim s per wall s; 0: as fast as possible).
+
+    ``clock`` returns wall seconds (a monotonic clock; a fake one in tests).
+    """
+
+    def __init__(self, real_time_factor: float, clock: Clock = time.monotonic) -> None:
+        self.real_time_factor = float(real_time_factor)
+        self.clock = clock
+        self._anchor_wall = clock()
+        self._anchor_t = 0.0
+
+    def anchor(self, t: float) -> None:
+        """Restart pacing from sim time ``t`` (s) now: after a pause, a reset, a new r."""
+        self._anchor_wall = self.clock()
+        self._anchor_t = t
+
+    def tick_period(self, dt: float) -> float:
+        """Wall seconds between two timer ticks: one step of wall time, within [MIN_TICK, MAX_TICK]."""
+        if self.real_time_factor <= 0.0:
+            return MIN_TICK
+        return min(max(dt / self.real_time_factor, MIN_TICK), MAX_TICK)
+
+    def target_step(self, sim: "Simulator", now: float) -> tuple[int | None, float | None]:
+        """The step the run is due at ``now`` (None: unbounded) and the backlog dropped (wall s) or None.
+
+        A backlog of more than ``MAX_BACKLOG_WALL`` is dropped: the run re-anchors half a
+        tick before ``now``, so it goes on at pace from where it is.
+        """
+        r = self.real_time_factor
+        if r <= 0.0:
+            return None, None
+        target_t = self._anchor_t + (now - self._anchor_wall) * r
+        behind_wall = (target_t - sim.t) / r
+        dropped = None
+        if behind_wall > MAX_BACKLOG_WALL:
+            dropped = behind_wall
+            self._anchor_wall = now - MAX_TICK_WALL * 0.5
+            self._anchor_t = sim.t
+            target_t = sim.t + MAX_TICK_WALL * 0.5 * r
+        return max(sim.step_at_or_before(target_t), sim.step_index), dropped
+
+
+class OutputSchedule:
+    """Each output's period in steps; which outputs are due at a step.
+
+    ``periods`` maps an output name to its period (steps >= 1). An output is due at the
+    steps that are multiples of its period.
+    """
+
+    def __init__(self, periods: Mapping[str, int] | None = None) -> None:
+        self.periods: dict[str, int] = dict(periods or {})
+
+    @staticmethod
+    def period_steps(rate: float, dt: float) -> int:
+        """Whole steps of ``dt`` s per period of ``rate`` Hz (at least 1)."""
+        return max(1, int(round(1.0 / (rate * dt))))
+
+    @classmethod
+    def from_rates(cls, rates: Mapping[str, float], dt: float) -> "OutputSchedule":
+        """The schedule of the outputs with a rate > 0 (Hz of sim time) at step ``dt`` (s)."""
+        return cls({name: cls.period_steps(rate, dt) for name, rate in rates.items() if rate > 0.0})
+
+    def set_rates(self, rates: Mapping[str, float], dt: float) -> None:
+        """New periods for the scheduled outputs (after a rate or dt change); others stay unscheduled."""
+        for name in self.periods:
+            self.periods[name] = self.period_steps(rates[name], dt)
+
+    def due(self, step: int, force: bool = False, rest: bool = False) -> list[str]:
+        """The outputs due at ``step``: all with ``force``; with ``rest`` those *not* due there."""
+        return [name for name, n in self.periods.items() if force or (step % n != 0 if rest else step % n == 0)]
+
+    def next_due(self, step: int) -> int:
+        """The first step after ``step`` at which some output is due (``step + NEVER`` if none)."""
+        periods = self.periods.values()
+        return min(((step // n) + 1) * n for n in periods) if periods else step + NEVER
+
+
+@dataclass
+class Progress:
+    """What a slice of the run came to, for the node to log."""
+
+    #: Steps done.
+    steps: int = 0
+    #: The falling-behind warning when a backlog was dropped (r > 0), else None.
+    falling_behind: str | None = None
+    #: Why the run stopped (the Simulator's failure), else None.
+    failure: str | None = None
+    #: True when the duration was reached in this slice.
+    finished: bool = False
+
+
+class RunDriver:
+    """Advances ``sim`` in slices and tells its observers the outputs due at each step.
+
+    ``duration`` (s of sim time, None: unbounded) ends the run: every output is published
+    once more on the final state (those not due there), then :attr:`finished` is set.
+    """
+
+    def __init__(
+        self,
+        sim: "Simulator",
+        schedule: OutputSchedule,
+        pacer: Pacer,
+        duration: float | None = None,
+        observers: Iterable["SimulationObserver"] = (),
+    ) -> None:
+        self.sim = sim
+        self.schedule = schedule
+        self.pacer = pacer
+        self.clock = pacer.clock
+        self.duration = duration
+        self.step_cost = StepCost()
+        self.finished = False
+        self.observers: list[SimulationObserver] = list(observers)
+
+    def add_observer(self, observer: "SimulationObserver") -> None:
+        """Tell ``observer`` the outputs due from now on."""
+        self.observers.append(observer)
+
+    def publish_due(self, force: bool = False, rest: bool = False) -> None:
+        """Report the outputs due at the current step (see :meth:`OutputSchedule.due`)."""
+        step = self.sim.step_index
+        names: Sequence[str] = self.schedule.due(step, force, rest)
+        if not names:
+            return
+        snapshot = self.sim.snapshot()
+        for observer in self.observers:
+            observer.outputs_due(step, snapshot, names)
+
+    def restart(self) -> None:
+        """After a reset: not finished, paced from the current (initial) state."""
+        self.finished = False
+        self.pacer.anchor(self.sim.t)
+
+    def tick(self) -> Progress:
+        """One timer tick: step to the paced target (r > 0) or as far as ``MAX_TICK_WALL`` allows."""
+        sim = self.sim
+        if sim.paused or self.finished:
+            return Progress()
+        now = self.clock()
+        target, dropped = self.pacer.target_step(sim, now)
+        behind = None
+        if dropped is not None:
+            snapshot = sim.snapshot()
+            behind = falling_behind_message(
+                self.pacer.real_time_factor, dropped, sim.method, sim.dt, self.step_cost.per_step,
+                math.hypot(*snapshot.angular_velocity_body.tolist()), math.hypot(*snapshot.torque_body.tolist()),
+            )
+        progress = self.run(target, now + MAX_TICK_WALL)
+        progress.falling_behind = behind
+        return progress
+
+    def run(self, target: int | None, deadline: float | None) -> Progress:
+        """Step (reporting what is due) up to step ``target`` (None: unbounded) or the wall ``deadline``."""
+        sim = self.sim
+        start = sim.step_index
+        end_step = sim.step_at_or_after(self.duration) if self.duration is not None else None
+        while True:
+            k = sim.step_index
+            if end_step is not None and k >= end_step:
+                self.publish_due(rest=True)  # every output ends on the final state, none twice
+                self.finished = True
+                return Progress(steps=k - start, finished=True)
+            stop = min(self.schedule.next_due(k), k + MAX_CHUNK)
+            if deadline is not None:  # as many steps as the measured cost per step lets fit
+                stop = min(stop, k + self.step_cost.steps_within(deadline - self.clock()))
+            if target is not None:
+                stop = min(stop, target)
+            if end_step is not None:
+                stop = min(stop, end_step)
+            if stop <= k:
+                break
+            began = self.clock()
+            self.step_cost.record(sim.advance_to(stop), self.clock() - began)
+            if sim.failure is not None:
+                self.publish_due(force=True)
+                return Progress(steps=sim.step_index - start, failure=sim.failure)
+            self.publish_due()
+            if deadline is not None and self.clock() >= deadline:
+                break
+        return Progress(steps=sim.step_index - start)

@@ -1,67 +1,24 @@
 """Scene files: the YAML description of one simulation run, validated into frozen dataclasses.
 
-A scene says what a run needs, and the simulator and the node build only that. Every
-error is a :class:`SceneError` (a ValueError) naming the file, the key and what is wrong,
-e.g. ``free_tumble.yaml: body.principal_moments[2]: must be finite and > 0, got -1.0``.
-
-Schema (SI units; frames REP 103; quaternions scalar-last, body -> world)::
+A scene says what a run needs, and the simulator and the node build only that. Its format
+is one JSON Schema, :data:`rigid_rot_sim.core.scene_schema.SCENE_SCHEMA` (exported as
+``config/schema/scene.schema.json``, with a description of every key); a short scene::
 
     name: free_tumble                  # optional, defaults to the file stem
-    description: "..."                 # optional
-    frames: {world: odom, body: base_link}  # optional, these are the defaults (REP 105)
-    body:                              # exactly one of the three inertia forms
-      principal_moments: [I1, I2, I3]  # kg*m^2, along the body frame's axes
-      inertia_tensor: [[..], [..], [..]]   # kg*m^2, symmetric positive definite, body axes
-      point_masses:                    # inertia computed by core.inertia
-        masses: [m, ...]               # kg
-        positions: [[x, y, z], ...]    # m, body frame
-    initial:                           # optional, defaults to identity attitude and rest
-      orientation: [x, y, z, w]        # body -> world, normalised on load
-      euler_zxz: [phi, theta, psi]     # rad, intrinsic z-x'-z'' (instead of orientation)
-      angular_velocity: [wx, wy, wz]   # rad/s, body frame
-    torque_inputs:                     # optional list; each item is a topic or a schedule
-      - topic: ~/torque                # a topic input
-        type: WrenchStamped            # or Vector3Stamped
-        frame: body                    # body | world | header (header.frame_id names one)
-        hold: hold                     # hold until replaced, or {timeout: seconds} then zero
-      - schedule:                      # piecewise-constant torque written in the file
-          frame: body                  # body | world
-          segments:                    # each holds from its start to the next start
-            - {start: 0.0, torque: [0, 0, 0.1]}
-            - {start: 2.0, torque: [0, 0, 0]}
-    gravity:                           # optional (heavy top); omit or null for none
-      acceleration: 9.81               # m/s^2 along -z of the world frame
-      mass: 1.0                        # kg (not with point_masses: their total is used)
-      center_of_mass: [0, 0, 0.1]      # m, body frame (not with point_masses)
-    integrator:
-      method: auto                     # a name from the integrator registry, or auto
-      dt: 0.001                        # s, the fixed physics step (> 0)
-      options: {tol: 1.0e-12}          # optional keyword options of the method (e.g. taylor's tol)
-    duration: 10.0                     # s of sim time, or null for unbounded
-    real_time_factor: 1.0              # 1 = wall-clock pace, 0 = as fast as possible
-    outputs:                           # Hz of sim time; 0 = not published
-      state: 100
-      orientation: 100
-      angular_velocity: 100
-      angular_momentum: 100
-      top_state: 100                   # gravity scenes only
-      tf: 50                           # only where tf2_msgs is installed
-      clock: 100
-      imu: 0                           # sensor_msgs/Imu on ~/imu (0: not built, the default)
-      odom: 0                          # nav_msgs/Odometry on ~/odom (0: not built, the default)
-    qos:                               # QoS of the state-like outputs (~/state ... ~/top_state)
-      reliability: reliable            # reliable | best_effort
-      depth: 10                        # keep-last history depth, 1..MAX_QOS_DEPTH
-    recording: null                    # or a path to an .mcap file
-    commands:                          # optional, for the torque inputs
-      max_torque: 0                    # N*m; a command whose |torque| exceeds it is rejected (0 = no limit)
-      qos_depth: 10                    # keep-last depth of the torque subscriptions
+    body: {principal_moments: [0.8, 1.2, 1.5]}   # kg*m^2; or inertia_tensor, or point_masses
+    initial: {angular_velocity: [0.05, 0.0, 4.0]} # rad/s, body frame
+    integrator: {method: auto, dt: 0.001}
+    duration: 20.0                     # s of sim time, or null for unbounded
 
-Limits (:mod:`rigid_rot_sim.core.limits`, README "Limits and failure behaviour"): the
-file size, YAML nesting depth and list lengths are bounded and YAML aliases are refused
-(:mod:`bounded_yaml`); physical numbers have at most ``MAX_MAGNITUDE`` in magnitude; dt,
-real-time factor, duration and rates lie in the ranges of the node's parameters; topic
-names follow the ROS 2 rules (:mod:`names`).
+:func:`load_scene` validates the file against the schema (keys, types, required keys,
+choices, bounds: :mod:`rigid_rot_sim.core.limits`, the ranges of the node's parameters),
+then checks what a schema cannot express, one small function each: a physical inertia
+(positive definite, triangle inequality), the integrator's name in the registry, topic
+and frame names ROS accepts (:mod:`names`), and the rules across sections (gravity needs a
+mass and centre of mass unless point masses give them; no torque inputs with gravity).
+Every error is a :class:`SceneError` (a ValueError) naming the file, the key and what is
+wrong, in one line, e.g. ``free_tumble.yaml: body.principal_moments[2] must be > 0 kg*m^2, got -1.0``.
+The file itself is read within limits, without YAML aliases (:mod:`bounded_yaml`).
 
 With ``gravity`` the body frame's origin is the pivot, and the inertia (principal
 moments or tensor) is about the pivot; point masses give the inertia about the origin
@@ -74,13 +31,26 @@ from __future__ import annotations
 
 import math
 import os
-from dataclasses import dataclass
-from typing import Any, Mapping
+from dataclasses import dataclass, field, make_dataclass
+from typing import Any, Callable, Mapping
 
 import numpy as np
 from rigid_rot_sim.core import limits, names, validation
-from rigid_rot_sim.core.bounded_yaml import BoundedYAMLError, load_bounded, read_bounded
+from rigid_rot_sim.core.bounded_yaml import load_input, read_input
 from rigid_rot_sim.core.quaternion import zxz_to_quaternion
+from rigid_rot_sim.core.inertia import mass_properties
+from rigid_rot_sim.core.integrators import get_method
+from rigid_rot_sim.core.schema import validated
+from rigid_rot_sim.core.scene_schema import (
+    DEFAULT_BODY_FRAME,
+    DEFAULT_GRAVITY,
+    DEFAULT_WORLD_FRAME,
+    OUTPUTS,
+    QOS_RELIABILITIES,
+    SCENE_SCHEMA,
+    TORQUE_FRAMES,
+    TORQUE_MESSAGE_TYPES,
+)
 
 __all__ = [
     "SceneError",
@@ -101,37 +71,23 @@ __all__ = [
     "parse_scene_text",
     "TORQUE_MESSAGE_TYPES",
     "TORQUE_FRAMES",
+    "QOS_RELIABILITIES",
+    "MAX_QOS_DEPTH",
+    "OUTPUT_NAMES",
+    "DEFAULT_OUTPUT_RATES",
 ]
 
-TORQUE_MESSAGE_TYPES = ("WrenchStamped", "Vector3Stamped")
-TORQUE_FRAMES = ("body", "world", "header")
-OUTPUT_NAMES = ("state", "orientation", "angular_velocity", "angular_momentum", "top_state", "tf", "clock", "imu", "odom")
-DEFAULT_OUTPUT_RATES = {
-    "state": 100.0,
-    "orientation": 100.0,
-    "angular_velocity": 100.0,
-    "angular_momentum": 100.0,
-    "top_state": 100.0,
-    "tf": 50.0,
-    "clock": 100.0,
-    "imu": 0.0,  # sensor_msgs/Imu and nav_msgs/Odometry: built only when the scene asks
-    "odom": 0.0,
-}
-
-QOS_RELIABILITIES = ("reliable", "best_effort")
+#: The outputs' names, in publishing order, and their default rates (Hz): from the one table, OUTPUTS.
+OUTPUT_NAMES = tuple(OUTPUTS)
+DEFAULT_OUTPUT_RATES = {name: output.rate for name, output in OUTPUTS.items()}
 #: Largest keep-last depth of an output (a bound on the memory a slow subscriber can pin).
-MAX_QOS_DEPTH = 100_000
+MAX_QOS_DEPTH = limits.QOS_DEPTH_RANGE[1]
 
 Vector3 = tuple[float, float, float]
 
 
 class SceneError(ValueError):
     """A scene file is invalid; the message names the file, the key and what is wrong."""
-
-
-#: Default frame names, REP 105: the fixed frame the attitude is given in, and the body.
-DEFAULT_WORLD_FRAME = "odom"
-DEFAULT_BODY_FRAME = "base_link"
 
 
 @dataclass(frozen=True)
@@ -256,22 +212,21 @@ class IntegratorSpec:
     options: tuple[tuple[str, Any], ...] = ()
 
 
-@dataclass(frozen=True)
-class Outputs:
-    """Publication rates in Hz of sim time (0 = not published)."""
+def _rates_as_dict(self: Any) -> dict[str, float]:
+    return {name: getattr(self, name) for name in OUTPUT_NAMES}
 
-    state: float = DEFAULT_OUTPUT_RATES["state"]
-    orientation: float = DEFAULT_OUTPUT_RATES["orientation"]
-    angular_velocity: float = DEFAULT_OUTPUT_RATES["angular_velocity"]
-    angular_momentum: float = DEFAULT_OUTPUT_RATES["angular_momentum"]
-    top_state: float = DEFAULT_OUTPUT_RATES["top_state"]
-    tf: float = DEFAULT_OUTPUT_RATES["tf"]
-    clock: float = DEFAULT_OUTPUT_RATES["clock"]
-    imu: float = DEFAULT_OUTPUT_RATES["imu"]
-    odom: float = DEFAULT_OUTPUT_RATES["odom"]
 
-    def as_dict(self) -> dict[str, float]:
-        return {name: getattr(self, name) for name in OUTPUT_NAMES}
+#: Publication rates in Hz of sim time (0 = not published): one float field per output of
+#: :data:`~rigid_rot_sim.core.scene_schema.OUTPUTS` (``state``, ``orientation``, ... ``odom``),
+#: defaulting to its rate there; ``as_dict()`` gives them by name, in publishing order.
+Outputs = make_dataclass(
+    "Outputs",
+    [(name, float, field(default=output.rate)) for name, output in OUTPUTS.items()],
+    frozen=True,
+    namespace={"as_dict": _rates_as_dict},
+)
+Outputs.__module__ = __name__
+Outputs.__doc__ = "Publication rates in Hz of sim time (0 = not published), one field per output."
 
 
 @dataclass(frozen=True)
@@ -341,429 +296,201 @@ class Scene:
         return "none"
 
 
-# ----------------------------------------------------------------------------- parsing
+
+# ----------------------------------------------------------------------------- loading
 
 
-class _Ctx:
-    """Error factory that prefixes the file name and the key path.
-
-    ``error_class`` is SceneError here; other YAML specs built on scenes (sweep specs)
-    reuse these helpers with their own error class, so every file error reads the same.
-    """
-
-    def __init__(self, source: str, error_class: type[ValueError] = SceneError) -> None:
-        self.label = os.path.basename(source) if source else "<string>"
-        self.error_class = error_class
-
-    def error(self, key: str, what: str) -> ValueError:
-        return self.error_class(f"{self.label}: {key}: {what}")
-
-    def checked(self, check: Any, key: str, value: Any) -> Any:
-        """Run a core.validation check named ``key``; its ValueError becomes a SceneError."""
-        try:
-            return check(key, value)
-        except ValueError as exc:
-            raise self.error_class(f"{self.label}: {exc}") from None
+def load_scene(path: str | os.PathLike[str]) -> Scene:
+    """Read and validate the scene file at ``path``."""
+    path = os.fspath(path)
+    return parse_scene_text(read_input(path, "scene file", SceneError), source=path)
 
 
-def _mapping(ctx: _Ctx, value: Any, key: str, allowed: tuple[str, ...]) -> Mapping[str, Any]:
-    if not isinstance(value, Mapping):
-        raise ctx.error(key, f"must be a mapping, got {type(value).__name__}")
-    for name in value:
-        if name not in allowed:
-            shown = limits.clip_text(str(name), 60)
-            raise ctx.error(f"{key}.{shown}" if key else shown, f"unknown key (allowed: {', '.join(allowed)})")
-    return value
-
-
-def _show(value: Any) -> str:
-    """A value as echoed in an error message: its repr, cut to a readable length."""
-    return limits.clip_text(repr(value), 60)
-
-
-def _number(
-    ctx: _Ctx,
-    value: Any,
-    key: str,
-    *,
-    minimum: float | None = None,
-    strict: bool = False,
-    maximum: float = limits.MAX_MAGNITUDE,
-) -> float:
-    """A finite number; ``minimum`` (exclusive when ``strict``) and ``maximum`` on its value,
-    which by default bounds its magnitude by MAX_MAGNITUDE."""
-    if isinstance(value, bool) or not isinstance(value, (int, float)):
-        raise ctx.error(key, f"must be a number, got {_show(value)}")
-    try:
-        number = float(value)
-    except OverflowError:  # a YAML integer too large for a float
-        raise ctx.error(key, f"must be a number of magnitude <= {maximum:g}, got an integer of {len(str(abs(value)))} digits") from None
-    if not math.isfinite(number):
-        raise ctx.error(key, f"must be finite, got {number}")
-    if minimum is not None and (number < minimum or (strict and number == minimum)):
-        raise ctx.error(key, f"must be {'>' if strict else '>='} {minimum:g}, got {number:g}")
-    if number > maximum or (minimum is None and -number > maximum):
-        raise ctx.error(key, f"must be {'<=' if minimum is not None else 'of magnitude <='} {maximum:g}, got {number:g}")
-    return number
-
-
-def _in_range(ctx: _Ctx, value: Any, key: str, bounds: tuple[float, float], *, strict: bool = False) -> float:
-    """A number within a parameter's range (the node's descriptor range)."""
-    return _number(ctx, value, key, minimum=bounds[0], strict=strict, maximum=bounds[1])
-
-
-def _vector(ctx: _Ctx, value: Any, key: str, length: int) -> tuple[float, ...]:
-    if not isinstance(value, (list, tuple)) or len(value) != length:
-        raise ctx.error(key, f"must be a list of {length} numbers, got {_show(value)}")
-    return tuple(_number(ctx, v, f"{key}[{i}]") for i, v in enumerate(value))
-
-
-def _string(ctx: _Ctx, value: Any, key: str, max_length: int = limits.MAX_NAME_LENGTH) -> str:
-    if not isinstance(value, str) or not value.strip():
-        raise ctx.error(key, f"must be a non-empty string, got {_show(value)}")
-    if len(value) > max_length:
-        raise ctx.error(key, f"longer than {max_length} characters (limit)")
-    return value.strip()
-
-
-def _frame(ctx: _Ctx, value: Any, key: str) -> str:
-    name = _string(ctx, value, key)
-    try:
-        return names.check_frame_id(name, "frame name")
-    except ValueError as exc:
-        raise ctx.error(key, str(exc)) from None
-
-
-def _parse_body(ctx: _Ctx, raw: Any, gravity_raw: Any) -> Body:
-    forms = ("principal_moments", "inertia_tensor", "point_masses")
-    body = _mapping(ctx, raw, "body", forms)
-    given = [name for name in forms if name in body]
-    if len(given) != 1:
-        raise ctx.error("body", f"must give exactly one of {', '.join(forms)}, got {given or 'none'}")
-    form = given[0]
-    key = f"body.{form}"
-    mass = com = masses = positions = None
-    if form == "principal_moments":
-        tensor = np.diag(ctx.checked(validation.principal_moments, key, _vector(ctx, body[form], key, 3)))
-    elif form == "inertia_tensor":
-        rows = body[form]
-        if not isinstance(rows, (list, tuple)) or len(rows) != 3:
-            raise ctx.error(key, f"must be a 3x3 list of lists, got {_show(rows)}")
-        rows = [_vector(ctx, row, f"{key}[{i}]", 3) for i, row in enumerate(rows)]
-        tensor = ctx.checked(validation.inertia_tensor, key, rows)
-        ctx.checked(validation.principal_moments, f"{key} eigenvalues", np.linalg.eigvalsh(tensor))
-    else:
-        from rigid_rot_sim.core.inertia import mass_properties
-
-        spec = _mapping(ctx, body[form], key, ("masses", "positions"))
-        if "masses" not in spec or "positions" not in spec:
-            raise ctx.error(key, "needs both masses and positions")
-        raw_masses = spec["masses"]
-        raw_positions = spec["positions"]
-        if not isinstance(raw_masses, (list, tuple)) or not isinstance(raw_positions, (list, tuple)):
-            raise ctx.error(key, "masses and positions must be lists")
-        if max(len(raw_masses), len(raw_positions)) > limits.MAX_POINT_MASSES:
-            raise ctx.error(key, f"more than {limits.MAX_POINT_MASSES} point masses (limit)")
-        masses = tuple(_number(ctx, m, f"{key}.masses[{i}]") for i, m in enumerate(raw_masses))
-        positions = tuple(_vector(ctx, p, f"{key}.positions[{i}]", 3) for i, p in enumerate(raw_positions))
-        try:
-            properties = mass_properties(masses, positions)
-        except ValueError as exc:
-            raise ctx.error(key, str(exc)) from None
-        mass = float(properties.total_mass)
-        com = tuple(float(c) for c in properties.center_of_mass)
-        # about the pivot (body origin) under gravity, else about the centre of mass
-        tensor = np.asarray(properties.inertia_origin if gravity_raw else properties.inertia_com, dtype=float)
-        eigenvalues = np.linalg.eigvalsh(tensor)
-        if eigenvalues[0] <= validation.TRIANGLE_RTOL * float(eigenvalues[-1]):
-            raise ctx.error(
-                key,
-                f"the masses are collinear or a single point (principal moments {eigenvalues.tolist()}): "
-                "a rotating rigid body needs three non-zero moments",
-            )
-    tensor_tuple = tuple(tuple(float(v) for v in row) for row in tensor)
-    return Body(
-        inertia=tensor_tuple,  # type: ignore[arg-type]
-        given_as=form,
-        mass=mass,
-        center_of_mass=com,  # type: ignore[arg-type]
-        masses=masses,
-        positions=positions,  # type: ignore[arg-type]
-    )
-
-
-def _parse_initial(ctx: _Ctx, raw: Any) -> InitialState:
-    if raw is None:
-        return InitialState()
-    initial = _mapping(ctx, raw, "initial", ("orientation", "euler_zxz", "angular_velocity"))
-    if "orientation" in initial and "euler_zxz" in initial:
-        raise ctx.error("initial", "give orientation or euler_zxz, not both")
-    orientation = (0.0, 0.0, 0.0, 1.0)
-    if "orientation" in initial:
-        q = ctx.checked(validation.quaternion, "initial.orientation", _vector(ctx, initial["orientation"], "initial.orientation", 4))
-        orientation = tuple(float(v) for v in q)
-    elif "euler_zxz" in initial:
-        angles = _vector(ctx, initial["euler_zxz"], "initial.euler_zxz", 3)
-        orientation = tuple(float(v) for v in zxz_to_quaternion(*angles))
-    omega = (0.0, 0.0, 0.0)
-    if "angular_velocity" in initial:
-        omega = _vector(ctx, initial["angular_velocity"], "initial.angular_velocity", 3)
-    return InitialState(orientation=orientation, angular_velocity=omega)  # type: ignore[arg-type]
-
-
-def _parse_torque_inputs(ctx: _Ctx, raw: Any) -> tuple[tuple[TopicInput, ...], tuple[TorqueSchedule, ...]]:
-    if raw is None:
-        return (), ()
-    if not isinstance(raw, (list, tuple)):
-        raise ctx.error("torque_inputs", f"must be a list, got {type(raw).__name__}")
-    if len(raw) > limits.MAX_TORQUE_INPUTS:
-        raise ctx.error("torque_inputs", f"more than {limits.MAX_TORQUE_INPUTS} inputs (limit)")
-    topics: list[TopicInput] = []
-    schedules: list[TorqueSchedule] = []
-    for index, item in enumerate(raw):
-        key = f"torque_inputs[{index}]"
-        if isinstance(item, Mapping) and "schedule" in item:
-            spec = _mapping(ctx, item, key, ("schedule",))
-            schedules.append(_parse_schedule(ctx, spec["schedule"], f"{key}.schedule"))
-            continue
-        spec = _mapping(ctx, item, key, ("topic", "type", "frame", "hold"))
-        if "topic" not in spec:
-            raise ctx.error(key, "needs a topic (or a schedule)")
-        topic = _string(ctx, spec["topic"], f"{key}.topic")
-        try:
-            names.check_topic_name(topic)
-        except ValueError as exc:
-            raise ctx.error(f"{key}.topic", str(exc)) from None
-        message_type = spec.get("type", "WrenchStamped")
-        if message_type not in TORQUE_MESSAGE_TYPES:
-            raise ctx.error(f"{key}.type", f"must be one of {', '.join(TORQUE_MESSAGE_TYPES)}, got {_show(message_type)}")
-        frame = spec.get("frame", "body")
-        if frame not in TORQUE_FRAMES:
-            raise ctx.error(f"{key}.frame", f"must be one of {', '.join(TORQUE_FRAMES)}, got {_show(frame)}")
-        hold = spec.get("hold", "hold")
-        timeout = None
-        if isinstance(hold, Mapping):
-            hold = _mapping(ctx, hold, f"{key}.hold", ("timeout",))
-            if "timeout" not in hold:
-                raise ctx.error(f"{key}.hold", "must be 'hold' or {timeout: seconds}")
-            timeout = _in_range(ctx, hold["timeout"], f"{key}.hold.timeout", limits.DURATION_RANGE, strict=True)
-        elif hold != "hold":
-            raise ctx.error(f"{key}.hold", f"must be 'hold' or {{timeout: seconds}}, got {_show(hold)}")
-        if any(t.topic == topic for t in topics):
-            raise ctx.error(f"{key}.topic", f"topic {topic!r} is listed twice")
-        topics.append(TopicInput(topic=topic, message_type=message_type, frame=frame, timeout=timeout))
-    return tuple(topics), tuple(schedules)
-
-
-def _parse_schedule(ctx: _Ctx, raw: Any, key: str) -> TorqueSchedule:
-    spec = _mapping(ctx, raw, key, ("frame", "segments"))
-    frame = spec.get("frame", "body")
-    if frame not in ("body", "world"):
-        raise ctx.error(f"{key}.frame", f"must be body or world, got {_show(frame)}")
-    raw_segments = spec.get("segments")
-    if not isinstance(raw_segments, (list, tuple)) or not raw_segments:
-        raise ctx.error(f"{key}.segments", "must be a non-empty list of {start, torque}")
-    segments = []
-    previous = -math.inf
-    for i, item in enumerate(raw_segments):
-        item_key = f"{key}.segments[{i}]"
-        segment = _mapping(ctx, item, item_key, ("start", "torque"))
-        if "start" not in segment or "torque" not in segment:
-            raise ctx.error(item_key, "needs start (s) and torque [x, y, z] (N*m)")
-        start = _in_range(ctx, segment["start"], f"{item_key}.start", limits.DURATION_RANGE)
-        if start <= previous:
-            raise ctx.error(f"{item_key}.start", f"must be later than the previous segment's start {previous:g}, got {start:g}")
-        previous = start
-        segments.append(ScheduleSegment(start=start, torque=_vector(ctx, segment["torque"], f"{item_key}.torque", 3)))  # type: ignore[arg-type]
-    return TorqueSchedule(frame=frame, segments=tuple(segments))
-
-
-def _parse_gravity(ctx: _Ctx, raw: Any, body_raw: Any) -> tuple[Gravity | None, float | None, Vector3 | None]:
-    if raw is None or raw == "none":
-        return None, None, None
-    point_masses = isinstance(body_raw, Mapping) and "point_masses" in body_raw
-    allowed = ("acceleration",) if point_masses else ("acceleration", "mass", "center_of_mass")
-    spec = _mapping(ctx, raw, "gravity", allowed)
-    acceleration = _number(ctx, spec.get("acceleration", 9.80665), "gravity.acceleration", minimum=0.0, strict=True)
-    if point_masses:
-        return Gravity(acceleration=acceleration), None, None
-    for name in ("mass", "center_of_mass"):
-        if name not in spec:
-            raise ctx.error("gravity", f"needs {name} (the body's {'kg' if name == 'mass' else 'm, body frame'})")
-    mass = _number(ctx, spec["mass"], "gravity.mass", minimum=0.0, strict=True)
-    com = _vector(ctx, spec["center_of_mass"], "gravity.center_of_mass", 3)
-    if math.hypot(*com) == 0.0:
-        raise ctx.error("gravity.center_of_mass", "must not be at the pivot (then gravity exerts no torque; drop gravity)")
-    return Gravity(acceleration=acceleration), mass, com  # type: ignore[return-value]
-
-
-def _parse_integrator(ctx: _Ctx, raw: Any) -> IntegratorSpec:
-    if raw is None:
-        return IntegratorSpec()
-    spec = _mapping(ctx, raw, "integrator", ("method", "dt", "options"))
-    method = _string(ctx, spec.get("method", "auto"), "integrator.method")
-    if method != "auto":
-        from rigid_rot_sim.core.integrators import get_method
-
-        try:
-            get_method(method)
-        except ValueError as exc:
-            raise ctx.error("integrator.method", str(exc)) from None
-    dt = _in_range(ctx, spec.get("dt", 0.001), "integrator.dt", limits.DT_RANGE)
-    options = spec.get("options") or {}
-    if not isinstance(options, Mapping):
-        raise ctx.error("integrator.options", f"must be a mapping of option names to values, got {_show(options)}")
-    for name, value in options.items():
-        if isinstance(value, (Mapping, list)):
-            raise ctx.error(f"integrator.options.{name}", f"must be a number, string or null, got {_show(value)}")
-        if isinstance(value, (int, float)) and not isinstance(value, bool):
-            _number(ctx, value, f"integrator.options.{name}")
-        elif isinstance(value, str):
-            _string(ctx, value, f"integrator.options.{name}")
-    return IntegratorSpec(method=method, dt=dt, options=tuple(sorted((str(k), v) for k, v in options.items())))
-
-
-def _parse_outputs(ctx: _Ctx, raw: Any) -> Outputs:
-    if raw is None:
-        return Outputs()
-    spec = _mapping(ctx, raw, "outputs", OUTPUT_NAMES)
-    rates = {name: _in_range(ctx, value, f"outputs.{name}", limits.RATE_RANGE) for name, value in spec.items()}
-    return Outputs(**rates)
-
-
-def _parse_qos(ctx: _Ctx, raw: Any) -> OutputQos:
-    if raw is None:
-        return OutputQos()
-    spec = _mapping(ctx, raw, "qos", ("reliability", "depth"))
-    reliability = spec.get("reliability", OutputQos.reliability)
-    if reliability not in QOS_RELIABILITIES:
-        raise ctx.error("qos.reliability", f"must be one of {', '.join(QOS_RELIABILITIES)}, got {reliability!r}")
-    depth = spec.get("depth", OutputQos.depth)
-    if isinstance(depth, bool) or not isinstance(depth, int) or not 1 <= depth <= MAX_QOS_DEPTH:
-        raise ctx.error("qos.depth", f"must be an integer from 1 to {MAX_QOS_DEPTH}, got {depth!r}")
-    return OutputQos(reliability=reliability, depth=depth)
-
-
-def _parse_commands(ctx: _Ctx, raw: Any) -> CommandSettings:
-    if raw is None:
-        return CommandSettings()
-    spec = _mapping(ctx, raw, "commands", ("max_torque", "qos_depth"))
-    max_torque = _in_range(ctx, spec.get("max_torque", 0.0), "commands.max_torque", limits.MAX_TORQUE_RANGE)
-    depth = spec.get("qos_depth", limits.DEFAULT_COMMAND_DEPTH)
-    low, high = limits.COMMAND_DEPTH_RANGE
-    if isinstance(depth, bool) or not isinstance(depth, int) or not low <= depth <= high:
-        raise ctx.error("commands.qos_depth", f"must be an integer from {low} to {high}, got {_show(depth)}")
-    return CommandSettings(max_torque=max_torque, qos_depth=depth)
+def parse_scene_text(text: str, source: str = "<string>") -> Scene:
+    """Validate a scene given as YAML text (e.g. from a recording's metadata)."""
+    return parse_scene(load_input(text, source, SceneError), source=source, text=text)
 
 
 def parse_scene(data: Any, source: str = "<string>", text: str = "") -> Scene:
     """Validate a scene given as parsed YAML (a mapping); ``source`` names it in errors."""
     # numpy overflows (a tensor near the magnitude limit) are checked as results, never warned
     with np.errstate(all="ignore"):
-        return _parse_scene(data, source, text)
+        return validated(data, SCENE_SCHEMA, source, SceneError, lambda spec: _scene(spec, source, text))
 
 
-def _parse_scene(data: Any, source: str, text: str) -> Scene:
-    ctx = _Ctx(source)
-    top_keys = (
-        "name",
-        "description",
-        "frames",
-        "body",
-        "initial",
-        "torque_inputs",
-        "gravity",
-        "integrator",
-        "duration",
-        "real_time_factor",
-        "outputs",
-        "qos",
-        "recording",
-        "commands",
-    )
-    spec = _mapping(ctx, data, "", top_keys)
-    if "body" not in spec:
-        raise ctx.error("body", "missing (a scene needs the body's inertia)")
-    default_name = os.path.splitext(os.path.basename(source))[0] if source != "<string>" else "scene"
-    name = _string(ctx, spec.get("name", default_name), "name")
-    description = spec.get("description", "") or ""
-    if not isinstance(description, str):
-        raise ctx.error("description", "must be a string")
-    if len(description) > limits.MAX_TEXT_LENGTH:
-        raise ctx.error("description", f"longer than {limits.MAX_TEXT_LENGTH} characters (limit)")
+# ------------------------------------------- what the schema cannot say (the data passed it)
 
-    frames_raw = _mapping(ctx, spec.get("frames") or {}, "frames", ("world", "body"))
-    frames = Frames(
-        world=_frame(ctx, frames_raw.get("world", DEFAULT_WORLD_FRAME), "frames.world"),
-        body=_frame(ctx, frames_raw.get("body", DEFAULT_BODY_FRAME), "frames.body"),
-    )
+
+def _at(key: str, check: Callable[..., Any], *args: Any) -> Any:
+    """``check(*args)``, its ValueError prefixed by the key it is about."""
     try:
-        frames.checked()
+        return check(*args)
     except ValueError as exc:
-        raise ctx.error("frames", str(exc)) from None
+        raise ValueError(f"{key}: {exc}") from None
 
-    gravity, mass, com = _parse_gravity(ctx, spec.get("gravity"), spec["body"])
-    body = _parse_body(ctx, spec["body"], spec.get("gravity") not in (None, "none"))
+
+def _floats(values: Any) -> tuple[float, ...]:
+    return tuple(float(v) for v in values)
+
+
+def _scene(spec: Mapping[str, Any], source: str, text: str) -> Scene:
+    default_name = os.path.splitext(os.path.basename(source))[0] if source != "<string>" else "scene"
+    frames = _frames(spec.get("frames") or {})
+    under_gravity = spec.get("gravity") not in (None, "none")
+    point_masses = "point_masses" in spec["body"]
+    gravity, mass, com = _gravity(spec["gravity"], point_masses) if under_gravity else (None, None, None)
+    body = _body(spec["body"], under_gravity)
     if gravity is not None:
-        if body.given_as == "point_masses":
+        if point_masses:
             if body.center_of_mass is None or math.hypot(*body.center_of_mass) == 0.0:
-                raise ctx.error("body.point_masses", "centre of mass is at the pivot (body origin): gravity exerts no torque")
+                raise ValueError("body.point_masses: centre of mass is at the pivot (body origin): gravity exerts no torque")
         else:
             body = Body(inertia=body.inertia, given_as=body.given_as, mass=mass, center_of_mass=com)
-    initial = _parse_initial(ctx, spec.get("initial"))
-    topics, schedules = _parse_torque_inputs(ctx, spec.get("torque_inputs"))
+    topics, schedules = _torque_inputs(spec.get("torque_inputs") or ())
     if gravity is not None and (topics or schedules):
         # the integrators expand gravity or a piecewise-constant torque exactly, not their sum
-        raise ctx.error("torque_inputs", "not supported in a gravity (heavy top) scene; drop gravity or the inputs")
-    integrator = _parse_integrator(ctx, spec.get("integrator"))
-
+        raise ValueError("torque_inputs: not supported in a gravity (heavy top) scene; drop gravity or the inputs")
     duration = spec.get("duration")
-    if duration is not None:
-        duration = _in_range(ctx, duration, "duration", limits.DURATION_RANGE, strict=True)
-    rtf = _in_range(ctx, spec.get("real_time_factor", 1.0), "real_time_factor", limits.REAL_TIME_FACTOR_RANGE)
-    outputs = _parse_outputs(ctx, spec.get("outputs"))
-    qos = _parse_qos(ctx, spec.get("qos"))
+    qos = spec.get("qos") or {}
+    commands = spec.get("commands") or {}
     recording = spec.get("recording")
-    if recording is not None:
-        recording = _string(ctx, recording, "recording", limits.MAX_TEXT_LENGTH)
-    commands = _parse_commands(ctx, spec.get("commands"))
     return Scene(
-        name=name,
-        description=description.strip(),
+        name=spec.get("name", default_name).strip(),
+        description=(spec.get("description") or "").strip(),
         frames=frames,
         body=body,
-        initial=initial,
+        initial=_initial(spec.get("initial") or {}),
         topic_inputs=topics,
         schedules=schedules,
         gravity=gravity,
-        integrator=integrator,
-        duration=duration,
-        real_time_factor=rtf,
-        outputs=outputs,
-        qos=qos,
-        recording=recording,
-        commands=commands,
+        integrator=_integrator(spec.get("integrator") or {}),
+        duration=None if duration is None else float(duration),
+        real_time_factor=float(spec.get("real_time_factor", 1.0)),
+        outputs=Outputs(**{name: float(rate) for name, rate in (spec.get("outputs") or {}).items()}),
+        qos=OutputQos(reliability=qos.get("reliability", OutputQos.reliability), depth=qos.get("depth", OutputQos.depth)),
+        recording=None if recording is None else recording.strip(),
+        commands=CommandSettings(
+            max_torque=float(commands.get("max_torque", 0.0)),
+            qos_depth=commands.get("qos_depth", limits.DEFAULT_COMMAND_DEPTH),
+        ),
         source=source,
         text=text,
     )
 
 
-def parse_scene_text(text: str, source: str = "<string>") -> Scene:
-    """Validate a scene given as YAML text (e.g. from a recording's metadata)."""
-    try:
-        data = load_bounded(text)
-    except BoundedYAMLError as exc:
-        raise SceneError(f"{os.path.basename(source)}: {exc}") from None
-    return parse_scene(data, source=source, text=text)
+def _frames(spec: Mapping[str, Any]) -> Frames:
+    """Frame names ROS accepts (no whitespace or control characters), world and body different."""
+    given = {role: spec.get(role, default).strip() for role, default in (("world", DEFAULT_WORLD_FRAME), ("body", DEFAULT_BODY_FRAME))}
+    for role, name in given.items():
+        _at(f"frames.{role}", names.check_frame_id, name, "frame name")
+    return _at("frames", Frames(**given).checked)
 
 
-def load_scene(path: str | os.PathLike[str]) -> Scene:
-    """Read and validate the scene file at ``path``."""
-    path = os.fspath(path)
-    try:
-        text = read_bounded(path)
-    except OSError as exc:
-        raise SceneError(f"{path}: cannot read scene file: {exc.strerror}") from None
-    except BoundedYAMLError as exc:
-        raise SceneError(f"{path}: {exc}") from None
-    return parse_scene_text(text, source=path)
+def _body(spec: Mapping[str, Any], under_gravity: bool) -> Body:
+    """A physical inertia: positive definite, triangle inequality (from point masses: not collinear)."""
+    if "principal_moments" in spec:
+        moments = validation.principal_moments("body.principal_moments", _floats(spec["principal_moments"]))
+        return Body(inertia=_rows(np.diag(moments)), given_as="principal_moments")
+    if "inertia_tensor" in spec:
+        key = "body.inertia_tensor"
+        tensor = validation.inertia_tensor(key, [_floats(row) for row in spec["inertia_tensor"]])
+        validation.principal_moments(f"{key} eigenvalues", np.linalg.eigvalsh(tensor))
+        return Body(inertia=_rows(tensor), given_as="inertia_tensor")
+    key = "body.point_masses"
+    masses = _floats(spec["point_masses"]["masses"])
+    positions = tuple(_floats(p) for p in spec["point_masses"]["positions"])
+    properties = _at(key, mass_properties, masses, positions)
+    # about the pivot (body origin) under gravity, else about the centre of mass
+    tensor = np.asarray(properties.inertia_origin if under_gravity else properties.inertia_com, dtype=float)
+    eigenvalues = np.linalg.eigvalsh(tensor)
+    if eigenvalues[0] <= validation.TRIANGLE_RTOL * float(eigenvalues[-1]):
+        raise ValueError(
+            f"{key}: the masses are collinear or a single point (principal moments {eigenvalues.tolist()}): "
+            "a rotating rigid body needs three non-zero moments"
+        )
+    return Body(
+        inertia=_rows(tensor),
+        given_as="point_masses",
+        mass=float(properties.total_mass),
+        center_of_mass=_floats(properties.center_of_mass),  # type: ignore[arg-type]
+        masses=masses,
+        positions=positions,  # type: ignore[arg-type]
+    )
+
+
+def _rows(tensor: np.ndarray) -> tuple[Vector3, Vector3, Vector3]:
+    return tuple(_floats(row) for row in tensor)  # type: ignore[return-value]
+
+
+def _gravity(spec: Mapping[str, Any], point_masses: bool) -> tuple[Gravity, float | None, Vector3 | None]:
+    """Gravity, and the mass and centre of mass (m, body frame) it acts on unless point masses give them."""
+    gravity = Gravity(acceleration=float(spec.get("acceleration", DEFAULT_GRAVITY)))
+    if point_masses:
+        for name in ("mass", "center_of_mass"):
+            if name in spec:
+                raise ValueError(f"gravity.{name}: unknown key (allowed: acceleration; the point masses give the {name})")
+        return gravity, None, None
+    for name, what in (("mass", "kg"), ("center_of_mass", "m, body frame")):
+        if name not in spec:
+            raise ValueError(f"gravity: needs {name} (the body's, {what})")
+    com = _floats(spec["center_of_mass"])
+    if math.hypot(*com) == 0.0:
+        raise ValueError("gravity.center_of_mass: must not be at the pivot (then gravity exerts no torque; drop gravity)")
+    return gravity, float(spec["mass"]), com  # type: ignore[return-value]
+
+
+def _initial(spec: Mapping[str, Any]) -> InitialState:
+    """A non-zero quaternion, normalised (or the attitude from Euler angles)."""
+    orientation = InitialState.orientation
+    if "orientation" in spec:
+        orientation = _floats(validation.quaternion("initial.orientation", _floats(spec["orientation"])))
+    elif "euler_zxz" in spec:
+        orientation = _floats(zxz_to_quaternion(*_floats(spec["euler_zxz"])))
+    omega = _floats(spec.get("angular_velocity", InitialState.angular_velocity))
+    return InitialState(orientation=orientation, angular_velocity=omega)  # type: ignore[arg-type]
+
+
+def _torque_inputs(items: list[Mapping[str, Any]]) -> tuple[tuple[TopicInput, ...], tuple[TorqueSchedule, ...]]:
+    """Topic names ROS accepts, each listed once; schedule segments in order of their start."""
+    topics: list[TopicInput] = []
+    schedules: list[TorqueSchedule] = []
+    for index, item in enumerate(items):
+        key = f"torque_inputs[{index}]"
+        if "schedule" in item:
+            schedules.append(_schedule(item["schedule"], f"{key}.schedule"))
+            continue
+        topic = _at(f"{key}.topic", names.check_topic_name, item["topic"].strip())
+        if any(t.topic == topic for t in topics):
+            raise ValueError(f"{key}.topic: topic {topic!r} is listed twice")
+        hold = item.get("hold", "hold")
+        topics.append(TopicInput(
+            topic=topic,
+            message_type=item.get("type", TopicInput.message_type),
+            frame=item.get("frame", TopicInput.frame),
+            timeout=float(hold["timeout"]) if isinstance(hold, Mapping) else None,
+        ))
+    return tuple(topics), tuple(schedules)
+
+
+def _schedule(spec: Mapping[str, Any], key: str) -> TorqueSchedule:
+    segments: list[ScheduleSegment] = []
+    for i, segment in enumerate(spec["segments"]):
+        start = float(segment["start"])
+        if segments and start <= segments[-1].start:
+            raise ValueError(f"{key}.segments[{i}].start: must be later than the previous segment's start "
+                             f"{segments[-1].start:g}, got {start:g}")
+        segments.append(ScheduleSegment(start=start, torque=_floats(segment["torque"])))  # type: ignore[arg-type]
+    return TorqueSchedule(frame=spec.get("frame", "body"), segments=tuple(segments))
+
+
+def _integrator(spec: Mapping[str, Any]) -> IntegratorSpec:
+    """A method name from the integrator registry (or auto)."""
+    method = spec.get("method", IntegratorSpec.method).strip()
+    if method != "auto":
+        _at("integrator.method", get_method, method)
+    options = spec.get("options") or {}
+    return IntegratorSpec(
+        method=method,
+        dt=float(spec.get("dt", IntegratorSpec.dt)),
+        options=tuple(sorted((str(name), value) for name, value in options.items())),
+    )

@@ -5,16 +5,18 @@ Modules, one job each:
 * :mod:`.definitions` - complete ``ros2msg`` definitions and type hashes (installed .msg
   files; ``tf2_msgs/msg/TFMessage`` embedded), CDR encoders/decoders from definitions;
 * :mod:`.writer` - :class:`~.writer.Recorder`, the MCAP file rosbag2 reads as a lone-file bag;
+* :mod:`.bag_metadata` - what rosbag2 reads besides the messages: offered QoS, topic
+  records, the BagMetadata YAML (shared by the writer and ``repair``);
 * :mod:`.session` - :class:`~.session.RunRecorder`, one simulator run (metadata, /tf, events);
 * :mod:`.events` - the simulation event log that makes re-simulation exact;
-* :mod:`.node_recording` - the decorators through which the node records;
+* :mod:`.node_recording` - the node's recording: an observer of the simulator, a listener of its messages;
 * :mod:`.reader` - reading, crash recovery (scan) and ``repair``, ``info``;
 * :mod:`.replay`, :mod:`.resim`, :mod:`.plot` - what the ``rigid-rot`` subcommands run;
 * :mod:`.provenance` - package and dependency versions stored with each recording.
 
-Nothing here is imported by :mod:`rigid_rot_sim.core`; rclpy is imported by the node-side
-:mod:`.node_recording` and otherwise only inside the functions that need it, so reading,
-resim and plots work without ROS.
+Nothing here is imported by :mod:`rigid_rot_sim.core`; ROS message packages are imported by
+the node-side :mod:`.node_recording` (through :mod:`rigid_rot_sim.conversions`) and otherwise
+only inside the functions that need them, so reading, resim and plots work without ROS.
 """
 
 #: Time bases of a recording's MCAP log times, the default first (see :mod:`.session`).

@@ -16,11 +16,16 @@ import os
 from dataclasses import dataclass
 from pathlib import Path
 
+import matplotlib
 import numpy as np
 
+from rigid_rot_sim.core.scene import parse_scene_text
 from rigid_rot_sim.recording.events import EVENT_TYPE, decode_event
 from rigid_rot_sim.recording.reader import BagReader
-from rigid_rot_sim.recording.resim import STATE_TYPE
+from rigid_rot_sim.recording.resim import STATE_TYPE, stamp_seconds
+
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt  # noqa: E402
 
 _AXIS_COLOURS = ("tab:red", "tab:green", "tab:blue")
 
@@ -44,7 +49,7 @@ def load_states(reader: BagReader) -> StateSeries:
         raise ValueError(f"{reader.path}: no {STATE_TYPE} topic recorded: nothing to plot")
     rows = []
     for _, msg in reader.decoded([topic]):
-        t = float(msg.header.stamp.sec) + float(msg.header.stamp.nanosec) * 1e-9
+        t = stamp_seconds(msg)
         vectors = [msg.angular_velocity_body, msg.angular_momentum_body, msg.angular_momentum_world, msg.torque_body]
         rows.append([t, *(c for v in vectors for c in (v.x, v.y, v.z)), msg.kinetic_energy + msg.potential_energy])
     if not rows:
@@ -61,8 +66,6 @@ def principal_frame(reader: BagReader, series: StateSeries) -> tuple[np.ndarray,
     """
     scene = reader.metadata.get("scene", {})
     if "text" in scene:
-        from rigid_rot_sim.core.scene import parse_scene_text
-
         inertia = parse_scene_text(scene["text"], source=scene.get("file", "<recorded scene>")).body.inertia_array
         tensor = np.asarray(inertia, dtype=float)
         tensor = np.diag(tensor) if tensor.ndim == 1 else tensor
@@ -93,11 +96,6 @@ def plot_run(path: str | os.PathLike[str], out_dir: str | os.PathLike[str] | Non
 
     ``out_dir`` defaults to ``<recording stem>_plots`` next to the recording.
     """
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
     reader = BagReader(path)
     series = load_states(reader)
     out = Path(out_dir) if out_dir is not None else reader.path.with_name(reader.path.stem + "_plots")

@@ -17,15 +17,25 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Iterable, Iterator
 
+import yaml
 from mcap.exceptions import McapError
 from mcap.reader import make_reader
 from mcap.records import Channel, Chunk, Message, Metadata, Schema
 from mcap.stream_reader import MAGIC_SIZE, StreamReader, breakup_chunk
 
+from rigid_rot_sim.recording.bag_metadata import (
+    DURABILITY_TRANSIENT_LOCAL,
+    DURABILITY_VOLATILE,
+    RELIABILITY_BEST_EFFORT,
+    RELIABILITY_RELIABLE,
+)
 from rigid_rot_sim.recording.definitions import dynamic_decoder
+from rigid_rot_sim.recording.writer import Recorder
 
 _MAGIC = b"\x89MCAP0\r\n"
 _OPCODE_CHUNK = 0x06
+_RELIABILITY = {RELIABILITY_RELIABLE: "reliable", RELIABILITY_BEST_EFFORT: "best_effort"}
+_DURABILITY = {DURABILITY_TRANSIENT_LOCAL: "transient_local", DURABILITY_VOLATILE: "volatile"}
 
 
 class BagError(ValueError):
@@ -245,8 +255,6 @@ def repair(
     ``<file>.crashed`` (unless ``backup`` is False). A file that already has its
     summary is left alone (``already_complete``).
     """
-    from rigid_rot_sim.recording.writer import Recorder
-
     source = Path(path)
     reader = BagReader(source)
     if reader.complete:
@@ -290,8 +298,6 @@ def log_time_base(reader: BagReader) -> str:
 
 def info(path: str | os.PathLike[str]) -> str:
     """A human-readable summary of a recording (like ``ros2 bag info``)."""
-    import yaml
-
     reader = BagReader(path)
     counts = reader.counts()
     times = [(m.log_time_ns) for m in reader.messages()]
@@ -320,8 +326,8 @@ def info(path: str | os.PathLike[str]) -> str:
             profiles = yaml.safe_load(qos_text) if qos_text else None
             if profiles:
                 p = profiles[0]
-                reliability = {1: "reliable", 2: "best_effort"}.get(p.get("reliability"), str(p.get("reliability")))
-                durability = {1: "transient_local", 2: "volatile"}.get(p.get("durability"), str(p.get("durability")))
+                reliability = _RELIABILITY.get(p.get("reliability"), str(p.get("reliability")))
+                durability = _DURABILITY.get(p.get("durability"), str(p.get("durability")))
                 qos = f"  [{reliability}, {durability}, depth {p.get('depth')}]"
         except yaml.YAMLError:
             qos = "  [unreadable QoS]"

@@ -19,6 +19,7 @@ from typing import Any
 
 import numpy as np
 
+from rigid_rot_sim.core import quaternion as quat
 from rigid_rot_sim.core.scene import parse_scene_text
 from rigid_rot_sim.core.simulator import Simulator, StateSnapshot
 from rigid_rot_sim.recording.events import EVENT_TYPE, SimEvent, decode_event
@@ -105,17 +106,14 @@ def attitude_angle(q_a: np.ndarray, q_b: np.ndarray) -> float:
     """Rotation angle (rad, in [0, pi]) between two unit quaternions (x, y, z, w).
 
     Computed as 2 atan2(|v|, |w|) of q_a^-1 q_b, accurate for tiny angles too (unlike acos).
+    The formula of :func:`rigid_rot_sim.analysis.metrics.attitude_error_angle` without its
+    normalisation: the recorded and re-simulated quaternions are compared as they are
+    (and recording sits below analysis, which imports it).
     """
     if np.array_equal(q_a, q_b):
-        return 0.0  # the product of a quaternion with its own conjugate rounds to ~1e-19, not 0
-    ax, ay, az, aw = (float(v) for v in q_a)
-    bx, by, bz, bw = (float(v) for v in q_b)
-    # conj(a) * b, scalar-last Hamilton product
-    w = aw * bw + ax * bx + ay * by + az * bz
-    x = aw * bx - ax * bw - ay * bz + az * by
-    y = aw * by + ax * bz - ay * bw - az * bx
-    z = aw * bz - ax * by + ay * bx - az * bw
-    return 2.0 * math.atan2(math.sqrt(x * x + y * y + z * z), abs(w))
+        return 0.0  # identical attitudes: exactly 0, whatever the rounding of the product
+    dx, dy, dz, dw = quat.multiply(quat.conjugate(q_a), q_b)
+    return 2.0 * math.atan2(math.sqrt(dx * dx + dy * dy + dz * dz), abs(dw))
 
 
 def _recorded_vector(msg: Any, name: str) -> np.ndarray:
@@ -123,7 +121,8 @@ def _recorded_vector(msg: Any, name: str) -> np.ndarray:
     return np.array([v.x, v.y, v.z], dtype=float)
 
 
-def _stamp_seconds(msg: Any) -> float:
+def stamp_seconds(msg: Any) -> float:
+    """The ``header.stamp`` of a message in seconds."""
     return float(msg.header.stamp.sec) + float(msg.header.stamp.nanosec) * 1e-9
 
 
@@ -189,7 +188,7 @@ def resimulate(path: str | os.PathLike[str], method: str | None = None) -> Resim
             _apply(sim, event, override)
             events += 1
             continue
-        t = _stamp_seconds(decoded)
+        t = stamp_seconds(decoded)
         k = sim.step_index + round((t - sim.t) / sim.dt)
         sim.advance_to(k)
         snapshot = sim.snapshot()

@@ -1,7 +1,7 @@
 """One simulation run recorded to MCAP: the node's side of the recording.
 
-:class:`RunRecorder` wraps :class:`~rigid_rot_sim.recording.writer.Recorder` with what a
-run of the simulator records:
+:class:`RunRecorder` holds a :class:`~rigid_rot_sim.recording.writer.Recorder` (its
+:attr:`~RunRecorder.writer`) and writes what a run of the simulator records:
 
 * MCAP metadata records written first (so a crashed file keeps them): ``scene`` (the
   scene file as given: ``file``, ``text``), ``parameters`` (resolved node parameters,
@@ -118,19 +118,19 @@ class RunRecorder:
         flush_period: float = 0.5,
         sim_seconds: Callable[[], float] | None = None,
     ) -> None:
-        self.recorder = Recorder(path, on_error=on_error, flush_period=flush_period)
+        self.writer = Recorder(path, on_error=on_error, flush_period=flush_period)
         self.log_time_base = "wall" if sim_seconds is None else "sim"
         self._sim_log_time = None if sim_seconds is None else SimLogTime(sim_seconds)
-        self.path = self.recorder.path
+        self.path = self.writer.path
         self.events_topic = events_topic
         self._roles: dict[str, str] = {"events": events_topic, "tf": TF_TOPIC}
         self._clock_lock = threading.Lock()
         self._last_ns = 0
-        self.recorder.add_metadata("scene", {"file": scene_file, "text": scene_text})
-        self.recorder.add_metadata(
+        self.writer.add_metadata("scene", {"file": scene_file, "text": scene_text})
+        self.writer.add_metadata(
             "parameters", {name: json.dumps(value) for name, value in sorted(parameters.items())}
         )
-        self.recorder.add_metadata(
+        self.writer.add_metadata(
             "integrator",
             {
                 "method": str(integrator["method"]),
@@ -138,22 +138,27 @@ class RunRecorder:
                 "options": json.dumps(dict(integrator.get("options") or {}), sort_keys=True),
             },
         )
-        self.recorder.add_metadata("versions", package_versions())
-        self.recorder.add_metadata("log_time", {"base": self.log_time_base})
-        self.recorder.add_topic(events_topic, EVENT_TYPE, QosProfile(depth=100))
-        self.recorder.add_topic(TF_TOPIC, TF_TYPE, QosProfile(depth=100))
+        self.writer.add_metadata("versions", package_versions())
+        self.writer.add_metadata("log_time", {"base": self.log_time_base})
+        self.writer.add_topic(events_topic, EVENT_TYPE, QosProfile(depth=100))
+        self.writer.add_topic(TF_TOPIC, TF_TYPE, QosProfile(depth=100))
 
     # -- state -----------------------------------------------------------------------
 
     @property
     def active(self) -> bool:
         """True while recording (not closed, no error)."""
-        return self.recorder.active
+        return self.writer.active
+
+    @property
+    def message_count(self) -> int:
+        """Messages written so far."""
+        return self.writer.message_count
 
     @property
     def error(self) -> RecorderError | None:
         """Why recording stopped, or None."""
-        return self.recorder.error
+        return self.writer.error
 
     def log_time_ns(self) -> int:
         """Now, in the time base: sim time (ns, non-decreasing) or wall clock (ns, strictly
@@ -175,18 +180,18 @@ class RunRecorder:
         plot which topic is which.
         """
         type_name = msg_type if isinstance(msg_type, str) else type_name_of(msg_type)
-        self.recorder.add_topic(topic, type_name, _qos(qos))
+        self.writer.add_topic(topic, type_name, _qos(qos))
         if role is not None:
             key = role if role not in self._roles else f"{role}:{topic}"
             self._roles[key] = topic
 
     def record(self, topic: str, msg: Any, log_time_ns: int | None = None) -> None:
         """Record an rclpy message object published or received on ``topic``."""
-        self.recorder.write_message(topic, msg, self.log_time_ns() if log_time_ns is None else log_time_ns)
+        self.writer.write_message(topic, msg, self.log_time_ns() if log_time_ns is None else log_time_ns)
 
     def record_serialized(self, topic: str, data: bytes, log_time_ns: int | None = None) -> None:
         """Record already serialised CDR bytes (e.g. the bytes the node just published)."""
-        self.recorder.write(topic, data, self.log_time_ns() if log_time_ns is None else log_time_ns)
+        self.writer.write(topic, data, self.log_time_ns() if log_time_ns is None else log_time_ns)
 
     def record_tf(self, stamp_sec: int, stamp_nanosec: int, orientation: Any, world_frame: str, body_frame: str) -> None:
         """Record the world -> body transform (rotation only) on ``/tf``."""
@@ -203,13 +208,13 @@ class RunRecorder:
                 }
             ]
         }
-        self.recorder.write_fields(TF_TOPIC, fields, self.log_time_ns())
+        self.writer.write_fields(TF_TOPIC, fields, self.log_time_ns())
 
     # -- events ----------------------------------------------------------------------
 
     def record_event(self, kind: str, step: int, summary: str, **values: Any) -> None:
         """Record one simulation event (see :mod:`.events`)."""
-        self.recorder.write_fields(self.events_topic, event_fields(kind, step, summary, **values), self.log_time_ns())
+        self.writer.write_fields(self.events_topic, event_fields(kind, step, summary, **values), self.log_time_ns())
 
     def receive_log_time(self, wall_ns: int) -> int:
         """Log time of a message received at wall-clock ``wall_ns``: the sim time now (time
@@ -224,9 +229,9 @@ class RunRecorder:
 
     def close(self) -> None:
         """Write the topic roles, the summary and close the file (idempotent)."""
-        if self.recorder.active:
-            self.recorder.add_metadata("rigid_rot_sim", dict(self._roles))
-        self.recorder.finish()
+        if self.writer.active:
+            self.writer.add_metadata("rigid_rot_sim", dict(self._roles))
+        self.writer.finish()
 
     finish = close
 

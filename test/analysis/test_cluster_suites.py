@@ -9,8 +9,9 @@ import math
 
 import pytest
 
-from rigid_rot_sim.analysis import stability as S
 from rigid_rot_sim.analysis import workprecision as wp
+from rigid_rot_sim.analysis.stability_report import run_suite
+from rigid_rot_sim.analysis.workprecision_report import run_report
 
 TINY = dict(repeats=1, budget_seconds=0.03, max_step_points=3, tolerances=(1e-3, 1e-6),
             methods=("rk4", "implicit_midpoint", "exact"), scipy_methods=("RK45", "DOP853"))
@@ -36,8 +37,8 @@ def without_times(row):
 
 def test_report_on_a_cluster_times_every_point_with_its_scipy_baseline(tmp_path, cluster):
     settings = wp.Settings.quick_mode(**TINY)
-    here, _ = wp.run_report(tmp_path / "here", problem_keys=["P1"], settings=settings, progress=False)
-    there, paths = wp.run_report(tmp_path / "there", problem_keys=["P1"], settings=settings, progress=False,
+    here, _ = run_report(tmp_path / "here", problem_keys=["P1"], settings=settings, progress=False)
+    there, paths = run_report(tmp_path / "there", problem_keys=["P1"], settings=settings, progress=False,
                                  scheduler=cluster)
     here_points, there_points = here[0].points, there[0].points
     assert {p.label for p in here_points} == {p.label for p in there_points}
@@ -69,8 +70,8 @@ def test_stability_suite_on_a_cluster_matches_a_local_run(tmp_path, cluster):
     kwargs = dict(quick=True, long_steps=2000, long_methods=("rk4", "implicit_midpoint"),
                   case_names=["symmetric", "high spin 10 rad/step"], methods=["rk4", "implicit_midpoint", "splitting"],
                   progress=False)
-    here = S.run_suite(tmp_path / "here", **kwargs)
-    there = S.run_suite(tmp_path / "there", scheduler=cluster, **kwargs)
+    here = run_suite(tmp_path / "here", **kwargs)
+    there = run_suite(tmp_path / "there", scheduler=cluster, **kwargs)
     assert [c["name"] for c in here["cases"]] == [c["name"] for c in there["cases"]]
     for a, b in zip(here["cases"], there["cases"]):
         assert {m: without_times(r) for m, r in a["runs"].items()} == {m: without_times(r) for m, r in b["runs"].items()}

@@ -89,3 +89,12 @@ def test_separatrix_reference_approaches_the_vertical():
     gamma = math.sqrt(p.top.mass * p.top.gravity * p.top.com_distance / i1)
     assert 1.0 / axis_z == pytest.approx(1.0 + 1.0 / math.cosh(gamma * p.t_end), rel=1e-12)
     assert math.acos(axis_z) < 0.1
+
+
+def test_final_state_runs_a_method_to_the_end_of_the_problem():
+    p = problems.get_problem("P4")
+    ref = p.reference()
+    q, omega = p.final_state("exact", p.t_end)  # one step of length t_end: the exact flow itself
+    assert metrics.omega_error(ref.omega, omega) < 1e-10 and metrics.attitude_error_angle(ref.q, q) < 1e-10
+    q4, omega4 = p.final_state("rk4", p.t_end / 2000)
+    assert 0.0 < metrics.omega_error(ref.omega, omega4) < 1e-6

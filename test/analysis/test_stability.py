@@ -7,6 +7,8 @@ import numpy as np
 import pytest
 
 from rigid_rot_sim.analysis import stability as S
+from rigid_rot_sim.analysis.stability_cases import catalogue
+from rigid_rot_sim.analysis.stability_report import run_suite
 from rigid_rot_sim.cli import main
 from rigid_rot_sim.core import advice
 from rigid_rot_sim.core.integrators import METHODS
@@ -35,7 +37,7 @@ def test_outputs_exist(suite):
 
 def test_every_run_is_classified_and_never_nan_silently(suite):
     _, data, _ = suite
-    assert len(data["cases"]) == len(S.catalogue(quick=True))
+    assert len(data["cases"]) == len(catalogue(quick=True))
     for case in data["cases"]:
         assert set(case["runs"]) == set(METHODS)
         for method, run in case["runs"].items():
@@ -93,7 +95,7 @@ def test_bisected_rk4_step_matches_linear_theory(suite):
 
 
 def test_bisection_agrees_with_advice_warning_threshold():
-    case = next(c for c in S.catalogue(quick=True) if c.name == "MuJoCo rod")
+    case = next(c for c in catalogue(quick=True) if c.name == "MuJoCo rod")
     spin = float(np.linalg.norm(case.problem.omega0))
     theory = advice.max_stable_dt("rk4", case.problem.moments, spin)
     measured = S.largest_stable_step(case, "rk4", steps=200)
@@ -118,4 +120,4 @@ def test_flip_times_found_by_interpolation():
 
 def test_unknown_case_name_is_a_value_error(tmp_path):
     with pytest.raises(ValueError, match="case_names"):
-        S.run_suite(tmp_path, quick=True, case_names=["no such case"], progress=False)
+        run_suite(tmp_path, quick=True, case_names=["no such case"], progress=False)

@@ -9,6 +9,7 @@ import math
 import pytest
 
 from rigid_rot_sim.analysis import workprecision as wp
+from rigid_rot_sim.analysis.workprecision_report import run_report
 from rigid_rot_sim.cli import main
 from rigid_rot_sim.core.integrators import METHODS
 
@@ -19,7 +20,7 @@ TINY = dict(repeats=1, budget_seconds=0.03, max_step_points=4, tolerances=(1e-3,
 def report(tmp_path_factory):
     out = tmp_path_factory.mktemp("report")
     settings = wp.Settings.quick_mode(**TINY)
-    results, paths = wp.run_report(out, problem_keys=["P1", "P2"], settings=settings, progress=False)
+    results, paths = run_report(out, problem_keys=["P1", "P2"], settings=settings, progress=False)
     return out, {r.problem: r for r in results}, paths
 
 
@@ -103,11 +104,11 @@ def test_structure_preserving_methods_conserve_on_free_body(report):
 
 def test_fastest_at_target_is_cheapest_point_meeting_it():
     pts = [
-        wp.Point("a", "ours", "a", "dt", 0.1, "ok", seconds=1.0, omega_error=1e-7),
-        wp.Point("b", "ours", "b", "dt", 0.1, "ok", seconds=0.5, omega_error=1e-5),
-        wp.Point("c", "ours", "c", "dt", 0.1, "ok", seconds=2.0, omega_error=1e-11),
-        wp.Point("s", "scipy", "s", "tol", 1e-8, "ok", seconds=4.0, omega_error=1e-7),
-        wp.Point("u", "ours", "u", "dt", 1.0, "unstable", message="boom"),
+        wp.SweepPoint("a", "ours", "a", "dt", 0.1, "ok", seconds=1.0, omega_error=1e-7),
+        wp.SweepPoint("b", "ours", "b", "dt", 0.1, "ok", seconds=0.5, omega_error=1e-5),
+        wp.SweepPoint("c", "ours", "c", "dt", 0.1, "ok", seconds=2.0, omega_error=1e-11),
+        wp.SweepPoint("s", "scipy", "s", "tol", 1e-8, "ok", seconds=4.0, omega_error=1e-7),
+        wp.SweepPoint("u", "ours", "u", "dt", 1.0, "unstable", message="boom"),
     ]
     assert wp.fastest_at(pts, 1e-6, "ours").label == "a"
     assert wp.fastest_at(pts, 1e-10, "ours").label == "c"

@@ -1,8 +1,26 @@
-"""core.pacing: slices sized by the measured cost of a step (issue 9, items 4 and 9)."""
+"""core.pacing without DDS: slices sized by the cost of a step, pacing, backlog drop, pause, due outputs.
 
+The run driver is tested on a fake clock and a fake simulator whose steps cost fake wall time.
+"""
+
+import math
+from types import SimpleNamespace
+
+import numpy as np
 import pytest
 
-from rigid_rot_sim.core.pacing import StepCost, falling_behind_message
+from rigid_rot_sim.core.observer import SimulationObserver
+from rigid_rot_sim.core.pacing import (
+    MAX_BACKLOG_WALL,
+    MAX_TICK,
+    MAX_TICK_WALL,
+    MIN_TICK,
+    OutputSchedule,
+    Pacer,
+    RunDriver,
+    StepCost,
+    falling_behind_message,
+)
 
 
 def test_a_slow_step_shrinks_the_slice_at_once_and_a_fast_one_gradually():
@@ -25,3 +43,175 @@ def test_the_falling_behind_warning_says_why():
     assert "taylor needs 190 ms of wall time per 0.001 s step" in message
     assert "|omega| = 2.5e+07 rad/s" in message and "|torque| = 1e+06 N*m" in message
     assert "max_torque" in message
+
+
+# ---------------------------------------------------------------- Pacer, OutputSchedule, RunDriver (fake clock)
+
+
+class FakeClock:
+    """Wall seconds that move only when told to (or when the fake simulator steps)."""
+
+    def __init__(self) -> None:
+        self.now = 100.0
+
+    def __call__(self) -> float:
+        return self.now
+
+
+class FakeSim:
+    """The Simulator's stepping API on a uniform grid; each step costs ``step_wall`` s of the fake clock."""
+
+    def __init__(self, clock: FakeClock, dt: float = 0.01, step_wall: float = 0.0, fail_at: int | None = None) -> None:
+        self.clock, self.dt, self.step_wall, self.fail_at = clock, dt, step_wall, fail_at
+        self.step_index = 0
+        self.paused = False
+        self.failure = None
+        self.method = "rk4"
+        self.slices: list[tuple[int, int]] = []
+
+    @property
+    def t(self) -> float:
+        return self.step_index * self.dt
+
+    def step_at_or_before(self, t: float) -> int:
+        return math.floor(t / self.dt + 1e-9)
+
+    def step_at_or_after(self, t: float) -> int:
+        return math.ceil(t / self.dt - 1e-9)
+
+    def advance_to(self, k: int) -> int:
+        start = self.step_index
+        end = k if self.fail_at is None else min(k, self.fail_at)
+        self.step_index = end
+        self.clock.now += (end - start) * self.step_wall
+        self.slices.append((start, end))
+        if self.fail_at is not None and end == self.fail_at:
+            self.failure = "NonFiniteStateError: test"
+            self.paused = True
+        return end - start
+
+    def snapshot(self):
+        return SimpleNamespace(t=self.t, angular_velocity_body=np.array([3.0, 4.0, 0.0]), torque_body=np.zeros(3))
+
+
+class Due(SimulationObserver):
+    def __init__(self) -> None:
+        self.calls: list[tuple[int, tuple[str, ...]]] = []
+
+    def outputs_due(self, step, snapshot, names):
+        assert snapshot.t == pytest.approx(step * 0.01)
+        self.calls.append((step, tuple(names)))
+
+
+def driver(clock, sim, rtf=0.0, periods=None, duration=None):
+    due = Due()
+    run = RunDriver(sim, OutputSchedule(periods or {}), Pacer(rtf, clock), duration, observers=[due])
+    run.pacer.anchor(sim.t)
+    return run, due
+
+
+def test_output_schedule_periods_due_and_next_due():
+    assert OutputSchedule.period_steps(25.0, 0.002) == 20 and OutputSchedule.period_steps(1e6, 0.01) == 1
+    schedule = OutputSchedule.from_rates({"state": 50.0, "clock": 100.0, "imu": 0.0}, 0.01)
+    assert schedule.periods == {"state": 2, "clock": 1}  # rate 0: not scheduled
+    assert schedule.due(4) == ["state", "clock"] and schedule.due(5) == ["clock"]
+    assert schedule.due(5, rest=True) == ["state"] and schedule.due(5, force=True) == ["state", "clock"]
+    assert schedule.next_due(4) == 5
+    schedule.set_rates({"state": 10.0, "clock": 20.0}, 0.01)
+    assert schedule.periods == {"state": 10, "clock": 5} and schedule.next_due(7) == 10
+    assert OutputSchedule().next_due(7) == 7 + 10**9 and OutputSchedule().due(0, force=True) == []
+
+
+def test_tick_period_follows_one_step_of_wall_time_within_bounds():
+    clock = FakeClock()
+    assert Pacer(0.0, clock).tick_period(0.01) == MIN_TICK
+    assert Pacer(1.0, clock).tick_period(0.005) == 0.005
+    assert Pacer(1.0, clock).tick_period(1.0) == MAX_TICK and Pacer(1e6, clock).tick_period(0.001) == MIN_TICK
+
+
+def test_paced_run_reaches_the_step_due_by_the_wall_clock_and_reports_due_outputs():
+    clock = FakeClock()
+    sim = FakeSim(clock)
+    run, due = driver(clock, sim, rtf=2.0, periods={"state": 5})
+    clock.now += 0.1  # 0.2 s of sim time at r = 2: step 20
+    progress = run.tick()
+    assert sim.step_index == 20 and progress.steps == 20 and progress.falling_behind is None
+    assert [step for step, _ in due.calls] == [5, 10, 15, 20]  # slices stop at each due output
+    assert run.tick().steps == 0  # no wall time passed: nothing due
+
+
+def test_a_backlog_beyond_the_limit_is_dropped_with_the_reason():
+    clock = FakeClock()
+    sim = FakeSim(clock)
+    run, _ = driver(clock, sim, rtf=1.0)
+    clock.now += MAX_BACKLOG_WALL + 0.3  # e.g. the process was stopped
+    progress = run.tick()
+    assert progress.falling_behind is not None and "cannot keep up with real_time_factor 1" in progress.falling_behind
+    assert "|omega| = 5 rad/s" in progress.falling_behind
+    # re-anchored: only half a tick of sim time ahead, not the 0.8 s missed
+    assert sim.step_index == sim.step_at_or_before(MAX_TICK_WALL * 0.5) == 1
+    clock.now += 0.05
+    assert run.tick().falling_behind is None and sim.step_index == 6  # paced again from the new anchor
+
+
+def test_slices_hold_the_executor_about_the_budget_whatever_a_step_costs():
+    clock = FakeClock()
+    sim = FakeSim(clock, step_wall=0.004)  # 4 ms per step: 5 steps fit in MAX_TICK_WALL
+    run, _ = driver(clock, sim, rtf=0.0)
+    run.step_cost.per_step = 0.004
+    began = clock.now
+    run.tick()  # as fast as possible: stops at the deadline
+    assert sim.step_index == 5 and clock.now - began == pytest.approx(MAX_TICK_WALL)
+    sim.step_wall = 0.2  # a step suddenly 50x slower (taylor at a huge |omega| dt)
+    began = clock.now
+    run.tick()
+    assert clock.now - began <= MAX_TICK_WALL + 5 * 0.2  # the first slice, sized on the old cost
+    began, steps = clock.now, sim.step_index
+    run.tick()
+    assert sim.step_index - steps == 1 and clock.now - began == pytest.approx(0.2)  # at most one slow step
+
+
+def test_a_paused_run_does_not_step_and_resumes_from_a_new_anchor():
+    clock = FakeClock()
+    sim = FakeSim(clock)
+    run, _ = driver(clock, sim, rtf=1.0)
+    sim.paused = True
+    clock.now += 0.3
+    assert run.tick().steps == 0 and sim.step_index == 0
+    sim.paused = False
+    run.pacer.anchor(sim.t)  # as ~/pause data=false does
+    clock.now += 0.1
+    assert run.tick().falling_behind is None and sim.step_index == 10  # the paused time is not caught up
+
+
+def test_the_duration_ends_the_run_with_every_output_on_the_final_state_once():
+    clock = FakeClock()
+    sim = FakeSim(clock)
+    run, due = driver(clock, sim, rtf=0.0, periods={"state": 4, "clock": 1}, duration=0.1)
+    progress = run.tick()
+    assert progress.finished and run.finished and sim.step_index == 10
+    assert due.calls[-2:] == [(10, ("clock",)), (10, ("state",))]  # due ones, then the rest: none twice
+    assert run.tick().steps == 0 and len(due.calls) == 11  # finished: nothing more
+    run.restart()  # after a reset
+    assert not run.finished
+
+
+def test_a_failure_stops_the_slice_and_reports_every_output():
+    clock = FakeClock()
+    sim = FakeSim(clock, fail_at=7)
+    run, due = driver(clock, sim, rtf=0.0, periods={"state": 5, "clock": 1})
+    progress = run.tick()
+    assert progress.failure == "NonFiniteStateError: test" and sim.step_index == 7
+    assert due.calls[-1] == (7, ("state", "clock"))
+    assert run.tick().steps == 0  # paused by the failure
+
+
+def test_a_step_request_runs_to_its_target_within_its_budget():
+    clock = FakeClock()
+    sim = FakeSim(clock, step_wall=0.001)
+    run, _ = driver(clock, sim)
+    sim.paused = True
+    assert run.run(25, clock() + 0.25).steps == 25 and sim.step_index == 25
+    sim.step_wall = 0.1
+    run.step_cost.per_step = 0.1
+    assert run.run(50, clock() + 0.25).steps < 25  # stopped short at the budget; the reply says so

@@ -8,7 +8,7 @@ Fixtures
 --------
 ``ros_env``            dict: the environment for subprocesses (os.environ plus the above).
 ``launch_node``        factory: ``launch_node(*ros_args, name=...) -> NodeProcess``; the node
-                       runs as ``python -m rigid_rot_sim.node``; stopped after the test.
+                       runs as ``python -m rigid_rot_sim.ros.node``; stopped after the test.
 ``launch_node_module`` the same factory, but its nodes live until the module's tests end.
 ``ros_node``           an rclpy node in a private Context of the test process.
 ``ros_node_module``    the same, shared by the tests of one module.
@@ -93,7 +93,7 @@ class _Launcher:
         self.env = env
         self.processes: list[NodeProcess] = []
 
-    def __call__(self, *args: str, name: str = "node", module: str = "rigid_rot_sim.node",
+    def __call__(self, *args: str, name: str = "node", module: str = "rigid_rot_sim.ros.node",
                  env: dict[str, str] | None = None) -> NodeProcess:
         """Start ``python -m <module> <args>`` (e.g. ``"--ros-args", "-p", "x:=1"``)."""
         log_path = self.log_dir / f"{name}-{len(self.processes)}.log"

@@ -36,7 +36,7 @@ def test_two_namespaced_nodes_run_side_by_side_without_cross_talk(launch_node, c
     from std_srvs.srv import SetBool
     from tf2_msgs.msg import TFMessage
 
-    from rigid_rot_sim.node import COMMAND_QOS, STATE_QOS, TF_QOS
+    from rigid_rot_sim.ros.qos import COMMAND_QOS, STATE_QOS, TF_QOS
 
     nodes = {
         # /clock comes from one simulator only; `rates.clock:=0` (an integer) also checks that

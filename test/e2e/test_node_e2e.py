@@ -1,6 +1,6 @@
 """End to end: the simulation node in its own process, driven and observed over DDS.
 
-Each test starts ``python -m rigid_rot_sim.node`` on a shipped scene (conftest fixtures:
+Each test starts ``python -m rigid_rot_sim.ros.node`` on a shipped scene (conftest fixtures:
 private ROS_DOMAIN_ID, localhost discovery) and waits on conditions with timeouts.
 
 No assertion depends on how many volatile messages the test process happened to receive (a
@@ -81,7 +81,7 @@ def test_torque_commands_change_omega_exactly_as_the_core_predicts(launch_node, 
     from std_srvs.srv import SetBool
 
     from rigid_rot_sim.conversions import seconds_to_time
-    from rigid_rot_sim.node import COMMAND_QOS, STATE_QOS
+    from rigid_rot_sim.ros.qos import COMMAND_QOS, STATE_QOS
 
     # started paused at t = 0; resumed once the node has received (and recorded) every command
     bag = tmp_path / "commands.mcap"
@@ -128,7 +128,7 @@ def test_torque_commands_change_omega_exactly_as_the_core_predicts(launch_node, 
 def test_torque_free_run_conserves_momentum_and_energy_and_exits_cleanly(launch_node, collector, tmp_path):
     from rigid_rot_msgs.msg import RigidBodyState
 
-    from rigid_rot_sim.node import STATE_QOS
+    from rigid_rot_sim.ros.qos import STATE_QOS
 
     # started paused, resumed once this test's subscription is matched; the run is recorded
     bag = tmp_path / "flip.mcap"
@@ -164,7 +164,7 @@ def test_heavy_top_nutation_stays_between_the_turning_points(launch_node, collec
     from rigid_rot_msgs.msg import HeavyTopState
 
     from rigid_rot_sim.core.heavy_top import HeavyTop, heavy_top_reference
-    from rigid_rot_sim.node import STATE_QOS
+    from rigid_rot_sim.ros.qos import STATE_QOS
 
     scene = load_scene(SCENES / "heavy_top.yaml")
     bag = tmp_path / "top.mcap"
@@ -203,7 +203,7 @@ def test_bad_commands_and_requests_are_rejected_and_pause_step_reset_work(launch
     from rigid_rot_msgs.srv import ApplyTorque, SetState, Step
     from std_srvs.srv import SetBool, Trigger
 
-    from rigid_rot_sim.node import COMMAND_QOS, REJECTED_QOS, STATE_QOS
+    from rigid_rot_sim.ros.qos import COMMAND_QOS, REJECTED_QOS, STATE_QOS
 
     node = launch_node(*scene_args("torque_driven", real_time_factor=1.0, integrator="rk4"), name="services")
     rejected = collector.subscribe(RejectedCommand, f"{NODE}/rejected", REJECTED_QOS)
@@ -281,7 +281,7 @@ def test_shell_commands_run_and_torque(launch_node, collector, ros_env, tmp_path
 
     from rigid_rot_msgs.msg import RigidBodyState
 
-    from rigid_rot_sim.node import STATE_QOS
+    from rigid_rot_sim.ros.qos import STATE_QOS
 
     node = launch_node(*scene_args("torque_driven", real_time_factor=1.0, integrator="rk4"), name="cli_target")
     states = collector.subscribe(RigidBodyState, f"{NODE}/state", STATE_QOS)

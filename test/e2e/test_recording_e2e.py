@@ -404,7 +404,7 @@ def test_disk_full_mid_run_stops_the_recording_and_the_simulation_runs_on(tmp_pa
     log_path = tmp_path / "full.log"
     with open(log_path, "wb") as log:
         process = subprocess.Popen(
-            [sys.executable, "-m", "rigid_rot_sim.node", *node_args(write_scene(tmp_path), bag)],
+            [sys.executable, "-m", "rigid_rot_sim.ros.node", *node_args(write_scene(tmp_path), bag)],
             stdout=log, stderr=subprocess.STDOUT, env=ros_env, preexec_fn=limit_file_size,
         )
 

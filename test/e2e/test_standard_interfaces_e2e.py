@@ -123,7 +123,7 @@ def test_imu_and_odom_carry_the_state_of_the_same_stamp_in_the_parameter_frames(
     from rigid_rot_msgs.msg import RigidBodyState
     from sensor_msgs.msg import Imu
 
-    from rigid_rot_sim.node import STATE_QOS
+    from rigid_rot_sim.ros.qos import STATE_QOS
 
     states = collector.subscribe(RigidBodyState, f"{NODE}/state", STATE_QOS)
     imus = collector.subscribe(Imu, f"{NODE}/imu", STATE_QOS)

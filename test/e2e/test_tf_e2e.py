@@ -35,7 +35,7 @@ def test_tf_and_tf_static_are_live_with_the_upstream_type_hash_and_match_the_ori
     from geometry_msgs.msg import QuaternionStamped
     from tf2_msgs.msg import TFMessage
 
-    from rigid_rot_sim.node import STATE_QOS, TF_QOS, TF_STATIC_QOS
+    from rigid_rot_sim.ros.qos import STATE_QOS, TF_QOS, TF_STATIC_QOS
 
     node = launch_node("--ros-args", "-p", "scene:=from_point_masses", name="tf")
     scene = load_scene(resolve_scene("from_point_masses"))

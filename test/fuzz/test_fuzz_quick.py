@@ -108,7 +108,7 @@ def test_node_survives_random_commands_requests_and_parameters(harness):
     from rigid_rot_msgs.srv import ComputeInertia, SetState, Step
     from std_srvs.srv import SetBool
 
-    from rigid_rot_sim.node import COMMAND_QOS, STATE_QOS
+    from rigid_rot_sim.ros.qos import COMMAND_QOS, STATE_QOS
     from test_node_hardening import finite_state
 
     rng = random.Random(11)

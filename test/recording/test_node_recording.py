@@ -1,4 +1,4 @@
-"""The recording decorators of the node: every kind of event replays bit for bit in resim."""
+"""The node's recording, an observer of the simulator: every kind of event replays bit for bit in resim."""
 
 from pathlib import Path
 
@@ -11,7 +11,7 @@ from rigid_rot_msgs.msg import RigidBodyState  # noqa: E402
 from rigid_rot_sim import conversions  # noqa: E402
 from rigid_rot_sim.core.scene import load_scene  # noqa: E402
 from rigid_rot_sim.core.simulator import Simulator  # noqa: E402
-from rigid_rot_sim.recording.node_recording import NodeRecording, RecordedSimulator  # noqa: E402
+from rigid_rot_sim.recording.node_recording import NodeRecording  # noqa: E402
 from rigid_rot_sim.recording.resim import resimulate  # noqa: E402
 from rigid_rot_sim.recording.session import RunRecorder  # noqa: E402
 
@@ -25,31 +25,31 @@ def test_every_event_kind_is_recorded_and_replayed_bit_for_bit(tmp_path):
                       integrator={"method": sim.method, "dt": sim.dt, "options": sim.options},
                       events_topic="/rigid_rot_sim/sim_events")
     run.add_topic("/rigid_rot_sim/state", RigidBodyState, role="state")
-    recorded = RecordedSimulator(sim, NodeRecording(None, run, sim))
+    sim.add_observer(NodeRecording(run, sim, None, "base_link"))
 
     def publish():
-        run.record("/rigid_rot_sim/state", conversions.snapshot_to_state(recorded.snapshot(), "odom", "base_link"))
+        run.record("/rigid_rot_sim/state", conversions.snapshot_to_state(sim.snapshot(), "odom", "base_link"))
 
     script = [
-        (50, lambda: recorded.receive_torque("~/torque", (0.0, 0.0, 0.003), "base_link", 0.0)),
-        (120, lambda: recorded.apply_torque((0.001, 0.0, 0.0), "odom", 0.05)),
-        (200, lambda: recorded.set_integrator(dt=0.0005)),           # a dt change mid-run
-        (300, lambda: recorded.set_state((0.1, 0.0, 0.0, 1.0), (0.2, -0.1, 0.3))),
-        (400, lambda: recorded.submit_torque("~/torque", (0.0, 0.002, 0.0), "body", recorded.t + 0.01)),
-        (500, lambda: recorded.set_integrator(method="lie_rk4")),   # an integrator change mid-run
-        (600, recorded.reset),
-        (650, lambda: recorded.receive_torque("~/torque", (0.001, 0.001, 0.0), "odom", 0.0)),
+        (50, lambda: sim.receive_torque("~/torque", (0.0, 0.0, 0.003), "base_link", 0.0)),
+        (120, lambda: sim.apply_torque((0.001, 0.0, 0.0), "odom", 0.05)),
+        (200, lambda: sim.set_integrator(dt=0.0005)),           # a dt change mid-run
+        (300, lambda: sim.set_state((0.1, 0.0, 0.0, 1.0), (0.2, -0.1, 0.3))),
+        (400, lambda: sim.submit_torque("~/torque", (0.0, 0.002, 0.0), "body", sim.t + 0.01)),
+        (500, lambda: sim.set_integrator(method="lie_rk4")),   # an integrator change mid-run
+        (600, sim.reset),
+        (650, lambda: sim.receive_torque("~/torque", (0.001, 0.001, 0.0), "odom", 0.0)),
     ]
     k = 0
     for at, action in script:
         while k < at:
-            recorded.advance(10)
+            sim.advance(10)
             k += 10
             publish()
         action()
         publish()
     for _ in range(20):
-        recorded.advance(10)
+        sim.advance(10)
         publish()
     run.close()
 
@@ -67,16 +67,16 @@ def test_rejected_commands_record_no_event(tmp_path):
     sim = Simulator(load_scene(SCENE), method="rk4")
     with RunRecorder(bag, scene_text=SCENE.read_text(), scene_file=str(SCENE), parameters={},
                      integrator={"method": sim.method, "dt": sim.dt}, events_topic="/e/sim_events") as run:
-        recorded = RecordedSimulator(sim, NodeRecording(None, run, sim))
+        sim.add_observer(NodeRecording(run, sim, None, "base_link"))
         with pytest.raises(CommandRejected):
-            recorded.receive_torque("~/torque", (float("inf"), 0.0, 0.0), "base_link", 0.0)
+            sim.receive_torque("~/torque", (float("inf"), 0.0, 0.0), "base_link", 0.0)
     assert BagReader(bag).counts().get("/e/sim_events", 0) == 0
 
 
 def test_tf_and_the_latched_tf_static_are_recorded_as_published(tmp_path):
     import rclpy
 
-    from rigid_rot_sim.node import RigidRotSimNode
+    from rigid_rot_sim.ros.node import RigidRotSimNode
     from rigid_rot_sim.recording.reader import BagReader
 
     bag = tmp_path / "tf.mcap"
@@ -102,3 +102,39 @@ def test_tf_and_the_latched_tf_static_are_recorded_as_published(tmp_path):
     assert offered["durability"] == 1 and offered["depth"] == 1  # transient local, as published
     (_, static), = reader.decoded(["/tf_static"])
     assert static.transforms[0].child_frame_id == "base_link_principal"
+
+
+def test_without_tf2_msgs_the_recording_still_gets_tf_from_the_states(tmp_path, monkeypatch):
+    import rclpy
+
+    from rigid_rot_sim.recording.reader import BagReader
+    from rigid_rot_sim.ros import outputs
+    from rigid_rot_sim.ros.node import RigidRotSimNode
+
+    monkeypatch.setattr(outputs, "TFMessage", None)  # as on an install without tf2_msgs
+    bag = tmp_path / "no_tf2.mcap"
+    context = rclpy.Context()
+    rclpy.init(context=context)
+    try:
+        node = RigidRotSimNode(context=context, parameter_overrides=[
+            rclpy.parameter.Parameter("scene", value="from_point_masses"),
+            rclpy.parameter.Parameter("record_path", value=str(bag)),
+            rclpy.parameter.Parameter("real_time_factor", value=0.0),
+            rclpy.parameter.Parameter("duration", value=0.5),
+        ])
+        assert "tf" not in node.outputs.publishers and node.count_publishers("/tf") == 0
+        while not node.finished:
+            node.timer_callback()
+        node.destroy_node()
+    finally:
+        rclpy.try_shutdown(context=context)
+    reader = BagReader(bag)
+    assert reader.complete and "/tf_static" not in reader.counts()
+    assert reader.counts()["/tf"] == 26  # 50 Hz over 0.5 s, both ends, built from ~/state
+    states = {(m.header.stamp.sec, m.header.stamp.nanosec): m for _, m in reader.decoded(["/rigid_rot_sim/state"])}
+    for _, tf in reader.decoded(["/tf"]):
+        (transform,) = tf.transforms
+        state = states[(transform.header.stamp.sec, transform.header.stamp.nanosec)]
+        assert transform.child_frame_id == "base_link" and transform.header.frame_id == "odom"
+        rotation, orientation = transform.transform.rotation, state.orientation
+        assert (rotation.x, rotation.y, rotation.z, rotation.w) == (orientation.x, orientation.y, orientation.z, orientation.w)

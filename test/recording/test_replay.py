@@ -16,7 +16,8 @@ from test_resim import COMMANDS, record_like_the_node  # noqa: E402
 
 from rigid_rot_sim.recording.reader import BagReader  # noqa: E402
 from rigid_rot_sim.recording.replay import qos_from_metadata, replay, select_topics  # noqa: E402
-from rigid_rot_sim.recording.writer import DURABILITY_TRANSIENT_LOCAL, QosProfile, Recorder, offered_qos_yaml  # noqa: E402
+from rigid_rot_sim.recording.bag_metadata import DURABILITY_TRANSIENT_LOCAL, QosProfile, offered_qos_yaml  # noqa: E402
+from rigid_rot_sim.recording.writer import Recorder  # noqa: E402
 
 
 @pytest.fixture

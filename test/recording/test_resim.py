@@ -12,7 +12,7 @@ from rigid_rot_msgs.msg import RigidBodyState  # noqa: E402
 from rigid_rot_sim import conversions  # noqa: E402
 from rigid_rot_sim.core.scene import load_scene  # noqa: E402
 from rigid_rot_sim.core.simulator import CommandRejected, Simulator  # noqa: E402
-from rigid_rot_sim.recording.node_recording import NodeRecording, RecordedSimulator  # noqa: E402
+from rigid_rot_sim.recording.node_recording import NodeRecording  # noqa: E402
 from rigid_rot_sim.recording.resim import attitude_angle, resimulate  # noqa: E402
 from rigid_rot_sim.recording.session import RunRecorder  # noqa: E402
 
@@ -38,9 +38,9 @@ def record_like_the_node(path: Path, scene_name: str, steps: int, publish_every:
     ) as run:
         run.add_topic("/rigid_rot_sim/state", RigidBodyState, role="state")
         run.add_topic(torque_topic, WrenchStamped, role="torque")
-        # as the node does: the simulator wrapped so that every command is recorded as an event
-        recording = NodeRecording(None, run, sim)
-        recorded = RecordedSimulator(sim, recording)
+        # as the node does: the recording observes the simulator, so every command is recorded as an event
+        recording = NodeRecording(run, sim, None, "base_link")
+        sim.add_observer(recording)
         states = []
         for k in range(0, steps, publish_every):
             if k in commands:
@@ -51,10 +51,10 @@ def record_like_the_node(path: Path, scene_name: str, steps: int, publish_every:
                 msg.wrench.torque = conversions.array_to_vector3(torque)
                 received_ns = run.log_time_ns()
                 try:
-                    recorded.receive_torque("~/torque", torque, frame_id, stamp)
+                    sim.receive_torque("~/torque", torque, frame_id, stamp)
                 except CommandRejected:
                     pass
-                recording.record_command(torque_topic, msg, received_ns)
+                recording.received(torque_topic, msg, received_ns)
             sim.advance_to(k)
             snapshot = sim.snapshot()
             states.append(snapshot)

@@ -11,12 +11,8 @@ from rosbags.highlevel import AnyReader
 
 from rigid_rot_sim.recording import definitions
 from rigid_rot_sim.recording.reader import BagReader, scan
-from rigid_rot_sim.recording.writer import (
-    DURABILITY_TRANSIENT_LOCAL,
-    QosProfile,
-    Recorder,
-    RecorderError,
-)
+from rigid_rot_sim.recording.bag_metadata import DURABILITY_TRANSIENT_LOCAL, QosProfile
+from rigid_rot_sim.recording.writer import Recorder, RecorderError
 
 rclpy_serialization = pytest.importorskip("rclpy.serialization")
 from geometry_msgs.msg import WrenchStamped  # noqa: E402

@@ -10,6 +10,7 @@ from pathlib import Path
 from typing import Any, Iterable, Sequence
 
 import matplotlib
+import numpy as np
 
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
@@ -29,7 +30,7 @@ def work_precision_plot(
 ) -> Path:
     """Omega error at the final time (rad/s) against run time (s), log-log, a line per method.
 
-    ``points`` are :class:`rigid_rot_sim.analysis.workprecision.Point` (or dicts with the
+    ``points`` are :class:`rigid_rot_sim.analysis.workprecision.SweepPoint` (or dicts with the
     same keys); only finished runs ("ok") are drawn.
     """
     rows = [p if isinstance(p, dict) else vars(p) for p in points]
@@ -83,8 +84,6 @@ def stability_plot(cases: Sequence[dict[str, Any]], methods: Sequence[str], path
     Cells are coloured by log10 of the drift; unstable runs are marked 'X' and
     refusals 'R' (not coloured).
     """
-    import numpy as np
-
     grid = np.full((len(cases), len(methods)), np.nan)
     marks: dict[tuple[int, int], str] = {}
     for i, case in enumerate(cases):
@@ -120,8 +119,6 @@ def stability_plot(cases: Sequence[dict[str, Any]], methods: Sequence[str], path
 
 def long_horizon_plot(rows: Sequence[dict[str, Any]], path: str | Path) -> Path:
     """Bar chart: relative energy error over the first and the last tenth of the long run, per method."""
-    import numpy as np
-
     fig, ax = plt.subplots(figsize=(9, 5), dpi=110)
     labels = [r["method"] for r in rows]
     x = np.arange(len(rows))

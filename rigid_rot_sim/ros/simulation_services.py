@@ -12,9 +12,9 @@ under names relative to the node, as Gazebo does (``/gzserver/step_simulation``)
 ``~/reset_simulation``        ``ResetSimulation``                            time and state, or state only
 ==========================  ============================================  ===========================
 
-Every call goes through the node method behind the node's own service (``~/step``,
-``~/reset``, ``~/pause``, ``~/set_state``), so their checks, limits and the recording of
-what changed apply to both. The outcome is a ``simulation_interfaces/msg/Result``:
+Every call goes through the action behind the node's own service
+(:class:`~rigid_rot_sim.ros.services.RunServices`: ``step``, ``reset``, ``pause``,
+``set_initial_state``), so their checks, limits and the recording of what changed apply to both. The outcome is a ``simulation_interfaces/msg/Result``:
 ``RESULT_INCORRECT_STATE`` when the call needs another run state (stepping while
 playing), ``RESULT_FEATURE_UNSUPPORTED`` for what this simulator cannot do (a reset of
 time alone, QUITTING), ``RESULT_OPERATION_FAILED`` with the node's reason otherwise.
@@ -83,12 +83,14 @@ class _Refused(Exception):
 
 
 class SimulationServices:
-    """The five services, created on ``node`` (a RigidRotSimNode with a scene loaded)."""
+    """The five services, created on ``node``, acting through ``actions`` (the node's own services)."""
 
-    def __init__(self, node: Any) -> None:
+    def __init__(self, node: Any, actions: Any) -> None:
         if not AVAILABLE:
             raise RuntimeError("simulation_interfaces is not installed")
         self.node = node
+        self.actions = actions
+        self.run = actions.run
         self._stopped = False  # set by SetSimulationState(STOPPED) until played or stepped
         self.services = [
             node.create_service(GetSimulatorFeatures, SERVICE_NAMES[0], self.get_features_callback),
@@ -125,10 +127,10 @@ class SimulationServices:
 
     def run_state(self) -> int:
         """SimulationState code of the run now."""
-        node = self.node
-        if node.finished or (self._stopped and node.sim.paused and node.sim.step_index == 0):
+        run = self.run
+        if run.finished or (self._stopped and run.sim.paused and run.sim.step_index == 0):
             return STOPPED
-        return PAUSED if node.sim.paused else PLAYING
+        return PAUSED if run.sim.paused else PLAYING
 
     def get_state_callback(self, request, response):
         return self._serve("~/get_simulation_state", response, lambda: setattr(response.state, "state", self.run_state()))
@@ -139,7 +141,7 @@ class SimulationServices:
         return self._serve("~/set_simulation_state", response, lambda: self._set_run_state(int(request.state.state)))
 
     def _set_run_state(self, target: int) -> None:
-        node = self.node
+        actions = self.actions
         current = self.run_state()
         already = SetSimulationState.Response.ALREADY_IN_TARGET_STATE
         names = {STOPPED: "STOPPED", PLAYING: "PLAYING", PAUSED: "PAUSED"}
@@ -149,16 +151,16 @@ class SimulationServices:
             raise _Refused(OPERATION_FAILED, f"unknown simulation state {target} (STOPPED 0, PLAYING 1, PAUSED 2)")
         if target == current:
             raise _Refused(already, f"already {names[target]}")
-        if node.finished:
+        if self.run.finished:
             raise _Refused(SetSimulationState.Response.STATE_TRANSITION_ERROR,
                            "the run reached its duration and is stopping")
         if target == STOPPED:
-            node._reset()  # noqa: SLF001 - the node's ~/reset action
-            node._pause(True)  # noqa: SLF001 - the node's ~/pause action
+            actions.reset()  # ~/reset
+            actions.pause(True)  # ~/pause
             self._stopped = True
             return
         try:
-            node._pause(target == PAUSED)  # noqa: SLF001
+            actions.pause(target == PAUSED)  # ~/pause
         except ValueError as exc:  # e.g. resuming after a failure
             raise _Refused(SetSimulationState.Response.STATE_TRANSITION_ERROR, str(exc)) from None
         self._stopped = False
@@ -167,13 +169,13 @@ class SimulationServices:
         return self._serve("~/step_simulation", response, lambda: self._step(int(request.steps)))
 
     def _step(self, steps: int) -> None:
-        node = self.node
-        if node.finished or not node.sim.paused:
-            state = "stopping (duration reached)" if node.finished else "playing"
+        run = self.run
+        if run.finished or not run.sim.paused:
+            state = "stopping (duration reached)" if run.finished else "playing"
             raise _Refused(INCORRECT_STATE, f"stepping needs a paused simulation, it is {state}: "
                            "pause it first (SetSimulationState PAUSED)")
         self._stopped = False
-        node._step(steps)  # noqa: SLF001 - the node's ~/step action (ValueError: operation failed)
+        self.actions.step(steps)  # ~/step (ValueError: operation failed)
 
     def reset_callback(self, request, response):
         # the scope field came with the 1.x releases; without it, a reset is a full one
@@ -190,9 +192,9 @@ class SimulationServices:
                            "time cannot be reset without the state (the scene's initial state belongs to t = 0): "
                            "use scope TIME|STATE, DEFAULT or ALL")
         if scope & time_bit:
-            self.node._reset()  # noqa: SLF001 - the node's ~/reset action
+            self.actions.reset()  # ~/reset
         elif scope & state_bit:
-            self.node._set_initial_state()  # noqa: SLF001 - the node's ~/set_state action
+            self.actions.set_initial_state()  # ~/set_state with the scene's initial state
         # SPAWNED: nothing is ever spawned here, so there is nothing to remove
 
     # ------------------------------------------------------------------ plumbing

@@ -1,9 +1,9 @@
-"""rigid_rot_sim.simulation_services without DDS: constants under either spelling of the package."""
+"""rigid_rot_sim.ros.simulation_services without DDS: constants under either spelling of the package."""
 
 import pytest
 
-from rigid_rot_sim import simulation_services
-from rigid_rot_sim.simulation_services import _constant
+from rigid_rot_sim.ros import simulation_services
+from rigid_rot_sim.ros.simulation_services import _constant
 
 
 class _Prefixed:

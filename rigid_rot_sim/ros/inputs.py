@@ -1,0 +1,104 @@
+"""What the node receives: torque commands, and the ``~/rejected`` report of those refused.
+
+:class:`TorqueInputs` subscribes to each topic input of the scene (WrenchStamped or
+Vector3Stamped); :meth:`TorqueInputs.torque_callback` converts the message
+(:func:`~rigid_rot_sim.conversions.torque_command_from_msg`), hands it to
+:meth:`Simulator.receive_torque <rigid_rot_sim.core.simulator.Simulator.receive_torque>`
+and, when the simulator refuses it, to :meth:`Rejections.reject`. Then it hands the message
+as received to its listeners (the recorder), with the wall-clock receive time.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from typing import Any, Protocol
+
+from geometry_msgs.msg import Vector3Stamped, WrenchStamped
+from rclpy.node import Node
+from rclpy.qos import QoSProfile
+
+from rigid_rot_sim import conversions
+from rigid_rot_sim.core import limits
+from rigid_rot_sim.core.scene import Scene
+from rigid_rot_sim.core.simulator import CommandRejected, Simulator
+from rigid_rot_sim.ros.outputs import Outputs
+from rigid_rot_sim.ros.qos import COMMAND_QOS
+
+#: Seconds between two warnings about rejected commands from the same source.
+REJECT_WARN_PERIOD = 2.0
+
+
+class ReceivedListener(Protocol):
+    """Receives every torque command message as it arrived (the recorder)."""
+
+    def received(self, topic: str, msg: Any, received_ns: int) -> None:
+        """``msg`` arrived on ``topic`` at wall-clock ``received_ns`` (ns since the epoch)."""
+
+
+class Rejections:
+    """``~/rejected``: a RejectedCommand per refused command, and a warning at most every
+    ``REJECT_WARN_PERIOD`` s per source (with the count of those not warned about)."""
+
+    def __init__(self, node: Node, sim: Simulator, outputs: Outputs) -> None:
+        self.logger = node.get_logger()
+        self.sim = sim
+        self.outputs = outputs
+        self._warned: dict[str, tuple[float, int]] = {}
+
+    def reject(self, source: str, reason: str, frame_id: str, torque: Any) -> None:
+        # the frame_id is echoed, but never more than MAX_NAME_LENGTH characters of it
+        frame_id = limits.clip_text(frame_id)
+        reason = limits.clip_text(reason, limits.MAX_TEXT_LENGTH)
+        self.outputs.publish("rejected", conversions.rejected_command(source, reason, self.sim.t, frame_id, torque))
+        now = time.monotonic()
+        last, suppressed = self._warned.get(source, (-math.inf, 0))
+        if now - last >= REJECT_WARN_PERIOD:
+            more = f" ({suppressed} more rejected since the last warning)" if suppressed else ""
+            self.logger.warning(f"rejected command on {source}: {reason}{more}")
+            self._warned[source] = (now, 0)
+        else:
+            self._warned[source] = (last, suppressed + 1)
+
+
+class TorqueInputs:
+    """One subscription per topic input of ``scene`` (none for a torque-free scene).
+
+    ``depth``: keep-last depth of the subscriptions (``commands.qos_depth``).
+    """
+
+    def __init__(self, node: Node, sim: Simulator, scene: Scene, depth: int, rejections: Rejections,
+                 built: list[str], left_out: list[str]) -> None:
+        self.sim = sim
+        self.rejections = rejections
+        self.listeners: list[ReceivedListener] = []
+        self.subscriptions: list[Any] = []
+        qos = QoSProfile(depth=depth, reliability=COMMAND_QOS.reliability, durability=COMMAND_QOS.durability)
+        for spec in scene.topic_inputs:
+            msg_type = WrenchStamped if spec.message_type == "WrenchStamped" else Vector3Stamped
+            topic = node.resolve_topic_name(spec.topic)
+            subscription = node.create_subscription(
+                msg_type, spec.topic, lambda msg, source=spec.topic, topic=topic: self.torque_callback(msg, source, topic), qos
+            )
+            self.subscriptions.append(subscription)
+            hold = "hold until replaced" if spec.timeout is None else f"zero {spec.timeout:g} s after the last command"
+            built.append(f"torque input {topic} ({spec.message_type}, frame {spec.frame}, {hold}, depth {qos.depth})")
+            if spec.message_type == "WrenchStamped":
+                node.get_logger().info(
+                    f"{topic}: only wrench.torque acts on the body; a command with a non-zero wrench.force is rejected"
+                )
+        if not scene.topic_inputs:
+            left_out.append("torque subscriptions (no topic input)")
+
+    def torque_callback(self, msg: Any, source: str, topic: str) -> None:
+        """A command on ``source`` (the scene's topic; ``topic`` fully qualified): to the simulator, or rejected."""
+        received_ns = time.time_ns()
+        torque, force, frame_id, stamp = conversions.torque_command_from_msg(msg)
+        try:
+            self.sim.receive_torque(source, torque, frame_id, stamp, force)
+        except CommandRejected as exc:
+            self.rejections.reject(topic, exc.reason, frame_id, torque)
+        except Exception as exc:  # never out of a callback: rejected with the reason
+            self.rejections.reject(topic, f"internal error: {exc!r}", frame_id, torque)
+        for listener in self.listeners:
+            listener.received(topic, msg, received_ns)
