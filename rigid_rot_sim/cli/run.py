@@ -16,26 +16,12 @@ the node published, through DDS. Exit code 0 when the duration is reached or on 
 from __future__ import annotations
 
 import argparse
-import math
 import os
 
+from rigid_rot_sim.cli.argtypes import nonnegative_number, positive_number
 from rigid_rot_sim.cli.ros_args import add_ros_args
 from rigid_rot_sim.recording import LOG_TIME_BASES
 from rigid_rot_sim.share import resolve_scene, scene_search_dirs  # noqa: F401 (both: API of this module)
-
-
-def _nonnegative(text: str) -> float:
-    value = float(text)
-    if not (math.isfinite(value) and value >= 0.0):
-        raise argparse.ArgumentTypeError(f"must be a finite number >= 0, got {text}")
-    return value
-
-
-def _positive(text: str) -> float:
-    value = float(text)
-    if not (math.isfinite(value) and value > 0.0):
-        raise argparse.ArgumentTypeError(f"must be a finite number > 0, got {text}")
-    return value
 
 
 def add_parser(subparsers) -> None:
@@ -45,16 +31,16 @@ def add_parser(subparsers) -> None:
         description=__doc__.split("\n\n")[0],
     )
     parser.add_argument("scene", help="scene YAML path, or a shipped scene name (e.g. free_tumble)")
-    parser.add_argument("--duration", type=_nonnegative, help="sim seconds to run, then exit 0 (0 = unbounded)")
+    parser.add_argument("--duration", type=nonnegative_number, help="sim seconds to run, then exit 0 (0 = unbounded)")
     parser.add_argument(
-        "--realtime-factor", type=_nonnegative, dest="real_time_factor", help="1 = wall-clock pace, 0 = as fast as possible"
+        "--realtime-factor", type=nonnegative_number, dest="real_time_factor", help="1 = wall-clock pace, 0 = as fast as possible"
     )
     parser.add_argument("--integrator", help="integrator name from the registry, or auto")
-    parser.add_argument("--dt", type=_positive, help="physics step, s")
+    parser.add_argument("--dt", type=positive_number, help="physics step, s")
     parser.add_argument("--record", metavar="OUT.mcap", help="record the run to this MCAP file")
     parser.add_argument("--record-log-time", choices=LOG_TIME_BASES, dest="record_log_time",
                         help="MCAP log times of the recording: sim time (default) or wall clock")
-    parser.add_argument("--echo", type=_positive, metavar="PERIOD", help="print the received ~/state every PERIOD s of sim time")
+    parser.add_argument("--echo", type=positive_number, metavar="PERIOD", help="print the received ~/state every PERIOD s of sim time")
     add_ros_args(parser)
     parser.set_defaults(handler=run)
 

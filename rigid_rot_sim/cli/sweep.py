@@ -13,12 +13,7 @@ from __future__ import annotations
 import argparse
 import sys
 
-
-def _positive_int(text: str) -> int:
-    value = int(text)
-    if value < 1:
-        raise argparse.ArgumentTypeError(f"must be >= 1, got {value}")
-    return value
+from rigid_rot_sim.cli.argtypes import positive_integer
 
 
 def add_parser(subparsers) -> None:
@@ -30,11 +25,11 @@ def add_parser(subparsers) -> None:
     parser.add_argument("spec", metavar="SPEC.yaml", help="sweep spec (see config/sweeps/)")
     parser.add_argument("--scheduler", metavar="ADDRESS", help="existing Dask scheduler, e.g. tcp://host:8786 "
                         "(default: $DASK_SCHEDULER_ADDRESS, else a local cluster)")
-    parser.add_argument("--workers", type=_positive_int, metavar="N",
+    parser.add_argument("--workers", type=positive_integer, metavar="N",
                         help="local cluster size (default: one per CPU); with a scheduler: wait for N workers")
     parser.add_argument("--out", metavar="DIR", help="output directory (default: out/sweeps/<name>)")
     parser.add_argument("--quick", action="store_true", help="the spec's quick sizes (fewer samples, shorter runs)")
-    parser.add_argument("--chunk-size", type=_positive_int, metavar="N",
+    parser.add_argument("--chunk-size", type=positive_integer, metavar="N",
                         help="bodies per task (default: chosen from a measured step cost; rows do not depend on it)")
     parser.add_argument("--no-progress", action="store_true", help="no progress bar")
     parser.set_defaults(handler=run)

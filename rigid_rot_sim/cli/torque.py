@@ -17,41 +17,27 @@ node's subscription first; exit code 1 (message on stderr) when nobody subscribe
 from __future__ import annotations
 
 import argparse
-import math
 import sys
 import time
 
+from rigid_rot_sim.cli.argtypes import finite_number, positive_number
 from rigid_rot_sim.cli.ros_args import add_ros_args, rclpy_args
 
 DEFAULT_TOPIC = "/rigid_rot_sim/torque"
-
-
-def _finite(text: str) -> float:
-    value = float(text)
-    if not math.isfinite(value):
-        raise argparse.ArgumentTypeError(f"must be finite, got {text}")
-    return value
-
-
-def _positive(text: str) -> float:
-    value = _finite(text)
-    if value <= 0.0:
-        raise argparse.ArgumentTypeError(f"must be > 0, got {text}")
-    return value
 
 
 def add_parser(subparsers) -> None:
     parser = subparsers.add_parser(
         "torque", help="publish WrenchStamped torque commands to a running node", description=__doc__.split("\n\n")[0]
     )
-    parser.add_argument("torque", nargs="*", type=_finite, metavar="X Y Z", help="torque, N*m (omit with --zero)")
+    parser.add_argument("torque", nargs="*", type=finite_number, metavar="X Y Z", help="torque, N*m (omit with --zero)")
     parser.add_argument("--frame", default="base_link",
                         help="header.frame_id: the scene's body or world frame (default base_link)")
-    parser.add_argument("--duration", type=_positive, help="repeat for this many wall seconds, then send zero")
-    parser.add_argument("--rate", type=_positive, default=20.0, help="repeat rate with --duration, Hz (default 20)")
+    parser.add_argument("--duration", type=positive_number, help="repeat for this many wall seconds, then send zero")
+    parser.add_argument("--rate", type=positive_number, default=20.0, help="repeat rate with --duration, Hz (default 20)")
     parser.add_argument("--topic", default=DEFAULT_TOPIC, help=f"command topic (default {DEFAULT_TOPIC})")
     parser.add_argument("--zero", action="store_true", help="publish a zero torque (clears a held command)")
-    parser.add_argument("--wait", type=_positive, default=5.0, help="seconds to wait for a subscriber (default 5)")
+    parser.add_argument("--wait", type=positive_number, default=5.0, help="seconds to wait for a subscriber (default 5)")
     add_ros_args(parser)
     parser.set_defaults(handler=run)
 
