@@ -1,5 +1,9 @@
 """Conversions between ROS 2 messages and the numpy values of the core: the only place for them.
 
+The readers (message -> numpy) need no ROS and live in :mod:`rigid_rot_sim.message_fields`,
+so that code reading recordings without ROS (resim, plot) uses the same functions; they are
+imported here, so the node finds every conversion in this one module.
+
 Every function here is pure (no node, no I/O) and keeps units and frames unchanged: ROS
 messages carry SI units (REP 103) and quaternions are (x, y, z, w) on both sides.
 """
@@ -27,6 +31,12 @@ from rosgraph_msgs.msg import Clock
 from sensor_msgs.msg import Imu
 
 from rigid_rot_sim.core.inertia import MassProperties, principal_orientation
+from rigid_rot_sim.message_fields import (  # noqa: F401 (the readers are part of this module's API)
+    quaternion_to_array,
+    state_to_arrays,
+    time_to_seconds,
+    vector3_to_array,
+)
 
 if TYPE_CHECKING:
     from rigid_rot_sim.core.simulator import StateSnapshot
@@ -139,25 +149,10 @@ def seconds_to_time(seconds: float) -> Time:
     return Time(sec=total_ns // 1_000_000_000, nanosec=total_ns % 1_000_000_000)
 
 
-def time_to_seconds(stamp) -> float:
-    """builtin_interfaces/Time (or Duration) -> seconds (float)."""
-    return float(stamp.sec) + float(stamp.nanosec) * 1e-9
-
-
-def vector3_to_array(vector) -> np.ndarray:
-    """geometry_msgs/Vector3 -> ndarray (3,)."""
-    return np.array([vector.x, vector.y, vector.z], dtype=float)
-
-
 def array_to_vector3(values) -> Vector3:
     """ndarray (3,) -> geometry_msgs/Vector3."""
     x, y, z = (float(value) for value in np.asarray(values, dtype=float).reshape(3))
     return Vector3(x=x, y=y, z=z)
-
-
-def quaternion_to_array(q) -> np.ndarray:
-    """geometry_msgs/Quaternion -> ndarray (4,) scalar-last (no renormalisation)."""
-    return np.array([q.x, q.y, q.z, q.w], dtype=float)
 
 
 def torque_command_from_msg(msg) -> tuple[np.ndarray, np.ndarray | None, str, float]:
@@ -203,23 +198,6 @@ def fill_rigid_body_state(msg: RigidBodyState, snapshot: StateSnapshot, world_fr
 def snapshot_to_state(snapshot: StateSnapshot, world_frame: str, body_frame: str) -> RigidBodyState:
     """StateSnapshot -> rigid_rot_msgs/RigidBodyState."""
     return fill_rigid_body_state(RigidBodyState(), snapshot, world_frame, body_frame)
-
-
-def state_to_arrays(msg: RigidBodyState) -> dict[str, np.ndarray | float]:
-    """RigidBodyState -> {t, orientation (4,), angular_velocity_body (3,), ...} (clients, tests)."""
-    return {
-        "t": time_to_seconds(msg.header.stamp),
-        "orientation": quaternion_to_array(msg.orientation),
-        "angular_velocity_body": vector3_to_array(msg.angular_velocity_body),
-        "angular_velocity_world": vector3_to_array(msg.angular_velocity_world),
-        "angular_momentum_body": vector3_to_array(msg.angular_momentum_body),
-        "angular_momentum_world": vector3_to_array(msg.angular_momentum_world),
-        "torque_body": vector3_to_array(msg.torque_body),
-        "kinetic_energy": float(msg.kinetic_energy),
-        "potential_energy": float(msg.potential_energy),
-        "energy_drift": float(msg.energy_drift),
-        "angular_momentum_drift": float(msg.angular_momentum_drift),
-    }
 
 
 def snapshot_to_orientation(snapshot: StateSnapshot, world_frame: str) -> QuaternionStamped:

@@ -20,9 +20,10 @@ import matplotlib
 import numpy as np
 
 from rigid_rot_sim.core.scene import parse_scene_text
+from rigid_rot_sim.message_fields import time_to_seconds
 from rigid_rot_sim.recording.events import EVENT_TYPE, decode_event
 from rigid_rot_sim.recording.reader import BagReader
-from rigid_rot_sim.recording.resim import STATE_TYPE, stamp_seconds
+from rigid_rot_sim.recording.resim import STATE_TYPE
 
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
@@ -49,7 +50,7 @@ def load_states(reader: BagReader) -> StateSeries:
         raise ValueError(f"{reader.path}: no {STATE_TYPE} topic recorded: nothing to plot")
     rows = []
     for _, msg in reader.decoded([topic]):
-        t = stamp_seconds(msg)
+        t = time_to_seconds(msg.header.stamp)
         vectors = [msg.angular_velocity_body, msg.angular_momentum_body, msg.angular_momentum_world, msg.torque_body]
         rows.append([t, *(c for v in vectors for c in (v.x, v.y, v.z)), msg.kinetic_energy + msg.potential_energy])
     if not rows:

@@ -22,6 +22,7 @@ import numpy as np
 from rigid_rot_sim.core import quaternion as quat
 from rigid_rot_sim.core.scene import parse_scene_text
 from rigid_rot_sim.core.simulator import Simulator, StateSnapshot
+from rigid_rot_sim.message_fields import quaternion_to_array, time_to_seconds, vector3_to_array
 from rigid_rot_sim.recording.events import EVENT_TYPE, SimEvent, decode_event
 from rigid_rot_sim.recording.provenance import core_fingerprint
 from rigid_rot_sim.recording.reader import BagReader
@@ -116,16 +117,6 @@ def attitude_angle(q_a: np.ndarray, q_b: np.ndarray) -> float:
     return 2.0 * math.atan2(math.sqrt(dx * dx + dy * dy + dz * dz), abs(dw))
 
 
-def _recorded_vector(msg: Any, name: str) -> np.ndarray:
-    v = getattr(msg, name)
-    return np.array([v.x, v.y, v.z], dtype=float)
-
-
-def stamp_seconds(msg: Any) -> float:
-    """The ``header.stamp`` of a message in seconds."""
-    return float(msg.header.stamp.sec) + float(msg.header.stamp.nanosec) * 1e-9
-
-
 def _apply(sim: Simulator, event: SimEvent, override_method: str | None) -> None:
     kind = event.kind
     if kind == "torque":
@@ -188,7 +179,7 @@ def resimulate(path: str | os.PathLike[str], method: str | None = None) -> Resim
             _apply(sim, event, override)
             events += 1
             continue
-        t = stamp_seconds(decoded)
+        t = time_to_seconds(decoded.header.stamp)
         k = sim.step_index + round((t - sim.t) / sim.dt)
         sim.advance_to(k)
         snapshot = sim.snapshot()
@@ -214,13 +205,13 @@ def resimulate(path: str | os.PathLike[str], method: str | None = None) -> Resim
 
 
 def _compare(recorded: Any, snapshot: StateSnapshot) -> tuple[bool, tuple[float, float, float, float]]:
-    q_rec = np.array([recorded.orientation.x, recorded.orientation.y, recorded.orientation.z, recorded.orientation.w])
+    q_rec = quaternion_to_array(recorded.orientation)
     differs = not np.array_equal(q_rec, snapshot.orientation)
     for name in _VECTOR_FIELDS:
-        differs = differs or not np.array_equal(_recorded_vector(recorded, name), getattr(snapshot, name))
+        differs = differs or not np.array_equal(vector3_to_array(getattr(recorded, name)), getattr(snapshot, name))
     for name in _SCALAR_FIELDS:
         differs = differs or float(getattr(recorded, name)) != float(getattr(snapshot, name))
-    omega = float(np.linalg.norm(_recorded_vector(recorded, "angular_velocity_body") - snapshot.angular_velocity_body))
-    momentum = float(np.linalg.norm(_recorded_vector(recorded, "angular_momentum_world") - snapshot.angular_momentum_world))
+    omega = float(np.linalg.norm(vector3_to_array(recorded.angular_velocity_body) - snapshot.angular_velocity_body))
+    momentum = float(np.linalg.norm(vector3_to_array(recorded.angular_momentum_world) - snapshot.angular_momentum_world))
     energy = abs(float(recorded.kinetic_energy) + float(recorded.potential_energy) - snapshot.energy)
     return differs, (attitude_angle(q_rec, snapshot.orientation), omega, momentum, energy)
