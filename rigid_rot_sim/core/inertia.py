@@ -148,6 +148,7 @@ def inertia_about_center_of_mass(inertia: Any, mass: float, offset: Any) -> np.n
     tensor = np.asarray(inertia, dtype=float)
     return tensor - parallel_axis_shift(tensor * 0.0, mass, offset)
 
+
 def _symmetry_label(moments: np.ndarray, point_scale: float) -> str:
     """Label of ascending principal moments.
 

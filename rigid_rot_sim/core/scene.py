@@ -38,7 +38,7 @@ import numpy as np
 from rigid_rot_sim.core import limits, names, validation
 from rigid_rot_sim.core.bounded_yaml import load_input, read_input
 from rigid_rot_sim.core.quaternion import zxz_to_quaternion
-from rigid_rot_sim.core.inertia import mass_properties
+from rigid_rot_sim.core.inertia import inertia_about_center_of_mass, mass_properties
 from rigid_rot_sim.core.integrators import get_method
 from rigid_rot_sim.core.schema import validated
 from rigid_rot_sim.core.scene_schema import (
@@ -294,6 +294,19 @@ class Scene:
         if self.schedules:
             return "schedule"
         return "none"
+
+    def mass_properties_about_com(self) -> tuple[float, Vector3, np.ndarray]:
+        """Mass (kg; 0 when the scene gives none), centre of mass (m, body frame) and the
+        inertia tensor (kg*m^2, body axes) about the centre of mass.
+
+        A gravity scene's tensor is about the pivot; the others' about the centre of mass.
+        """
+        mass = self.body.mass or 0.0
+        com = self.body.center_of_mass or (0.0, 0.0, 0.0)
+        tensor = self.body.inertia_array
+        if self.gravity is not None:
+            tensor = inertia_about_center_of_mass(tensor, mass, com)
+        return mass, com, tensor
 
 
 

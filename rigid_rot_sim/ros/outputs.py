@@ -27,7 +27,7 @@ from rosgraph_msgs.msg import Clock
 from sensor_msgs.msg import Imu
 
 from rigid_rot_sim import conversions
-from rigid_rot_sim.core.inertia import inertia_about_center_of_mass, principal_frame_pose
+from rigid_rot_sim.core.inertia import principal_frame_pose
 from rigid_rot_sim.core.observer import SimulationObserver
 from rigid_rot_sim.core.scene import OUTPUT_NAMES, Frames, Scene
 from rigid_rot_sim.core.simulator import StateSnapshot
@@ -66,17 +66,6 @@ class PublishedListener(Protocol):
 
     def published(self, name: str, topic: str, data: bytes, msg: Any) -> None:
         """``msg`` was published on ``topic`` (output ``name``) as the CDR bytes ``data``."""
-
-
-def mass_properties_about_com(scene: Scene) -> tuple[float, Any, Any]:
-    """Mass (kg; 0 when the scene gives none), centre of mass (m, body frame), inertia tensor about it."""
-    body = scene.body
-    mass = body.mass or 0.0
-    com = body.center_of_mass or (0.0, 0.0, 0.0)
-    tensor = body.inertia_array
-    if scene.gravity is not None:  # the scene's tensor is about the pivot
-        tensor = inertia_about_center_of_mass(tensor, mass, com)
-    return mass, com, tensor
 
 
 class Outputs(SimulationObserver):
@@ -121,7 +110,7 @@ class Outputs(SimulationObserver):
         """With /tf: body -> principal-axes frame, where the principal axes are not the body axes."""
         if "tf" not in self.publishers:
             return []
-        _, com, tensor = mass_properties_about_com(self.scene)
+        _, com, tensor = self.scene.mass_properties_about_com()
         pose = principal_frame_pose(tensor, com)
         if pose is None:
             left_out.append(f"/tf_static (the body axes are the principal axes, {self.frames.principal} not needed)")
@@ -141,7 +130,7 @@ class Outputs(SimulationObserver):
 
     def publish_latched(self, t: float) -> None:
         """The once-only outputs: ~/mass_properties (at sim time ``t``) and /tf_static."""
-        mass, com, tensor = mass_properties_about_com(self.scene)
+        mass, com, tensor = self.scene.mass_properties_about_com()
         self.publish("mass_properties", conversions.inertia_stamped(mass, com, tensor, t, self.frames.body))
         if self.static_transforms:
             self.publish("tf_static", TFMessage(transforms=self.static_transforms))

@@ -8,9 +8,6 @@ import subprocess
 import sys
 from pathlib import Path
 
-import pytest
-
-pytest.importorskip("rigid_rot_msgs.msg")
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "recording"))
 from test_resim import COMMANDS, record_like_the_node  # noqa: E402
 

@@ -198,3 +198,16 @@ def test_topic_inputs_schedules_and_options_are_kept():
     assert scene.integrator.method == "taylor" and scene.integrator.dt == 0.002
     assert dict(scene.integrator.options) == {"tol": 1e-10}
     assert scene.torque_kind == "topic"
+
+
+def test_mass_properties_about_com_undo_the_pivot_shift_of_a_gravity_scene():
+    from rigid_rot_sim.core.inertia import parallel_axis_shift
+
+    top = load_scene(SCENES / "heavy_top.yaml")
+    mass, com, tensor = top.mass_properties_about_com()
+    assert mass == top.body.mass and com == top.body.center_of_mass
+    assert not np.allclose(tensor, top.body.inertia_array)  # the scene's tensor is about the pivot
+    assert np.allclose(parallel_axis_shift(tensor, mass, com), top.body.inertia_array, rtol=1e-14, atol=0.0)
+    free = load_scene(SCENES / "free_tumble.yaml")  # no gravity: the tensor is already about the COM
+    free_mass, free_com, free_tensor = free.mass_properties_about_com()
+    assert free_com == (0.0, 0.0, 0.0) and np.array_equal(free_tensor, free.body.inertia_array)

@@ -15,7 +15,6 @@ from pathlib import Path
 import pytest
 import yaml
 
-pytest.importorskip("simulation_interfaces.srv", reason="simulation_interfaces is not installed (make setup builds it)")
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 from test_node_e2e import NODE, SCENES, stamp  # noqa: E402 (collector: a conftest fixture)
 

@@ -74,26 +74,10 @@ def test_rejected_commands_record_no_event(tmp_path):
 
 
 def test_tf_and_the_latched_tf_static_are_recorded_as_published(tmp_path):
-    import rclpy
-
-    from rigid_rot_sim.ros.node import RigidRotSimNode
     from rigid_rot_sim.recording.reader import BagReader
 
     bag = tmp_path / "tf.mcap"
-    context = rclpy.Context()
-    rclpy.init(context=context)
-    try:
-        node = RigidRotSimNode(context=context, parameter_overrides=[
-            rclpy.parameter.Parameter("scene", value="from_point_masses"),
-            rclpy.parameter.Parameter("record_path", value=str(bag)),
-            rclpy.parameter.Parameter("real_time_factor", value=0.0),
-            rclpy.parameter.Parameter("duration", value=0.5),
-        ])
-        while not node.finished:
-            node.timer_callback()
-        node.destroy_node()
-    finally:
-        rclpy.try_shutdown(context=context)
+    _record_half_a_second(bag)
     reader = BagReader(bag)
     assert reader.complete
     assert reader.counts()["/tf_static"] == 1 and reader.counts()["/tf"] == 26  # 50 Hz over 0.5 s, both ends
@@ -105,29 +89,16 @@ def test_tf_and_the_latched_tf_static_are_recorded_as_published(tmp_path):
 
 
 def test_without_tf2_msgs_the_recording_still_gets_tf_from_the_states(tmp_path, monkeypatch):
-    import rclpy
-
     from rigid_rot_sim.recording.reader import BagReader
     from rigid_rot_sim.ros import outputs
-    from rigid_rot_sim.ros.node import RigidRotSimNode
 
     monkeypatch.setattr(outputs, "TFMessage", None)  # as on an install without tf2_msgs
     bag = tmp_path / "no_tf2.mcap"
-    context = rclpy.Context()
-    rclpy.init(context=context)
-    try:
-        node = RigidRotSimNode(context=context, parameter_overrides=[
-            rclpy.parameter.Parameter("scene", value="from_point_masses"),
-            rclpy.parameter.Parameter("record_path", value=str(bag)),
-            rclpy.parameter.Parameter("real_time_factor", value=0.0),
-            rclpy.parameter.Parameter("duration", value=0.5),
-        ])
+
+    def no_tf_publisher(node):
         assert "tf" not in node.outputs.publishers and node.count_publishers("/tf") == 0
-        while not node.finished:
-            node.timer_callback()
-        node.destroy_node()
-    finally:
-        rclpy.try_shutdown(context=context)
+
+    _record_half_a_second(bag, check_node=no_tf_publisher)
     reader = BagReader(bag)
     assert reader.complete and "/tf_static" not in reader.counts()
     assert reader.counts()["/tf"] == 26  # 50 Hz over 0.5 s, both ends, built from ~/state
@@ -138,3 +109,27 @@ def test_without_tf2_msgs_the_recording_still_gets_tf_from_the_states(tmp_path, 
         assert transform.child_frame_id == "base_link" and transform.header.frame_id == "odom"
         rotation, orientation = transform.transform.rotation, state.orientation
         assert (rotation.x, rotation.y, rotation.z, rotation.w) == (orientation.x, orientation.y, orientation.z, orientation.w)
+
+
+def _record_half_a_second(bag: Path, check_node=None) -> None:
+    """An in-process node on from_point_masses, recorded to ``bag`` for 0.5 s of sim time as fast as it goes."""
+    import rclpy
+
+    from rigid_rot_sim.ros.node import RigidRotSimNode
+
+    context = rclpy.Context()
+    rclpy.init(context=context)
+    try:
+        node = RigidRotSimNode(context=context, parameter_overrides=[
+            rclpy.parameter.Parameter("scene", value="from_point_masses"),
+            rclpy.parameter.Parameter("record_path", value=str(bag)),
+            rclpy.parameter.Parameter("real_time_factor", value=0.0),
+            rclpy.parameter.Parameter("duration", value=0.5),
+        ])
+        if check_node is not None:
+            check_node(node)
+        while not node.finished:
+            node.timer_callback()
+        node.destroy_node()
+    finally:
+        rclpy.try_shutdown(context=context)
