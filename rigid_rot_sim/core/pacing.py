@@ -206,10 +206,6 @@ class RunDriver:
         self.finished = False
         self.observers: list[SimulationObserver] = list(observers)
 
-    def add_observer(self, observer: "SimulationObserver") -> None:
-        """Tell ``observer`` the outputs due from now on."""
-        self.observers.append(observer)
-
     def publish_due(self, force: bool = False, rest: bool = False) -> None:
         """Report the outputs due at the current step (see :meth:`OutputSchedule.due`)."""
         step = self.sim.step_index

@@ -182,14 +182,12 @@ class Stepper:
         end = clock.k + int(n)
         done = 0
         while clock.k < end:
-            if clock.k >= commands.next_event:
+            due = clock.k >= commands.next_event
+            if due:
                 commands.process_due()
+            if due or commands.world_sum is not None:  # a world torque: re-expressed at every boundary
                 self.set_command_torque()
-            if commands.world_sum is not None:
-                self.set_command_torque()  # re-expressed in the body frame at every boundary
-                stop = clock.k + 1
-            else:
-                stop = min(end, commands.next_event)
+            stop = clock.k + 1 if commands.world_sum is not None else min(end, commands.next_event)
             chunk = stop - clock.k
             reason = self.rotation_failure(clock.dt)
             if reason is not None:
