@@ -57,7 +57,8 @@ class Harness:
         assert future.done(), f"{name}: no reply in {timeout} s"
         return future.result()
 
-    def spin_until(self, condition, timeout: float = 10.0) -> bool:
+    def spin_until(self, condition, timeout: float = 60.0) -> bool:
+        # generous: returns as soon as the condition holds; a cold numba cache compiles on the first step
         deadline = time.monotonic() + timeout
         while time.monotonic() < deadline:
             if condition():
