@@ -43,8 +43,8 @@ A torque command's route, top to bottom
    the integrator steps with it.
 7. After each slice, ``RunDriver.publish_due`` -> ``outputs.Outputs.outputs_due(step,
    snapshot, names)`` builds each due message (``outputs.OUTPUTS``) and
-   ``Outputs.publish`` serialises it once, publishes the bytes and hands the same bytes
-   to ``NodeRecording.published``, which writes them to the file.
+   ``Outputs.publish`` serialises it once, hands the bytes to ``NodeRecording.published``,
+   which writes them to the file, then publishes the same bytes.
 
 There is one route: no method or publisher is wrapped, and whether the run is recorded
 only decides whether the recorder is among the observers and listeners

@@ -8,8 +8,8 @@ for each output the scene asks for (rate > 0), plus ``~/mass_properties`` (latch
 frame), all in :attr:`Outputs.publishers`, keyed on those names.
 
 :meth:`Outputs.publish` is the only way a message leaves the node: with no listener it
-publishes the message; with listeners (the recorder) it serialises the message once,
-publishes those bytes and hands the same bytes to every listener. The run driver tells
+publishes the message; with listeners (the recorder) it serialises the message once, hands
+the bytes to every listener, then publishes the same bytes. The run driver tells
 :meth:`Outputs.outputs_due` (a :class:`~rigid_rot_sim.core.observer.SimulationObserver`)
 which outputs are due at a step.
 """
@@ -124,9 +124,11 @@ class Outputs(SimulationObserver):
             publisher.publish(msg)
             return
         data = serialize_message(msg)
-        publisher.publish(data)
+        # listeners first: a message seen on the wire is already in the recording, even when a
+        # SIGTERM during start-up interrupts right after the publish
         for listener in self.listeners:
             listener.published(name, publisher.topic_name, data, msg)
+        publisher.publish(data)
 
     def publish_latched(self, t: float) -> None:
         """The once-only outputs: ~/mass_properties (at sim time ``t``) and /tf_static."""
