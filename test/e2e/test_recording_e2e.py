@@ -17,12 +17,14 @@ import subprocess
 import sys
 import time
 from pathlib import Path
+from types import SimpleNamespace
 
 import numpy as np
 import pytest
 import yaml
 from e2e_helpers import WAIT, recorded_count, wait_until_recorded  # beside this file
 
+from rigid_rot_sim.message_fields import time_to_seconds
 from rigid_rot_sim.recording.events import decode_event
 from rigid_rot_sim.recording.reader import BagReader, repair
 from rigid_rot_sim.recording.resim import resimulate
@@ -305,9 +307,11 @@ def test_replayed_commands_reproduce_the_states_of_the_original_run(
     def command_events(bag):
         return [(e.values["effective_time"], e.values["receipt_time"]) for e in _events(bag) if e.kind == "torque"]
 
-    # both took effect at the stamps, having arrived before them
-    assert [float(e) for e, _ in command_events(original)] == list(stamps), command_events(original)
-    assert [float(e) for e, _ in command_events(replayed)] == list(stamps), command_events(replayed)
+    # both took effect at the stamps (as the headers carry them: whole ns), having arrived before them
+    in_headers = [time_to_seconds(SimpleNamespace(sec=sec, nanosec=ns)) for sec, ns in
+                  (divmod(round(stamp * 1e9), 1_000_000_000) for stamp in stamps)]
+    assert [float(e) for e, _ in command_events(original)] == in_headers, command_events(original)
+    assert [float(e) for e, _ in command_events(replayed)] == in_headers, command_events(replayed)
     a, b = _states_by_stamp(original), _states_by_stamp(replayed, after_reset=True)
     common = sorted(s for s in set(a) & set(b) if s <= end)
     assert len(common) > 50 and common[-1] >= stamps[-1] + 0.5
