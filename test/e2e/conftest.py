@@ -224,6 +224,10 @@ def call_service():
     return _call_service
 
 
+#: Seconds between two sends of an idempotent request that got no reply (Collector.call).
+RESEND_PERIOD = 5.0
+
+
 class Collector:
     """Subscribes in the test's rclpy node and spins until a condition holds."""
 
@@ -250,13 +254,30 @@ class Collector:
             self.executor.spin_once(timeout_sec=0.05)
         raise AssertionError(f"timed out after {timeout} s waiting for {what}" + (f"\n{process.log()}" if process else ""))
 
-    def call(self, srv_type, name: str, request, timeout: float = 10.0, process=None):
-        """Call service ``name`` (relative: of the default node ``/rigid_rot_sim``) and return the reply."""
+    def call(self, srv_type, name: str, request, timeout: float = 10.0, process=None, idempotent: bool = False):
+        """Call service ``name`` (relative: of the default node ``/rigid_rot_sim``) and return the reply.
+
+        ``idempotent``: send the request again every ``RESEND_PERIOD`` s until a reply comes. A
+        fresh server's Fast DDS drops its reply when it has not yet matched the client's reply
+        reader within 100 ms ("failed to send response (timeout)", ros2/rmw_fastrtps#704);
+        ``service_is_ready`` only says that the request reached it.
+        """
         client = self.node.create_client(srv_type, name if name.startswith("/") else f"{NODE}/{name}")
         self.spin_until(lambda: client.service_is_ready(), 2 * NODE_START_TIMEOUT, process, f"service {name}")
-        future = client.call_async(request)
-        self.spin_until(future.done, max(timeout, 30.0), process, f"reply of {name}")
-        return future.result()
+        futures = [client.call_async(request)]
+        now = time.monotonic()
+        deadline, resend = now + max(timeout, 30.0), now + RESEND_PERIOD
+        while not any(f.done() for f in futures):
+            now = time.monotonic()
+            if now > deadline:
+                raise AssertionError(f"timed out waiting for reply of {name}" + (f"\n{process.log()}" if process else ""))
+            if idempotent and now > resend:
+                futures.append(client.call_async(request))
+                resend = now + RESEND_PERIOD
+            if process is not None:
+                process.check_alive()
+            self.executor.spin_once(timeout_sec=0.05)
+        return next(f for f in futures if f.done()).result()
 
     def close(self):
         self.executor.remove_node(self.node)

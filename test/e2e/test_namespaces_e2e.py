@@ -95,7 +95,8 @@ def test_two_namespaced_nodes_run_side_by_side_without_cross_talk(launch_node, c
     assert all(m.child_frame_id == "sat1_body" for m in states["sat1"])
 
     # services are per node: pausing sat1 leaves sat2 running
-    paused = collector.call(SetBool, "/sat1/rigid_rot_sim/pause", SetBool.Request(data=True), process=nodes["sat1"])
+    paused = collector.call(SetBool, "/sat1/rigid_rot_sim/pause", SetBool.Request(data=True), process=nodes["sat1"],
+                            idempotent=True)
     assert paused.success, paused.message
     assert collector.call(Step, "/sat1/rigid_rot_sim/step", Step.Request(steps=1),
                           process=nodes["sat1"]).success

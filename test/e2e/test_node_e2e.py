@@ -53,7 +53,7 @@ def resume_when_matched(collector, node, topic: str, messages: list) -> None:
             collector.spin_until(lambda: len(messages) > 0, 1.0, node, f"the t = 0 message on {topic}")
         except AssertionError:
             continue
-    assert collector.call(SetBool, "pause", SetBool.Request(data=False), process=node).success
+    assert collector.call(SetBool, "pause", SetBool.Request(data=False), process=node, idempotent=True).success
 
 
 def recorded(bag: Path, topic: str) -> dict[float, object]:
@@ -100,7 +100,7 @@ def test_torque_commands_change_omega_exactly_as_the_core_predicts(launch_node, 
         msg.wrench.torque.x, msg.wrench.torque.y, msg.wrench.torque.z = torque
         publisher.publish(msg)
     wait_until_recorded(bag, f"{NODE}/torque", len(commands), node)
-    assert collector.call(SetBool, "pause", SetBool.Request(data=False), process=node).success
+    assert collector.call(SetBool, "pause", SetBool.Request(data=False), process=node, idempotent=True).success
     t_end = t1 + 1.5  # after the 0.5 s hold timeout of the last command
     collector.spin_until(lambda: states and stamp(states[-1]) >= t_end, WAIT, node, f"state at t >= {t_end}")
 
@@ -250,7 +250,7 @@ def test_bad_commands_and_requests_are_rejected_and_pause_step_reset_work(launch
     collector.spin_until(lambda: len(states) > n, WAIT, node, "more states")
     assert all(m.angular_velocity_body.z == 0.0 and m.angular_velocity_body.x == 0.0 for m in states)
 
-    assert collector.call(SetBool, "pause", SetBool.Request(data=True), process=node).success
+    assert collector.call(SetBool, "pause", SetBool.Request(data=True), process=node, idempotent=True).success
     first = collector.call(Step, "step", Step.Request(steps=1), process=node)
     assert first.success
     applied = collector.call(ApplyTorque, "apply_torque", ApplyTorque.Request(torque=Vector3(z=0.004), duration=Duration(nanosec=50_000_000)), process=node)
