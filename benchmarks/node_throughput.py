@@ -78,8 +78,8 @@ def steps_per_second(method: str, seconds: float) -> tuple[float, int]:
 
 def physics_steps_per_second(method: str, seconds: float) -> float:
     """Steps per wall second of the free_tumble scene's Simulator alone, 10 steps a call."""
-    from rigid_rot_sim.core.scene import load_scene
-    from rigid_rot_sim.core.simulator import Simulator
+    from rigid_rot_sim.scene.scene import load_scene
+    from rigid_rot_sim.run.simulator import Simulator
 
     sim = Simulator(load_scene(SCENES / "free_tumble.yaml"), method=method, dt=0.001)
     sim.advance(10)

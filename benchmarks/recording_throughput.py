@@ -33,8 +33,8 @@ from rclpy.serialization import serialize_message
 from rigid_rot_msgs.msg import RigidBodyState
 
 from rigid_rot_sim import conversions
-from rigid_rot_sim.core.scene import load_scene
-from rigid_rot_sim.core.simulator import Simulator
+from rigid_rot_sim.scene.scene import load_scene
+from rigid_rot_sim.run.simulator import Simulator
 from rigid_rot_sim.recording.session import RunRecorder
 from rigid_rot_sim.recording.writer import Recorder
 

@@ -39,7 +39,7 @@ from rigid_rot_sim.message_fields import (  # noqa: F401 (the readers are part o
 )
 
 if TYPE_CHECKING:
-    from rigid_rot_sim.core.simulator import StateSnapshot
+    from rigid_rot_sim.run.simulator import StateSnapshot
 
 
 def point_to_array(point: Point) -> np.ndarray:

@@ -101,12 +101,71 @@ def test_no_module_imports_one_that_imports_it_back():
     assert _cycles(graph) == []
 
 
-def test_core_imports_nothing_above_it():
+#: The rooms from the bottom floor up; a room imports only rooms on its floor or below.
+#: Rooms on one floor do not import each other (ros and analysis are siblings).
+LAYERS = (
+    ("core",),
+    ("scene",),
+    ("run",),
+    ("message_fields", "share"),
+    ("recording",),
+    ("conversions",),
+    ("ros", "analysis"),
+    ("cli",),
+)
+
+
+def _room(module: str) -> str:
+    parts = module.split(".")
+    return parts[1] if len(parts) > 1 else ""
+
+
+def _floor(room: str) -> int:
+    for floor, rooms in enumerate(LAYERS):
+        if room in rooms:
+            return floor
+    raise AssertionError(f"room {room!r} is on no floor of LAYERS")
+
+
+def test_every_room_is_on_a_floor():
+    rooms = {_room(name) for name in _modules()} - {""}
+    for room in rooms:
+        _floor(room)
+
+
+def test_rooms_import_only_downwards():
     modules = _modules()
+    upward = []
     for name, path in modules.items():
-        if name.startswith("rigid_rot_sim.core"):
-            above = {m for m in _imported_modules(name, path, modules) if not m.startswith("rigid_rot_sim.core")}
-            assert not above, f"{name} imports {sorted(above)}"
+        room = _room(name)
+        if not room:
+            continue
+        for imported in _imported_modules(name, path, modules):
+            other = _room(imported)
+            if other and other != room and _floor(other) >= _floor(room):
+                upward.append(f"{name} ({room}) imports {imported} ({other})")
+    assert upward == []
+
+
+def test_layer_order_is_the_documented_one():
+    assert _floor("core") < _floor("scene") < _floor("run") < _floor("recording") < _floor("ros") < _floor("cli")
+    assert _floor("ros") == _floor("analysis")
+
+
+def _third_party_imports(path: Path) -> set[str]:
+    found = set()
+    for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"))):
+        if isinstance(node, ast.Import):
+            found.update(alias.name.split(".")[0] for alias in node.names)
+        elif isinstance(node, ast.ImportFrom) and not node.level and node.module:
+            found.add(node.module.split(".")[0])
+    return found - set(sys.stdlib_module_names) - {"rigid_rot_sim"}
+
+
+def test_core_imports_only_numpy_scipy_numba():
+    for name, path in _modules().items():
+        if _room(name) == "core":
+            assert _third_party_imports(path) <= {"numpy", "scipy", "numba"}, name
 
 
 def test_no_class_is_over_the_size_limit():
@@ -120,8 +179,31 @@ def test_no_class_is_over_the_size_limit():
     assert too_long == []
 
 
-@pytest.mark.parametrize("package", ["rigid_rot_sim.core", "rigid_rot_sim.core.simulator", "rigid_rot_sim.core.scene"])
+@pytest.mark.parametrize("package", ["rigid_rot_sim.core.simulate", "rigid_rot_sim.run.simulator", "rigid_rot_sim.scene.scene"])
 def test_core_runs_without_ros(package):
     code = f"import sys, {package}; print(sorted(m for m in sys.modules if m.startswith(('rclpy', 'rigid_rot_msgs'))))"
     result = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120, check=True)
     assert result.stdout.strip() == "[]"
+
+
+def test_kernel_cache_is_keyed_on_the_numerics_only(tmp_path):
+    """Editing a scene-loader or run-engine file leaves the compiled kernels' cache key as it was."""
+    import shutil
+
+    copy = tmp_path / "rigid_rot_sim"
+    shutil.copytree(PACKAGE, copy, ignore=shutil.ignore_patterns("__pycache__"))
+    code = "from rigid_rot_sim.core.jit import sources_fingerprint; print(sources_fingerprint())"
+
+    def fingerprint() -> str:
+        result = subprocess.run([sys.executable, "-c", code], cwd=tmp_path, capture_output=True, text=True,
+                                timeout=120, check=True, env={"PYTHONPATH": str(tmp_path), "PATH": ""})
+        return result.stdout.strip()
+
+    before = fingerprint()
+    for edited in ("scene/scene.py", "run/pacing.py"):
+        with open(copy / edited, "a", encoding="utf-8") as f:
+            f.write("\n# an edit outside the numerics\n")
+        assert fingerprint() == before, edited
+    with open(copy / "core" / "dynamics.py", "a", encoding="utf-8") as f:
+        f.write("\n# an edit to the numerics\n")
+    assert fingerprint() != before

@@ -62,7 +62,7 @@ class Problem:
     """One benchmark: body, initial state, horizon, torque, and its reference.
 
     ``torque`` is None, a :class:`ConstantTorque` or a :class:`GravityTorque` (principal
-    frame); ``torque_kind`` is the matching :data:`rigid_rot_sim.core.advice.TORQUE_KINDS`
+    frame); ``torque_kind`` is the matching :data:`rigid_rot_sim.run.advice.TORQUE_KINDS`
     entry. ``reference_factory`` computes the :class:`Reference` (called once, cached).
     """
 

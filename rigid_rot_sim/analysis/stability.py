@@ -19,7 +19,7 @@ on what a run measures:
 
 For the explicit fixed-step methods (euler, rk4, lie_rk4) :func:`largest_stable_step`
 finds the largest stable step by bisection; the suite compares it with the linear
-bound of :func:`rigid_rot_sim.core.advice.max_stable_dt`.
+bound of :func:`rigid_rot_sim.run.advice.max_stable_dt`.
 
 A long horizon of 1e7 steps (1e5 in quick mode) separates bounded from secular energy
 drift: :func:`long_horizon` fits nothing, it compares the energy error over the last
@@ -41,7 +41,7 @@ from rigid_rot_sim.analysis.engine import map_tasks, open_client, wants_cluster
 from rigid_rot_sim.analysis.metrics import attitude_error_angle, omega_error, relative_change
 from rigid_rot_sim.analysis.problems import P1, Problem
 from rigid_rot_sim.analysis.stability_cases import Case, Criterion, case_named
-from rigid_rot_sim.core import advice
+from rigid_rot_sim.run import advice
 from rigid_rot_sim.core.exact import torque_free_solution
 from rigid_rot_sim.core.integrators import METHODS, get_method
 from rigid_rot_sim.core.integrators.base import NonFiniteStateError

@@ -126,7 +126,7 @@ def _markdown(payload: dict[str, Any]) -> str:
         "## Largest stable step of the explicit methods (bisection)",
         "",
         f"Stable = {bis['steps']} steps without non-finite values and with energy and |L| grown by at most "
-        f"{bis['growth']:.0%}. Advice: `core.advice.practical_step_limit`: 2√2 / ν for rk4 and lie_rk4 from linear "
+        f"{bis['growth']:.0%}. Advice: `run.advice.practical_step_limit`: 2√2 / ν for rk4 and lie_rk4 from linear "
         "theory (ν the linearised gyroscopic frequency bound |ω|·max_i sqrt(|(Ii−Ij)(Ii−Ik)|/(Ij Ik))); for "
         "implicit_midpoint (Newton solve) 4 / ν and for splitting 2 rad / |ω|, both measured by this bisection. "
         "Explicit Euler has no stable step in theory (growth factor sqrt(1 + (ν dt)²) per step), so its bisected "

@@ -38,7 +38,7 @@ from rigid_rot_sim.core.simulate import step_grid
 
 __all__ = ["Chunk", "plan_chunks", "run_chunk", "run_nominal", "sample_inputs", "COLUMNS", "measure_step_cost", "choose_chunk_size"]
 
-# A time within this fraction of a step of a boundary counts as on it (as in core.simulator).
+# A time within this fraction of a step of a boundary counts as on it (as in run.simulator).
 _BOUNDARY_SLACK = 1e-9
 # Streams of SeedSequence(seed, spawn_key=(sample, k)): one per kind of dispersion.
 _STREAMS = ("principal_moments", "axis_misalignment", "initial_omega", "initial_attitude", "torque_scale", "torque_noise")

@@ -15,7 +15,7 @@ from __future__ import annotations
 
 from typing import Any
 
-from rigid_rot_sim.core.schema import DIALECT, array, choice, dump, integer, mapping, nullable, number, text, vector
+from rigid_rot_sim.scene.schema import DIALECT, array, choice, dump, integer, mapping, nullable, number, text, vector
 
 __all__ = ["SWEEP_SCHEMA", "DISPERSION_KINDS", "DISTRIBUTIONS"]
 

@@ -6,7 +6,7 @@ spec against it, then checks what a schema cannot express: the base scene (found
 torque-free or scheduled), batch method, event and metric names, and dispersions that
 keep every body physical. Every error is a :class:`SweepSpecError` (a ValueError) naming
 the file, the key and what is wrong, in one line, like
-:class:`rigid_rot_sim.core.scene.SceneError`, e.g. ``slew.yaml:
+:class:`rigid_rot_sim.scene.scene.SceneError`, e.g. ``slew.yaml:
 dispersions.principal_moments.relative: 0.4 (normal, cut at 4 sigma) can make moment 1
 non-positive``.
 
@@ -51,9 +51,9 @@ import numpy as np
 
 from rigid_rot_sim.analysis.sweep_schema import DISPERSION_KINDS, SWEEP_SCHEMA
 from rigid_rot_sim.core.batch import BATCH_METHODS
-from rigid_rot_sim.core.bounded_yaml import load_input, read_input
-from rigid_rot_sim.core.scene import Scene, SceneError, load_scene
-from rigid_rot_sim.core.schema import validated
+from rigid_rot_sim.scene.bounded_yaml import load_input, read_input
+from rigid_rot_sim.scene.scene import Scene, SceneError, load_scene
+from rigid_rot_sim.scene.schema import validated
 from rigid_rot_sim.core.validation import TRIANGLE_RTOL
 from rigid_rot_sim.share import resolve_scene
 

@@ -78,7 +78,7 @@ def load_body_file(path: str | os.PathLike) -> BodyInput:
     The numbers themselves (positive masses, finite positions, matching lengths) are
     checked by :func:`rigid_rot_sim.core.inertia.mass_properties`.
     """
-    from rigid_rot_sim.core.bounded_yaml import BoundedYAMLError, load_bounded, read_bounded
+    from rigid_rot_sim.scene.bounded_yaml import BoundedYAMLError, load_bounded, read_bounded
 
     path = Path(path)
     try:

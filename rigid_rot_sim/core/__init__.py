@@ -1,9 +1,54 @@
-"""Pure numerical core of rigid_rot_sim (numpy, scipy and numba; never imports rclpy).
-
-Scene files are read with PyYAML (:mod:`.bounded_yaml`) and checked with jsonschema
-(:mod:`.schema`, :mod:`.scene_schema`); nothing here needs ROS.
+"""The numerical core of rigid_rot_sim: numpy, scipy and numba, nothing else (no ROS, no files).
 
 Conventions everywhere: SI units; quaternions scalar-last ``(x, y, z, w)`` rotating
 body -> world (as ``scipy.spatial.transform.Rotation`` and geometry_msgs do);
 angular velocity and torque in the body frame unless a name says ``_world``.
+
+The public façade, as ``scipy.integrate`` re-exports its solvers (loaded on first use, so that
+importing :mod:`rigid_rot_sim.core.limits` does not load numba)::
+
+    from rigid_rot_sim.core import simulate, get_method, METHODS, torque_free_solution
+
+The rooms above it: :mod:`rigid_rot_sim.scene` reads scene files into frozen dataclasses (PyYAML,
+jsonschema); :mod:`rigid_rot_sim.run` is the run engine (commands, clock, pacing) over these
+numerics. Neither is imported from here (``test/test_structure.py`` checks the layer order).
 """
+
+from __future__ import annotations
+
+import importlib
+from typing import Any
+
+#: Public name -> the module of this package that defines it.
+_FACADE = {
+    "simulate": "simulate",
+    "Trajectory": "simulate",
+    "METHODS": "integrators",
+    "get_method": "integrators",
+    "Integrator": "integrators",
+    "NonFiniteStateError": "integrators",
+    "torque_free_solution": "exact",
+    "TorqueFreeSolution": "exact",
+    "mass_properties": "inertia",
+    "MassProperties": "inertia",
+    "RigidBody": "dynamics",
+    "ConstantTorque": "torque",
+    "GravityTorque": "torque",
+    "PolynomialTorque": "torque",
+}
+
+__all__ = sorted(_FACADE)
+
+
+def __getattr__(name: str) -> Any:
+    """Load a façade name from its module on first use (PEP 562)."""
+    module = _FACADE.get(name)
+    if module is None:
+        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+    value = getattr(importlib.import_module(f"{__name__}.{module}"), name)
+    globals()[name] = value
+    return value
+
+
+def __dir__() -> list[str]:
+    return sorted(set(globals()) | set(__all__))

@@ -59,7 +59,7 @@ MAX_STEPS_PER_REQUEST = 10_000
 #: Longest error line printed by a command line tool (characters).
 MAX_ERROR_CHARS = 300
 
-# Parameter ranges (inclusive), shared by the scene schema (core/scene_schema.py) and the node's descriptors.
+# Parameter ranges (inclusive), shared by the scene schema (scene/scene_schema.py) and the node's descriptors.
 DT_RANGE = (1e-7, 10.0)  # s
 REAL_TIME_FACTOR_RANGE = (0.0, 1000.0)  # 0 = as fast as possible
 DURATION_RANGE = (0.0, 1e9)  # s of sim time; 0 = unbounded (parameter)

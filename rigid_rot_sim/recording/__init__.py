@@ -9,14 +9,15 @@ Modules, one job each:
   records, the BagMetadata YAML (shared by the writer and ``repair``);
 * :mod:`.session` - :class:`~.session.RunRecorder`, one simulator run (metadata, /tf, events);
 * :mod:`.events` - the simulation event log that makes re-simulation exact;
-* :mod:`.node_recording` - the node's recording: an observer of the simulator, a listener of its messages;
 * :mod:`.reader` - reading, crash recovery (scan) and ``repair``, ``info``;
 * :mod:`.replay`, :mod:`.resim`, :mod:`.plot` - what the ``rigid-rot`` subcommands run;
 * :mod:`.provenance` - package and dependency versions stored with each recording.
 
-Nothing here is imported by :mod:`rigid_rot_sim.core`; ROS message packages are imported by
-the node-side :mod:`.node_recording` (through :mod:`rigid_rot_sim.conversions`) and otherwise
-only inside the functions that need them, so reading, resim and plots work without ROS.
+Nothing here is imported by :mod:`rigid_rot_sim.core`, :mod:`rigid_rot_sim.scene` or
+:mod:`rigid_rot_sim.run`. The node's side of recording (an observer of the simulator and a
+listener of its messages) is :mod:`rigid_rot_sim.ros.recording`; here ROS is imported only
+inside the functions that need it (replay, the writer's serialisation), so reading, resim and
+plots work without ROS.
 """
 
 #: Time bases of a recording's MCAP log times, the default first (see :mod:`.session`).

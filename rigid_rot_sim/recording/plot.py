@@ -19,7 +19,7 @@ from pathlib import Path
 import matplotlib
 import numpy as np
 
-from rigid_rot_sim.core.scene import parse_scene_text
+from rigid_rot_sim.scene.scene import parse_scene_text
 from rigid_rot_sim.message_fields import time_to_seconds
 from rigid_rot_sim.recording.events import EVENT_TYPE, decode_event
 from rigid_rot_sim.recording.reader import BagReader

@@ -3,7 +3,7 @@
 The bag holds the scene as given, the integrator actually used (``auto`` resolved), and
 the simulation event log (:mod:`.events`: every torque command with the step at which it
 arrived and its effective sim time, every service call that changed the state). Replaying
-the events through :class:`rigid_rot_sim.core.simulator.Simulator` in recorded order,
+the events through :class:`rigid_rot_sim.run.simulator.Simulator` in recorded order,
 advancing to the recorded step before each, rebuilds the run: with the same integrator
 the states are bit-identical to the recorded ones; with another integrator the report
 shows what that integrator changes on this very run.
@@ -20,8 +20,8 @@ from typing import Any
 import numpy as np
 
 from rigid_rot_sim.core import quaternion as quat
-from rigid_rot_sim.core.scene import parse_scene_text
-from rigid_rot_sim.core.simulator import Simulator, StateSnapshot
+from rigid_rot_sim.scene.scene import parse_scene_text
+from rigid_rot_sim.run.simulator import Simulator, StateSnapshot
 from rigid_rot_sim.message_fields import quaternion_to_array, time_to_seconds, vector3_to_array
 from rigid_rot_sim.recording.events import EVENT_TYPE, SimEvent, decode_event
 from rigid_rot_sim.recording.provenance import core_fingerprint

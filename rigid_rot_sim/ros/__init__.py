@@ -10,9 +10,9 @@
 * :mod:`.qos`: the QoS profiles. Message <-> numpy conversions: :mod:`rigid_rot_sim.conversions`.
 
 The physics and the pacing are in :mod:`rigid_rot_sim.core` (no ROS): the
-:class:`~rigid_rot_sim.core.simulator.Simulator` and the
-:class:`~rigid_rot_sim.core.pacing.RunDriver` that advances it against the wall clock.
-Both report to observers (:class:`~rigid_rot_sim.core.observer.SimulationObserver`): the
+:class:`~rigid_rot_sim.run.simulator.Simulator` and the
+:class:`~rigid_rot_sim.run.pacing.RunDriver` that advances it against the wall clock.
+Both report to observers (:class:`~rigid_rot_sim.run.observer.SimulationObserver`): the
 ROS outputs and the recorder.
 
 A torque command's route, top to bottom
@@ -21,8 +21,8 @@ A torque command's route, top to bottom
    (one per topic input of the scene, created in ``TorqueInputs.__init__``).
 2. ``conversions.torque_command_from_msg(msg)``: torque, force (WrenchStamped), frame_id and
    header stamp (s) as numpy arrays and floats.
-3. ``core.simulator.Simulator.receive_torque(source, torque, frame_id, stamp, force)`` ->
-   ``core.commands.CommandSchedule.admit``: the checks (finite, ``commands.max_torque``,
+3. ``run.simulator.Simulator.receive_torque(source, torque, frame_id, stamp, force)`` ->
+   ``run.commands.CommandSchedule.admit``: the checks (finite, ``commands.max_torque``,
    zero force, the input's frame policy, the stamp horizon) and the effective time (the
    stamp, or now). A refusal raises ``CommandRejected``: the simulator reports it to its
    observers (``command_rejected``) and ``torque_callback`` publishes it on ``~/rejected``
@@ -30,14 +30,14 @@ A torque command's route, top to bottom
 4. ``Simulator.submit_torque`` -> ``CommandSchedule.submit``: a ``TorqueCommand`` goes on
    the schedule's event heap at the step where it takes effect; then every observer of the
    simulator hears ``command_accepted(step, command)``. The recorder
-   (``recording.node_recording.NodeRecording.command_accepted``) writes it to
+   (``ros.recording.NodeRecording.command_accepted``) writes it to
    ``~/sim_events`` as a ``torque`` event: what resim replays.
 5. Back in ``torque_callback``: the message as received goes to the input listeners;
    ``NodeRecording.received`` records it on the torque topic.
 6. Later, on the wall-clock timer: ``node.RigidRotSimNode.timer_callback`` ->
-   ``core.pacing.RunDriver.tick`` (``Pacer.target_step``: the step due now) ->
+   ``run.pacing.RunDriver.tick`` (``Pacer.target_step``: the step due now) ->
    ``RunDriver.run`` -> ``Simulator.advance_to`` -> ``Simulator.advance`` ->
-   ``core.stepper.Stepper.advance``: at the command's step ``CommandSchedule.process_due``
+   ``run.stepper.Stepper.advance``: at the command's step ``CommandSchedule.process_due``
    makes it the input's held torque and sums what the inputs hold,
    ``Stepper.set_command_torque`` gives that sum to the integrator (principal frame), and
    the integrator steps with it.

@@ -3,7 +3,7 @@
 :class:`TorqueInputs` subscribes to each topic input of the scene (WrenchStamped or
 Vector3Stamped); :meth:`TorqueInputs.torque_callback` converts the message
 (:func:`~rigid_rot_sim.conversions.torque_command_from_msg`), hands it to
-:meth:`Simulator.receive_torque <rigid_rot_sim.core.simulator.Simulator.receive_torque>`
+:meth:`Simulator.receive_torque <rigid_rot_sim.run.simulator.Simulator.receive_torque>`
 and, when the simulator refuses it, to :meth:`Rejections.reject`. Then it hands the message
 as received to its listeners (the recorder), with the wall-clock receive time.
 """
@@ -20,8 +20,8 @@ from rclpy.qos import QoSProfile
 
 from rigid_rot_sim import conversions
 from rigid_rot_sim.core import limits
-from rigid_rot_sim.core.scene import Scene
-from rigid_rot_sim.core.simulator import CommandRejected, Simulator
+from rigid_rot_sim.scene.scene import Scene
+from rigid_rot_sim.run.simulator import CommandRejected, Simulator
 from rigid_rot_sim.ros.outputs import Outputs
 from rigid_rot_sim.ros.qos import COMMAND_QOS
 

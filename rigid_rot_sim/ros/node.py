@@ -1,9 +1,9 @@
-"""The rigid_rot_sim ROS 2 node: a scene simulated by :class:`~rigid_rot_sim.core.simulator.Simulator`.
+"""The rigid_rot_sim ROS 2 node: a scene simulated by :class:`~rigid_rot_sim.run.simulator.Simulator`.
 
 The node wires: parameters (:mod:`.parameters`), outputs (:mod:`.outputs`), torque inputs
 (:mod:`.inputs`), services (:mod:`.services`, :mod:`.simulation_services`) and the
-recording (:mod:`rigid_rot_sim.recording.node_recording`) around the simulator and the
-run driver that paces it (:mod:`rigid_rot_sim.core.pacing`). It builds only what the scene
+recording (:mod:`rigid_rot_sim.ros.recording`) around the simulator and the
+run driver that paces it (:mod:`rigid_rot_sim.run.pacing`). It builds only what the scene
 needs and logs one start-up line saying what was built and what was left out. Without a
 ``scene`` parameter it serves ``~/compute_inertia`` only.
 
@@ -36,7 +36,7 @@ Every limit is in :mod:`rigid_rot_sim.core.limits` (README, "Limits and failure 
 Pacing
 ------
 ``real_time_factor`` r > 0: a wall-clock timer advances the simulation to
-``r * (wall time since the anchor)`` each tick (at most ``core.pacing.MAX_TICK_WALL`` of work per
+``r * (wall time since the anchor)`` each tick (at most ``run.pacing.MAX_TICK_WALL`` of work per
 tick, so commands and services are served in between); r = 0: as fast as possible, in
 batches of at most ``MAX_TICK_WALL`` wall time per tick. The states do not depend on r
 or on the publish rates (see the Simulator's determinism notes). The timer runs on the
@@ -61,9 +61,9 @@ from rclpy.node import Node
 from rclpy.signals import SignalHandlerOptions
 
 from rigid_rot_sim.core import limits
-from rigid_rot_sim.core.pacing import OutputSchedule, Pacer, Progress, RunDriver
-from rigid_rot_sim.core.scene import load_scene
-from rigid_rot_sim.core.simulator import Simulator
+from rigid_rot_sim.run.pacing import OutputSchedule, Pacer, Progress, RunDriver
+from rigid_rot_sim.scene.scene import load_scene
+from rigid_rot_sim.run.simulator import Simulator
 from rigid_rot_sim.ros import simulation_services
 from rigid_rot_sim.ros.inputs import Rejections, TorqueInputs
 from rigid_rot_sim.ros.outputs import Outputs
@@ -161,7 +161,7 @@ class RigidRotSimNode(Node):
         """The recording, an observer of the simulator and a listener of the outputs and inputs;
         None (error logged) when it cannot start: the run goes on."""
         try:
-            from rigid_rot_sim.recording.node_recording import NodeRecording  # imported only when recording
+            from rigid_rot_sim.ros.recording import NodeRecording  # imported only when recording
         except ImportError as exc:  # the mcap packages are optional at run time
             missing = (exc.name or "").split(".")[0] or str(exc)
             self.get_logger().error(f"recording disabled: {missing} is not installed (pip install mcap mcap-ros2-support)")

@@ -1,8 +1,8 @@
 """What the node publishes: one table of outputs, one publishing path.
 
-:data:`OUTPUTS` maps each scene output name (``core.scene.OUTPUT_NAMES``) to its message
+:data:`OUTPUTS` maps each scene output name (``scene.scene.OUTPUT_NAMES``) to its message
 type and the function that builds its message from a
-:class:`~rigid_rot_sim.core.simulator.StateSnapshot`. :class:`Outputs` creates a publisher
+:class:`~rigid_rot_sim.run.simulator.StateSnapshot`. :class:`Outputs` creates a publisher
 for each output the scene asks for (rate > 0), plus ``~/mass_properties`` (latched, once),
 ``~/rejected`` and ``/tf_static`` (the principal-axes frame, where it differs from the body
 frame), all in :attr:`Outputs.publishers`, keyed on those names.
@@ -10,7 +10,7 @@ frame), all in :attr:`Outputs.publishers`, keyed on those names.
 :meth:`Outputs.publish` is the only way a message leaves the node: with no listener it
 publishes the message; with listeners (the recorder) it serialises the message once, hands
 the bytes to every listener, then publishes the same bytes. The run driver tells
-:meth:`Outputs.outputs_due` (a :class:`~rigid_rot_sim.core.observer.SimulationObserver`)
+:meth:`Outputs.outputs_due` (a :class:`~rigid_rot_sim.run.observer.SimulationObserver`)
 which outputs are due at a step.
 """
 
@@ -28,9 +28,9 @@ from sensor_msgs.msg import Imu
 
 from rigid_rot_sim import conversions
 from rigid_rot_sim.core.inertia import principal_frame_pose
-from rigid_rot_sim.core.observer import SimulationObserver
-from rigid_rot_sim.core.scene import OUTPUT_NAMES, Frames, Scene
-from rigid_rot_sim.core.simulator import StateSnapshot
+from rigid_rot_sim.run.observer import SimulationObserver
+from rigid_rot_sim.scene.scene import OUTPUT_NAMES, Frames, Scene
+from rigid_rot_sim.run.simulator import StateSnapshot
 from rigid_rot_sim.ros.qos import CLOCK_QOS, LATCHED_QOS, REJECTED_QOS, TF_QOS, TF_STATIC_QOS, describe as describe_qos
 
 try:  # never required: /tf exists only where tf2_msgs is installed

@@ -28,8 +28,8 @@ from rclpy.node import Node
 from rclpy.parameter import Parameter
 
 from rigid_rot_sim.core import limits
-from rigid_rot_sim.core.pacing import RunDriver
-from rigid_rot_sim.core.scene import MAX_QOS_DEPTH, Frames, OutputQos, Scene
+from rigid_rot_sim.run.pacing import RunDriver
+from rigid_rot_sim.scene.scene import MAX_QOS_DEPTH, Frames, OutputQos, Scene
 from rigid_rot_sim.recording import LOG_TIME_BASES  # the package itself is light (no mcap)
 from rigid_rot_sim.ros.outputs import output_topic
 from rigid_rot_sim.ros.qos import output_qos

@@ -19,7 +19,7 @@ from __future__ import annotations
 from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
 
 from rigid_rot_sim.core import limits
-from rigid_rot_sim.core.scene import MAX_QOS_DEPTH, QOS_RELIABILITIES, OutputQos
+from rigid_rot_sim.scene.scene import MAX_QOS_DEPTH, QOS_RELIABILITIES, OutputQos
 
 STATE_QOS = QoSProfile(depth=10, reliability=ReliabilityPolicy.RELIABLE, durability=DurabilityPolicy.VOLATILE)
 LATCHED_QOS = QoSProfile(depth=1, reliability=ReliabilityPolicy.RELIABLE, durability=DurabilityPolicy.TRANSIENT_LOCAL)

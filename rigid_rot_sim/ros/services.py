@@ -17,9 +17,9 @@ from std_srvs.srv import SetBool, Trigger
 from rigid_rot_sim import conversions
 from rigid_rot_sim.core import limits
 from rigid_rot_sim.core.inertia import mass_properties
-from rigid_rot_sim.core.pacing import Progress, RunDriver
-from rigid_rot_sim.core.scene import Scene
-from rigid_rot_sim.core.simulator import CommandRejected
+from rigid_rot_sim.run.pacing import Progress, RunDriver
+from rigid_rot_sim.scene.scene import Scene
+from rigid_rot_sim.run.simulator import CommandRejected
 from rigid_rot_sim.ros.inputs import REJECT_WARN_PERIOD, Rejections
 
 #: Most wall time (s) one ~/step request spends stepping; the reply says if it stopped short.

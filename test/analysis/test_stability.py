@@ -10,7 +10,7 @@ from rigid_rot_sim.analysis import stability as S
 from rigid_rot_sim.analysis.stability_cases import catalogue
 from rigid_rot_sim.analysis.stability_report import run_suite
 from rigid_rot_sim.cli import main
-from rigid_rot_sim.core import advice
+from rigid_rot_sim.run import advice
 from rigid_rot_sim.core.integrators import METHODS
 
 FREE_CASES = ("thin rod 0.01", "thin rod 1e-06", "MuJoCo rod", "near-spherical 1e-9", "symmetric", "high spin 10 rad/step")

@@ -9,7 +9,7 @@ from jsonschema import Draft202012Validator
 
 from rigid_rot_sim.analysis.sweep_schema import SWEEP_SCHEMA
 from rigid_rot_sim.analysis.sweep_spec import SweepSpecError, parse_sweep_text
-from rigid_rot_sim.core import schema
+from rigid_rot_sim.scene import schema
 
 ROOT = Path(__file__).resolve().parents[2]
 EXPORTED = ROOT / "config" / "schema" / "sweep.schema.json"

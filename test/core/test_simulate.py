@@ -212,8 +212,8 @@ def test_non_finite_state_is_reported_with_step_and_time():
 
 @pytest.mark.parametrize(
     "module_name",
-    ["rigid_rot_sim.core.simulate", "rigid_rot_sim.core.integrators", "rigid_rot_sim.core.bounded_yaml",
-     "rigid_rot_sim.core.names", "rigid_rot_sim.core.pacing"],
+    ["rigid_rot_sim.core.simulate", "rigid_rot_sim.core.integrators", "rigid_rot_sim.scene.bounded_yaml",
+     "rigid_rot_sim.scene.names", "rigid_rot_sim.run.pacing"],
 )
 def test_docstring_examples_run(module_name):
     import doctest

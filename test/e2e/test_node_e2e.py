@@ -19,8 +19,8 @@ import pytest
 
 from e2e_helpers import WAIT, wait_until_recorded  # beside this file
 
-from rigid_rot_sim.core.scene import load_scene
-from rigid_rot_sim.core.simulator import Simulator
+from rigid_rot_sim.scene.scene import load_scene
+from rigid_rot_sim.run.simulator import Simulator
 
 SCENES = Path(__file__).resolve().parents[2] / "config" / "scenes"
 NODE = "/rigid_rot_sim"

@@ -12,7 +12,7 @@ import pytest
 from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
 
 from rigid_rot_sim.core.inertia import mass_properties, principal_frame, principal_orientation
-from rigid_rot_sim.core.scene import load_scene
+from rigid_rot_sim.scene.scene import load_scene
 from rigid_rot_sim.share import resolve_scene
 
 #: `ros2 topic info -v /tf` on ROS 2 Jazzy (tf2_msgs/msg/TFMessage).

@@ -1,4 +1,4 @@
-"""The fuzz tests reuse the node harness of test/test_node.py (in-process node and client)."""
+"""The fuzz tests reuse the node harness of test/ros/test_node.py (in-process node and client)."""
 
 import sys
 from pathlib import Path

@@ -12,8 +12,8 @@ import pytest
 
 from generators import inertia_request, mutated_scene, number, parameter, set_state_request, step_count, torque_command
 from rigid_rot_sim.core.inertia import mass_properties
-from rigid_rot_sim.core.scene import SceneError, parse_scene_text
-from rigid_rot_sim.core.simulator import CommandRejected, Simulator
+from rigid_rot_sim.scene.scene import SceneError, parse_scene_text
+from rigid_rot_sim.run.simulator import CommandRejected, Simulator
 
 
 def snapshot_finite(snapshot) -> bool:

@@ -10,9 +10,9 @@ from geometry_msgs.msg import WrenchStamped  # noqa: E402
 from rigid_rot_msgs.msg import RigidBodyState  # noqa: E402
 
 from rigid_rot_sim import conversions  # noqa: E402
-from rigid_rot_sim.core.scene import load_scene  # noqa: E402
-from rigid_rot_sim.core.simulator import CommandRejected, Simulator  # noqa: E402
-from rigid_rot_sim.recording.node_recording import NodeRecording  # noqa: E402
+from rigid_rot_sim.scene.scene import load_scene  # noqa: E402
+from rigid_rot_sim.run.simulator import CommandRejected, Simulator  # noqa: E402
+from rigid_rot_sim.ros.recording import NodeRecording  # noqa: E402
 from rigid_rot_sim.recording.resim import attitude_angle, resimulate  # noqa: E402
 from rigid_rot_sim.recording.session import RunRecorder  # noqa: E402
 

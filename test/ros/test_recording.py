@@ -9,9 +9,9 @@ pytest.importorskip("rigid_rot_msgs.msg")
 from rigid_rot_msgs.msg import RigidBodyState  # noqa: E402
 
 from rigid_rot_sim import conversions  # noqa: E402
-from rigid_rot_sim.core.scene import load_scene  # noqa: E402
-from rigid_rot_sim.core.simulator import Simulator  # noqa: E402
-from rigid_rot_sim.recording.node_recording import NodeRecording  # noqa: E402
+from rigid_rot_sim.scene.scene import load_scene  # noqa: E402
+from rigid_rot_sim.run.simulator import Simulator  # noqa: E402
+from rigid_rot_sim.ros.recording import NodeRecording  # noqa: E402
 from rigid_rot_sim.recording.resim import resimulate  # noqa: E402
 from rigid_rot_sim.recording.session import RunRecorder  # noqa: E402
 
@@ -60,7 +60,7 @@ def test_every_event_kind_is_recorded_and_replayed_bit_for_bit(tmp_path):
 
 
 def test_rejected_commands_record_no_event(tmp_path):
-    from rigid_rot_sim.core.simulator import CommandRejected
+    from rigid_rot_sim.run.simulator import CommandRejected
     from rigid_rot_sim.recording.reader import BagReader
 
     bag = tmp_path / "rejected.mcap"

@@ -1,4 +1,4 @@
-"""Tests for rigid_rot_sim.core.scene: the shipped scenes load, bad files are named precisely."""
+"""Tests for rigid_rot_sim.scene.scene: the shipped scenes load, bad files are named precisely."""
 
 import math
 from pathlib import Path
@@ -6,7 +6,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from rigid_rot_sim.core.scene import SceneError, load_scene, parse_scene_text
+from rigid_rot_sim.scene.scene import SceneError, load_scene, parse_scene_text
 
 SCENES = Path(__file__).resolve().parents[2] / "config" / "scenes"
 SHIPPED = {

@@ -1,7 +1,7 @@
 """Scene files: the YAML description of one simulation run, validated into frozen dataclasses.
 
 A scene says what a run needs, and the simulator and the node build only that. Its format
-is one JSON Schema, :data:`rigid_rot_sim.core.scene_schema.SCENE_SCHEMA` (exported as
+is one JSON Schema, :data:`rigid_rot_sim.scene.scene_schema.SCENE_SCHEMA` (exported as
 ``config/schema/scene.schema.json``, with a description of every key); a short scene::
 
     name: free_tumble                  # optional, defaults to the file stem
@@ -35,13 +35,14 @@ from dataclasses import dataclass, field, make_dataclass
 from typing import Any, Callable, Mapping
 
 import numpy as np
-from rigid_rot_sim.core import limits, names, validation
-from rigid_rot_sim.core.bounded_yaml import load_input, read_input
+from rigid_rot_sim.core import limits, validation
+from rigid_rot_sim.scene import names
+from rigid_rot_sim.scene.bounded_yaml import load_input, read_input
 from rigid_rot_sim.core.quaternion import zxz_to_quaternion
 from rigid_rot_sim.core.inertia import inertia_about_center_of_mass, mass_properties
 from rigid_rot_sim.core.integrators import get_method
-from rigid_rot_sim.core.schema import validated
-from rigid_rot_sim.core.scene_schema import (
+from rigid_rot_sim.scene.schema import validated
+from rigid_rot_sim.scene.scene_schema import (
     DEFAULT_BODY_FRAME,
     DEFAULT_GRAVITY,
     DEFAULT_WORLD_FRAME,
@@ -217,7 +218,7 @@ def _rates_as_dict(self: Any) -> dict[str, float]:
 
 
 #: Publication rates in Hz of sim time (0 = not published): one float field per output of
-#: :data:`~rigid_rot_sim.core.scene_schema.OUTPUTS` (``state``, ``orientation``, ... ``odom``),
+#: :data:`~rigid_rot_sim.scene.scene_schema.OUTPUTS` (``state``, ``orientation``, ... ``odom``),
 #: defaulting to its rate there; ``as_dict()`` gives them by name, in publishing order.
 Outputs = make_dataclass(
     "Outputs",

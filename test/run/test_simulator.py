@@ -1,4 +1,4 @@
-"""Tests for rigid_rot_sim.core.simulator: command timing, hold policies, determinism, frames, invariants,
+"""Tests for rigid_rot_sim.run.simulator: command timing, hold policies, determinism, frames, invariants,
 the reports to observers."""
 
 import math
@@ -8,9 +8,9 @@ import numpy as np
 import pytest
 
 from rigid_rot_sim.core.integrators import METHODS
-from rigid_rot_sim.core.observer import SimulationObserver
-from rigid_rot_sim.core.scene import load_scene, parse_scene_text
-from rigid_rot_sim.core.simulator import APPLY_TORQUE_SOURCE, CommandRejected, Simulator
+from rigid_rot_sim.run.observer import SimulationObserver
+from rigid_rot_sim.scene.scene import load_scene, parse_scene_text
+from rigid_rot_sim.run.simulator import APPLY_TORQUE_SOURCE, CommandRejected, Simulator
 
 SCENES = Path(__file__).resolve().parents[2] / "config" / "scenes"
 
@@ -381,7 +381,7 @@ def test_divergence_pauses_and_keeps_a_finite_state():
     assert sim.failure is None and not sim.paused  # the failure paused it: reset resumes
 
 
-# -- reports to observers (rigid_rot_sim.core.observer) ------------------------------------
+# -- reports to observers (rigid_rot_sim.run.observer) ------------------------------------
 
 
 class Recording(SimulationObserver):

@@ -1,4 +1,4 @@
-"""core.pacing without DDS: slices sized by the cost of a step, pacing, backlog drop, pause, due outputs.
+"""run.pacing without DDS: slices sized by the cost of a step, pacing, backlog drop, pause, due outputs.
 
 The run driver is tested on a fake clock and a fake simulator whose steps cost fake wall time.
 """
@@ -9,8 +9,8 @@ from types import SimpleNamespace
 import numpy as np
 import pytest
 
-from rigid_rot_sim.core.observer import SimulationObserver
-from rigid_rot_sim.core.pacing import (
+from rigid_rot_sim.run.observer import SimulationObserver
+from rigid_rot_sim.run.pacing import (
     MAX_BACKLOG_WALL,
     MAX_TICK,
     MAX_TICK_WALL,

@@ -5,7 +5,7 @@ and registers the node's topics; the node then attaches the recording in three v
 lines (``RigidRotSimNode._start_recording``):
 
 * ``sim.add_observer(recording)``: the simulator reports every change made from outside
-  the physics (:class:`~rigid_rot_sim.core.observer.SimulationObserver`), which is recorded
+  the physics (:class:`~rigid_rot_sim.run.observer.SimulationObserver`), which is recorded
   on ``~/sim_events`` with the step index it happened at (what resim replays): torque
   commands with their effective time (``torque``), ``apply_torque``, ``set_state``,
   ``reset``, integrator / step changes (``integrator``);
@@ -30,8 +30,8 @@ from pathlib import Path
 from typing import Any, Sequence
 
 from rigid_rot_sim import conversions
-from rigid_rot_sim.core.observer import SimulationObserver
-from rigid_rot_sim.core.pacing import OutputSchedule
+from rigid_rot_sim.run.observer import SimulationObserver
+from rigid_rot_sim.run.pacing import OutputSchedule
 from rigid_rot_sim.recording import LOG_TIME_BASES
 from rigid_rot_sim.recording.session import RunRecorder
 from rigid_rot_sim.recording.writer import QosProfile, RecorderError

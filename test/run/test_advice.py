@@ -1,4 +1,4 @@
-"""Tests for rigid_rot_sim.core.advice: the bounds against linear theory computed independently."""
+"""Tests for rigid_rot_sim.run.advice: the bounds against linear theory computed independently."""
 
 import math
 import re
@@ -6,7 +6,7 @@ import re
 import numpy as np
 import pytest
 
-from rigid_rot_sim.core import advice
+from rigid_rot_sim.run import advice
 
 
 def euler_jacobian(moments, omega):

@@ -1,9 +1,9 @@
 """The integrator of a run, stepped under the commanded torque within the run's limits.
 
 :class:`Stepper` holds the integrator chosen from the registry (in the principal frame),
-gives it the torque of the :class:`~rigid_rot_sim.core.commands.CommandSchedule` for
+gives it the torque of the :class:`~rigid_rot_sim.run.commands.CommandSchedule` for
 each stretch of steps (a world-frame torque re-expressed in the body frame at every
-boundary) and advances it on the :class:`~rigid_rot_sim.core.clock.StepClock`. A stretch
+boundary) and advances it on the :class:`~rigid_rot_sim.run.clock.StepClock`. A stretch
 stops early, with a reason and the last good state kept, when
 
 * ω, with the torque acting, would turn the body more than
@@ -19,15 +19,16 @@ from typing import Any
 
 import numpy as np
 
-from rigid_rot_sim.core import advice, limits, validation
+from rigid_rot_sim.core import limits, validation
+from rigid_rot_sim.run import advice
 from rigid_rot_sim.core import quaternion as quat
-from rigid_rot_sim.core.clock import StepClock
-from rigid_rot_sim.core.commands import CommandSchedule
+from rigid_rot_sim.run.clock import StepClock
+from rigid_rot_sim.run.commands import CommandSchedule
 from rigid_rot_sim.core.dynamics import RigidBody
 from rigid_rot_sim.core.integrators import get_method
 from rigid_rot_sim.core.integrators.base import Integrator, NonFiniteStateError
-from rigid_rot_sim.core.observables import Observables, StateSnapshot
-from rigid_rot_sim.core.scene import Scene
+from rigid_rot_sim.run.observables import Observables, StateSnapshot
+from rigid_rot_sim.scene.scene import Scene
 from rigid_rot_sim.core.torque import ConstantTorque
 
 __all__ = ["Stepper"]

@@ -1,12 +1,12 @@
-"""Tests for rigid_rot_sim.core.commands: when a command, an applied torque or a schedule segment acts."""
+"""Tests for rigid_rot_sim.run.commands: when a command, an applied torque or a schedule segment acts."""
 
 import math
 
 import pytest
 
-from rigid_rot_sim.core.clock import StepClock
-from rigid_rot_sim.core.commands import APPLY_TORQUE_SOURCE, STAMP_HORIZON, CommandRejected, CommandSchedule
-from rigid_rot_sim.core.scene import parse_scene_text
+from rigid_rot_sim.run.clock import StepClock
+from rigid_rot_sim.run.commands import APPLY_TORQUE_SOURCE, STAMP_HORIZON, CommandRejected, CommandSchedule
+from rigid_rot_sim.scene.scene import parse_scene_text
 
 # three inputs: held for ever (body frame), held 0.05 s (frame from the header), world frame
 SCENE = """

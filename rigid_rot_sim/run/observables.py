@@ -18,7 +18,7 @@ from scipy.spatial.transform import Rotation
 
 from rigid_rot_sim.core import quaternion as quat
 from rigid_rot_sim.core.dynamics import RigidBody
-from rigid_rot_sim.core.scene import Scene
+from rigid_rot_sim.scene.scene import Scene
 from rigid_rot_sim.core.torque import GravityTorque
 
 __all__ = ["Observables", "StateSnapshot"]

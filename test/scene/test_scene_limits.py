@@ -7,9 +7,9 @@ import warnings
 import pytest
 
 from rigid_rot_sim.core import limits
-from rigid_rot_sim.core.bounded_yaml import BoundedYAMLError, load_bounded
-from rigid_rot_sim.core.names import check_topic_name
-from rigid_rot_sim.core.scene import SceneError, load_scene, parse_scene_text
+from rigid_rot_sim.scene.bounded_yaml import BoundedYAMLError, load_bounded
+from rigid_rot_sim.scene.names import check_topic_name
+from rigid_rot_sim.scene.scene import SceneError, load_scene, parse_scene_text
 
 MINIMAL = "body: {principal_moments: [1.0, 2.0, 2.5]}\n"
 

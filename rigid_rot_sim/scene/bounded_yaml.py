@@ -12,7 +12,7 @@ a limit; only a document within every limit is then built. Errors are
 >>> load_bounded("a: &x [1]\\nb: *x")
 Traceback (most recent call last):
 ...
-rigid_rot_sim.core.bounded_yaml.BoundedYAMLError: line 2: YAML aliases (*x) are not accepted; write the value out
+rigid_rot_sim.scene.bounded_yaml.BoundedYAMLError: line 2: YAML aliases (*x) are not accepted; write the value out
 """
 
 from __future__ import annotations

@@ -10,9 +10,10 @@ from pathlib import Path
 import pytest
 from jsonschema import Draft202012Validator
 
-from rigid_rot_sim.core import limits, schema
-from rigid_rot_sim.core.scene import DEFAULT_OUTPUT_RATES, OUTPUT_NAMES, Outputs, SceneError, parse_scene_text
-from rigid_rot_sim.core.scene_schema import OUTPUTS, SCENE_SCHEMA
+from rigid_rot_sim.core import limits
+from rigid_rot_sim.scene import schema
+from rigid_rot_sim.scene.scene import DEFAULT_OUTPUT_RATES, OUTPUT_NAMES, Outputs, SceneError, parse_scene_text
+from rigid_rot_sim.scene.scene_schema import OUTPUTS, SCENE_SCHEMA
 
 ROOT = Path(__file__).resolve().parents[2]
 EXPORTED = ROOT / "config" / "schema" / "scene.schema.json"
@@ -20,7 +21,7 @@ MINIMAL = "body: {principal_moments: [1.0, 2.0, 3.0]}\n"
 
 
 def test_the_committed_json_is_the_schema():
-    # regenerate with: python -m rigid_rot_sim.core.scene_schema > config/schema/scene.schema.json
+    # regenerate with: python -m rigid_rot_sim.scene.scene_schema > config/schema/scene.schema.json
     assert EXPORTED.read_text() == schema.dump(SCENE_SCHEMA)
 
 

@@ -8,7 +8,7 @@ frames). Every change is an event on a heap keyed by the step boundary where it 
 effect (:class:`EventKind`); :meth:`CommandSchedule.process_due` applies those due at the
 clock's current step.
 
-Rules (pinned by ``test/core/test_commands.py``):
+Rules (pinned by ``test/run/test_commands.py``):
 
 * an input holds its last command from the command's step until a newer command replaces
   it; an input with a hold ``timeout`` falls back to zero ``timeout`` s of sim time after
@@ -33,8 +33,8 @@ from typing import Any
 import numpy as np
 
 from rigid_rot_sim.core import limits, validation
-from rigid_rot_sim.core.clock import StepClock
-from rigid_rot_sim.core.scene import Scene, TopicInput
+from rigid_rot_sim.run.clock import StepClock
+from rigid_rot_sim.scene.scene import Scene, TopicInput
 
 __all__ = [
     "APPLY_TORQUE_SOURCE", "STAMP_HORIZON", "CommandRejected", "CommandSchedule", "EventKind", "TorqueCommand",

@@ -4,9 +4,9 @@
 choices, bounds and defaults, with a description of each for editors. It is exported as
 ``config/schema/scene.schema.json`` (the README shows how editors use it)::
 
-    python -m rigid_rot_sim.core.scene_schema > config/schema/scene.schema.json
+    python -m rigid_rot_sim.scene.scene_schema > config/schema/scene.schema.json
 
-and :mod:`rigid_rot_sim.core.scene` validates every scene against it before the checks a
+and :mod:`rigid_rot_sim.scene.scene` validates every scene against it before the checks a
 schema cannot express. Bounds come from :mod:`rigid_rot_sim.core.limits`, the numbers the
 node's parameter descriptors use, so a scene holds exactly what a ``-p`` override may hold.
 """
@@ -16,7 +16,7 @@ from __future__ import annotations
 from typing import Any, NamedTuple
 
 from rigid_rot_sim.core import limits
-from rigid_rot_sim.core.schema import (
+from rigid_rot_sim.scene.schema import (
     DIALECT,
     array,
     choice,

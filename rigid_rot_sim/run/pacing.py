@@ -1,7 +1,7 @@
 """Pacing a run: wall clock against sim time, outputs due per step, slices of bounded wall time.
 
 Plain classes, no ROS, every clock injected, so the rules are tested with a fake clock
-(``test/core/test_pacing.py``); the ROS node only calls :meth:`RunDriver.tick` from its
+(``test/run/test_pacing.py``); the ROS node only calls :meth:`RunDriver.tick` from its
 timer and :meth:`RunDriver.run` from ``~/step``.
 
 * :class:`Pacer`: the real-time factor r. At r > 0 the run is due at step
@@ -11,9 +11,9 @@ timer and :meth:`RunDriver.run` from ``~/step``.
   time) and the outputs due at a step.
 * :class:`StepCost`: wall time per physics step, so that a slice holds the executor for
   about its budget whatever a step costs (taylor at |ω| dt = 25 rad needs ~0.2 s per step).
-* :class:`RunDriver`: advances the :class:`~rigid_rot_sim.core.simulator.Simulator` in
+* :class:`RunDriver`: advances the :class:`~rigid_rot_sim.run.simulator.Simulator` in
   slices up to the next due output, the paced target, the wall deadline or the duration,
-  and tells its observers (:class:`~rigid_rot_sim.core.observer.SimulationObserver`) which
+  and tells its observers (:class:`~rigid_rot_sim.run.observer.SimulationObserver`) which
   outputs are due at each step, with the state there.
 
 The states never depend on r, the rates or the slices (the Simulator's determinism notes):
@@ -33,8 +33,8 @@ from dataclasses import dataclass
 from typing import TYPE_CHECKING, Callable, Iterable, Mapping, Sequence
 
 if TYPE_CHECKING:  # annotations only
-    from rigid_rot_sim.core.observer import SimulationObserver
-    from rigid_rot_sim.core.simulator import Simulator
+    from rigid_rot_sim.run.observer import SimulationObserver
+    from rigid_rot_sim.run.simulator import Simulator
 
 __all__ = ["OutputSchedule", "Pacer", "Progress", "RunDriver", "StepCost", "falling_behind_message"]
 

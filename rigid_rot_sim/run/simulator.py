@@ -2,14 +2,14 @@
 
 :class:`Simulator` is the one entry point of a run: it owns the scene's rigid body, pause /
 step / reset / set_state and the run's failure state, and reports every outside change to
-its observers (:class:`~rigid_rot_sim.core.observer.SimulationObserver`: a command accepted
+its observers (:class:`~rigid_rot_sim.run.observer.SimulationObserver`: a command accepted
 in :meth:`~Simulator.submit_torque`, where :meth:`~Simulator.receive_torque` leads too, or
 rejected, an applied torque, set_state, reset, an integrator change, a failure). It
-delegates to four parts, each in its own module: the step clock (:mod:`~rigid_rot_sim.core.clock`),
+delegates to four parts, each in its own module: the step clock (:mod:`~rigid_rot_sim.run.clock`),
 the torque commands with their hold / timeout state, the scene's torque schedules and
-the torques applied for a duration (:mod:`~rigid_rot_sim.core.commands`), the integrator
-stepped within the run's limits (:mod:`~rigid_rot_sim.core.stepper`), and the user-frame
-view of the state with its drifts (:mod:`~rigid_rot_sim.core.observables`).
+the torques applied for a duration (:mod:`~rigid_rot_sim.run.commands`), the integrator
+stepped within the run's limits (:mod:`~rigid_rot_sim.run.stepper`), and the user-frame
+view of the state with its drifts (:mod:`~rigid_rot_sim.run.observables`).
 It returns plain :class:`StateSnapshot` values (numpy, user body frame, SI units).
 
 Time and determinism
@@ -45,14 +45,15 @@ from __future__ import annotations
 
 from typing import Any
 
-from rigid_rot_sim.core import advice, validation
-from rigid_rot_sim.core.clock import StepClock
-from rigid_rot_sim.core.commands import APPLY_TORQUE_SOURCE, CommandRejected, CommandSchedule, TorqueCommand
+from rigid_rot_sim.core import validation
+from rigid_rot_sim.run import advice
+from rigid_rot_sim.run.clock import StepClock
+from rigid_rot_sim.run.commands import APPLY_TORQUE_SOURCE, CommandRejected, CommandSchedule, TorqueCommand
 from rigid_rot_sim.core.dynamics import RigidBody
-from rigid_rot_sim.core.observables import Observables, StateSnapshot
-from rigid_rot_sim.core.observer import SimulationObserver
-from rigid_rot_sim.core.scene import Scene
-from rigid_rot_sim.core.stepper import Stepper
+from rigid_rot_sim.run.observables import Observables, StateSnapshot
+from rigid_rot_sim.run.observer import SimulationObserver
+from rigid_rot_sim.scene.scene import Scene
+from rigid_rot_sim.run.stepper import Stepper
 
 # CommandRejected, TorqueCommand, APPLY_TORQUE_SOURCE and StateSnapshot are what the Simulator's
 # methods raise, return and take: part of its API, importable from here.
@@ -65,7 +66,7 @@ class Simulator:
     Parameters
     ----------
     scene : Scene
-        A validated scene (:func:`rigid_rot_sim.core.scene.load_scene`).
+        A validated scene (:func:`rigid_rot_sim.scene.scene.load_scene`).
     method : str, optional
         Integrator name from the registry, or ``auto`` (the scene's choice by default).
     dt : float, optional

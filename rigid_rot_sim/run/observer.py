@@ -21,8 +21,8 @@ from __future__ import annotations
 from typing import TYPE_CHECKING, Any, Sequence
 
 if TYPE_CHECKING:  # the dataclasses only; nothing here depends on the simulator at run time
-    from rigid_rot_sim.core.commands import TorqueCommand
-    from rigid_rot_sim.core.observables import StateSnapshot
+    from rigid_rot_sim.run.commands import TorqueCommand
+    from rigid_rot_sim.run.observables import StateSnapshot
 
 
 class SimulationObserver:
@@ -49,11 +49,11 @@ class SimulationObserver:
     def failed(self, step: int, reason: str) -> None:
         """The run stopped at ``step`` (a non-finite or out-of-limits state); the last good state is kept.
 
-        ``reason`` is :attr:`Simulator.failure <rigid_rot_sim.core.simulator.Simulator.failure>`.
+        ``reason`` is :attr:`Simulator.failure <rigid_rot_sim.run.simulator.Simulator.failure>`.
         """
 
     def outputs_due(self, step: int, snapshot: "StateSnapshot", names: Sequence[str]) -> None:
         """The outputs ``names`` (scene output names) are due at ``step``, with the state there.
 
-        Told by the run driver (:mod:`~rigid_rot_sim.core.pacing`), never by the simulator.
+        Told by the run driver (:mod:`~rigid_rot_sim.run.pacing`), never by the simulator.
         """

@@ -1,9 +1,9 @@
-"""Tests for rigid_rot_sim.core.clock: sim time from the step count, boundaries, dt changes."""
+"""Tests for rigid_rot_sim.run.clock: sim time from the step count, boundaries, dt changes."""
 
 import doctest
 
-from rigid_rot_sim.core import clock as clock_module
-from rigid_rot_sim.core.clock import StepClock
+from rigid_rot_sim.run import clock as clock_module
+from rigid_rot_sim.run.clock import StepClock
 
 
 def test_the_module_examples_run():

@@ -56,7 +56,7 @@ from rigid_rot_sim.core import quaternion as quat
 
 if TYPE_CHECKING:
     from rigid_rot_sim.core.dynamics import RigidBody
-    from rigid_rot_sim.core.scene import Scene
+    from rigid_rot_sim.scene.scene import Scene
 
 #: Extent of classical RK4's stability region along the imaginary axis.
 RK4_IMAGINARY_LIMIT = 2.0 * math.sqrt(2.0)

@@ -1,0 +1,13 @@
+"""The run engine: a scene's simulation driven by commands, in steps, paced against a wall clock.
+
+* :mod:`.simulator` - :class:`~.simulator.Simulator`, the engine's API (no ROS);
+* :mod:`.stepper` - the integrator and the state, stepped in chunks between events;
+* :mod:`.commands` - :class:`~.commands.CommandSchedule`: torque commands admitted, held, expired;
+* :mod:`.clock` - :class:`~.clock.StepClock` and the one rule for which step a time lands on;
+* :mod:`.observables` - :class:`~.observables.StateSnapshot` and the drift monitors;
+* :mod:`.observer` - :class:`~.observer.SimulationObserver`, what the engine reports;
+* :mod:`.pacing` - real-time pacing, output schedules and the run driver (fake-clock testable);
+* :mod:`.advice` - stable step sizes and the ``auto`` method choice.
+
+Built on :mod:`rigid_rot_sim.core` and :mod:`rigid_rot_sim.scene`; no ROS.
+"""
