@@ -40,6 +40,8 @@ def add_parser(subparsers) -> None:
     parser.add_argument("--record", metavar="OUT.mcap", help="record the run to this MCAP file")
     parser.add_argument("--record-log-time", choices=LOG_TIME_BASES, dest="record_log_time",
                         help="MCAP log times of the recording: sim time (default) or wall clock")
+    parser.add_argument("--foxglove", metavar="[HOST:]PORT",
+                        help="serve the run live to Foxglove (WebSocket, host default 127.0.0.1); needs foxglove-sdk")
     parser.add_argument("--echo", type=positive_number, metavar="PERIOD", help="print the received ~/state every PERIOD s of sim time")
     add_ros_args(parser)
     parser.set_defaults(handler=run)
@@ -58,6 +60,8 @@ def node_arguments(args: argparse.Namespace) -> list[str]:
         params["dt"] = repr(float(args.dt))
     if args.record is not None:
         params["record_path"] = os.path.abspath(args.record)
+    if args.foxglove is not None:
+        params["foxglove"] = args.foxglove
     if args.record_log_time is not None:
         params["record_log_time"] = args.record_log_time
     argv = ["rigid_rot_sim_node", "--ros-args"]

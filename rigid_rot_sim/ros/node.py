@@ -91,6 +91,7 @@ class RigidRotSimNode(Node):
         self.sim: Simulator | None = None
         self.run: RunDriver | None = None
         self.recording = None
+        self.foxglove = None
         self.parameter_callbacks = ParameterCallbacks(self)  # refuses use_sim_time, with or without a scene
         self.inertia_service = InertiaService(self)
         scene_path = declare_scene_parameter(self)
@@ -134,6 +135,7 @@ class RigidRotSimNode(Node):
                          if self.recording else "no recording (see the error above)")
         else:
             left_out.append("recorder (nothing recorded)")
+        self.foxglove = self._start_foxglove(settings.foxglove, built, left_out)
 
         try:
             sim.pause(settings.start_paused)
@@ -173,6 +175,23 @@ class RigidRotSimNode(Node):
             self.inputs.listeners.append(recording)  # every torque command as received
         return recording
 
+    def _start_foxglove(self, address: str | None, built: list[str], left_out: list[str]) -> Any:
+        """The Foxglove live server, a listener of the outputs (None without an address or foxglove-sdk)."""
+        if not address:
+            left_out.append("Foxglove live server (no address)")
+            return None
+        from rigid_rot_sim.ros import foxglove_live
+
+        try:
+            live, words = foxglove_live.start(address, self.sim, self.outputs.body_view, self.scene.frames,
+                                              self.get_namespace().rstrip("/") + "/" + self.get_name())
+        except (OSError, RuntimeError) as exc:  # the port is taken, the host is not ours
+            raise ValueError(f"foxglove: cannot serve on {address}: {exc}") from None
+        (built if live is not None else left_out).append(words)
+        if live is not None:
+            self.outputs.listeners.append(live)
+        return live
+
     @property
     def finished(self) -> bool:
         """The run reached its duration."""
@@ -201,6 +220,8 @@ class RigidRotSimNode(Node):
             publisher.wait_for_all_acked(rclpy.duration.Duration(seconds=timeout))
 
     def destroy_node(self) -> None:
+        if self.foxglove is not None:
+            self.foxglove.close()
         if self.recording is not None:
             self.recording.close()  # summary and indexes: the file is complete (also on SIGINT / SIGTERM)
         super().destroy_node()

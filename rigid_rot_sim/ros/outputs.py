@@ -25,9 +25,11 @@ from rclpy.serialization import serialize_message
 from rigid_rot_msgs.msg import HeavyTopState, RejectedCommand, RigidBodyState
 from rosgraph_msgs.msg import Clock
 from sensor_msgs.msg import Imu
+from visualization_msgs.msg import MarkerArray
 
 from rigid_rot_sim import conversions
 from rigid_rot_sim.core.inertia import principal_frame_pose
+from rigid_rot_sim.run.body_view import body_view
 from rigid_rot_sim.run.observer import SimulationObserver
 from rigid_rot_sim.scene.scene import OUTPUT_NAMES, Frames, Scene
 from rigid_rot_sim.run.simulator import StateSnapshot
@@ -38,20 +40,26 @@ try:  # never required: /tf exists only where tf2_msgs is installed
 except ImportError:  # pragma: no cover - depends on the installation
     TFMessage = None
 
-#: A message from the state, the frames and the ground-truth variance (imu, odom).
-MessageBuilder = Callable[[StateSnapshot, Frames, float], Any]
+#: A message from the state and the outputs' settings (frames, ground-truth variance, body view).
+MessageBuilder = Callable[[StateSnapshot, "Outputs"], Any]
 
 #: Scene output name -> (message type, builder). Topics: :func:`output_topic`.
 OUTPUTS: dict[str, tuple[Any, MessageBuilder]] = {
-    "state": (RigidBodyState, lambda s, f, v: conversions.snapshot_to_state(s, f.world, f.body)),
-    "orientation": (QuaternionStamped, lambda s, f, v: conversions.snapshot_to_orientation(s, f.world)),
-    "angular_velocity": (Vector3Stamped, lambda s, f, v: conversions.vector_stamped(s.angular_velocity_body, s.t, f.body)),
-    "angular_momentum": (Vector3Stamped, lambda s, f, v: conversions.vector_stamped(s.angular_momentum_world, s.t, f.world)),
-    "top_state": (HeavyTopState, lambda s, f, v: conversions.snapshot_to_top_state(s, f.world)),
-    "tf": (TFMessage, lambda s, f, v: TFMessage(transforms=[conversions.transform_stamped(s, f.world, f.body)])),
-    "clock": (Clock, lambda s, f, v: conversions.clock_message(s.t)),
-    "imu": (Imu, lambda s, f, v: conversions.snapshot_to_imu(s, f.body, v)),
-    "odom": (Odometry, lambda s, f, v: conversions.snapshot_to_odometry(s, f.world, f.body, v)),
+    "state": (RigidBodyState, lambda s, o: conversions.snapshot_to_state(s, o.frames.world, o.frames.body)),
+    "orientation": (QuaternionStamped, lambda s, o: conversions.snapshot_to_orientation(s, o.frames.world)),
+    "angular_velocity": (Vector3Stamped,
+                         lambda s, o: conversions.vector_stamped(s.angular_velocity_body, s.t, o.frames.body)),
+    "angular_momentum": (Vector3Stamped,
+                         lambda s, o: conversions.vector_stamped(s.angular_momentum_world, s.t, o.frames.world)),
+    "top_state": (HeavyTopState, lambda s, o: conversions.snapshot_to_top_state(s, o.frames.world)),
+    "tf": (TFMessage,
+           lambda s, o: TFMessage(transforms=[conversions.transform_stamped(s, o.frames.world, o.frames.body)])),
+    "clock": (Clock, lambda s, o: conversions.clock_message(s.t)),
+    "imu": (Imu, lambda s, o: conversions.snapshot_to_imu(s, o.frames.body, o.ground_truth_variance)),
+    "odom": (Odometry,
+             lambda s, o: conversions.snapshot_to_odometry(s, o.frames.world, o.frames.body, o.ground_truth_variance)),
+    "markers": (MarkerArray,
+                lambda s, o: conversions.body_markers(o.body_view, s, o.frames.world, o.frames.body)),
 }
 assert tuple(OUTPUTS) == OUTPUT_NAMES, "one entry per scene output, in the scene's order"
 
@@ -80,6 +88,7 @@ class Outputs(SimulationObserver):
         self.scene = scene
         self.frames = scene.frames
         self.ground_truth_variance = ground_truth_variance
+        self.body_view = body_view(scene)
         self.listeners: list[PublishedListener] = []
         self.publishers: dict[str, Any] = {}
         self.rates: dict[str, float] = {}
@@ -139,4 +148,4 @@ class Outputs(SimulationObserver):
 
     def outputs_due(self, step: int, snapshot: StateSnapshot, names: Sequence[str]) -> None:
         for name in names:
-            self.publish(name, OUTPUTS[name][1](snapshot, self.frames, self.ground_truth_variance))
+            self.publish(name, OUTPUTS[name][1](snapshot, self))

@@ -141,6 +141,13 @@ def declare_parameters(node: Node, scene: Scene) -> None:
         ParameterDescriptor(description="MCAP file to record the run to; empty = no recording", read_only=True),
     )
     declare(
+        "foxglove",
+        scene.foxglove or "",
+        ParameterDescriptor(description="Foxglove live server address [HOST:]PORT (host default 127.0.0.1); "
+                            "empty = no server (needs foxglove-sdk: pip install rigid_rot_sim[viewer])",
+                            read_only=True),
+    )
+    declare(
         "record_log_time",
         "sim",
         ParameterDescriptor(
@@ -232,6 +239,7 @@ class Settings:
     start_paused: bool
     record_path: str | None
     record_log_time: str
+    foxglove: str | None
     ground_truth_variance: float
     state_qos: Any
     rates: dict[str, float]
@@ -256,6 +264,7 @@ def read_settings(node: Node, scene: Scene) -> Settings:
         start_paused=value("start_paused"),
         record_path=value("record_path") or None,
         record_log_time=value("record_log_time"),
+        foxglove=value("foxglove").strip() or None,
         ground_truth_variance=float(value("ground_truth_variance")),
         state_qos=output_qos(OutputQos(value("qos.reliability"), value("qos.depth"))),
         rates={name: value(f"rates.{name}") for name in scene.outputs.as_dict()},

@@ -29,6 +29,7 @@ masses give their inertia about their centre of mass.
 
 from __future__ import annotations
 
+import datetime
 import math
 import os
 from dataclasses import dataclass, field, make_dataclass
@@ -44,6 +45,7 @@ from rigid_rot_sim.core.integrators import get_method
 from rigid_rot_sim.scene.schema import validated
 from rigid_rot_sim.scene.scene_schema import (
     DEFAULT_BODY_FRAME,
+    DEFAULT_EPOCH,
     DEFAULT_GRAVITY,
     DEFAULT_WORLD_FRAME,
     OUTPUTS,
@@ -275,8 +277,11 @@ class Scene:
     outputs: Outputs = Outputs()
     qos: OutputQos = OutputQos()
     recording: str | None = None
+    foxglove: str | None = None  # [HOST:]PORT of a Foxglove live server (a node setting; see ros/foxglove_live)
     commands: CommandSettings = CommandSettings()
     description: str = ""
+    #: UTC date and time of sim time 0 (ISO 8601; see :data:`scene_schema.DEFAULT_EPOCH`).
+    epoch: str = DEFAULT_EPOCH
     source: str = "<string>"
     text: str = ""
 
@@ -368,9 +373,11 @@ def _scene(spec: Mapping[str, Any], source: str, text: str) -> Scene:
     qos = spec.get("qos") or {}
     commands = spec.get("commands") or {}
     recording = spec.get("recording")
+    foxglove = spec.get("foxglove")
     return Scene(
         name=spec.get("name", default_name).strip(),
         description=(spec.get("description") or "").strip(),
+        epoch=_at("epoch", _epoch, spec.get("epoch") or DEFAULT_EPOCH),
         frames=frames,
         body=body,
         initial=_initial(spec.get("initial") or {}),
@@ -383,6 +390,7 @@ def _scene(spec: Mapping[str, Any], source: str, text: str) -> Scene:
         outputs=Outputs(**{name: float(rate) for name, rate in (spec.get("outputs") or {}).items()}),
         qos=OutputQos(reliability=qos.get("reliability", OutputQos.reliability), depth=qos.get("depth", OutputQos.depth)),
         recording=None if recording is None else recording.strip(),
+        foxglove=None if foxglove is None else str(foxglove).strip(),
         commands=CommandSettings(
             max_torque=float(commands.get("max_torque", 0.0)),
             qos_depth=commands.get("qos_depth", limits.DEFAULT_COMMAND_DEPTH),
@@ -390,6 +398,15 @@ def _scene(spec: Mapping[str, Any], source: str, text: str) -> Scene:
         source=source,
         text=text,
     )
+
+
+def _epoch(text: str) -> str:
+    """A real UTC date and time (the schema's pattern also passes 2026-02-30T25:00:00)."""
+    try:
+        datetime.datetime.fromisoformat(text.rstrip("Z")[:26])
+    except ValueError:
+        raise ValueError(f"not a valid date and time: {text!r}") from None
+    return text
 
 
 def _frames(spec: Mapping[str, Any]) -> Frames:
