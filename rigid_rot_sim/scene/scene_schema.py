@@ -241,11 +241,6 @@ SCENE_SCHEMA: dict[str, Any] = {
                                  default=DEFAULT_BODY_FRAME),
                 },
             )),
-            "epoch": nullable({
-                "description": "UTC date and time of sim time 0, ISO 8601 (YYYY-MM-DDThh:mm:ss[.f...][Z]); "
-                               f"used by exports (CCSDS AEM). Default {DEFAULT_EPOCH}.",
-                "type": "string", "pattern": EPOCH_PATTERN, "default": DEFAULT_EPOCH,
-            }),
             "body": _BODY,
             "initial": _INITIAL,
             "torque_inputs": _TORQUE_INPUTS,
@@ -253,6 +248,11 @@ SCENE_SCHEMA: dict[str, Any] = {
             "integrator": _INTEGRATOR,
             "duration": nullable(number("Sim time to run, s; null runs unbounded.", exclusive_minimum=0.0,
                                         maximum=_DURATION_MAX)),
+            "epoch": nullable({
+                "description": "UTC date and time of sim time 0, ISO 8601 (YYYY-MM-DDThh:mm:ss[.f...][Z]); "
+                               f"used by exports (CCSDS AEM). Default {DEFAULT_EPOCH}.",
+                "type": "string", "pattern": EPOCH_PATTERN, "default": DEFAULT_EPOCH,
+            }),
             "real_time_factor": number("Pace: 1 = wall clock, 0 = as fast as possible.",
                                        minimum=limits.REAL_TIME_FACTOR_RANGE[0],
                                        maximum=limits.REAL_TIME_FACTOR_RANGE[1], default=1.0),

@@ -22,6 +22,7 @@ from foxglove_client import FoxgloveClient  # noqa: E402
 
 from rigid_rot_sim.core.inertia import equivalent_box, principal_frame  # noqa: E402
 from rigid_rot_sim.recording.definitions import dynamic_decoder  # noqa: E402
+from rigid_rot_sim.recording.reader import BagReader  # noqa: E402
 from rigid_rot_sim.run.body_view import body_view  # noqa: E402
 from rigid_rot_sim.scene.scene import load_scene  # noqa: E402
 from rigid_rot_sim.share import resolve_scene  # noqa: E402
@@ -152,11 +153,11 @@ def test_view_serves_a_recording(tmp_path):
         assert match, line
         client = FoxgloveClient(f"ws://127.0.0.1:{match.group(1)}")
         client.until(lambda: client.channel_of("/rigid_rot_sim/state") is not None, WAIT, "the state channel")
-        assert "PlaybackControl" in json.dumps(client.server_info)  # play/pause from the app
+        assert "playbackControl" in client.server_info["capabilities"]  # play/pause/seek from the app
+        end = client.server_info["dataEndTime"]
+        assert end["sec"] * 1_000_000_000 + end["nsec"] == max(m.log_time_ns for m in BagReader(bag).messages())
         client.subscribe("/rigid_rot_sim/state", "/rigid_rot_sim/body_scene")
         client.until(lambda: len(client.received("/rigid_rot_sim/state")) >= 5, WAIT, "5 recorded states")
-        from rigid_rot_sim.recording.reader import BagReader
-
         recorded = {m.log_time_ns: m.data for m in BagReader(bag).messages(["/rigid_rot_sim/state"])}
         for t_ns, payload in client.received("/rigid_rot_sim/state"):
             assert recorded[t_ns] == payload  # the recorded bytes at their recorded times
