@@ -25,7 +25,7 @@ def test_every_event_kind_is_recorded_and_replayed_bit_for_bit(tmp_path):
                       integrator={"method": sim.method, "dt": sim.dt, "options": sim.options},
                       events_topic="/rigid_rot_sim/sim_events")
     run.add_topic("/rigid_rot_sim/state", RigidBodyState, role="state")
-    sim.add_observer(NodeRecording(run, sim, None, "base_link"))
+    sim.add_observer(NodeRecording(run, sim, None))
 
     def publish():
         run.record("/rigid_rot_sim/state", conversions.snapshot_to_state(sim.snapshot(), "odom", "base_link"))
@@ -67,7 +67,7 @@ def test_rejected_commands_record_no_event(tmp_path):
     sim = Simulator(load_scene(SCENE), method="rk4")
     with RunRecorder(bag, scene_text=SCENE.read_text(), scene_file=str(SCENE), parameters={},
                      integrator={"method": sim.method, "dt": sim.dt}, events_topic="/e/sim_events") as run:
-        sim.add_observer(NodeRecording(run, sim, None, "base_link"))
+        sim.add_observer(NodeRecording(run, sim, None))
         with pytest.raises(CommandRejected):
             sim.receive_torque("~/torque", (float("inf"), 0.0, 0.0), "base_link", 0.0)
     assert BagReader(bag).counts().get("/e/sim_events", 0) == 0
@@ -106,7 +106,7 @@ def _record_half_a_second(bag: Path, check_node=None) -> None:
         if check_node is not None:
             check_node(node)
         while not node.finished:
-            node.timer_callback()
+            node.run.tick()
         node.destroy_node()
     finally:
         rclpy.try_shutdown(context=context)
