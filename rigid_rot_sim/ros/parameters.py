@@ -7,7 +7,7 @@ run). Everything else is a loop over the table:
 
 * :func:`declare_parameters` declares each with a ``ParameterDescriptor`` (ranges from
   :mod:`rigid_rot_sim.core.limits`), the scene's value as default;
-* :func:`read_settings` reads them back once into :class:`Settings`, a frozen mapping read
+* :func:`read_settings` reads them back once into :class:`NodeSettings`, frozen and read
   by spec (``settings[DT]`` is a float), refusing a value outside its choices;
 * :class:`RunParameters` refuses bad run-time values (``validate``) and applies good ones
   (``apply``), each check and apply function called once per change, as ros2/demos'
@@ -328,7 +328,7 @@ def declare_parameters(node: Node, scene: Scene, specs: Iterable[ParamSpec[Any]]
 
 
 @dataclass(frozen=True)
-class Settings:
+class NodeSettings:
     """The parameters' values at start-up, read by spec (``settings[DT]``), and the scene
     they configure (with the frame parameters' names: they override the scene's everywhere)."""
 
@@ -343,10 +343,10 @@ class Settings:
         return {output: self[spec] for output, spec in RATES.items()}
 
 
-def read_settings(node: Node, scene: Scene, specs: Iterable[ParamSpec[Any]] = PARAMETERS) -> Settings:
+def read_settings(node: Node, scene: Scene, specs: Iterable[ParamSpec[Any]] = PARAMETERS) -> NodeSettings:
     """The declared parameters' values; ValueError for a value outside its choices or bad frame names."""
     values = {spec.name: node.get_parameter(spec.name).value for spec in specs}
-    settings = Settings(scene, types.MappingProxyType(values))
+    settings = NodeSettings(scene, types.MappingProxyType(values))
     for spec in specs:
         spec.check_choice(settings[spec])
     frames = Frames(settings[WORLD_FRAME], settings[BODY_FRAME]).checked()

@@ -2,7 +2,7 @@
 
 :meth:`NodeRecording.start` opens a :class:`~rigid_rot_sim.recording.session.RunRecorder`
 and registers the node's topics; the node then attaches the recording in three visible
-lines (``RigidRotSimNode._start_recording``):
+lines (``SceneRun._start_recording`` in :mod:`.node`):
 
 * ``sim.add_observer(recording)``: the simulator reports every change made from outside
   the physics (:class:`~rigid_rot_sim.run.observer.SimulationObserver`), which is recorded
