@@ -17,6 +17,7 @@ from __future__ import annotations
 
 import argparse
 import os
+from typing import Any
 
 from rigid_rot_sim.cli.argtypes import nonnegative_number, positive_number
 from rigid_rot_sim.cli.ros_args import add_ros_args
@@ -49,7 +50,7 @@ def node_arguments(args: argparse.Namespace) -> list[str]:
     """The argv for the node: ``--ros-args -p name:=value ...`` plus the pass-through arguments."""
     from rigid_rot_sim.ros import parameters as p  # the names, from the node's table (imports rclpy)
 
-    options = [
+    options: list[tuple[p.ParamSpec[Any], str | None]] = [
         (p.SCENE, resolve_scene(args.scene)),
         (p.DURATION, None if args.duration is None else repr(float(args.duration))),
         (p.REAL_TIME_FACTOR, None if args.real_time_factor is None else repr(float(args.real_time_factor))),
