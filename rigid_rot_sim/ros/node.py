@@ -66,27 +66,8 @@ from rigid_rot_sim.core import limits
 from rigid_rot_sim.ros import simulation_services
 from rigid_rot_sim.ros.inputs import Rejections, TorqueInputs
 from rigid_rot_sim.ros.outputs import Outputs
-from rigid_rot_sim.ros.parameters import (
-    COMMAND_DEPTH,
-    DT,
-    DURATION,
-    GROUND_TRUTH_VARIANCE,
-    INTEGRATOR,
-    MAX_TORQUE,
-    QOS_DEPTH,
-    QOS_RELIABILITY,
-    REAL_TIME_FACTOR,
-    RECORD_LOG_TIME,
-    RECORD_PATH,
-    START_PAUSED,
-    USE_SIM_TIME_REFUSAL,
-    RunParameters,
-    accept_integers_for_doubles,
-    declare_parameters,
-    declare_scene_parameter,
-    read_settings,
-    refuse_use_sim_time,
-)
+from rigid_rot_sim.ros import parameters as params
+from rigid_rot_sim.ros.parameters import RunParameters, declare_parameters, declare_scene_parameter, read_settings
 from rigid_rot_sim.ros.qos import output_qos
 from rigid_rot_sim.ros.services import InertiaService, RunServices
 from rigid_rot_sim.run.pacing import OutputSchedule, Pacer, Progress, RunDriver
@@ -112,29 +93,30 @@ class SceneRun:
         declare_parameters(node, scene)
         settings = read_settings(node, scene)
         self.scene = scene = settings.scene  # with the frame parameters' names
-        self.sim = sim = Simulator(scene, method=settings[INTEGRATOR], dt=settings[DT])
-        sim.max_torque = settings[MAX_TORQUE]
-        state_qos = output_qos(OutputQos(settings[QOS_RELIABILITY], settings[QOS_DEPTH]))
-        self.outputs = Outputs(node, scene, settings.rates(), state_qos, settings[GROUND_TRUTH_VARIANCE])
-        self.driver = RunDriver(sim, OutputSchedule.from_rates(self.outputs.rates, sim.dt),
-                                Pacer(settings[REAL_TIME_FACTOR]), settings[DURATION] or None, observers=[self.outputs])
+        self.sim = sim = Simulator(scene, method=settings[params.INTEGRATOR], dt=settings[params.DT])
+        sim.max_torque = settings[params.MAX_TORQUE]
+        state_qos = output_qos(OutputQos(settings[params.QOS_RELIABILITY], settings[params.QOS_DEPTH]))
+        self.outputs = Outputs(node, scene, settings.rates(), state_qos, settings[params.GROUND_TRUTH_VARIANCE])
+        schedule = OutputSchedule.from_rates(self.outputs.rates, sim.dt)
+        pacer = Pacer(settings[params.REAL_TIME_FACTOR])
+        self.driver = RunDriver(sim, schedule, pacer, settings[params.DURATION] or None, observers=[self.outputs])
         rejections = Rejections(node, sim, self.outputs)
-        self.inputs = TorqueInputs(node, sim, scene, settings[COMMAND_DEPTH], rejections)
+        self.inputs = TorqueInputs(node, sim, scene, settings[params.COMMAND_DEPTH], rejections)
         self.services = RunServices(node, self.driver, scene, rejections, self.report_progress)
         self.simulation_services = (simulation_services.SimulationServices(node, self.services)
                                     if simulation_services.AVAILABLE else None)
         self.recording: NodeRecording | None = None
-        if settings[RECORD_PATH]:
-            self.recording = self._start_recording(node, settings[RECORD_PATH], settings[RECORD_LOG_TIME])
+        if settings[params.RECORD_PATH]:
+            self.recording = self._start_recording(node, settings[params.RECORD_PATH], settings[params.RECORD_LOG_TIME])
         try:
-            sim.pause(settings[START_PAUSED])
+            sim.pause(settings[params.START_PAUSED])
             self.driver.pacer.anchor(sim.t)
             # steady clock: the pacing never depends on /clock, which this node itself publishes
             self.timer = node.create_timer(self.driver.pacer.tick_period(sim.dt), self.tick,
                                            clock=SteadyClock(clock_type=ClockType.STEADY_TIME))
             self.parameters = RunParameters(node, self.driver, self.timer)
-            self.logger.info(self._startup_line(settings[INTEGRATOR] == "auto", settings[RECORD_PATH],
-                                                settings[RECORD_LOG_TIME]))
+            self.logger.info(self._startup_line(settings[params.INTEGRATOR] == "auto", settings[params.RECORD_PATH],
+                                                settings[params.RECORD_LOG_TIME]))
             for warning in sim.warnings():
                 self.logger.warning(warning)
             self.outputs.publish_latched(sim.t)
@@ -225,8 +207,8 @@ class RigidRotSimNode(Node):
 
     def __init__(self, **kwargs: Any) -> None:
         super().__init__(NODE_NAME, **kwargs)
-        accept_integers_for_doubles(self)  # `ros2 param set ... real_time_factor 2` stores 2.0
-        refuse_use_sim_time(self)  # with or without a scene
+        params.accept_integers_for_doubles(self)  # `ros2 param set ... real_time_factor 2` stores 2.0
+        params.refuse_use_sim_time(self)  # with or without a scene
         self.inertia_service = InertiaService(self)
         self.run: SceneRun | None = None
         scene_path = declare_scene_parameter(self)
@@ -235,7 +217,7 @@ class RigidRotSimNode(Node):
                 "no scene parameter: serving ~/compute_inertia only (rigid-rot run SCENE starts a simulation)")
             return
         if self.get_parameter("use_sim_time").value is True:
-            raise ValueError(USE_SIM_TIME_REFUSAL)
+            raise ValueError(params.USE_SIM_TIME_REFUSAL)
         self.run = SceneRun(self, load_scene(resolve_scene(scene_path)))  # SceneError names the file, key, problem
 
     @property
