@@ -248,6 +248,9 @@ class OutputRates(Mapping[str, float]):
     def __setattr__(self, name: str, value: Any) -> None:
         raise AttributeError(f"{type(self).__name__} is frozen")
 
+    def __reduce__(self) -> tuple[type[OutputRates], tuple[dict[str, float]]]:
+        return (type(self), (self._rates,))  # pickled by value (scenes travel to sweep workers)
+
     def __repr__(self) -> str:
         return f"{type(self).__name__}({self._rates!r})"
 

@@ -1,9 +1,11 @@
 """The scene schema: exported as committed, valid JSON Schema, bounded like the node's parameters,
 described for editors, and its errors turned into one line naming the key."""
 
+import copy
 import dataclasses
 import doctest
 import json
+import pickle
 import re
 from pathlib import Path
 
@@ -79,6 +81,7 @@ def test_output_rates_are_a_frozen_mapping():
         rates["imu"] = 1.0  # type: ignore[index]
     with pytest.raises(KeyError, match="velocity"):
         OutputRates(velocity=1.0)
+    assert pickle.loads(pickle.dumps(rates)) == rates and copy.deepcopy(rates) == rates
 
 
 @pytest.mark.parametrize("path", sorted((ROOT / "config" / "scenes").glob("*.yaml")), ids=lambda p: p.stem)
