@@ -13,8 +13,9 @@ Topics (names relative to the node; QoS in the README, section "The simulation n
 ~/angular_velocity (Vector3Stamped, body frame), ~/angular_momentum (Vector3Stamped,
 world frame), ~/mass_properties (geometry_msgs/InertiaStamped, transient local, once),
 ~/top_state (rigid_rot_msgs/HeavyTopState, gravity scenes), ~/rejected
-(rigid_rot_msgs/RejectedCommand), ~/imu (sensor_msgs/Imu) and ~/odom (nav_msgs/Odometry)
-when the scene asks for them, /tf (world -> body) and /tf_static (body -> principal
+(rigid_rot_msgs/RejectedCommand), ~/imu (sensor_msgs/Imu; the gyro's readings when the scene
+has ``sensors.gyro``) and ~/odom (nav_msgs/Odometry) when the scene asks for them,
+~/star_tracker (geometry_msgs/PoseWithCovarianceStamped) with ``sensors.star_tracker``, /tf (world -> body) and /tf_static (body -> principal
 frame, where it differs from the body frame), both where tf2_msgs imports (``make setup``
 builds it into the venv), /clock (sim time). QoS: rigid_rot_sim.ros.qos.
 Every header stamp is sim time. Frame names: the ``world_frame`` / ``body_frame``
@@ -63,6 +64,7 @@ from rclpy.signals import SignalHandlerOptions
 from rigid_rot_sim.core import limits
 from rigid_rot_sim.run.pacing import OutputSchedule, Pacer, Progress, RunDriver
 from rigid_rot_sim.scene.scene import load_scene
+from rigid_rot_sim.run.sensors import SensorSuite
 from rigid_rot_sim.run.simulator import Simulator
 from rigid_rot_sim.ros import simulation_services
 from rigid_rot_sim.ros.inputs import Rejections, TorqueInputs
@@ -109,8 +111,9 @@ class RigidRotSimNode(Node):
         built: list[str] = [f"integrator {sim.method} (dt {sim.dt:g} s{auto})"]
         left_out: list[str] = []
 
+        sensors = self._sensors(scene, built, left_out)
         self.outputs = Outputs(self, scene, settings.rates, settings.state_qos, settings.ground_truth_variance,
-                               built, left_out)
+                               built, left_out, sensors)
         self.run = RunDriver(sim, OutputSchedule.from_rates(self.outputs.rates, sim.dt),
                              Pacer(settings.real_time_factor), settings.duration, observers=[self.outputs])
         rejections = Rejections(self, sim, self.outputs)
@@ -156,6 +159,17 @@ class RigidRotSimNode(Node):
             if self.recording is not None:
                 self.recording.close()  # the recording started above ends as a complete file
             raise
+
+    @staticmethod
+    def _sensors(scene: Any, built: list[str], left_out: list[str]) -> SensorSuite | None:
+        """The scene's sensor models (None without any), their seed on the start-up line."""
+        if scene.sensors.gyro is None and scene.sensors.star_tracker is None:
+            left_out.append("sensor models (~/imu, if asked for, is ideal; no ~/star_tracker)")
+            return None
+        sensors = SensorSuite(scene.sensors)
+        drawn = "" if scene.sensors.seed is not None else ", drawn"
+        built.append(f"sensors {', '.join(sensors.names)} (seed {sensors.seed}{drawn})")
+        return sensors
 
     def _start_recording(self, path: str, log_time: str) -> Any:
         """The recording, an observer of the simulator and a listener of the outputs and inputs;

@@ -18,7 +18,7 @@ from __future__ import annotations
 
 from typing import Any, Callable, Protocol, Sequence
 
-from geometry_msgs.msg import InertiaStamped, QuaternionStamped, Vector3Stamped
+from geometry_msgs.msg import InertiaStamped, PoseWithCovarianceStamped, QuaternionStamped, Vector3Stamped
 from nav_msgs.msg import Odometry
 from rclpy.node import Node
 from rclpy.serialization import serialize_message
@@ -30,6 +30,7 @@ from rigid_rot_sim import conversions
 from rigid_rot_sim.core.inertia import principal_frame_pose
 from rigid_rot_sim.run.observer import SimulationObserver
 from rigid_rot_sim.scene.scene import OUTPUT_NAMES, Frames, Scene
+from rigid_rot_sim.run.sensors import SensorSuite
 from rigid_rot_sim.run.simulator import StateSnapshot
 from rigid_rot_sim.ros.qos import CLOCK_QOS, LATCHED_QOS, REJECTED_QOS, TF_QOS, TF_STATIC_QOS, describe as describe_qos
 
@@ -52,8 +53,21 @@ OUTPUTS: dict[str, tuple[Any, MessageBuilder]] = {
     "clock": (Clock, lambda s, f, v: conversions.clock_message(s.t)),
     "imu": (Imu, lambda s, f, v: conversions.snapshot_to_imu(s, f.body, v)),
     "odom": (Odometry, lambda s, f, v: conversions.snapshot_to_odometry(s, f.world, f.body, v)),
+    "star_tracker": (PoseWithCovarianceStamped, None),  # a sensor's reading: SENSOR_OUTPUTS
 }
 assert tuple(OUTPUTS) == OUTPUT_NAMES, "one entry per scene output, in the scene's order"
+
+#: A sensor reading's message from the sensors, the state, the frames and the ground-truth variance.
+SensorBuilder = Callable[[SensorSuite, StateSnapshot, Frames, float], Any]
+
+#: Outputs that carry a sensor's reading when the scene has that sensor (``~/imu``: the gyro's,
+#: instead of the ideal rate): output name -> (sensor, builder). Each message is one reading.
+SENSOR_OUTPUTS: dict[str, tuple[str, SensorBuilder]] = {
+    "imu": ("gyro", lambda sensors, s, f, v: conversions.gyro_to_imu(
+        sensors.read_gyro(s), s.t, f.body, sensors.gyro.white_noise_variance() or v)),
+    "star_tracker": ("star_tracker", lambda sensors, s, f, v: conversions.star_tracker_pose(
+        sensors.read_star_tracker(s), s.t, f.world, sensors.star_tracker.covariance)),
+}
 
 
 def output_topic(name: str) -> str:
@@ -76,8 +90,13 @@ class Outputs(SimulationObserver):
     """
 
     def __init__(self, node: Node, scene: Scene, rates: dict[str, float], state_qos: Any,
-                 ground_truth_variance: float, built: list[str], left_out: list[str]) -> None:
+                 ground_truth_variance: float, built: list[str], left_out: list[str],
+                 sensors: SensorSuite | None = None) -> None:
         self.scene = scene
+        self.sensors = sensors
+        #: Output name -> the builder of its sensor reading (the outputs whose sensor the scene has).
+        self.readings = {name: builder for name, (sensor, builder) in SENSOR_OUTPUTS.items()
+                         if sensors is not None and sensor in sensors.names}
         self.frames = scene.frames
         self.ground_truth_variance = ground_truth_variance
         self.listeners: list[PublishedListener] = []
@@ -87,6 +106,8 @@ class Outputs(SimulationObserver):
             rate = rates.get(name, 0.0)
             if name == "top_state" and not scene.is_top:
                 continue  # listed with gravity by the node
+            if name == "star_tracker" and name not in self.readings:
+                continue  # listed with the sensors by the node
             if name == "tf" and TFMessage is None:
                 left_out.append("/tf (tf2_msgs not installed)")
                 continue
@@ -139,4 +160,8 @@ class Outputs(SimulationObserver):
 
     def outputs_due(self, step: int, snapshot: StateSnapshot, names: Sequence[str]) -> None:
         for name in names:
-            self.publish(name, OUTPUTS[name][1](snapshot, self.frames, self.ground_truth_variance))
+            reading = self.readings.get(name)
+            if reading is not None:
+                self.publish(name, reading(self.sensors, snapshot, self.frames, self.ground_truth_variance))
+            else:
+                self.publish(name, OUTPUTS[name][1](snapshot, self.frames, self.ground_truth_variance))
