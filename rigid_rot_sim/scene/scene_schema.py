@@ -253,8 +253,8 @@ _STAR_TRACKER = mapping(
 _SENSORS = nullable(mapping(
     "Sensor models with seeded noise; ground-truth topics stay exact (docs/sensors.md).",
     {
-        "seed": nullable(integer("Seed of every sensor noise; omitted: drawn at start and recorded.",
-                                 minimum=0, maximum=SEED_LIMIT - 1)),
+        "seed": integer("Seed of every sensor noise; omitted: drawn at start and recorded.",
+                        minimum=0, maximum=SEED_LIMIT - 1),
         "gyro": nullable(_GYRO),
         "star_tracker": nullable(_STAR_TRACKER),
     },
