@@ -253,7 +253,8 @@ def _same_reading(role: str, sensors: Any, recorded: Any, snapshot: StateSnapsho
     """Draw the next reading of the sensor behind ``role`` and compare it with the recorded message."""
     if role == "imu":
         return bool(np.array_equal(vector3_to_array(recorded.angular_velocity), sensors.read_gyro(snapshot)))
-    return bool(np.array_equal(quaternion_to_array(recorded.pose.pose.orientation), sensors.read_star_tracker(snapshot)))
+    attitude = quaternion_to_array(recorded.pose.pose.orientation)
+    return bool(np.array_equal(attitude, sensors.read_star_tracker(snapshot)))
 
 
 def _compare(recorded: Any, snapshot: StateSnapshot) -> tuple[bool, tuple[float, float, float, float]]:

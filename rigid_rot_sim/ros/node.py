@@ -15,8 +15,9 @@ world frame), ~/mass_properties (geometry_msgs/InertiaStamped, transient local, 
 ~/top_state (rigid_rot_msgs/HeavyTopState, gravity scenes), ~/rejected
 (rigid_rot_msgs/RejectedCommand), ~/imu (sensor_msgs/Imu; the gyro's readings when the scene
 has ``sensors.gyro``) and ~/odom (nav_msgs/Odometry) when the scene asks for them,
-~/star_tracker (geometry_msgs/PoseWithCovarianceStamped) with ``sensors.star_tracker``, /tf (world -> body) and /tf_static (body -> principal
-frame, where it differs from the body frame), both where tf2_msgs imports (``make setup``
+~/star_tracker (geometry_msgs/PoseWithCovarianceStamped) with ``sensors.star_tracker``
+(docs/sensors.md), /tf (world -> body) and /tf_static (body -> principal frame, where it
+differs from the body frame), both where tf2_msgs imports (``make setup``
 builds it into the venv), /clock (sim time). QoS: rigid_rot_sim.ros.qos.
 Every header stamp is sim time. Frame names: the ``world_frame`` / ``body_frame``
 parameters (default: the scene's ``frames``, REP 105 ``odom`` / ``base_link``), used by

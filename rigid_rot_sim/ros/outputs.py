@@ -2,7 +2,9 @@
 
 :data:`OUTPUTS` maps each scene output name (``scene.scene.OUTPUT_NAMES``) to its message
 type and the function that builds its message from a
-:class:`~rigid_rot_sim.run.simulator.StateSnapshot`. :class:`Outputs` creates a publisher
+:class:`~rigid_rot_sim.run.simulator.StateSnapshot`; :data:`SENSOR_OUTPUTS` the outputs that
+carry a sensor's reading instead (``~/imu`` with a gyro, ``~/star_tracker``), drawn from the
+run's :class:`~rigid_rot_sim.run.sensors.SensorSuite` once per message. :class:`Outputs` creates a publisher
 for each output the scene asks for (rate > 0), plus ``~/mass_properties`` (latched, once),
 ``~/rejected`` and ``/tf_static`` (the principal-axes frame, where it differs from the body
 frame), all in :attr:`Outputs.publishers`, keyed on those names.

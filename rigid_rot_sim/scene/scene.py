@@ -385,6 +385,7 @@ def _scene(spec: Mapping[str, Any], source: str, text: str) -> Scene:
     commands = spec.get("commands") or {}
     recording = spec.get("recording")
     sensors = _sensors(spec.get("sensors") or {})
+    outputs = spec.get("outputs") or {}
     return Scene(
         name=spec.get("name", default_name).strip(),
         description=(spec.get("description") or "").strip(),
@@ -397,7 +398,7 @@ def _scene(spec: Mapping[str, Any], source: str, text: str) -> Scene:
         integrator=_integrator(spec.get("integrator") or {}),
         duration=None if duration is None else float(duration),
         real_time_factor=float(spec.get("real_time_factor", 1.0)),
-        outputs=Outputs(**_sensor_rates(sensors, {name: float(rate) for name, rate in (spec.get("outputs") or {}).items()})),
+        outputs=Outputs(**_sensor_rates(sensors, {name: float(rate) for name, rate in outputs.items()})),
         sensors=sensors,
         qos=OutputQos(reliability=qos.get("reliability", OutputQos.reliability), depth=qos.get("depth", OutputQos.depth)),
         recording=None if recording is None else recording.strip(),

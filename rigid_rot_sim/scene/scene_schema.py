@@ -73,7 +73,8 @@ OUTPUTS: dict[str, OutputSpec] = {
     "tf": OutputSpec(50.0, "world -> body transform on /tf (where tf2_msgs is installed)"),
     "clock": OutputSpec(100.0, "sim time on /clock"),
     # sensor_msgs/Imu and nav_msgs/Odometry: built only when the scene asks
-    "imu": OutputSpec(0.0, "sensor_msgs/Imu on ~/imu (0: not built, the default)"),
+    "imu": OutputSpec(0.0, "sensor_msgs/Imu on ~/imu: ideal, or the gyro's readings (set by sensors.gyro.rate); "
+                           "0: not built, the default"),
     "odom": OutputSpec(0.0, "nav_msgs/Odometry on ~/odom (0: not built, the default)"),
     "star_tracker": OutputSpec(0.0, "geometry_msgs/PoseWithCovarianceStamped on ~/star_tracker "
                                     "(set by sensors.star_tracker.rate; 0: not built)"),
