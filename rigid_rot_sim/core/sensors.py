@@ -158,9 +158,10 @@ class GyroModel:
         """Nominal sample interval 1/rate (s)."""
         return 1.0 / self.rate
 
-    def white_noise_variance(self, interval: float | None = None) -> float:
-        """Variance ((rad/s)^2) of the noise of one sample beyond the constant biases: N^2/Δ + σ_b^2."""
-        return self.angle_random_walk**2 / (interval or self.period) + self.bias_sigma**2
+    @property
+    def reading_variance(self) -> float:
+        """Variance ((rad/s)^2) of one reading's noise beyond the constant biases: N^2 rate + σ_b^2."""
+        return self.angle_random_walk**2 * self.rate + self.bias_sigma**2
 
 
 @dataclass(frozen=True)
@@ -214,7 +215,7 @@ def gyro_sample(
     return measured, GyroState(index=state.index + 1, t=float(t), bias=tuple(float(b) for b in bias))
 
 
-def gyro_batch(model: GyroModel, seed: int, omega: np.ndarray, first: int = 0) -> np.ndarray:
+def gyro_batch(model: GyroModel, seed: int, omega: np.ndarray) -> np.ndarray:
     """Readings (n, 3) rad/s of the rates ``omega`` (n, 3) sampled every 1/rate s from sample 0.
 
     The same equations as :func:`gyro_sample` vectorised over samples, for analysis (Allan
@@ -224,10 +225,7 @@ def gyro_batch(model: GyroModel, seed: int, omega: np.ndarray, first: int = 0) -
     from scipy.signal import lfilter  # only here: analysis, not the node's path
 
     omega = np.asarray(omega, dtype=float).reshape(-1, 3)
-    n = len(omega)
-    if first != 0:
-        raise ValueError("gyro_batch starts at sample 0 (the bias starts stationary there)")
-    w = standard_normals(seed, Stream.GYRO, 0, n, 6)
+    w = standard_normals(seed, Stream.GYRO, 0, len(omega), 6)
     sigma = model.bias_sigma
     a = math.exp(-model.period / model.bias_correlation_time)
     drive = sigma * math.sqrt(-math.expm1(-2.0 * model.period / model.bias_correlation_time)) * w[:, :3]

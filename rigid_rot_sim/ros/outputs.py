@@ -66,7 +66,7 @@ SensorBuilder = Callable[[SensorSuite, StateSnapshot, Frames, float], Any]
 #: instead of the ideal rate): output name -> (sensor, builder). Each message is one reading.
 SENSOR_OUTPUTS: dict[str, tuple[str, SensorBuilder]] = {
     "imu": ("gyro", lambda sensors, s, f, v: conversions.gyro_to_imu(
-        sensors.read_gyro(s), s.t, f.body, sensors.gyro.white_noise_variance() or v)),
+        sensors.read_gyro(s), s.t, f.body, sensors.gyro.reading_variance or v)),
     "star_tracker": ("star_tracker", lambda sensors, s, f, v: conversions.star_tracker_pose(
         sensors.read_star_tracker(s), s.t, f.world, sensors.star_tracker.covariance)),
 }

@@ -89,6 +89,10 @@ def test_readings_are_noisy_ground_truth_exact_star_tracker_covariance_is_nea_sq
         if state is not None:
             errors.append(vector3_to_array(imu.angular_velocity) - vector3_to_array(state.angular_velocity_body))
         assert imu.orientation_covariance[0] == -1.0  # a gyro gives no attitude
+        # one reading's noise: N^2 rate + sigma_b^2, sigma_b = 0.664 B / 0.61736 (docs/sensors.md)
+        variance = (1e-3) ** 2 * 200 + (0.664 * 1e-4 / 0.61736) ** 2
+        np.testing.assert_allclose(np.array(imu.angular_velocity_covariance).reshape(3, 3), np.eye(3) * variance,
+                                   rtol=1e-4)
         assert imu.header.frame_id == "base_link"
     errors = np.array(errors)
     assert len(errors) > 20 and np.all(errors != 0.0)
