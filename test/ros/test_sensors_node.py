@@ -108,3 +108,15 @@ def test_readings_are_noisy_ground_truth_exact_star_tracker_covariance_is_nea_sq
             q_true, q_measured = quaternion_to_array(state.orientation), quaternion_to_array(pose.pose.pose.orientation)
             attitude_errors.append(2.0 * np.arccos(min(1.0, abs(float(np.dot(q_true, q_measured))))))
     assert attitude_errors and 0.0 < max(attitude_errors) < 10 * max(NEA)
+
+
+def test_plot_shows_the_sensor_errors(recorded, tmp_path):
+    import matplotlib.image
+
+    from rigid_rot_sim.recording.plot import plot_run
+
+    bag, _ = recorded
+    written = plot_run(bag, tmp_path / "plots")
+    assert [p.name for p in written] == ["omega.png", "drift.png", "torque.png", "polhode.png", "sensors.png"]
+    image = matplotlib.image.imread(written[-1])
+    assert image.shape[0] > 600 and np.std(image) > 0.01
