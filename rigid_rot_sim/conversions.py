@@ -18,6 +18,7 @@ from geometry_msgs.msg import (
     Inertia,
     InertiaStamped,
     Point,
+    PoseWithCovarianceStamped,
     Quaternion,
     QuaternionStamped,
     TransformStamped,
@@ -379,3 +380,46 @@ def body_markers(view: BodyView, snapshot: StateSnapshot, world_frame: str, body
                       *view.momentum_arrow(snapshot.angular_momentum_world), view)
     momentum.frame_locked = False
     return MarkerArray(markers=[box, omega, momentum])
+# --------------------------------------------------------------------- sensor models (issue 20)
+# Readings of the scene's sensors (rigid_rot_sim.run.sensors), not the ground truth: their
+# covariances are the models' own. A quantity a sensor does not measure is marked as such.
+
+#: Variance (m^2) of the position block of ~/star_tracker: a star tracker measures no position.
+UNMEASURED_POSITION_VARIANCE = 1e6
+
+
+def gyro_to_imu(reading, t: float, body_frame: str, variance: float) -> Imu:
+    """sensor_msgs/Imu of a gyro reading (rad/s, body frame) at sim time t (s).
+
+    ``angular_velocity_covariance``: ``variance`` ((rad/s)^2) on the diagonal, the model's
+    per-sample noise. A gyro gives no orientation and no linear acceleration: both
+    covariances have -1 in element 0 (the message's "not provided"), the orientation is the
+    identity.
+    """
+    msg = Imu()
+    msg.header.stamp = seconds_to_time(t)
+    msg.header.frame_id = body_frame
+    msg.orientation.w = 1.0
+    _set_vector3(msg.angular_velocity, reading)
+    msg.orientation_covariance = [-1.0] + [0.0] * 8
+    msg.angular_velocity_covariance = _diagonal(3, [variance] * 3)
+    msg.linear_acceleration_covariance = [-1.0] + [0.0] * 8
+    return msg
+
+
+def star_tracker_pose(orientation, t: float, world_frame: str, covariance) -> PoseWithCovarianceStamped:
+    """geometry_msgs/PoseWithCovarianceStamped of a star tracker attitude (x, y, z, w; body -> world).
+
+    Position (0, 0, 0), not measured (variance ``UNMEASURED_POSITION_VARIANCE``); the rotation
+    block is ``covariance`` (3x3, rad^2): the attitude error's, about the body axes.
+    """
+    msg = PoseWithCovarianceStamped()
+    msg.header.stamp = seconds_to_time(t)
+    msg.header.frame_id = world_frame
+    q = msg.pose.pose.orientation
+    q.x, q.y, q.z, q.w = np.asarray(orientation, dtype=float).tolist()
+    block = np.zeros((6, 6))
+    block[:3, :3] = np.eye(3) * UNMEASURED_POSITION_VARIANCE
+    block[3:, 3:] = np.asarray(covariance, dtype=float).reshape(3, 3)
+    msg.pose.covariance = block.reshape(36).tolist()
+    return msg

@@ -15,9 +15,11 @@ Topics (names relative to the node; QoS in the README, section "The simulation n
 ~/angular_velocity (Vector3Stamped, body frame), ~/angular_momentum (Vector3Stamped,
 world frame), ~/mass_properties (geometry_msgs/InertiaStamped, transient local, once),
 ~/top_state (rigid_rot_msgs/HeavyTopState, gravity scenes), ~/rejected
-(rigid_rot_msgs/RejectedCommand), ~/imu (sensor_msgs/Imu) and ~/odom (nav_msgs/Odometry)
-when the scene asks for them, /tf (world -> body) and /tf_static (body -> principal
-frame, where it differs from the body frame), /clock (sim time). QoS: rigid_rot_sim.ros.qos.
+(rigid_rot_msgs/RejectedCommand), ~/imu (sensor_msgs/Imu; the gyro's readings when the scene
+has ``sensors.gyro``) and ~/odom (nav_msgs/Odometry) when the scene asks for them,
+~/star_tracker (geometry_msgs/PoseWithCovarianceStamped) with ``sensors.star_tracker``
+(docs/sensors.md), /tf (world -> body) and /tf_static (body -> principal frame, where it
+differs from the body frame), /clock (sim time). QoS: rigid_rot_sim.ros.qos.
 Every header stamp is sim time. Frame names: the ``world_frame`` / ``body_frame``
 parameters (default: the scene's ``frames``, REP 105 ``odom`` / ``base_link``), used by
 every output, /tf and the recording. Torque inputs: the scene's topics (WrenchStamped or
@@ -64,6 +66,7 @@ from rclpy.signals import SignalHandlerOptions
 
 from rigid_rot_sim.core import limits
 from rigid_rot_sim.ros import simulation_services
+from rigid_rot_sim.run.sensors import SensorSuite
 from rigid_rot_sim.ros.inputs import Rejections, TorqueInputs
 from rigid_rot_sim.ros.outputs import Outputs
 from rigid_rot_sim.ros import parameters as params
@@ -97,7 +100,10 @@ class SceneRun:
         self.sim = sim = Simulator(scene, method=settings[params.INTEGRATOR], dt=settings[params.DT])
         sim.max_torque = settings[params.MAX_TORQUE]
         state_qos = output_qos(OutputQos(settings[params.QOS_RELIABILITY], settings[params.QOS_DEPTH]))
-        self.outputs = Outputs(node, scene, settings.rates(), state_qos, settings[params.GROUND_TRUTH_VARIANCE])
+        has_sensors = scene.sensors.gyro is not None or scene.sensors.star_tracker is not None
+        self.sensors = SensorSuite(scene.sensors) if has_sensors else None
+        self.outputs = Outputs(node, scene, settings.rates(), state_qos, settings[params.GROUND_TRUTH_VARIANCE],
+                               self.sensors)
         schedule = OutputSchedule.from_rates(self.outputs.rates, sim.dt)
         pacer = Pacer(settings[params.REAL_TIME_FACTOR])
         self.driver = RunDriver(sim, schedule, pacer, settings[params.DURATION] or None, observers=[self.outputs])
@@ -168,6 +174,11 @@ class SceneRun:
         for part_built, part_left_out in (self.outputs.describe(), self.inputs.describe()):
             built += part_built
             left_out += part_left_out
+        if self.sensors is None:
+            left_out.append("sensor models (~/imu, if asked for, is ideal; no ~/star_tracker)")
+        else:
+            drawn = "" if scene.sensors.seed is not None else ", drawn"
+            built.append(f"sensors {', '.join(self.sensors.names)} (seed {self.sensors.seed}{drawn})")
         if scene.schedules:
             built.append(f"{len(scene.schedules)} torque schedule(s)")
         if scene.gravity is None:
