@@ -280,7 +280,8 @@ class LongHorizon:
 ROUNDOFF_FLOOR = 1e-11
 
 LONG_HORIZON_METHODS: tuple[MethodVariant, ...] = (
-    ("rk4", ()), ("lie_rk4", ()), ("implicit_midpoint", ()), ("splitting", (("order", 2),)), ("splitting", (("order", 4),)),
+    ("rk4", ()), ("lie_rk4", ()), ("implicit_midpoint", ()),
+    ("splitting", (("order", 2),)), ("splitting", (("order", 4),)),
 )
 
 

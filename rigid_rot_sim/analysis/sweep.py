@@ -226,7 +226,9 @@ def _advance_isolated(
         q_k, omega_k = q, omega
         for k in range(n_steps):
             try:
-                q_k, omega_k = advance_batch(method, moments, q_k, omega_k, dt, 1, torque, normalize_q=normalize_q and k == 0)
+                q_k, omega_k = advance_batch(
+                    method, moments, q_k, omega_k, dt, 1, torque, normalize_q=normalize_q and k == 0
+                )
             except (NonFiniteStateError, ArithmeticError) as exc:
                 reason = " ".join(str(exc).split())
                 return np.full_like(q, np.nan), np.full_like(omega, np.nan), {0: f"{type(exc).__name__} at step {k + 1} of the segment: {reason}"}

@@ -32,12 +32,12 @@ BOUNDARY_SLACK = 1e-9
 
 
 def step_at_or_after(t: float, dt: float, *, t0: float = 0.0, k0: int = 0) -> int:
-    """The first boundary at or after sim time ``t`` (s) on the grid of step ``dt`` (s) with boundary ``k0`` at ``t0``."""
+    """The first boundary at or after sim time ``t`` (s) on the grid of step ``dt`` (s), boundary ``k0`` at ``t0``."""
     return k0 + math.ceil((t - t0) / dt - BOUNDARY_SLACK)
 
 
 def step_at_or_before(t: float, dt: float, *, t0: float = 0.0, k0: int = 0) -> int:
-    """The last boundary at or before sim time ``t`` (s) on the grid of step ``dt`` (s) with boundary ``k0`` at ``t0``."""
+    """The last boundary at or before sim time ``t`` (s) on the grid of step ``dt`` (s), boundary ``k0`` at ``t0``."""
     return k0 + math.floor((t - t0) / dt + BOUNDARY_SLACK)
 
 
