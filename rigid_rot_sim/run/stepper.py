@@ -194,7 +194,7 @@ class Stepper:
             if reason is not None:
                 return done, f"rotation limit: {reason}"
             chunk = min(chunk, self._steps_within_rotation_limit())
-            start = (integrator.t, integrator.q, integrator.omega, integrator.n_steps)
+            start = self._saved_state()
             try:
                 if integrator.name in _STEPWISE_METHODS:
                     for _ in range(chunk):
@@ -209,18 +209,27 @@ class Stepper:
                     clock.k += good  # the method stopped at its last good step (energy and momentum finite)
                     done += good
                 else:
-                    integrator.set_state(*start[:3])
-                    integrator.n_steps = start[3]
+                    self._restore(start)
                 name = "NonFiniteStateError" if isinstance(exc, NonFiniteStateError) else type(exc).__name__
                 return done, f"{name}: {exc}"
             reason = self._derived_failure()
             if reason is not None:  # a finite state whose energy or momentum overflows
-                integrator.set_state(*start[:3])
-                integrator.n_steps = start[3]
+                self._restore(start)
                 return done, f"NonFiniteStateError: {reason}"
             clock.k += chunk
             done += chunk
         return done, None
+
+    def _saved_state(self) -> tuple:
+        """What :meth:`_restore` puts back: (t, q, omega, steps taken)."""
+        integrator = self.integrator
+        assert integrator is not None
+        return (integrator.t, integrator.q, integrator.omega, integrator.n_steps)
+
+    def _restore(self, saved: tuple) -> None:
+        assert self.integrator is not None
+        self.integrator.set_state(*saved[:3])
+        self.integrator.n_steps = saved[3]
 
     # ------------------------------------------------------------------ limits
 

@@ -41,7 +41,9 @@ from rigid_rot_sim.scene.bounded_yaml import load_input, read_input
 from rigid_rot_sim.core.quaternion import zxz_to_quaternion
 from rigid_rot_sim.core.inertia import inertia_about_center_of_mass, mass_properties
 from rigid_rot_sim.core.integrators import get_method
+from rigid_rot_sim.core.integrators.gyrostat import get_gyrostat_method
 from rigid_rot_sim.scene.schema import validated
+from rigid_rot_sim.scene.spacecraft import Spacecraft, parse_spacecraft
 from rigid_rot_sim.scene.scene_schema import (
     DEFAULT_BODY_FRAME,
     DEFAULT_GRAVITY,
@@ -276,6 +278,7 @@ class Scene:
     qos: OutputQos = OutputQos()
     recording: str | None = None
     commands: CommandSettings = CommandSettings()
+    spacecraft: Spacecraft = Spacecraft()
     description: str = ""
     source: str = "<string>"
     text: str = ""
@@ -364,6 +367,9 @@ def _scene(spec: Mapping[str, Any], source: str, text: str) -> Scene:
     if gravity is not None and (topics or schedules):
         # the integrators expand gravity or a piecewise-constant torque exactly, not their sum
         raise ValueError("torque_inputs: not supported in a gravity (heavy top) scene; drop gravity or the inputs")
+    spacecraft = parse_spacecraft(spec.get("actuators"), spec.get("environment"), body.inertia_array)
+    if gravity is not None and spacecraft:
+        raise ValueError("actuators / environment: not supported in a gravity (heavy top) scene; drop gravity")
     duration = spec.get("duration")
     qos = spec.get("qos") or {}
     commands = spec.get("commands") or {}
@@ -377,7 +383,8 @@ def _scene(spec: Mapping[str, Any], source: str, text: str) -> Scene:
         topic_inputs=topics,
         schedules=schedules,
         gravity=gravity,
-        integrator=_integrator(spec.get("integrator") or {}),
+        integrator=_integrator(spec.get("integrator") or {}, bool(spacecraft)),
+        spacecraft=spacecraft,
         duration=None if duration is None else float(duration),
         real_time_factor=float(spec.get("real_time_factor", 1.0)),
         outputs=Outputs(**{name: float(rate) for name, rate in (spec.get("outputs") or {}).items()}),
@@ -497,11 +504,11 @@ def _schedule(spec: Mapping[str, Any], key: str) -> TorqueSchedule:
     return TorqueSchedule(frame=spec.get("frame", "body"), segments=tuple(segments))
 
 
-def _integrator(spec: Mapping[str, Any]) -> IntegratorSpec:
-    """A method name from the integrator registry (or auto)."""
+def _integrator(spec: Mapping[str, Any], spacecraft: bool = False) -> IntegratorSpec:
+    """A method name from the integrator registry (the gyrostat methods' for wheels or gravity gradient), or auto."""
     method = spec.get("method", IntegratorSpec.method).strip()
     if method != "auto":
-        _at("integrator.method", get_method, method)
+        _at("integrator.method", get_gyrostat_method if spacecraft else get_method, method)
     options = spec.get("options") or {}
     return IntegratorSpec(
         method=method,

@@ -29,6 +29,7 @@ from rigid_rot_sim.scene.schema import (
     text,
     vector,
 )
+from rigid_rot_sim.scene.spacecraft_schema import ACTUATORS, ENVIRONMENT
 
 __all__ = [
     "SCENE_SCHEMA",
@@ -75,6 +76,10 @@ OUTPUTS: dict[str, OutputSpec] = {
     # sensor_msgs/Imu and nav_msgs/Odometry: built only when the scene asks
     "imu": OutputSpec(0.0, "sensor_msgs/Imu on ~/imu (0: not built, the default)"),
     "odom": OutputSpec(0.0, "nav_msgs/Odometry on ~/odom (0: not built, the default)"),
+    "wheels": OutputSpec(100.0, "sensor_msgs/JointState on ~/wheels (scenes with reaction wheels only)"),
+    "torque_breakdown": OutputSpec(
+        100.0, "rigid_rot_msgs/TorqueBreakdown on ~/torque_breakdown (N*m, body frame; wheel or gravity-gradient scenes)"
+    ),
 }
 
 _DURATION_MAX = limits.DURATION_RANGE[1]
@@ -236,6 +241,8 @@ SCENE_SCHEMA: dict[str, Any] = {
             "initial": _INITIAL,
             "torque_inputs": _TORQUE_INPUTS,
             "gravity": _GRAVITY,
+            "actuators": ACTUATORS,
+            "environment": ENVIRONMENT,
             "integrator": _INTEGRATOR,
             "duration": nullable(number("Sim time to run, s; null runs unbounded.", exclusive_minimum=0.0,
                                         maximum=_DURATION_MAX)),
