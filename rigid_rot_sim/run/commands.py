@@ -106,6 +106,24 @@ class _Held:
     serial: int
 
 
+def clamp_wheel_torques(wheels: Any, source: str, torques: Any) -> tuple[tuple[float, ...], tuple[int, ...]]:
+    """Wheel motor torques (N*m, one per wheel of ``wheels``) clamped to each wheel's max_torque, and which were.
+
+    CommandRejected for a scene without wheels, a wrong number of values or a non-finite one.
+    """
+    values = [float(v) for v in np.asarray(torques, dtype=float).reshape(-1)]
+    if not wheels:
+        raise CommandRejected(source, "this scene has no reaction wheels")
+    if len(values) != len(wheels):
+        raise CommandRejected(source, f"{len(values)} torque(s) for {len(wheels)} wheel(s) [{', '.join(w.name for w in wheels)}]")
+    clamped = []
+    for value, wheel in zip(values, wheels):
+        if not math.isfinite(value):
+            raise CommandRejected(source, f"non-finite torque for wheel {wheel.name!r}: {value}")
+        clamped.append(min(max(value, -wheel.max_torque), wheel.max_torque))
+    return tuple(clamped), tuple(i for i, (a, b) in enumerate(zip(values, clamped)) if a != b)
+
+
 class CommandSchedule:
     """The torque inputs of ``scene`` on the step grid of ``clock``; see the module docstring.
 
@@ -138,7 +156,7 @@ class CommandSchedule:
         self.wheel_torques: tuple[float, ...] = (0.0,) * len(self.spacecraft.wheels)
         if self.spacecraft.wheel_schedule is not None:
             for segment in self.spacecraft.wheel_schedule.segments:
-                torques = self.clamp_wheel_torques(WHEEL_SCHEDULE_SOURCE, segment.torques)[0]
+                torques = clamp_wheel_torques(self.spacecraft.wheels, WHEEL_SCHEDULE_SOURCE, segment.torques)[0]
                 self._push(self.clock.step_at_or_after(segment.start), EventKind.WHEELS,
                            (segment.start, torques, WHEEL_SCHEDULE_SOURCE))
         for index, schedule in enumerate(self.schedules):
@@ -190,29 +208,9 @@ class CommandSchedule:
                 )
         return values  # type: ignore[return-value]
 
-    def clamp_wheel_torques(self, source: str, torques: Any) -> tuple[tuple[float, ...], tuple[int, ...]]:
-        """Wheel motor torques (N*m, one per wheel) clamped to each wheel's max_torque, and which were clamped.
-
-        CommandRejected for a scene without wheels, a wrong number of values or a non-finite one.
-        """
-        wheels = self.spacecraft.wheels
-        values = [float(v) for v in np.asarray(torques, dtype=float).reshape(-1)]
-        if not wheels:
-            raise CommandRejected(source, "this scene has no reaction wheels")
-        if len(values) != len(wheels):
-            raise CommandRejected(
-                source, f"{len(values)} torque(s) for {len(wheels)} wheel(s) [{', '.join(w.name for w in wheels)}]"
-            )
-        clamped = []
-        for i, (value, wheel) in enumerate(zip(values, wheels)):
-            if not math.isfinite(value):
-                raise CommandRejected(source, f"non-finite torque for wheel {wheel.name!r}: {value}")
-            clamped.append(min(max(value, -wheel.max_torque), wheel.max_torque))
-        return tuple(clamped), tuple(i for i, (a, b) in enumerate(zip(values, clamped)) if a != b)
-
     def submit_wheels(self, source: str, torques: Any, effective_time: float) -> tuple[int, tuple[float, ...], tuple[int, ...]]:
-        """Hold wheel motor torques from ``effective_time`` (s): (step, clamped torques, indices clamped)."""
-        clamped, which = self.clamp_wheel_torques(source, torques)
+        """Hold wheel motor torques (:func:`clamp_wheel_torques`) from ``effective_time`` (s): (step, clamped, which)."""
+        clamped, which = clamp_wheel_torques(self.spacecraft.wheels, source, torques)
         effective_time = validation.finite_scalar("effective_time", effective_time)
         step = self.clock.step_at_or_after(effective_time)
         self._push(step, EventKind.WHEELS, (effective_time, clamped, source))

@@ -53,14 +53,14 @@ from rigid_rot_sim.core.dynamics import RigidBody
 from rigid_rot_sim.run.observables import Observables, StateSnapshot
 from rigid_rot_sim.run.observer import SimulationObserver
 from rigid_rot_sim.scene.scene import Scene
-from rigid_rot_sim.run.gyrostat_stepper import make_stepper
+from rigid_rot_sim.run.gyrostat_stepper import WheelInputs, make_stepper
 
 # CommandRejected, TorqueCommand, APPLY_TORQUE_SOURCE and StateSnapshot are what the Simulator's
 # methods raise, return and take: part of its API, importable from here.
 __all__ = ["Simulator", "StateSnapshot", "TorqueCommand", "CommandRejected", "APPLY_TORQUE_SOURCE"]
 
 
-class Simulator:
+class Simulator(WheelInputs):
     """Simulate ``scene``; ``method`` / ``dt`` / ``options`` override the scene's integrator.
 
     Parameters
@@ -225,26 +225,6 @@ class Simulator:
         for observer in self.observers:
             observer.torque_applied(step, command)
         return command
-
-    def submit_wheel_torques(
-        self, source: str, torques: Any, effective_time: float | None = None
-    ) -> tuple[int, tuple[float, ...], tuple[int, ...]]:
-        """Hold the wheel motor torques ``torques`` (N*m, one per wheel in scene order) from now (or
-        ``effective_time``, s, for resim): (step they take effect, torques as clamped, wheels clamped).
-
-        A torque beyond a wheel's max_torque is clamped (not rejected); CommandRejected (the
-        observers told) for a scene without wheels, a wrong number of values or a non-finite one.
-        """
-        step = self.clock.k
-        effective = self.t if effective_time is None else effective_time
-        try:
-            result = self.commands.submit_wheels(source, torques, effective)
-        except CommandRejected as rejected:
-            self._report_rejected(rejected, "", torques)
-            raise
-        for observer in self.observers:
-            observer.wheel_command_accepted(step, source, result[1], effective, result[2])
-        return result
 
     def _report_rejected(self, rejected: CommandRejected, frame_id: str, torque: Any) -> None:
         for observer in self.observers:

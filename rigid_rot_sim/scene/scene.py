@@ -290,9 +290,12 @@ class Scene:
 
     @property
     def torque_kind(self) -> str:
-        """What drives the body besides its inertia: none, gravity, topic or schedule."""
+        """What drives the body besides its inertia: none, gravity, spacecraft (wheels or gravity gradient,
+        besides any torque inputs), topic or schedule."""
         if self.gravity is not None:
             return "gravity"
+        if self.spacecraft:
+            return "spacecraft"
         if self.topic_inputs:
             return "topic"
         if self.schedules:
