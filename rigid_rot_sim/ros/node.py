@@ -66,6 +66,7 @@ from rigid_rot_sim.scene.scene import load_scene
 from rigid_rot_sim.run.simulator import Simulator
 from rigid_rot_sim.ros import simulation_services
 from rigid_rot_sim.ros.inputs import Rejections, TorqueInputs
+from rigid_rot_sim.ros.wheel_inputs import WheelTorqueInput
 from rigid_rot_sim.ros.outputs import Outputs
 from rigid_rot_sim.ros.parameters import (
     USE_SIM_TIME_REFUSAL,
@@ -115,6 +116,12 @@ class RigidRotSimNode(Node):
                              Pacer(settings.real_time_factor), settings.duration, observers=[self.outputs])
         rejections = Rejections(self, sim, self.outputs)
         self.inputs = TorqueInputs(self, sim, scene, settings.command_depth, rejections, built, left_out)
+        self.wheel_input = WheelTorqueInput(self, sim, scene, settings.command_depth, rejections, built, left_out)
+        if scene.spacecraft.wheel_schedule is not None:
+            built.append(f"a wheel-torque schedule of {len(scene.spacecraft.wheel_schedule.segments)} segment(s)")
+        if scene.spacecraft.gravity_gradient is not None:
+            gg = scene.spacecraft.gravity_gradient
+            built.append(f"gravity gradient (circular orbit, radius {gg.radius:g} m, inclination {gg.inclination:g} rad)")
         if scene.schedules:
             built.append(f"{len(scene.schedules)} torque schedule(s)")
         if scene.gravity is None:
@@ -166,11 +173,13 @@ class RigidRotSimNode(Node):
             missing = (exc.name or "").split(".")[0] or str(exc)
             self.get_logger().error(f"recording disabled: {missing} is not installed (pip install mcap mcap-ros2-support)")
             return None
-        recording = NodeRecording.start(self, self.sim, self.outputs, self.inputs.subscriptions, path, log_time)
+        subscriptions = self.inputs.subscriptions + self.wheel_input.subscriptions
+        recording = NodeRecording.start(self, self.sim, self.outputs, subscriptions, path, log_time)
         if recording is not None:
             self.sim.add_observer(recording)  # events: commands accepted, torques applied, set_state, ...
             self.outputs.listeners.append(recording)  # every message published, as the bytes published
             self.inputs.listeners.append(recording)  # every torque command as received
+            self.wheel_input.listeners.append(recording)  # every wheel command as received
         return recording
 
     @property

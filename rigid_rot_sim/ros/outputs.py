@@ -22,9 +22,9 @@ from geometry_msgs.msg import InertiaStamped, QuaternionStamped, Vector3Stamped
 from nav_msgs.msg import Odometry
 from rclpy.node import Node
 from rclpy.serialization import serialize_message
-from rigid_rot_msgs.msg import HeavyTopState, RejectedCommand, RigidBodyState
+from rigid_rot_msgs.msg import HeavyTopState, RejectedCommand, RigidBodyState, TorqueBreakdown
 from rosgraph_msgs.msg import Clock
-from sensor_msgs.msg import Imu
+from sensor_msgs.msg import Imu, JointState
 
 from rigid_rot_sim import conversions
 from rigid_rot_sim.core.inertia import principal_frame_pose
@@ -52,6 +52,8 @@ OUTPUTS: dict[str, tuple[Any, MessageBuilder]] = {
     "clock": (Clock, lambda s, f, v: conversions.clock_message(s.t)),
     "imu": (Imu, lambda s, f, v: conversions.snapshot_to_imu(s, f.body, v)),
     "odom": (Odometry, lambda s, f, v: conversions.snapshot_to_odometry(s, f.world, f.body, v)),
+    "wheels": (JointState, lambda s, f, v: conversions.snapshot_to_joint_state(s, f.body)),
+    "torque_breakdown": (TorqueBreakdown, lambda s, f, v: conversions.snapshot_to_torque_breakdown(s, f.body)),
 }
 assert tuple(OUTPUTS) == OUTPUT_NAMES, "one entry per scene output, in the scene's order"
 
@@ -87,6 +89,11 @@ class Outputs(SimulationObserver):
             rate = rates.get(name, 0.0)
             if name == "top_state" and not scene.is_top:
                 continue  # listed with gravity by the node
+            if name == "wheels" and not scene.spacecraft.wheels:
+                continue  # listed with the wheels by the node
+            if name == "torque_breakdown" and scene.torque_kind == "none":
+                left_out.append("~/torque_breakdown (no torque acts on this scene)")
+                continue
             if name == "tf" and TFMessage is None:
                 left_out.append("/tf (tf2_msgs not installed)")
                 continue

@@ -110,10 +110,7 @@ class GyrostatStepper(Stepper):
         omega_body = base.angular_velocity_body
         momentum_body = base.angular_momentum_body.copy()
         energy = base.kinetic_energy
-        sources: list[tuple[str, np.ndarray]] = []
-        for name, torque, frame in self.commands.named_torques:
-            vector = quat.rotate_inverse(q, torque) if frame == "world" else torque
-            sources.append((name, np.array(vector, dtype=float)))
+        sources = self.command_torques(base.orientation)
         speeds = integrator.wheel_speeds.copy()
         applied = integrator.applied_wheel_torques()
         wheels = self._wheels_body
@@ -142,6 +139,7 @@ class GyrostatStepper(Stepper):
             torque_body=total,
             energy_drift=_relative_change(energy, reference_energy),
             angular_momentum_drift=_relative_change(math.hypot(*momentum_world), reference_momentum),
+            wheel_names=self.scene.spacecraft.wheel_names,
             wheel_speeds=speeds,
             wheel_torques=applied,
             torque_sources=tuple(sources),

@@ -14,6 +14,7 @@ stops early, with a reason and the last good state kept, when
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from typing import Any
 
@@ -149,7 +150,20 @@ class Stepper:
         """The integrator's state at the clock's step, as the user sees it (:meth:`Observables.snapshot`)."""
         integrator = self.integrator
         assert integrator is not None
-        return self.observables.snapshot(self.clock.t, self.clock.k, integrator.q, integrator.omega, self.step_torque_body)
+        snapshot = self.observables.snapshot(self.clock.t, self.clock.k, integrator.q, integrator.omega, self.step_torque_body)
+        sources = self.command_torques(snapshot.orientation)
+        if self.gravity is not None:
+            gravity = self.body.vector_from_principal(self.gravity(0.0, integrator.q, integrator.omega))
+            sources.append(("gravity", np.asarray(gravity, dtype=float)))
+        return dataclasses.replace(snapshot, torque_sources=tuple(sources))
+
+    def command_torques(self, orientation: np.ndarray) -> list[tuple[str, np.ndarray]]:
+        """The commanded torques acting now, by source (N*m, user body frame; world ones rotated at ``orientation``)."""
+        q = tuple(float(v) for v in orientation)
+        return [
+            (name, np.array(quat.rotate_inverse(q, torque) if frame == "world" else torque, dtype=float))
+            for name, torque, frame in self.commands.named_torques
+        ]
 
     def set_command_torque(self) -> None:
         """Give the integrator the commanded torque for the next step (principal frame)."""
