@@ -23,7 +23,7 @@ from rigid_rot_sim.core.integrators.gyrostat import GyrostatIntegrator, get_gyro
 from rigid_rot_sim.core.wheels import NO_ORBIT, friction_torque, gravity_gradient_torque
 from rigid_rot_sim.run.commands import CommandRejected
 from rigid_rot_sim.run.observables import StateSnapshot, _relative_change
-from rigid_rot_sim.run.stepper import Stepper
+from rigid_rot_sim.run.stepper import Stepper, command_torques
 
 __all__ = ["GyrostatStepper", "WheelInputs", "AUTO_METHOD", "make_stepper"]
 
@@ -110,7 +110,7 @@ class GyrostatStepper(Stepper):
         omega_body = base.angular_velocity_body
         momentum_body = base.angular_momentum_body.copy()
         energy = base.kinetic_energy
-        sources = self.command_torques(base.orientation)
+        sources = command_torques(self.commands, base.orientation)
         speeds = integrator.wheel_speeds.copy()
         applied = integrator.applied_wheel_torques()
         wheels = self._wheels_body

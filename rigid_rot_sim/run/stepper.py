@@ -46,6 +46,15 @@ _STEPWISE_METHODS = frozenset({"dop853"})
 _DERIVED_CEILING = 1e300
 
 
+def command_torques(commands: CommandSchedule, orientation: np.ndarray) -> list[tuple[str, np.ndarray]]:
+    """The commanded torques acting now, by source (N*m, user body frame; world ones rotated at ``orientation``)."""
+    q = tuple(float(v) for v in orientation)
+    return [
+        (name, np.array(quat.rotate_inverse(q, torque) if frame == "world" else torque, dtype=float))
+        for name, torque, frame in commands.named_torques
+    ]
+
+
 class Stepper:
     """Steps ``body`` (of ``scene``) with ``method`` at the clock's dt under ``commands``' torque.
 
@@ -151,19 +160,12 @@ class Stepper:
         integrator = self.integrator
         assert integrator is not None
         snapshot = self.observables.snapshot(self.clock.t, self.clock.k, integrator.q, integrator.omega, self.step_torque_body)
-        sources = self.command_torques(snapshot.orientation)
+        sources = command_torques(self.commands, snapshot.orientation)
         if self.gravity is not None:
             gravity = self.body.vector_from_principal(self.gravity(0.0, integrator.q, integrator.omega))
             sources.append(("gravity", np.asarray(gravity, dtype=float)))
         return dataclasses.replace(snapshot, torque_sources=tuple(sources))
 
-    def command_torques(self, orientation: np.ndarray) -> list[tuple[str, np.ndarray]]:
-        """The commanded torques acting now, by source (N*m, user body frame; world ones rotated at ``orientation``)."""
-        q = tuple(float(v) for v in orientation)
-        return [
-            (name, np.array(quat.rotate_inverse(q, torque) if frame == "world" else torque, dtype=float))
-            for name, torque, frame in self.commands.named_torques
-        ]
 
     def set_command_torque(self) -> None:
         """Give the integrator the commanded torque for the next step (principal frame)."""
