@@ -141,12 +141,6 @@ class WheelModel:
         return WheelModel(self.names, axes, self.spin_inertia, self.max_torque, self.max_speed, self.coulomb,
                           self.viscous, self.stiction_speed)
 
-    def clamp(self, torques: Any) -> tuple[np.ndarray, tuple[int, ...]]:
-        """Motor commands (N*m) clamped to +-max_torque, and the indices of the wheels that were clamped."""
-        u = np.asarray(torques, dtype=float).reshape(self.count)
-        clamped = np.clip(u, -self.max_torque, self.max_torque)
-        return clamped, tuple(int(i) for i in np.flatnonzero(clamped != u))
-
     def compiled(self) -> tuple:
         """The tuple the kernels take: (axes, J, max_speed, ramp, coulomb, viscous, stiction_speed)."""
         return (

@@ -20,7 +20,13 @@ import numpy as np
 from rigid_rot_sim.core import quaternion as quat
 from rigid_rot_sim.core import validation
 from rigid_rot_sim.core.integrators.gyrostat import GyrostatIntegrator, get_gyrostat_method
-from rigid_rot_sim.core.wheels import NO_ORBIT, friction_torque, gravity_gradient_torque
+from rigid_rot_sim.core.wheels import (
+    NO_ORBIT,
+    friction_torque,
+    gravity_gradient_torque,
+    gyrostat_energy,
+    total_momentum_body,
+)
 from rigid_rot_sim.run.commands import CommandRejected
 from rigid_rot_sim.run.observables import StateSnapshot, _relative_change
 from rigid_rot_sim.run.stepper import Stepper, command_torques
@@ -107,18 +113,18 @@ class GyrostatStepper(Stepper):
         base = super().snapshot()
         body_from_principal = tuple(float(v) for v in self.body.body_from_principal)
         q = tuple(float(v) for v in base.orientation)
-        omega_body = base.angular_velocity_body
-        momentum_body = base.angular_momentum_body.copy()
+        momentum_body = base.angular_momentum_body
         energy = base.kinetic_energy
         sources = command_torques(self.commands, base.orientation)
         speeds = integrator.wheel_speeds.copy()
         applied = integrator.applied_wheel_torques()
         wheels = self._wheels_body
         if wheels is not None:
-            momentum_body += (wheels.spin_inertia * speeds) @ wheels.axes
-            axial = wheels.axes @ omega_body
-            # eq. (6): the locked-wheel energy already counts 1/2 J (g.omega)^2; add the spin's share
-            energy += float(np.sum(0.5 * wheels.spin_inertia * ((axial + speeds) ** 2 - axial**2)))
+            # eqs. (1) and (6) of core.wheels, in the principal frame the integrator works in
+            moments, principal_wheels = self.body.principal_moments, self._wheels
+            momentum = total_momentum_body(moments, principal_wheels, integrator.omega, speeds)
+            momentum_body = np.array(quat.rotate(body_from_principal, momentum))
+            energy = float(gyrostat_energy(moments, principal_wheels, integrator.omega, speeds))
             net = np.array([
                 u - friction_torque(c, b, s, w)
                 for u, c, b, s, w in zip(applied, wheels.coulomb, wheels.viscous, wheels.stiction_speed, speeds)

@@ -80,13 +80,6 @@ def test_single_wheel_on_a_principal_axis_matches_the_closed_form(cls):
     np.testing.assert_allclose(g.applied_wheel_torques(), [u])
 
 
-def test_commands_are_clamped_to_max_torque():
-    wheels = three_wheels()
-    clamped, which = wheels.clamp([0.5, -0.1, -3.0])
-    np.testing.assert_array_equal(clamped, [0.2, -0.1, -0.2])
-    assert which == (0, 2)
-
-
 @pytest.mark.parametrize("cls", list(GYROSTAT_METHODS.values()))
 def test_speed_saturation_stops_the_wheel_at_max_speed(cls):
     """A wheel driven hard towards max_speed approaches it and never passes it; the reverse torque acts in full."""
