@@ -293,19 +293,16 @@ class GyrostatIntegrator(Integrator):
             self.t = self._anchor_t + self._anchor_k * self.dt
             self.n_steps += steps
 
+    def _start_run(self) -> np.ndarray:
+        """Before a run of steps: re-anchor the step grid after a dt change; the external torque (N*m)."""
+        if self.dt != self._anchor_dt:
+            self._anchor_t, self._anchor_k, self._anchor_dt = self.t, 0, self.dt
+        return self._external()
+
     def _fail(self, status: int) -> None:
         t_bad = self._anchor_t + (self._anchor_k + 1) * self.dt
         what = "step size underflow" if status == STEP_UNDERFLOW else "non-finite state"
         raise NonFiniteStateError(f"{self.name}: {what} at step {self.n_steps + 1}, t = {t_bad:.9g} s")
-
-    def advance_saving(self, n_saves: int, save_every: int) -> tuple[np.ndarray, np.ndarray]:
-        q = np.empty((n_saves, 4))
-        omega = np.empty((n_saves, 3))
-        for k in range(n_saves):
-            self.advance(save_every)
-            q[k] = self.q
-            omega[k] = self.omega
-        return q, omega
 
 
 class GyrostatRK4(GyrostatIntegrator):
@@ -323,9 +320,7 @@ class GyrostatRK4(GyrostatIntegrator):
         n = int(n)
         if n <= 0:
             return
-        if self.dt != self._anchor_dt:
-            self._anchor_t, self._anchor_k, self._anchor_dt = self.t, 0, self.dt
-        external = self._external()
+        external = self._start_run()
         applied = np.zeros(self.wheels.count)
         done, status = rk4_advance(
             self._anchor_t, self._anchor_k, self.dt, n, self._y, self.moments, self._wheel_data, self._hub_inverse,
@@ -369,9 +364,7 @@ class GyrostatDopri5(GyrostatIntegrator):
         n = int(n)
         if n <= 0:
             return
-        if self.dt != self._anchor_dt:
-            self._anchor_t, self._anchor_k, self._anchor_dt = self.t, 0, self.dt
-        external = self._external()
+        external = self._start_run()
         applied = np.zeros(self.wheels.count)
         done, status = dopri5_advance(
             self._anchor_t, self._anchor_k, self.dt, n, self._y, self._solver, self._y_int, self._y_old, self._stages,
