@@ -29,23 +29,35 @@ WHEEL_TORQUE_TOPIC = "~/wheel_torque"
 class WheelTorqueInput:
     """The ``~/wheel_torque`` subscription of a scene with wheels (:attr:`subscriptions` is empty otherwise)."""
 
-    def __init__(self, node: Node, sim: Simulator, scene: Scene, depth: int, rejections: Rejections,
-                 built: list[str], left_out: list[str]) -> None:
+    def __init__(self, node: Node, sim: Simulator, scene: Scene, depth: int, rejections: Rejections) -> None:
         self.sim = sim
         self.rejections = rejections
         self.logger = node.get_logger()
         self.listeners: list[Any] = []
         self.subscriptions: list[Any] = []
         self._clamped_said: set[int] = set()
+        self.spacecraft = scene.spacecraft
         self.names = scene.spacecraft.wheel_names
-        if not self.names:
-            left_out.append("reaction wheels (none in the scene)")
-            return
         self.topic = node.resolve_topic_name(WHEEL_TORQUE_TOPIC)
-        qos = QoSProfile(depth=depth, reliability=COMMAND_QOS.reliability, durability=COMMAND_QOS.durability)
-        self.subscriptions.append(node.create_subscription(WheelTorques, WHEEL_TORQUE_TOPIC, self.callback, qos))
-        built.append(f"{len(self.names)} reaction wheel(s) [{', '.join(self.names)}]: commands on {self.topic} "
-                     f"(WheelTorques, N*m), speeds on ~/wheels")
+        if self.names:
+            qos = QoSProfile(depth=depth, reliability=COMMAND_QOS.reliability, durability=COMMAND_QOS.durability)
+            self.subscriptions.append(node.create_subscription(WheelTorques, WHEEL_TORQUE_TOPIC, self.callback, qos))
+
+    def describe(self) -> tuple[list[str], list[str]]:
+        """For the start-up line: (what was built, what was left out and why): wheels, their schedule, gravity gradient."""
+        built: list[str] = []
+        left_out: list[str] = []
+        if self.names:
+            built.append(f"{len(self.names)} reaction wheel(s) [{', '.join(self.names)}]: commands on {self.topic} "
+                         f"(WheelTorques, N*m), speeds on ~/wheels")
+        else:
+            left_out.append("reaction wheels (none in the scene)")
+        if self.spacecraft.wheel_schedule is not None:
+            built.append(f"a wheel-torque schedule of {len(self.spacecraft.wheel_schedule.segments)} segment(s)")
+        gg = self.spacecraft.gravity_gradient
+        if gg is not None:
+            built.append(f"gravity gradient (circular orbit, radius {gg.radius:g} m, inclination {gg.inclination:g} rad)")
+        return built, left_out
 
     def callback(self, msg: Any) -> None:
         received_ns = time.time_ns()
