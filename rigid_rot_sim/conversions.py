@@ -26,10 +26,10 @@ from geometry_msgs.msg import (
     Vector3Stamped,
 )
 from nav_msgs.msg import Odometry
-from rigid_rot_msgs.msg import HeavyTopState, RejectedCommand, RigidBodyState
+from rigid_rot_msgs.msg import HeavyTopState, RejectedCommand, RigidBodyState, TorqueBreakdown, WheelTorques
 from rigid_rot_msgs.srv import ComputeInertia
 from rosgraph_msgs.msg import Clock
-from sensor_msgs.msg import Imu
+from sensor_msgs.msg import Imu, JointState
 from std_msgs.msg import ColorRGBA
 from visualization_msgs.msg import Marker, MarkerArray
 
@@ -343,6 +343,35 @@ def snapshot_to_odometry(snapshot: StateSnapshot, world_frame: str, body_frame: 
     _set_vector3(msg.twist.twist.angular, snapshot.angular_velocity_body)
     msg.pose.covariance = _diagonal(6, [variance] * 6)
     msg.twist.covariance = _diagonal(6, [variance] * 6)
+    return msg
+
+
+def wheel_torques_from_msg(msg: WheelTorques) -> tuple[list[float], float]:
+    """rigid_rot_msgs/WheelTorques -> (motor torques N*m, unvalidated; header stamp s, 0 = none)."""
+    return [float(v) for v in msg.torques], time_to_seconds(msg.header.stamp)
+
+
+def snapshot_to_joint_state(snapshot: StateSnapshot, body_frame: str) -> JointState:
+    """The reaction wheels as sensor_msgs/JointState: name, velocity = speed relative to the body (rad/s),
+    effort = the motor torque acting (N*m); position is left empty (a wheel's angle is not simulated)."""
+    msg = JointState()
+    msg.header.stamp = seconds_to_time(snapshot.t)
+    msg.header.frame_id = body_frame
+    msg.name = list(snapshot.wheel_names or ())
+    msg.velocity = [float(v) for v in (snapshot.wheel_speeds if snapshot.wheel_speeds is not None else ())]
+    msg.effort = [float(v) for v in (snapshot.wheel_torques if snapshot.wheel_torques is not None else ())]
+    return msg
+
+
+def snapshot_to_torque_breakdown(snapshot: StateSnapshot, body_frame: str) -> TorqueBreakdown:
+    """Every torque on the body by source and their total (N*m, body frame) as rigid_rot_msgs/TorqueBreakdown."""
+    msg = TorqueBreakdown()
+    msg.header.stamp = seconds_to_time(snapshot.t)
+    msg.header.frame_id = body_frame
+    sources = snapshot.torque_sources or ()
+    msg.names = [name for name, _ in sources]
+    msg.torques = [array_to_vector3(vector) for _, vector in sources]
+    msg.total = array_to_vector3(np.sum([v for _, v in sources], axis=0) if sources else np.zeros(3))
     return msg
 
 

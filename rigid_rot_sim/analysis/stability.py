@@ -40,6 +40,8 @@ import numpy as np
 from rigid_rot_sim.analysis.cluster import map_tasks, open_client, wants_cluster
 from rigid_rot_sim.analysis.metrics import attitude_error_angle, omega_error, relative_change
 from rigid_rot_sim.analysis.problems import P1, Problem
+from rigid_rot_sim.core.integrators.gyrostat import get_gyrostat_method
+from rigid_rot_sim.core.wheels import gyrostat_energy, total_momentum_body
 from rigid_rot_sim.analysis.stability_cases import Case, Criterion, case_named
 from rigid_rot_sim.run import advice
 from rigid_rot_sim.core.exact import torque_free_solution
@@ -91,8 +93,12 @@ class CaseRun:
 # ---------------------------------------------------------------- running
 
 
-def _invariants(problem: Problem, q: np.ndarray, omega: np.ndarray) -> tuple[float, float, float]:
-    """(energy, momentum 1, momentum 2): |L| (twice) for a free body, (E, p_phi, p_psi) for a heavy top."""
+def _invariants(problem: Problem, q: np.ndarray, omega: np.ndarray, speeds: Any = None) -> tuple[float, float, float]:
+    """(energy, momentum 1, momentum 2): |L| (twice) for a free body, (E, p_phi, p_psi) for a heavy top,
+    total energy and |H| (body + wheels, twice) for a gyrostat (``speeds``: its wheel speeds, rad/s)."""
+    if problem.wheels is not None and speeds is not None:
+        norm = float(np.linalg.norm(total_momentum_body(problem.moments, problem.wheels, omega, speeds)))
+        return float(gyrostat_energy(problem.moments, problem.wheels, omega, speeds)), norm, norm
     if problem.top is not None:
         energy, p_phi, p_psi = problem.top.invariants(q, omega)
         return float(energy), float(p_phi), float(p_psi)
@@ -103,8 +109,11 @@ def _invariants(problem: Problem, q: np.ndarray, omega: np.ndarray) -> tuple[flo
 def _integrator(method: str, case: Case, dt: float, torque: Any) -> Any:
     """The integrator of ``method`` (a registry name) on ``case``'s body, at step ``dt``, with the case's options."""
     problem = case.problem
-    return get_method(method)(problem.moments, dt, torque, q0=problem.q0, omega0=problem.omega0,
-                              **case.options.get(method, {}))
+    options = case.options.get(method, {})
+    if problem.wheels is not None:  # a gyrostat: only the gyrostat methods carry the wheels (ValueError: refused)
+        return get_gyrostat_method(method)(problem.moments, dt, torque, q0=problem.q0, omega0=problem.omega0,
+                                           wheels=problem.wheels, wheel_speeds0=problem.wheel_speeds0, **options)
+    return get_method(method)(problem.moments, dt, torque, q0=problem.q0, omega0=problem.omega0, **options)
 
 
 def run_case(case: Case, method: str) -> CaseRun:
@@ -125,7 +134,7 @@ def run_case(case: Case, method: str) -> CaseRun:
         else:
             integrator = _integrator(method, case, dt, problem.torque)
         # conserved from here on (right after the kick, for an impulse)
-        first = _invariants(problem, integrator.q, integrator.omega)
+        first = _invariants(problem, integrator.q, integrator.omega, getattr(integrator, "wheel_speeds", None))
         drift_e = drift_m = qnorm = 0.0
         for chunk in chunks:
             if chunk:
@@ -133,7 +142,7 @@ def run_case(case: Case, method: str) -> CaseRun:
             q, omega = integrator.q, integrator.omega
             qnorm = max(qnorm, abs(float(np.linalg.norm(q)) - 1.0))
             if case.conserved:
-                e, m1, m2 = _invariants(problem, q, omega)
+                e, m1, m2 = _invariants(problem, q, omega, getattr(integrator, "wheel_speeds", None))
                 drift_e = max(drift_e, relative_change(first[0], e))
                 drift_m = max(drift_m, relative_change(first[1], m1), relative_change(first[2], m2))
                 if drift_e > GROWTH_LIMIT or drift_m > GROWTH_LIMIT:

@@ -178,7 +178,7 @@ def _best_time(run: Callable[[], Any], repeats: int) -> tuple[Any, float, int]:
 def _runner(problem: Problem, line: DiagramLine, value: float) -> tuple[Callable[[], tuple[np.ndarray, np.ndarray, int]], str]:
     """A zero-argument callable doing the full timed run, and the sweep parameter name."""
     if line.family == "scipy":
-        y0 = np.concatenate((problem.q0, problem.omega0))
+        y0 = problem.initial_vector()
 
         def run_scipy() -> tuple[np.ndarray, np.ndarray, int]:
             sol = solve_ivp(scipy_rhs(problem), (0.0, problem.t_end), y0, method=line.method, rtol=value, atol=value)
@@ -187,7 +187,7 @@ def _runner(problem: Problem, line: DiagramLine, value: float) -> tuple[Callable
             y = sol.y[:, -1]
             if not np.all(np.isfinite(y)):
                 raise NonFiniteStateError(f"solve_ivp {line.method}: non-finite final state")
-            return np.asarray(quat.normalize(y[:4])), y[4:], int(sol.nfev)
+            return np.asarray(quat.normalize(y[:4])), y[4:7], int(sol.nfev)
 
         return run_scipy, "tol"
 

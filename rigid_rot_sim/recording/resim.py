@@ -141,6 +141,9 @@ def _apply(sim: Simulator, event: SimEvent, override_method: str | None) -> None
             event.values["source"], event.vector("torque"), event.values["frame"], event.number("effective_time"),
             receipt_time=event.optional_float("receipt_time"), stamp=event.optional_float("stamp"),
         )
+    elif kind == "wheel_torque":  # the torques as clamped then: they clamp to themselves
+        torques = event.vector("torques", len(sim.scene.spacecraft.wheels))
+        sim.submit_wheel_torques(event.values["source"], torques, effective_time=event.number("effective_time"))
     elif kind == "apply_torque":
         frame_id = sim.frames.body if event.values["frame"] == "body" else sim.frames.world
         sim.apply_torque(event.vector("torque"), frame_id, event.number("duration"), effective_time=event.number("effective_time"))

@@ -68,6 +68,7 @@ from rigid_rot_sim.core import limits
 from rigid_rot_sim.ros import simulation_services
 from rigid_rot_sim.run.sensors import SensorSuite
 from rigid_rot_sim.ros.inputs import Rejections, TorqueInputs
+from rigid_rot_sim.ros.wheel_inputs import WheelTorqueInput
 from rigid_rot_sim.ros.outputs import Outputs
 from rigid_rot_sim.ros import parameters as params
 from rigid_rot_sim.ros.parameters import RunParameters, declare_parameters, declare_scene_parameter, read_settings
@@ -109,6 +110,7 @@ class SceneRun:
         self.driver = RunDriver(sim, schedule, pacer, settings[params.DURATION] or None, observers=[self.outputs])
         rejections = Rejections(node, sim, self.outputs)
         self.inputs = TorqueInputs(node, sim, scene, settings[params.COMMAND_DEPTH], rejections)
+        self.wheel_input = WheelTorqueInput(node, sim, scene, settings[params.COMMAND_DEPTH], rejections)
         self.services = RunServices(node, self.driver, scene, rejections, self.report_progress)
         self.simulation_services = (simulation_services.SimulationServices(node, self.services)
                                     if simulation_services.AVAILABLE else None)
@@ -144,11 +146,13 @@ class SceneRun:
             missing = (exc.name or "").split(".")[0] or str(exc)
             self.logger.error(f"recording disabled: {missing} is not installed (pip install mcap mcap-ros2-support)")
             return None
-        recording = NodeRecording.start(node, self.sim, self.outputs, self.inputs.subscriptions, path, log_time)
+        subscriptions = self.inputs.subscriptions + self.wheel_input.subscriptions
+        recording = NodeRecording.start(node, self.sim, self.outputs, subscriptions, path, log_time)
         if recording is not None:
             self.sim.add_observer(recording)  # events: commands accepted, torques applied, set_state, ...
             self.outputs.listeners.append(recording)  # every message published, as the bytes published
             self.inputs.listeners.append(recording)  # every torque command as received
+            self.wheel_input.listeners.append(recording)  # every wheel command as received
         return recording
 
     def _start_foxglove(self, node: Node, address: str) -> tuple[FoxgloveLive | None, str]:
@@ -171,7 +175,7 @@ class SceneRun:
         sim, scene, pacer, duration = self.sim, self.scene, self.driver.pacer, self.driver.duration
         built = [f"integrator {sim.method} (dt {sim.dt:g} s{', auto' if auto else ''})"]
         left_out: list[str] = []
-        for part_built, part_left_out in (self.outputs.describe(), self.inputs.describe()):
+        for part_built, part_left_out in (self.outputs.describe(), self.inputs.describe(), self.wheel_input.describe()):
             built += part_built
             left_out += part_left_out
         if self.sensors is None:

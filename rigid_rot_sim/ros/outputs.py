@@ -27,9 +27,9 @@ from rclpy.node import Node
 from rclpy.publisher import Publisher
 from rclpy.qos import QoSProfile
 from rclpy.serialization import serialize_message
-from rigid_rot_msgs.msg import HeavyTopState, RejectedCommand, RigidBodyState
+from rigid_rot_msgs.msg import HeavyTopState, RejectedCommand, RigidBodyState, TorqueBreakdown
 from rosgraph_msgs.msg import Clock
-from sensor_msgs.msg import Imu
+from sensor_msgs.msg import Imu, JointState
 from tf2_msgs.msg import TFMessage  # built into the venv by `make setup` (vendored), a ROS dependency
 from visualization_msgs.msg import MarkerArray
 
@@ -64,6 +64,8 @@ OUTPUTS: dict[str, tuple[Any, MessageBuilder]] = {
     "markers": (MarkerArray,
                 lambda s, o: conversions.body_markers(o.body_view, s, o.frames.world, o.frames.body)),
     "star_tracker": (PoseWithCovarianceStamped, None),  # a sensor's reading: SENSOR_OUTPUTS
+    "wheels": (JointState, lambda s, o: conversions.snapshot_to_joint_state(s, o.frames.body)),
+    "torque_breakdown": (TorqueBreakdown, lambda s, o: conversions.snapshot_to_torque_breakdown(s, o.frames.body)),
 }
 assert tuple(OUTPUTS) == OUTPUT_NAMES, "one entry per scene output, in the scene's order"
 
@@ -125,9 +127,12 @@ class Outputs(SimulationObserver):
         self.publishers["rejected"] = node.create_publisher(RejectedCommand, "~/rejected", REJECTED_QOS)
 
     def _offered(self) -> list[str]:
-        """The outputs this scene can have (``top_state`` only with gravity)."""
+        """The outputs this scene can have (``top_state`` only with gravity, ``wheels`` only with reaction
+        wheels, ``torque_breakdown`` only where a torque acts)."""
         return [name for name in OUTPUT_NAMES if (name != "top_state" or self.scene.is_top)
-                and (name != "star_tracker" or name in self.readings)]
+                and (name != "star_tracker" or name in self.readings)
+                and (name != "wheels" or bool(self.scene.spacecraft.wheels))
+                and (name != "torque_breakdown" or self.scene.torque_kind != "none")]
 
     def _static_transforms(self) -> list[Any]:
         """With /tf: body -> principal-axes frame, where the principal axes are not the body axes."""

@@ -127,6 +127,16 @@ class NodeRecording(SimulationObserver):
             effective_time=float(command.effective_time), receipt_time=command.receipt_time, stamp=command.stamp,
         )
 
+    def wheel_command_accepted(
+        self, step: int, source: str, torques: Sequence[float], effective_time: float, clamped: Sequence[int]
+    ) -> None:
+        said = f"; clamped to max_torque: wheel(s) {list(clamped)}" if clamped else ""
+        self._event(
+            "wheel_torque", step, f"{source}: wheel torques {list(torques)} N*m from t = {effective_time:.9g} s{said}",
+            source=source, torques=tuple(float(v) for v in torques), effective_time=float(effective_time),
+            clamped=list(clamped),
+        )
+
     def torque_applied(self, step: int, command: TorqueCommand) -> None:
         self._event(
             "apply_torque", step,

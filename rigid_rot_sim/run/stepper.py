@@ -14,6 +14,7 @@ stops early, with a reason and the last good state kept, when
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from typing import Any
 
@@ -43,6 +44,15 @@ _STEPWISE_METHODS = frozenset({"dop853"})
 #: Largest kinetic energy (J), |L| (kg*m^2/s) and |omega| (rad/s) a state may have: the snapshot's
 #: rotations and drifts of such values stay finite (a NaN compares false: refused too).
 _DERIVED_CEILING = 1e300
+
+
+def command_torques(commands: CommandSchedule, orientation: np.ndarray) -> list[tuple[str, np.ndarray]]:
+    """The commanded torques acting now, by source (N*m, user body frame; world ones rotated at ``orientation``)."""
+    q = tuple(float(v) for v in orientation)
+    return [
+        (name, np.array(quat.rotate_inverse(q, torque) if frame == "world" else torque, dtype=float))
+        for name, torque, frame in commands.named_torques
+    ]
 
 
 class Stepper:
@@ -149,7 +159,13 @@ class Stepper:
         """The integrator's state at the clock's step, as the user sees it (:meth:`Observables.snapshot`)."""
         integrator = self.integrator
         assert integrator is not None
-        return self.observables.snapshot(self.clock.t, self.clock.k, integrator.q, integrator.omega, self.step_torque_body)
+        snapshot = self.observables.snapshot(self.clock.t, self.clock.k, integrator.q, integrator.omega, self.step_torque_body)
+        sources = command_torques(self.commands, snapshot.orientation)
+        if self.gravity is not None:
+            gravity = self.body.vector_from_principal(self.gravity(0.0, integrator.q, integrator.omega))
+            sources.append(("gravity", np.asarray(gravity, dtype=float)))
+        return dataclasses.replace(snapshot, torque_sources=tuple(sources))
+
 
     def set_command_torque(self) -> None:
         """Give the integrator the commanded torque for the next step (principal frame)."""
@@ -199,7 +215,7 @@ class Stepper:
             if reason is not None:
                 return done, f"rotation limit: {reason}"
             chunk = min(chunk, self._steps_within_rotation_limit())
-            start = (integrator.t, integrator.q, integrator.omega, integrator.n_steps)
+            start = self._saved_state()
             try:
                 if integrator.name in _STEPWISE_METHODS:
                     for _ in range(chunk):
@@ -214,18 +230,27 @@ class Stepper:
                     clock.k += good  # the method stopped at its last good step (energy and momentum finite)
                     done += good
                 else:
-                    integrator.set_state(*start[:3])
-                    integrator.n_steps = start[3]
+                    self._restore(start)
                 name = "NonFiniteStateError" if isinstance(exc, NonFiniteStateError) else type(exc).__name__
                 return done, f"{name}: {exc}"
             reason = self._derived_failure()
             if reason is not None:  # a finite state whose energy or momentum overflows
-                integrator.set_state(*start[:3])
-                integrator.n_steps = start[3]
+                self._restore(start)
                 return done, f"NonFiniteStateError: {reason}"
             clock.k += chunk
             done += chunk
         return done, None
+
+    def _saved_state(self) -> tuple:
+        """What :meth:`_restore` puts back: (t, q, omega, steps taken)."""
+        integrator = self.integrator
+        assert integrator is not None
+        return (integrator.t, integrator.q, integrator.omega, integrator.n_steps)
+
+    def _restore(self, saved: tuple) -> None:
+        assert self.integrator is not None
+        self.integrator.set_state(*saved[:3])
+        self.integrator.n_steps = saved[3]
 
     # ------------------------------------------------------------------ limits
 

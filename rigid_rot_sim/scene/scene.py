@@ -43,9 +43,11 @@ from rigid_rot_sim.scene.bounded_yaml import load_input, read_input
 from rigid_rot_sim.core.quaternion import zxz_to_quaternion
 from rigid_rot_sim.core.inertia import inertia_about_center_of_mass, mass_properties
 from rigid_rot_sim.core.integrators import get_method
+from rigid_rot_sim.core.integrators.gyrostat import get_gyrostat_method
 from rigid_rot_sim.core.sensors import GyroModel, StarTrackerModel
 from rigid_rot_sim.core.steps import step_at_or_after
 from rigid_rot_sim.scene.schema import validated
+from rigid_rot_sim.scene.spacecraft import Spacecraft, parse_spacecraft
 from rigid_rot_sim.scene.scene_schema import (
     DEFAULT_BODY_FRAME,
     DEFAULT_EPOCH,
@@ -333,6 +335,7 @@ class Scene:
     recording: str | None = None
     foxglove: str | None = None  # [HOST:]PORT of a Foxglove live server (a node setting; see ros/foxglove_live)
     commands: CommandSettings = CommandSettings()
+    spacecraft: Spacecraft = Spacecraft()
     sensors: Sensors = Sensors()
     description: str = ""
     #: UTC date and time of sim time 0 (ISO 8601; see :data:`scene_schema.DEFAULT_EPOCH`).
@@ -347,9 +350,12 @@ class Scene:
 
     @property
     def torque_kind(self) -> str:
-        """What drives the body besides its inertia: none, gravity, topic or schedule."""
+        """What drives the body besides its inertia: none, gravity, spacecraft (wheels or gravity gradient,
+        besides any torque inputs), topic or schedule."""
         if self.gravity is not None:
             return "gravity"
+        if self.spacecraft:
+            return "spacecraft"
         if self.topic_inputs:
             return "topic"
         if self.schedules:
@@ -424,6 +430,9 @@ def _scene(spec: Mapping[str, Any], source: str, text: str) -> Scene:
     if gravity is not None and (topics or schedules):
         # the integrators expand gravity or a piecewise-constant torque exactly, not their sum
         raise ValueError("torque_inputs: not supported in a gravity (heavy top) scene; drop gravity or the inputs")
+    spacecraft = parse_spacecraft(spec.get("actuators"), spec.get("environment"), body.inertia_array)
+    if gravity is not None and spacecraft:
+        raise ValueError("actuators / environment: not supported in a gravity (heavy top) scene; drop gravity")
     duration = spec.get("duration")
     qos = spec.get("qos") or {}
     commands = spec.get("commands") or {}
@@ -441,7 +450,8 @@ def _scene(spec: Mapping[str, Any], source: str, text: str) -> Scene:
         topic_inputs=topics,
         schedules=schedules,
         gravity=gravity,
-        integrator=_integrator(spec.get("integrator") or {}),
+        integrator=_integrator(spec.get("integrator") or {}, bool(spacecraft)),
+        spacecraft=spacecraft,
         duration=None if duration is None else float(duration),
         real_time_factor=float(spec.get("real_time_factor", 1.0)),
         outputs=OutputRates(_sensor_rates(sensors, {name: float(rate) for name, rate in outputs.items()})),
@@ -572,11 +582,11 @@ def _schedule(spec: Mapping[str, Any], key: str) -> TorqueSchedule:
     return TorqueSchedule(frame=spec.get("frame", "body"), segments=tuple(segments))
 
 
-def _integrator(spec: Mapping[str, Any]) -> IntegratorSpec:
-    """A method name from the integrator registry (or auto)."""
+def _integrator(spec: Mapping[str, Any], spacecraft: bool = False) -> IntegratorSpec:
+    """A method name from the integrator registry (the gyrostat methods' for wheels or gravity gradient), or auto."""
     method = spec.get("method", IntegratorSpec.method).strip()
     if method != "auto":
-        _at("integrator.method", get_method, method)
+        _at("integrator.method", get_gyrostat_method if spacecraft else get_method, method)
     options = spec.get("options") or {}
     return IntegratorSpec(
         method=method,

@@ -29,6 +29,7 @@ from rigid_rot_sim.scene.schema import (
     text,
     vector,
 )
+from rigid_rot_sim.scene.spacecraft_schema import ACTUATORS, ENVIRONMENT
 
 __all__ = [
     "SCENE_SCHEMA",
@@ -87,6 +88,10 @@ OUTPUTS: dict[str, OutputSpec] = {
                                "(body) and L (world) arrows (0: not built, the default)"),
     "star_tracker": OutputSpec(0.0, "geometry_msgs/PoseWithCovarianceStamped on ~/star_tracker "
                                     "(set by sensors.star_tracker.rate; 0: not built)"),
+    "wheels": OutputSpec(100.0, "sensor_msgs/JointState on ~/wheels (scenes with reaction wheels only)"),
+    "torque_breakdown": OutputSpec(
+        100.0, "rigid_rot_msgs/TorqueBreakdown on ~/torque_breakdown (N*m, body frame; every torque by source: scenes where a torque acts)"
+    ),
 }
 
 _DURATION_MAX = limits.DURATION_RANGE[1]
@@ -292,6 +297,8 @@ SCENE_SCHEMA: dict[str, Any] = {
             "initial": _INITIAL,
             "torque_inputs": _TORQUE_INPUTS,
             "gravity": _GRAVITY,
+            "actuators": ACTUATORS,
+            "environment": ENVIRONMENT,
             "integrator": _INTEGRATOR,
             "duration": nullable(number("Sim time to run, s; null runs unbounded.", exclusive_minimum=0.0,
                                         maximum=_DURATION_MAX)),

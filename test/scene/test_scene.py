@@ -18,6 +18,8 @@ SHIPPED = {
     "sleeping_top": "gravity",
     "thin_rod": "none",
     "from_point_masses": "none",
+    "wheel_slew": "spacecraft",
+    "gravity_gradient_satellite": "spacecraft",
 }
 
 MINIMAL = "body: {principal_moments: [1.0, 2.0, 3.0]}\n"
