@@ -15,6 +15,7 @@ callable is :data:`TORQUE_CALLABLE` and runs the kernels' interpreted (slower) p
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, field
 from typing import Any, Callable, NamedTuple, Protocol
 
@@ -40,7 +41,7 @@ class ConstantTorque:
 
     def __post_init__(self) -> None:
         value = np.asarray(self.value, dtype=float).reshape(3)
-        if not np.all(np.isfinite(value)):
+        if not all(map(math.isfinite, value.tolist())):
             raise ValueError(f"torque must be finite, got {value}")
         object.__setattr__(self, "value", value)
 
