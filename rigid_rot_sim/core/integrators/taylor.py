@@ -95,6 +95,12 @@ def order_for_tolerance(tol: float) -> int:
     return int(min(MAX_AUTO_ORDER, max(MIN_AUTO_ORDER, math.ceil(-math.log(tol)))))
 
 
+def euler_coefficients(i1: float, i2: float, i3: float) -> tuple[float, float, float]:
+    """``((I2 - I3) / I1, (I3 - I1) / I2, (I1 - I2) / I3)``: Euler's equations as ``w1' = c1 w2 w3 + N1 / I1``
+    (cyclic), the coefficients of the recurrence's quadratic terms (moments in kg*m^2)."""
+    return (i2 - i3) / i1, (i3 - i1) / i2, (i1 - i2) / i3
+
+
 @functools.lru_cache(maxsize=256)
 def recurrence_tables(key: tuple) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """(pairs, terms, term_values, b) for the compiled recurrence, cached per body (and gravity).
@@ -107,11 +113,9 @@ def recurrence_tables(key: tuple) -> tuple[np.ndarray, np.ndarray, np.ndarray, n
     """
     moments = np.array(key[:3], dtype=float)
     if len(key) == 3:
-        i1, i2, i3 = key
         pairs = np.zeros((0, 2), dtype=np.int64)
         terms = np.zeros((0, 2), dtype=np.int64)
-        # the same expressions as derivative_map's C entries
-        values = np.array([(i2 - i3) / i1, (i3 - i1) / i2, (i1 - i2) / i3])
+        values = np.array(euler_coefficients(*key))
         b = np.zeros(_STATE_SIZE)
     else:
         c, b = derivative_map(moments, GravityTorque(np.array(key[3]), key[4]))
@@ -155,9 +159,7 @@ def derivative_map(moments: np.ndarray, gravity: GravityTorque | None = None) ->
     c = np.zeros((_STATE_SIZE, _STATE_SIZE, _STATE_SIZE))
     b = np.zeros(_STATE_SIZE)
     # Euler's equations, principal frame.
-    c[_W1, _W2, _W3] = (i2 - i3) / i1
-    c[_W2, _W3, _W1] = (i3 - i1) / i2
-    c[_W3, _W1, _W2] = (i1 - i2) / i3
+    c[_W1, _W2, _W3], c[_W2, _W3, _W1], c[_W3, _W1, _W2] = euler_coefficients(i1, i2, i3)
     # q' = 1/2 q (x) (omega, 0), Hamilton product, scalar-last.
     c[_QX, _QW, _W1], c[_QX, _QY, _W3], c[_QX, _QZ, _W2] = 0.5, 0.5, -0.5
     c[_QY, _QW, _W2], c[_QY, _QZ, _W1], c[_QY, _QX, _W3] = 0.5, 0.5, -0.5
