@@ -24,7 +24,7 @@ from std_srvs.srv import SetBool, Trigger  # noqa: E402
 from rigid_rot_sim.ros.node import RigidRotSimNode  # noqa: E402
 from rigid_rot_sim.ros.qos import COMMAND_QOS, REJECTED_QOS, STATE_QOS  # noqa: E402
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 SCENES = ROOT / "config" / "scenes"
 
 
@@ -319,7 +319,8 @@ def test_frame_parameters_override_the_scene_and_bad_names_are_refused(context):
 def test_recording_without_the_mcap_package_is_disabled_with_a_message(context, tmp_path, monkeypatch, capfd):
     import sys
 
-    for name in [n for n in sys.modules if n == "mcap" or n.startswith(("mcap.", "rigid_rot_sim.recording."))]:
+    for name in [n for n in sys.modules if n in ("mcap", "rigid_rot_sim.ros.recording")
+                 or n.startswith(("mcap.", "rigid_rot_sim.recording."))]:
         parent, _, child = name.rpartition(".")
         if parent in sys.modules and hasattr(sys.modules[parent], child):
             # undone after the test: the package attribute points at the original module again
