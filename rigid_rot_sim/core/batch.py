@@ -14,6 +14,9 @@ at ``n_steps * dt``; a torque is refused) run the single-body kernels of
 here has the same bits as the same body advanced alone by ``get_method(name)`` with a
 :class:`~rigid_rot_sim.core.torque.ConstantTorque`, and there is no second copy of any
 formula. The compiled loop is cached like the single-body one (``make setup`` builds it).
+``rk4`` (the sweeps' workhorse) runs by default in chunks of bodies laid out for SIMD
+(structure of arrays, the inner loops over bodies, see ``_rk4_soa_chunk``): rk4_step's
+operations in its order, so the same bits as the per-body loop (``layout="per_body"``).
 """
 
 from __future__ import annotations
@@ -247,7 +250,10 @@ def _rk4_soa_chunk(start, stop, moments, q, omega, torque, dt, n_steps, failed_s
             failure[b] = NON_FINITE
 
 
-@compiled(parallel=True)
+# error_model="numpy": a division is the IEEE one without numba's zero-divisor test (a branch that
+# stops LLVM from vectorising); the divisors here are moments (> 0, checked), constants and a
+# quaternion norm, whose zero gives a non-finite state, reported as such.
+@compiled(parallel=True, error_model="numpy")
 def _rk4_soa_parallel(moments, q, omega, torque, dt, n_steps, failed_step, failure):
     n = q.shape[0]
     for c in prange((n + _SOA_CHUNK - 1) // _SOA_CHUNK):
@@ -256,7 +262,7 @@ def _rk4_soa_parallel(moments, q, omega, torque, dt, n_steps, failed_step, failu
                        failure)
 
 
-@compiled
+@compiled(error_model="numpy")
 def _rk4_soa_serial(moments, q, omega, torque, dt, n_steps, failed_step, failure):
     n = q.shape[0]
     for start in range(0, n, _SOA_CHUNK):

@@ -137,7 +137,7 @@ def torque_data(torque: Any) -> TorqueData:
     if torque is None:
         return TorqueData(TORQUE_NONE, _NO_POLYNOMIAL, _NO_GRAVITY)
     if isinstance(torque, ConstantTorque):
-        if not np.any(torque.value):
+        if not any(torque.value.tolist()):  # np.any's truth, without its call overhead
             return TorqueData(TORQUE_NONE, _NO_POLYNOMIAL, _NO_GRAVITY)
         return TorqueData(TORQUE_TIME, np.array(torque.value, dtype=float).reshape(1, 3), _NO_GRAVITY)
     if isinstance(torque, PolynomialTorque):

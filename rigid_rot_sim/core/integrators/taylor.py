@@ -292,7 +292,7 @@ class Taylor(Integrator):
         self._const_forcing = b.copy()
         poly = np.zeros((0, 3))
         if isinstance(torque, ConstantTorque):
-            self._const_forcing = b + np.concatenate([torque.value / self.moments, np.zeros(4)])
+            self._const_forcing[:3] += torque.value / self.moments
         elif isinstance(torque, PolynomialTorque):
             poly = torque.coefficients / self.moments
         n = poly.shape[0]
