@@ -32,6 +32,8 @@ def entry_points() -> dict[str, object]:
         "exact._free_flow_compiled": exact._free_flow_compiled,
         "batch._advance_bodies_serial": batch._advance_bodies_serial,
         "batch._advance_bodies_parallel": batch._advance_bodies_parallel,
+        "batch._rk4_soa_serial": batch._rk4_soa_serial,
+        "batch._rk4_soa_parallel": batch._rk4_soa_parallel,
     }
 
 
@@ -75,6 +77,9 @@ def exercise() -> None:
         torque = None if method in FREE_BODY_METHODS else np.ones(3) * 1e-3
         for n, steps in ((1, 2), (2, 100_000)):  # serial, then parallel
             advance_batch(method, moments, rng.normal(size=(n, 4)), rng.normal(size=(n, 3)), 1e-4, steps, torque)
+            if method == "rk4":
+                advance_batch(method, moments, rng.normal(size=(n, 4)), rng.normal(size=(n, 3)), 1e-4, steps, torque,
+                              layout="per_body")
 
 
 def main() -> int:

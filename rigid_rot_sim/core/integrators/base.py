@@ -148,16 +148,17 @@ class Integrator:
         """Replace the state (q is normalised; a zero or non-finite q is a ValueError)."""
         q = np.asarray(q, dtype=float).reshape(4)
         omega = np.asarray(omega, dtype=float).reshape(3)
-        norm = float(np.linalg.norm(q))
-        if not (math.isfinite(norm) and norm > 0.0):
+        x, y, z, w = q.tolist()
+        norm_squared = x * x + y * y + z * z + w * w  # |q|^2 as quat.normalize forms it
+        if not (math.isfinite(norm_squared) and norm_squared > 0.0):
             raise ValueError(f"q must be a finite non-zero quaternion, got {q}")
-        if not np.all(np.isfinite(omega)):
+        if not all(map(math.isfinite, omega.tolist())):
             raise ValueError(f"omega must be finite, got {omega}")
         if not math.isfinite(t):
             raise ValueError(f"t must be finite, got {t}")
         self.t = float(t)
         # the kernels' normalisation (the batch core normalises its bodies the same way)
-        self.q = np.array(quat.normalize(q.tolist()))
+        self.q = np.array(quat.normalize((x, y, z, w)))
         self.omega = omega
         self._on_state_change()
 
