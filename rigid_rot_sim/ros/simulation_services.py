@@ -15,9 +15,11 @@ under names relative to the node, as Gazebo does (``/gzserver/step_simulation``)
 Every call goes through the action behind the node's own service
 (:class:`~rigid_rot_sim.ros.services.RunServices`: ``step``, ``reset``, ``pause``,
 ``set_initial_state``), so their checks, limits and the recording of what changed apply to both. The outcome is a ``simulation_interfaces/msg/Result``:
-``RESULT_INCORRECT_STATE`` when the call needs another run state (stepping while
-playing), ``RESULT_FEATURE_UNSUPPORTED`` for what this simulator cannot do (a reset of
-time alone, QUITTING), ``RESULT_OPERATION_FAILED`` with the node's reason otherwise.
+``RESULT_FEATURE_UNSUPPORTED`` for what this simulator cannot do (a reset of time alone,
+QUITTING), ``RESULT_OPERATION_FAILED`` with the node's reason otherwise, stepping while
+playing included: StepSimulation.srv and SimulateSteps.action say so ("Calling with
+simulation not paused will return RESULT_OPERATION_FAILED"), and O3DE does the same,
+although Result.msg gives this very case as its example of ``RESULT_INCORRECT_STATE``.
 
 The package is optional: it is imported here only, and :data:`AVAILABLE` is False when
 it is not installed (an apt install without ``ros-jazzy-simulation-interfaces``); the node
@@ -172,7 +174,7 @@ class SimulationServices:
         run = self.run
         if run.finished or not run.sim.paused:
             state = "stopping (duration reached)" if run.finished else "playing"
-            raise _Refused(INCORRECT_STATE, f"stepping needs a paused simulation, it is {state}: "
+            raise _Refused(OPERATION_FAILED, f"stepping needs a paused simulation, it is {state}: "
                            "pause it first (SetSimulationState PAUSED)")
         self._stopped = False
         self.actions.step(steps)  # ~/step (ValueError: operation failed)
