@@ -112,6 +112,7 @@ LAYERS = (
     ("conversions",),
     ("ros", "analysis"),
     ("cli",),
+    ("console_scripts",),
 )
 
 

@@ -40,8 +40,8 @@ Pacing
 tick, so commands and services are served in between); r = 0: as fast as possible, in
 batches of at most ``MAX_TICK_WALL`` wall time per tick. The states do not depend on r
 or on the publish rates (see the Simulator's determinism notes). The timer runs on the
-steady clock: the node is the source of sim time (/clock), so ``use_sim_time`` true is
-refused (at start-up and at run time).
+steady clock: the node is the source of sim time (/clock), so ``use_sim_time`` true (a
+launch-wide setting) is accepted with a warning that says so: nothing here reads the ROS clock.
 """
 
 from __future__ import annotations
@@ -49,13 +49,14 @@ from __future__ import annotations
 import signal
 import sys
 import threading
+import time
 from typing import Any
 
 import rclpy
 from rclpy.clock import Clock as SteadyClock
 from rclpy.clock_type import ClockType
 from rclpy.exceptions import NameValidationException, ParameterException
-from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
+from rclpy.executors import ExternalShutdownException, MultiThreadedExecutor
 from rclpy.impl.implementation_singleton import rclpy_implementation as _rclpy
 from rclpy.node import Node
 from rclpy.signals import SignalHandlerOptions
@@ -68,7 +69,7 @@ from rigid_rot_sim.ros import simulation_services
 from rigid_rot_sim.ros.inputs import Rejections, TorqueInputs
 from rigid_rot_sim.ros.outputs import Outputs
 from rigid_rot_sim.ros.parameters import (
-    USE_SIM_TIME_REFUSAL,
+    USE_SIM_TIME_NOTE,
     ParameterCallbacks,
     accept_integers_for_doubles,
     declare_parameters,
@@ -79,6 +80,10 @@ from rigid_rot_sim.ros.services import InertiaService, RunServices
 from rigid_rot_sim.share import ensure_ament_prefix_path, resolve_scene
 
 NODE_NAME = "rigid_rot_sim"
+#: Executor threads: the run's callbacks (one at a time) and ~/compute_inertia beside them.
+EXECUTOR_THREADS = 2
+#: Most wall time (s) to wait at shutdown for callbacks in flight (a slice is at most 0.25 s).
+EXECUTOR_SHUTDOWN_WAIT = 2.0
 
 
 class RigidRotSimNode(Node):
@@ -91,14 +96,14 @@ class RigidRotSimNode(Node):
         self.sim: Simulator | None = None
         self.run: RunDriver | None = None
         self.recording = None
-        self.parameter_callbacks = ParameterCallbacks(self)  # refuses use_sim_time, with or without a scene
+        self.parameter_callbacks = ParameterCallbacks(self)  # explains use_sim_time, with or without a scene
         self.inertia_service = InertiaService(self)
         scene_path = declare_scene_parameter(self)
         if not scene_path:
             log.info("no scene parameter: serving ~/compute_inertia only (rigid-rot run SCENE starts a simulation)")
             return
         if self.get_parameter("use_sim_time").value is True:
-            raise ValueError(USE_SIM_TIME_REFUSAL)
+            log.warning(USE_SIM_TIME_NOTE)
         scene = load_scene(resolve_scene(scene_path))  # SceneError names the file, key and problem
         declare_parameters(self, scene)
         settings = read_settings(self, scene)
@@ -219,6 +224,25 @@ def _interrupt(signum: int, frame: Any) -> None:
     raise KeyboardInterrupt
 
 
+def _wait_for_callbacks(node: Node, timeout: float) -> bool:
+    """Wait (at most ``timeout`` s) until no callback of the node's default group runs, and keep it so.
+
+    The run's callbacks (ticks, services, commands) are all in that mutually exclusive group; once
+    it is claimed here none starts again (the executor is shut down), so the node and its recording
+    close with no callback in flight. (rclpy 7.1's ``Executor.shutdown`` does not wait for them.)
+    """
+    group = node.default_callback_group
+    member = next((entity for entity in (ref() for ref in list(group.entities)) if entity is not None), None)
+    if member is None:
+        return True
+    deadline = time.monotonic() + timeout
+    while not group.beginning_execution(member):
+        if time.monotonic() > deadline:
+            return False
+        time.sleep(0.005)
+    return True
+
+
 def main(args: list[str] | None = None) -> int:
     """Run the node until shut down or until the scene's duration is reached (exit code 0).
 
@@ -235,13 +259,17 @@ def main(args: list[str] | None = None) -> int:
         signal.signal(signum, _interrupt)
     stop = threading.Event()
     node = None
+    executor = None
     try:
         node = RigidRotSimNode()
         # from here SIGINT and SIGTERM only ask the loop below to stop: the node (and its
         # recording) then closes in `finally`, never interrupted in a callback or a file write
         for signum in (signal.SIGINT, signal.SIGTERM):
             signal.signal(signum, lambda *_: stop.set())
-        executor = SingleThreadedExecutor()
+        # two threads: every callback that touches the run is in the node's default (mutually
+        # exclusive) group, so they never overlap; ~/compute_inertia has a group of its own, so a
+        # huge request is deserialised beside the stepping and publishing (InertiaService)
+        executor = MultiThreadedExecutor(num_threads=EXECUTOR_THREADS)
         executor.add_node(node)
         while rclpy.ok() and not node.finished and not stop.is_set():
             executor.spin_once(timeout_sec=0.1)
@@ -253,7 +281,10 @@ def main(args: list[str] | None = None) -> int:
         print(startup_error_line(exc), file=sys.stderr, flush=True)
         return 2
     finally:
+        if executor is not None:
+            executor.shutdown(timeout_sec=0)
         if node is not None:
+            _wait_for_callbacks(node, EXECUTOR_SHUTDOWN_WAIT)  # a tick in flight ends before the recording closes
             node.destroy_node()
         rclpy.try_shutdown()
     return 0

@@ -34,9 +34,13 @@ from rigid_rot_sim.recording import LOG_TIME_BASES  # the package itself is ligh
 from rigid_rot_sim.ros.outputs import output_topic
 from rigid_rot_sim.ros.qos import output_qos
 
-USE_SIM_TIME_REFUSAL = (
-    "use_sim_time true is refused: this node is the source of sim time (it publishes /clock and "
-    "stamps every output with sim time); its pacing runs on the steady clock"
+#: Logged when ``use_sim_time`` is set true (a launch-wide ``use_sim_time:=true``, as Nav2 and
+#: Gazebo bringups set it): accepted, since nothing in this node reads its ROS clock.
+USE_SIM_TIME_NOTE = (
+    "use_sim_time true accepted, but this node is the clock: it publishes /clock from its own simulation, "
+    "stamps every output with sim time and paces itself on the steady clock, so nothing here changes; "
+    "only its ROS clock now follows the /clock it publishes itself (the other nodes of the launch are "
+    "the ones that need use_sim_time)"
 )
 
 
@@ -267,7 +271,7 @@ def read_settings(node: Node, scene: Scene) -> Settings:
 class ParameterCallbacks:
     """Run-time parameter changes: refused with a reason, or applied to the run.
 
-    Registered at once, so that ``use_sim_time`` true is refused even without a scene;
+    Registered at once, so that ``use_sim_time`` true is explained even without a scene;
     :meth:`attach` gives it the run (and the timer whose period follows ``dt`` and r).
     """
 
@@ -287,7 +291,7 @@ class ParameterCallbacks:
         values = {p.name: p.value for p in parameters}
         try:
             if values.get("use_sim_time") is True:
-                raise ValueError(USE_SIM_TIME_REFUSAL)
+                self.node.get_logger().warning(USE_SIM_TIME_NOTE)
             if self.run is None:
                 return SetParametersResult(successful=True)
             sim, periods = self.run.sim, self.run.schedule.periods
