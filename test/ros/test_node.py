@@ -24,7 +24,7 @@ from std_srvs.srv import SetBool, Trigger  # noqa: E402
 from rigid_rot_sim.ros.node import RigidRotSimNode  # noqa: E402
 from rigid_rot_sim.ros.qos import COMMAND_QOS, REJECTED_QOS, STATE_QOS  # noqa: E402
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 SCENES = ROOT / "config" / "scenes"
 
 
