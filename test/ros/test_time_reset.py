@@ -6,7 +6,7 @@ that actually goes back, so that is what is pinned here (over DDS, in-process).
 
 from rosgraph_msgs.msg import Clock
 from rclpy.qos import QoSProfile, ReliabilityPolicy
-from std_srvs.srv import Trigger
+from std_srvs.srv import SetBool, Trigger
 
 from test_node import Harness, context  # noqa: F401 (the fixture)
 
@@ -23,12 +23,13 @@ def test_reset_publishes_the_backward_clock(context):  # noqa: F811
         h.client.create_subscription(Clock, "/clock", lambda m: clocks.append(_seconds(m.clock)),
                                      QoSProfile(depth=1, reliability=ReliabilityPolicy.BEST_EFFORT))
         assert h.spin_until(lambda: clocks and clocks[-1] > 0.5)
-        before = clocks[-1]
-        assert h.call(Trigger, "reset", Trigger.Request()).success
+        assert h.call(SetBool, "pause", SetBool.Request(data=True)).success  # so that t = 0 is the last /clock
+        before = h.node.sim.t
+        assert before > 0.5
         count = len(clocks)
-        # the first /clock after the reset is t = 0 (published by the reset itself), then time runs on
-        assert h.spin_until(lambda: any(t < before for t in clocks[count - 1:]))
-        after = next(t for t in clocks[count - 1:] if t < before)
-        assert after < 0.5 < before
+        assert h.call(Trigger, "reset", Trigger.Request()).success
+        # the reset itself publishes /clock at t = 0 (paused: nothing after it)
+        assert h.spin_until(lambda: 0.0 in clocks[count:], timeout=10.0)
+        assert max(clocks[:count]) > 0.5 and clocks[-1] == 0.0
     finally:
         h.close()
