@@ -24,6 +24,7 @@ import os
 import subprocess
 import sys
 import textwrap
+import threading
 import time
 from pathlib import Path
 
@@ -116,16 +117,15 @@ def measure(label: str, node_command: list[str], masses: int, requests: int, qui
         busy_start = time.monotonic()
         sender.stdin.write("go\n")
         sender.stdin.flush()
-        replies = []
-        os.set_blocking(sender.stdout.fileno(), False)
-        buffered = ""
-        while "DONE" not in buffered and time.monotonic() < busy_start + 60.0 * requests:
+        lines: list[str] = []
+        reader = threading.Thread(target=lambda: lines.extend(iter(sender.stdout.readline, "")), daemon=True)
+        reader.start()
+        while not any(line.startswith("DONE") for line in lines) and time.monotonic() < busy_start + 60.0 * requests:
             executor.spin_once(timeout_sec=0.01)
-            buffered += sender.stdout.read() or ""
         busy_end = time.monotonic()
         while time.monotonic() < busy_end + 1.0:  # the stream after the last reply
             executor.spin_once(timeout_sec=0.01)
-        replies = [line for line in buffered.splitlines() if line.startswith("REPLY")]
+        replies = [line.strip() for line in lines if line.startswith("REPLY")]
         print(f"{label}: largest ~/state gap: quiet {largest_gap(arrivals, quiet_start, busy_start) * 1e3:.0f} ms, "
               f"while serving {largest_gap(arrivals, busy_start, busy_end + 1.0) * 1e3:.0f} ms; "
               f"node peak RSS {peak_rss_mib(node.pid):.0f} MiB; {len(replies)} of {requests} replies")
