@@ -319,7 +319,8 @@ def test_frame_parameters_override_the_scene_and_bad_names_are_refused(context):
 def test_recording_without_the_mcap_package_is_disabled_with_a_message(context, tmp_path, monkeypatch, capfd):
     import sys
 
-    for name in [n for n in sys.modules if n == "mcap" or n.startswith(("mcap.", "rigid_rot_sim.recording."))]:
+    for name in [n for n in sys.modules if n in ("mcap", "rigid_rot_sim.ros.recording")
+                 or n.startswith(("mcap.", "rigid_rot_sim.recording."))]:
         parent, _, child = name.rpartition(".")
         if parent in sys.modules and hasattr(sys.modules[parent], child):
             # undone after the test: the package attribute points at the original module again
