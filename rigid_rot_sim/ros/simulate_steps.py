@@ -77,7 +77,7 @@ class SimulateStepsAction:
     async def execute(self, goal_handle: Any) -> Any:
         """Start stepping (or refuse), wait for the outcome; the result says OK or why not."""
         steps = int(goal_handle.request.steps)
-        refusal = self._refusal(steps)
+        refusal = "another SimulateSteps goal is running" if self.goal is not None else self._refusal(steps)
         if refusal is not None:
             return self._finish(goal_handle, "abort", self.failed, refusal, 0, steps)
         self.services.stepping_started()

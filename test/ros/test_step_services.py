@@ -189,3 +189,21 @@ def test_simulate_steps_action_feedback_per_step_cancel_and_refusal(harness, mon
     assert refused.status == 6 and refused.result.result.result == Result.RESULT_OPERATION_FAILED  # STATUS_ABORTED
     assert "paused" in refused.result.result.error_message
     client.destroy()
+
+
+def test_a_run_driven_by_step_with_torque_resimulates_bit_exact(harness, tmp_path):
+    from rigid_rot_sim.recording.resim import resimulate
+
+    bag = tmp_path / "step_with_torque.mcap"
+    h = harness("torque_driven", real_time_factor=0.0, start_paused=True, integrator="rk4", record_path=str(bag))
+    h.node.sim.set_state([0.1, -0.2, 0.3, 0.9], [0.4, -1.1, 2.3])
+    start = 0
+    for torque, frame, steps in [(Vector3(z=0.004), "base_link", 200), (Vector3(x=-0.002, y=0.003), "odom", 150),
+                                 (Vector3(y=0.001), "", 77)]:
+        request = StepWithTorque.Request(torque=torque, frame_id=frame, steps=steps)
+        _complete(h, h.call(StepWithTorque, "step_with_torque", request), start, steps)
+        start += steps
+    assert h.node.sim.step_index == 427
+    _close(h)  # the recording is complete
+    report = resimulate(bag)
+    assert report.identical and "BIT-EXACT" in report.verdict, report.format()
