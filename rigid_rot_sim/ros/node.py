@@ -27,10 +27,14 @@ Services
 ~/compute_inertia, ~/set_state, ~/reset (std_srvs/Trigger), ~/pause (std_srvs/SetBool),
 ~/step (rigid_rot_msgs/Step, while paused; at most ``limits.MAX_STEPS_PER_REQUEST`` steps,
 run in the service callback for at most ``services.STEP_REQUEST_WALL`` s: the reply says how many
-were done), ~/apply_torque. A bad request gets ``success = false`` and the reason; nothing
+were done), ~/apply_torque, ~/step_with_torque (a torque over the next N steps, then the state, in
+one callback). A bad request gets ``success = false`` and the reason; nothing
 raises out of a callback. Where simulation_interfaces is installed, also the standard
 simulator services (:mod:`.simulation_services`), through the same actions
-(``~/step_simulation`` runs ``~/step``'s code, limits included).
+(``~/step_simulation`` runs ``~/step``'s code, limits included) and the SimulateSteps action
+(``~/simulate_steps``, stepped by a timer of its own: :mod:`.simulate_steps`).
+Executor: two threads; the run's callbacks share the node's default (mutually exclusive)
+callback group, ``~/compute_inertia`` has its own, so a huge request is deserialised beside them.
 Every limit is in :mod:`rigid_rot_sim.core.limits` (README, "Limits and failure behaviour").
 
 Pacing
