@@ -91,7 +91,8 @@ def _from_other_venv(other: Path, command: list[str], timeout: float = 120.0) ->
 
 def test_the_inherited_environment_hides_this_venvs_libraries(other_venv):
     """The issue reproduced: this venv's interpreter, started there without the fix, cannot import them."""
-    result = _from_other_venv(other_venv, [str(BIN / "python"), "-c", "from rigid_rot_msgs.msg import RigidBodyState as T; type(T).__import_type_support__()"])
+    load = "from rigid_rot_msgs.msg import RigidBodyState as T; type(T).__import_type_support__()"
+    result = _from_other_venv(other_venv, [str(BIN / "python"), "-c", load])
     assert str(other_venv / "lib") in result["ld"].split(os.pathsep)
     assert os.path.join(sys.prefix, "lib") not in result["ld"].split(os.pathsep)
     assert result["rc"] != 0 and "librigid_rot_msgs__rosidl_generator_py.so" in result["err"]

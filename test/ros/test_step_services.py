@@ -52,7 +52,8 @@ def _state_bits(state) -> bytes:
                    state.angular_momentum_world, state.torque_body):
         fields += [vector.x, vector.y, vector.z]
     fields += [state.kinetic_energy, state.energy_drift, state.angular_momentum_drift]
-    return struct.pack(f"<{len(fields)}d", *fields) + struct.pack("<iI", state.header.stamp.sec, state.header.stamp.nanosec)
+    stamp = struct.pack("<iI", state.header.stamp.sec, state.header.stamp.nanosec)
+    return struct.pack(f"<{len(fields)}d", *fields) + stamp
 
 
 @pytest.fixture
