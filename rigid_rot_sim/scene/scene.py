@@ -29,10 +29,12 @@ masses give their inertia about their centre of mass.
 
 from __future__ import annotations
 
+import datetime
 import math
 import os
-from dataclasses import dataclass, field, make_dataclass
-from typing import Any, Callable, Mapping
+from collections.abc import Iterator, Mapping
+from dataclasses import dataclass
+from typing import Any, Callable
 
 import numpy as np
 from rigid_rot_sim.core import limits, validation
@@ -41,9 +43,11 @@ from rigid_rot_sim.scene.bounded_yaml import load_input, read_input
 from rigid_rot_sim.core.quaternion import zxz_to_quaternion
 from rigid_rot_sim.core.inertia import inertia_about_center_of_mass, mass_properties
 from rigid_rot_sim.core.integrators import get_method
+from rigid_rot_sim.core.sensors import GyroModel, StarTrackerModel
 from rigid_rot_sim.scene.schema import validated
 from rigid_rot_sim.scene.scene_schema import (
     DEFAULT_BODY_FRAME,
+    DEFAULT_EPOCH,
     DEFAULT_GRAVITY,
     DEFAULT_WORLD_FRAME,
     OUTPUTS,
@@ -63,9 +67,10 @@ __all__ = [
     "TorqueSchedule",
     "Gravity",
     "IntegratorSpec",
-    "Outputs",
+    "OutputRates",
     "OutputQos",
     "CommandSettings",
+    "Sensors",
     "Scene",
     "load_scene",
     "parse_scene",
@@ -213,21 +218,45 @@ class IntegratorSpec:
     options: tuple[tuple[str, Any], ...] = ()
 
 
-def _rates_as_dict(self: Any) -> dict[str, float]:
-    return {name: getattr(self, name) for name in OUTPUT_NAMES}
+class OutputRates(Mapping[str, float]):
+    """Publication rates in Hz of sim time (0 = not published), one per output, in publishing order.
 
+    A frozen mapping over :data:`OUTPUT_NAMES` (the outputs of
+    :data:`~rigid_rot_sim.scene.scene_schema.OUTPUTS`); an output not given keeps its default
+    rate there. ``OutputRates(imu=5.0)["imu"] == 5.0``; an unknown name is a ``KeyError``.
+    """
 
-#: Publication rates in Hz of sim time (0 = not published): one float field per output of
-#: :data:`~rigid_rot_sim.scene.scene_schema.OUTPUTS` (``state``, ``orientation``, ... ``odom``),
-#: defaulting to its rate there; ``as_dict()`` gives them by name, in publishing order.
-Outputs = make_dataclass(
-    "Outputs",
-    [(name, float, field(default=output.rate)) for name, output in OUTPUTS.items()],
-    frozen=True,
-    namespace={"as_dict": _rates_as_dict},
-)
-Outputs.__module__ = __name__
-Outputs.__doc__ = "Publication rates in Hz of sim time (0 = not published), one field per output."
+    __slots__ = ("_rates",)
+    _rates: dict[str, float]
+
+    def __init__(self, rates: Mapping[str, float] | None = None, **by_name: float) -> None:
+        given = {**(rates or {}), **by_name}
+        unknown = sorted(set(given) - set(OUTPUT_NAMES))
+        if unknown:
+            raise KeyError(f"unknown output(s) {', '.join(unknown)}; known: {', '.join(OUTPUT_NAMES)}")
+        rates_by_name = {name: float(given.get(name, DEFAULT_OUTPUT_RATES[name])) for name in OUTPUT_NAMES}
+        object.__setattr__(self, "_rates", rates_by_name)
+
+    def __getitem__(self, name: str) -> float:
+        return self._rates[name]
+
+    def __iter__(self) -> Iterator[str]:
+        return iter(self._rates)
+
+    def __len__(self) -> int:
+        return len(self._rates)
+
+    def __hash__(self) -> int:
+        return hash(tuple(self._rates.items()))
+
+    def __setattr__(self, name: str, value: Any) -> None:
+        raise AttributeError(f"{type(self).__name__} is frozen")
+
+    def __reduce__(self) -> tuple[type[OutputRates], tuple[dict[str, float]]]:
+        return (type(self), (self._rates,))  # pickled by value (scenes travel to sweep workers)
+
+    def __repr__(self) -> str:
+        return f"{type(self).__name__}({self._rates!r})"
 
 
 @dataclass(frozen=True)
@@ -259,6 +288,19 @@ class CommandSettings:
 
 
 @dataclass(frozen=True)
+class Sensors:
+    """The scene's sensor models (:mod:`rigid_rot_sim.core.sensors`) and the seed of their noise.
+
+    ``seed`` None: the run draws one at start and records it. ``gyro``: ~/imu carries its
+    readings (at ``gyro.rate``); ``star_tracker``: ~/star_tracker at its rate.
+    """
+
+    seed: int | None = None
+    gyro: GyroModel | None = None
+    star_tracker: StarTrackerModel | None = None
+
+
+@dataclass(frozen=True)
 class Scene:
     """A validated scene. ``source`` is the file it came from, ``text`` the YAML as given."""
 
@@ -272,11 +314,15 @@ class Scene:
     integrator: IntegratorSpec = IntegratorSpec()
     duration: float | None = None
     real_time_factor: float = 1.0
-    outputs: Outputs = Outputs()
+    outputs: OutputRates = OutputRates()
     qos: OutputQos = OutputQos()
     recording: str | None = None
+    foxglove: str | None = None  # [HOST:]PORT of a Foxglove live server (a node setting; see ros/foxglove_live)
     commands: CommandSettings = CommandSettings()
+    sensors: Sensors = Sensors()
     description: str = ""
+    #: UTC date and time of sim time 0 (ISO 8601; see :data:`scene_schema.DEFAULT_EPOCH`).
+    epoch: str = DEFAULT_EPOCH
     source: str = "<string>"
     text: str = ""
 
@@ -368,9 +414,13 @@ def _scene(spec: Mapping[str, Any], source: str, text: str) -> Scene:
     qos = spec.get("qos") or {}
     commands = spec.get("commands") or {}
     recording = spec.get("recording")
+    foxglove = spec.get("foxglove")
+    sensors = _sensors(spec.get("sensors") or {})
+    outputs = spec.get("outputs") or {}
     return Scene(
         name=spec.get("name", default_name).strip(),
         description=(spec.get("description") or "").strip(),
+        epoch=_at("epoch", _epoch, spec.get("epoch") or DEFAULT_EPOCH),
         frames=frames,
         body=body,
         initial=_initial(spec.get("initial") or {}),
@@ -380,9 +430,11 @@ def _scene(spec: Mapping[str, Any], source: str, text: str) -> Scene:
         integrator=_integrator(spec.get("integrator") or {}),
         duration=None if duration is None else float(duration),
         real_time_factor=float(spec.get("real_time_factor", 1.0)),
-        outputs=Outputs(**{name: float(rate) for name, rate in (spec.get("outputs") or {}).items()}),
+        outputs=OutputRates(_sensor_rates(sensors, {name: float(rate) for name, rate in outputs.items()})),
+        sensors=sensors,
         qos=OutputQos(reliability=qos.get("reliability", OutputQos.reliability), depth=qos.get("depth", OutputQos.depth)),
         recording=None if recording is None else recording.strip(),
+        foxglove=None if foxglove is None else str(foxglove).strip(),
         commands=CommandSettings(
             max_torque=float(commands.get("max_torque", 0.0)),
             qos_depth=commands.get("qos_depth", limits.DEFAULT_COMMAND_DEPTH),
@@ -390,6 +442,15 @@ def _scene(spec: Mapping[str, Any], source: str, text: str) -> Scene:
         source=source,
         text=text,
     )
+
+
+def _epoch(text: str) -> str:
+    """A real UTC date and time (the schema's pattern also passes 2026-02-30T25:00:00)."""
+    try:
+        datetime.datetime.fromisoformat(text.rstrip("Z")[:26])
+    except ValueError:
+        raise ValueError(f"not a valid date and time: {text!r}") from None
+    return text
 
 
 def _frames(spec: Mapping[str, Any]) -> Frames:
@@ -508,3 +569,33 @@ def _integrator(spec: Mapping[str, Any]) -> IntegratorSpec:
         dt=float(spec.get("dt", IntegratorSpec.dt)),
         options=tuple(sorted((str(name), value) for name, value in options.items())),
     )
+
+
+def _sensors(spec: Mapping[str, Any]) -> Sensors:
+    gyro = spec.get("gyro")
+    star_tracker = spec.get("star_tracker")
+    return Sensors(
+        seed=spec.get("seed"),
+        gyro=None if gyro is None else GyroModel(**{
+            name: _floats(value) if isinstance(value, list) else float(value) for name, value in gyro.items()
+        }),
+        star_tracker=None if star_tracker is None else StarTrackerModel(
+            rate=float(star_tracker.get("rate", StarTrackerModel.rate)),
+            noise_equivalent_angle=_floats(star_tracker["noise_equivalent_angle"]),  # type: ignore[arg-type]
+        ),
+    )
+
+
+def _sensor_rates(sensors: Sensors, rates: dict[str, float]) -> dict[str, float]:
+    """The output rates with ~/imu at the gyro's rate and ~/star_tracker at the star tracker's."""
+    for output, sensor, key in (("imu", sensors.gyro, "sensors.gyro.rate"),
+                                ("star_tracker", sensors.star_tracker, "sensors.star_tracker.rate")):
+        if sensor is None:
+            if output == "star_tracker" and rates.get(output, 0.0) > 0.0:
+                raise ValueError("outputs.star_tracker: needs a sensors.star_tracker section (its noise)")
+            continue
+        if output in rates and rates[output] != sensor.rate:
+            raise ValueError(f"outputs.{output}: {rates[output]:g} Hz differs from {key} {sensor.rate:g} Hz "
+                             f"(give the rate once, in {key})")
+        rates[output] = sensor.rate
+    return rates

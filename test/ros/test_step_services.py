@@ -30,7 +30,7 @@ def _complete(h, response, start: int, steps: int):
     (a loaded machine) says so and is finished with ~/step, as the service's reply advises."""
     while not response.success:
         assert "within the 0.25 s budget" in response.message, response.message
-        rest = start + steps - h.node.sim.step_index
+        rest = start + steps - h.node.run.sim.step_index
         response = h.call(Step, "step", Step.Request(steps=rest))
     return response
 
@@ -81,27 +81,27 @@ def test_step_with_torque_equals_a_topic_command_then_step_bit_for_bit(harness, 
     spin = dict(real_time_factor=0.0, start_paused=True, integrator="rk4")
     topic = harness("torque_driven", **spin)
     # the same first state for both: a tumbling body (set through the simulator, as ~/set_state does)
-    topic.node.sim.set_state([0.1, -0.2, 0.3, 0.9], [0.4, -1.1, 2.3])
+    topic.node.run.sim.set_state([0.1, -0.2, 0.3, 0.9], [0.4, -1.1, 2.3])
     publisher = topic.client.create_publisher(WrenchStamped, "/rigid_rot_sim/torque", COMMAND_QOS)
     assert topic.spin_until(lambda: publisher.get_subscription_count() > 0)
     command = WrenchStamped()
     command.header.frame_id = frame
     command.wrench.torque = torque
     accepted = _Accepted()
-    topic.node.sim.add_observer(accepted)
+    topic.node.run.sim.add_observer(accepted)
     publisher.publish(command)  # unstamped: acts from the sim time at receipt (paused: now)
     assert topic.spin_until(lambda: accepted.commands)
     assert accepted.commands[0].step == 0 and accepted.commands[0].source == "~/torque"
     by_topic = _complete(topic, topic.call(Step, "step", Step.Request(steps=300)), 0, 300)
-    topic_steps = topic.node.sim.step_index
+    topic_steps = topic.node.run.sim.step_index
     _close(topic)  # one node named rigid_rot_sim at a time
 
     atomic = harness("torque_driven", **spin)
-    atomic.node.sim.set_state([0.1, -0.2, 0.3, 0.9], [0.4, -1.1, 2.3])
+    atomic.node.run.sim.set_state([0.1, -0.2, 0.3, 0.9], [0.4, -1.1, 2.3])
     response = atomic.call(StepWithTorque, "step_with_torque",
                            StepWithTorque.Request(torque=torque, frame_id=frame, steps=300))
     response = _complete(atomic, response, 0, 300)
-    assert atomic.node.sim.step_index == topic_steps == 300
+    assert atomic.node.run.sim.step_index == topic_steps == 300
     assert _state_bits(response.state) == _state_bits(by_topic.state)
     assert response.state.torque_body.z != 0.0
     # the torque acted over exactly those steps: the next step is torque-free
@@ -116,7 +116,7 @@ def test_step_with_torque_refusals_apply_and_step_nothing(harness):
     playing = h.call(StepWithTorque, "step_with_torque", StepWithTorque.Request(torque=Vector3(z=0.01), steps=5))
     assert not playing.success and "not paused" in playing.message
     assert h.call(SetBool, "pause", SetBool.Request(data=True)).success
-    k = h.node.sim.step_index
+    k = h.node.run.sim.step_index
     for request, reason in [
         (StepWithTorque.Request(torque=Vector3(z=0.01), steps=0), "steps must be >= 1"),
         (StepWithTorque.Request(torque=Vector3(z=0.01), steps=10**6), "exceeds the limit"),
@@ -126,11 +126,11 @@ def test_step_with_torque_refusals_apply_and_step_nothing(harness):
     ]:
         response = h.call(StepWithTorque, "step_with_torque", request)
         assert not response.success and reason in response.message, response.message
-    assert h.node.sim.step_index == k and h.node.sim.snapshot().angular_velocity_body.tolist() == [0.0, 0.0, 0.0]
+    assert h.node.run.sim.step_index == k and h.node.run.sim.snapshot().angular_velocity_body.tolist() == [0.0, 0.0, 0.0]
     assert h.spin_until(lambda: len(rejected) >= 3)  # the torque refusals are published with their reason
     assert {r.source for r in rejected} == {"/rigid_rot_sim/step_with_torque"}
     h.call(Step, "step", Step.Request(steps=5))
-    assert h.node.sim.snapshot().angular_velocity_body.tolist() == [0.0, 0.0, 0.0]  # nothing left applied
+    assert h.node.run.sim.snapshot().angular_velocity_body.tolist() == [0.0, 0.0, 0.0]  # nothing left applied
 
 
 def _send_goal(h, client, steps, feedback):
@@ -163,7 +163,7 @@ def test_simulate_steps_action_feedback_per_step_cancel_and_refusal(harness, mon
     assert goal.accepted
     done = _result(h, goal)
     assert done.status == 4 and done.result.result.result == Result.RESULT_OK  # GoalStatus.STATUS_SUCCEEDED
-    assert h.node.sim.step_index == 40 and h.node.sim.paused
+    assert h.node.run.sim.step_index == 40 and h.node.run.sim.paused
     assert published == [(n, 40 - n) for n in range(1, 41)]  # one feedback after each step, in order
     # (what the client received of those depends on when its feedback reader matched: checked below)
 
@@ -179,9 +179,9 @@ def test_simulate_steps_action_feedback_per_step_cancel_and_refusal(harness, mon
     assert len(cancel.result().goals_canceling) == 1
     canceled = _result(h, goal)
     assert canceled.status == 5 and "canceled after" in canceled.result.result.error_message  # STATUS_CANCELED
-    stopped_at = h.node.sim.step_index
+    stopped_at = h.node.run.sim.step_index
     h.spin_until(lambda: False, timeout=0.2)
-    assert h.node.sim.step_index == stopped_at < 10**9 and h.node.sim.paused
+    assert h.node.run.sim.step_index == stopped_at < 10**9 and h.node.run.sim.paused
 
     # refused while playing: aborted with RESULT_OPERATION_FAILED, as the .action says
     assert h.call(SetBool, "pause", SetBool.Request(data=False)).success
@@ -197,14 +197,14 @@ def test_a_run_driven_by_step_with_torque_resimulates_bit_exact(harness, tmp_pat
 
     bag = tmp_path / "step_with_torque.mcap"
     h = harness("torque_driven", real_time_factor=0.0, start_paused=True, integrator="rk4", record_path=str(bag))
-    h.node.sim.set_state([0.1, -0.2, 0.3, 0.9], [0.4, -1.1, 2.3])
+    h.node.run.sim.set_state([0.1, -0.2, 0.3, 0.9], [0.4, -1.1, 2.3])
     start = 0
     for torque, frame, steps in [(Vector3(z=0.004), "base_link", 200), (Vector3(x=-0.002, y=0.003), "odom", 150),
                                  (Vector3(y=0.001), "", 77)]:
         request = StepWithTorque.Request(torque=torque, frame_id=frame, steps=steps)
         _complete(h, h.call(StepWithTorque, "step_with_torque", request), start, steps)
         start += steps
-    assert h.node.sim.step_index == 427
+    assert h.node.run.sim.step_index == 427
     _close(h)  # the recording is complete
     report = resimulate(bag)
     assert report.identical and "BIT-EXACT" in report.verdict, report.format()

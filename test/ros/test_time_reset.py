@@ -24,7 +24,7 @@ def test_reset_publishes_the_backward_clock(context):  # noqa: F811
                                      QoSProfile(depth=1, reliability=ReliabilityPolicy.BEST_EFFORT))
         assert h.spin_until(lambda: clocks and clocks[-1] > 0.5)
         assert h.call(SetBool, "pause", SetBool.Request(data=True)).success  # so that t = 0 is the last /clock
-        before = h.node.sim.t
+        before = h.node.run.sim.t
         assert before > 0.5
         count = len(clocks)
         assert h.call(Trigger, "reset", Trigger.Request()).success
