@@ -41,8 +41,8 @@ setup(
     tests_require=["pytest", "hypothesis", "rosbags"],
     entry_points={
         "console_scripts": [
-            "rigid-rot = rigid_rot_sim.cli:main",
-            "rigid_rot_sim_node = rigid_rot_sim.ros.node:main",
+            "rigid-rot = rigid_rot_sim.console_scripts:rigid_rot",
+            "rigid_rot_sim_node = rigid_rot_sim.console_scripts:rigid_rot_sim_node",
         ],
     },
 )
