@@ -250,6 +250,22 @@ def jacobi(r, a, c, levels, m1):
     return sn, cn, math.sqrt(cn * cn + m1 * sn * sn)
 
 
+@register_jitable
+def jacobi_dd(rh, rl, a, c, levels, m1, top_h, top_l):
+    """sn, cn, dn of r = rh + rl (|r| <= K) as :func:`jacobi`, with the amplitude carried in
+    double-double: phi_N = 2^N a_N r from a_N = top_h + top_l (a double-double of the AGM
+    limit), and each descent phi_{i-1} = (phi_i + asin(c_i sin(phi_i) / a_i)) / 2 adds a
+    bounded term to it, so the amplitude keeps the digits of r instead of a few ulps of it."""
+    scale = 2.0**levels
+    ph, pl = dd_mul(top_h, top_l, rh, rl)
+    ph, pl = scale * ph, scale * pl
+    for i in range(levels, 0, -1):
+        ph, pl = dd_add(ph, pl, math.asin(c[i] * math.sin(ph) / a[i]), 0.0)
+        ph, pl = 0.5 * ph, 0.5 * pl
+    sn, cn = dd_sin_cos(ph, pl)
+    return sn, cn, math.sqrt(cn * cn + m1 * sn * sn)
+
+
 def agm_buffers() -> tuple[np.ndarray, np.ndarray]:
     """Zeroed (a, c) arrays for :func:`agm_tables`."""
     return np.zeros(AGM_LEVELS), np.zeros(AGM_LEVELS)

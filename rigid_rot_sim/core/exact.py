@@ -83,9 +83,9 @@ from scipy.spatial.transform import Rotation
 from rigid_rot_sim.core import quaternion as quat
 from rigid_rot_sim.core import validation
 from rigid_rot_sim.core.dynamics import axes_by_moment
-from rigid_rot_sim.core.elliptic import (AGM_LEVELS, TWO_PI_DD, agm_tables, carlson_rf, carlson_rj, dd_add,
+from rigid_rot_sim.core.elliptic import (AGM_LEVELS, PI_DD, TWO_PI_DD, agm_tables, carlson_rf, carlson_rj, dd_add,
                                          dd_complete_integrals, dd_div, dd_mul, dd_reduce, dd_sin_cos, dd_sqrt,
-                                         jacobi, two_product, two_sum)
+                                         jacobi_dd, two_product, two_sum)
 from rigid_rot_sim.core.jit import compiled
 
 CASES = ("spherical", "symmetric", "below_separatrix", "above_separatrix", "separatrix")
@@ -113,9 +113,9 @@ _S_MOMENTS, _S_AXIS, _S_RATE, _S_BETA, _S_L, _S_Q0 = 1, 4, 5, 8, 9, 12
 # RATE = |L| / I1 and TURN (the precession beyond RATE t per half period 2K) too.
 (_E_ORDER, _E_AXIS_SIGNS, _E_MOMENTS, _E_AMPLITUDE, _E_SIGNS, _E_PSI_SCALE, _E_LAM, _E_U0, _E_M1, _E_N,
  _E_LNORM, _E_K, _E_COEFF, _E_J0, _E_G0, _E_QWL, _E_QPERM, _E_LEVELS, _E_LAM_LO, _E_U0_LO, _E_K_LO,
- _E_RATE, _E_TURN) = (
-    1, 4, 7, 10, 13, 16, 18, 19, 20, 21, 22, 23, 24, 25, 26, 27, 31, 35, 36, 37, 38, 39, 41)
-PARAMS_SIZE = 43
+ _E_RATE, _E_TURN, _E_AGM_TOP) = (
+    1, 4, 7, 10, 13, 16, 18, 19, 20, 21, 22, 23, 24, 25, 26, 27, 31, 35, 36, 37, 38, 39, 41, 43)
+PARAMS_SIZE = 45
 
 
 def _relabelling_table() -> np.ndarray:
@@ -225,8 +225,8 @@ def _phase(params, agm_a, agm_c, uh, ul):
     # u - 2 K j in double-double: the phase is reduced without the rounding of u or of K j
     ph, pl = two_product(j, 2.0 * k)
     rh, rl = dd_add(uh, ul, -ph, -pl - j * 2.0 * params[_E_K_LO])
-    r = rh + rl
-    sn, cn, dn = jacobi(r, agm_a, agm_c, int(params[_E_LEVELS]), params[_E_M1])
+    sn, cn, dn = jacobi_dd(rh, rl, agm_a, agm_c, int(params[_E_LEVELS]), params[_E_M1], params[_E_AGM_TOP],
+                           params[_E_AGM_TOP + 1])
     s2 = sn * sn
     g = (n / 3.0) * sn * s2 * carlson_rj(cn * cn, dn * dn, 1.0, 1.0 - n * s2)
     # sn and cn change sign over each half period 2K (dn does not)
@@ -395,6 +395,10 @@ def _elliptic_params(moments, omega, q0, order, d, params, agm_a, agm_c):
     params[_E_RATE], params[_E_RATE + 1] = dd_div(*l_dd, i1, 0.0)
     params[_E_TURN], params[_E_TURN + 1] = turn_dd
     params[_E_LEVELS] = levels
+    # the AGM limit a_N = pi / (2 K) in double-double, for the amplitude in jacobi_dd
+    params[_E_AGM_TOP], params[_E_AGM_TOP + 1] = 0.0, 0.0
+    if not separatrix:
+        params[_E_AGM_TOP], params[_E_AGM_TOP + 1] = dd_div(*PI_DD, 2.0 * k_dd[0], 2.0 * k_dd[1])
     _, _, _, j0, g0 = _phase(params, agm_a, agm_c, u0_dd[0], u0_dd[1])
     params[_E_J0], params[_E_G0] = j0, g0
     # q_world<-body = q_WL (x) q_zxz(t) (x) q_perm; q_WL from q(t0) = q0, with q_zxz(t0)
