@@ -83,7 +83,7 @@ from scipy.spatial.transform import Rotation
 from rigid_rot_sim.core import quaternion as quat
 from rigid_rot_sim.core import validation
 from rigid_rot_sim.core.dynamics import axes_by_moment
-from rigid_rot_sim.core.elliptic import (AGM_LEVELS, PI_DD, TWO_PI_DD, agm_tables, carlson_rf, carlson_rj, dd_add,
+from rigid_rot_sim.core.elliptic import (AGM_LEVELS, FOUR_PI_DD, PI_DD, agm_tables, carlson_rf, carlson_rj, dd_add,
                                          dd_complete_integrals, dd_div, dd_mul, dd_reduce, dd_sin_cos, dd_sqrt,
                                          jacobi_dd, two_product, two_sum)
 from rigid_rot_sim.core.jit import compiled
@@ -273,11 +273,13 @@ def _elliptic_state(params, agm_a, agm_c, tau):
 @register_jitable
 def _zxz_dd(phi_h, phi_l, theta, psi):
     """Quaternion of Rz(phi) Rx(theta) Rz(psi) with phi = phi_h + phi_l a double-double (rad):
-    the half angles (phi +- psi) / 2 are reduced by 2 pi before their sine and cosine."""
-    sum_h, sum_l = dd_add(0.5 * phi_h, 0.5 * phi_l, 0.5 * psi, 0.0)
-    diff_h, diff_l = dd_add(0.5 * phi_h, 0.5 * phi_l, -0.5 * psi, 0.0)
-    sum_h, sum_l = dd_reduce(sum_h, sum_l, TWO_PI_DD[0], TWO_PI_DD[1])
-    diff_h, diff_l = dd_reduce(diff_h, diff_l, TWO_PI_DD[0], TWO_PI_DD[1])
+    phi is reduced by 4 pi (the period of the half angles (phi +- psi) / 2) in double-double,
+    and the half angles keep their low parts into their sine and cosine."""
+    phi_h, phi_l = dd_reduce(phi_h, phi_l, FOUR_PI_DD[0], FOUR_PI_DD[1])  # the half angles' period
+    sum_h, sum_l = two_sum(0.5 * phi_h, 0.5 * psi)
+    diff_h, diff_l = two_sum(0.5 * phi_h, -0.5 * psi)
+    sum_l += 0.5 * phi_l
+    diff_l += 0.5 * phi_l
     sin_sum, cos_sum = dd_sin_cos(sum_h, sum_l)
     sin_diff, cos_diff = dd_sin_cos(diff_h, diff_l)
     ch = math.cos(0.5 * theta)
