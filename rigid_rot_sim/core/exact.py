@@ -318,12 +318,15 @@ def _dd_ratio_sum(num_a, num_b, den_a, den_b, x, y):
 
 
 @register_jitable
-def _elliptic_params(moments, omega, q0, order, d, params, agm_a, agm_c):
+def _elliptic_params(moments, omega, q0, order, d, params, agm_a, agm_c, long_run):
     """Fill params / the AGM tables for the triaxial body; ``d`` = L^2 - 2 E I2 (0: separatrix).
 
-    The constants of the phase and of the precession (lam, u0, K, |L| / I1 and the precession
-    per half period) are double-doubles from the floats given: over many periods their
-    rounding would otherwise grow into the phase (100 rad at 1e-16 relative is 1e-14).
+    The constants of the phase and of the precession (lam, u0, |L| / I1, and with ``long_run``
+    K and the precession per half period) are double-doubles from the floats given: over many
+    periods their rounding would otherwise grow into the phase (100 rad at 1e-16 relative is
+    1e-14). Without ``long_run`` (a flow evaluated within about a radian of its anchor, as a
+    step of exact_split) K and Pi(n|m) - K come in double from the AGM table and Carlson's R_J,
+    which costs half as much to build and is as accurate there.
     """
     row = 3 * order[0] + order[1]
     axis_signs = (_RELABELLING[row, 0], _RELABELLING[row, 1], _RELABELLING[row, 2])
@@ -373,7 +376,11 @@ def _elliptic_params(moments, omega, q0, order, d, params, agm_a, agm_c):
         m1 = 0.0
     else:
         levels = agm_tables(m, m1, agm_a, agm_c)
-        k_h, k_l, excess_h, excess_l = dd_complete_integrals(m1_dd[0], m1_dd[1], n_dd[0], n_dd[1])
+        if long_run:
+            k_h, k_l, excess_h, excess_l = dd_complete_integrals(m1_dd[0], m1_dd[1], n_dd[0], n_dd[1])
+        else:
+            k_h, k_l = math.pi / (2.0 * agm_a[levels]), 0.0
+            excess_h, excess_l = (n / 3.0) * carlson_rj(0.0, m1, 1.0, 1.0 - n), 0.0
         k_dd = (k_h, k_l)
         turn_dd = dd_mul(*coeff_dd, 2.0 * excess_h, 2.0 * excess_l)
         f = sn0 * carlson_rf(cn0 * cn0, cn0 * cn0 + m1 * sn0 * sn0, 1.0)
@@ -400,7 +407,9 @@ def _elliptic_params(moments, omega, q0, order, d, params, agm_a, agm_c):
     # the AGM limit a_N = pi / (2 K) in double-double, for the amplitude in jacobi_dd
     params[_E_AGM_TOP], params[_E_AGM_TOP + 1] = 0.0, 0.0
     if not separatrix:
-        params[_E_AGM_TOP], params[_E_AGM_TOP + 1] = dd_div(*PI_DD, 2.0 * k_dd[0], 2.0 * k_dd[1])
+        params[_E_AGM_TOP] = agm_a[levels]
+        if long_run:
+            params[_E_AGM_TOP], params[_E_AGM_TOP + 1] = dd_div(*PI_DD, 2.0 * k_dd[0], 2.0 * k_dd[1])
     _, _, _, j0, g0 = _phase(params, agm_a, agm_c, u0_dd[0], u0_dd[1])
     params[_E_J0], params[_E_G0] = j0, g0
     # q_world<-body = q_WL (x) q_zxz(t) (x) q_perm; q_WL from q(t0) = q0, with q_zxz(t0)
@@ -422,9 +431,10 @@ def _square_dd(i, w):
 
 
 @register_jitable
-def flow_params(moments, omega, q0, params, agm_a, agm_c):
+def flow_params(moments, omega, q0, params, agm_a, agm_c, long_run):
     """Build the flow from (moments, omega, q0) (tuples) into params / the AGM tables;
-    returns the case (an index of CASES)."""
+    returns the case (an index of CASES). ``long_run``: the flow will be evaluated far from
+    its anchor (see _elliptic_params); a solution object always is."""
     i_min, i_mid, i_max = axes_by_moment(moments[0], moments[1], moments[2])
     tol = _EQUAL_MOMENTS_ULPS * _EPS * moments[i_max]
     low_equal = moments[i_mid] - moments[i_min] <= tol
@@ -460,9 +470,9 @@ def flow_params(moments, omega, q0, params, agm_a, agm_c):
         # at rest, or a stationary spin about the middle axis
         _rigid_params(omega, q0, params)
     elif d < 0.0:
-        _elliptic_params(moments, omega, q0, (i_max, i_mid, i_min), d, params, agm_a, agm_c)
+        _elliptic_params(moments, omega, q0, (i_max, i_mid, i_min), d, params, agm_a, agm_c, long_run)
     else:
-        _elliptic_params(moments, omega, q0, (i_min, i_mid, i_max), d, params, agm_a, agm_c)
+        _elliptic_params(moments, omega, q0, (i_min, i_mid, i_max), d, params, agm_a, agm_c, long_run)
     return case
 
 
@@ -484,13 +494,15 @@ def free_flow(moments, q, omega, tau):
     params = np.zeros(PARAMS_SIZE)
     agm_a = np.zeros(AGM_LEVELS)
     agm_c = np.zeros(AGM_LEVELS)
-    flow_params(moments, omega, q, params, agm_a, agm_c)
+    # beyond about a radian of rotation the phase constants are worth their double-double
+    long_run = abs(tau) * math.sqrt(omega[0] ** 2 + omega[1] ** 2 + omega[2] ** 2) > 1.0
+    flow_params(moments, omega, q, params, agm_a, agm_c, long_run)
     return flow_state(params, agm_a, agm_c, tau)
 
 
 @compiled
 def _build(moments, omega, q0, params, agm_a, agm_c):
-    return flow_params(moments, omega, q0, params, agm_a, agm_c)
+    return flow_params(moments, omega, q0, params, agm_a, agm_c, True)
 
 
 @compiled
