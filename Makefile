@@ -42,7 +42,7 @@ SWEEP_PINS := dask==2026.8.0 distributed==2026.8.0 pyarrow==26.0.1
 # The viewer extra (pip install rigid_rot_sim[viewer]): Foxglove's SDK, a live WebSocket server without ROS.
 VIEWER_PINS := foxglove-sdk==0.30.3
 # websockets: the tests' Foxglove ws-protocol client.
-TEST_PINS := pytest==9.2.0 hypothesis==6.170.15 rosbags==0.11.9 websockets==15.0.1
+TEST_PINS := pytest==9.2.0 hypothesis==6.170.15 rosbags==0.11.9 websockets==15.0.1 mpmath==1.3.0
 
 # The compiled kernels are built from these (rigid_rot_sim/core/jit.py keys their cache on them).
 CORE_SOURCES := $(shell find rigid_rot_sim/core -name '*.py' 2>/dev/null)

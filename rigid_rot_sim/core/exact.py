@@ -83,7 +83,7 @@ from scipy.spatial.transform import Rotation
 from rigid_rot_sim.core import quaternion as quat
 from rigid_rot_sim.core import validation
 from rigid_rot_sim.core.dynamics import axes_by_moment
-from rigid_rot_sim.core.elliptic import (AGM_LEVELS, FOUR_PI_DD, PI_DD, agm_tables, carlson_rf, carlson_rj, dd_add,
+from rigid_rot_sim.core.elliptic import (AGM_LEVELS, FOUR_PI_DD, PI_DD, TWO_PI_DD, agm_tables, carlson_rf, carlson_rj, dd_add,
                                          dd_complete_integrals, dd_div, dd_mul, dd_reduce, dd_sin_cos, dd_sqrt,
                                          jacobi_dd, two_product, two_sum)
 from rigid_rot_sim.core.jit import compiled
@@ -103,8 +103,8 @@ _EXACT_SEPARATRIX_DISTANCE = 1e-2
 # The flow's parameter vector: the kind, then the fields of each kind.
 _KIND = 0
 _RIGID, _SYMMETRIC_FLOW, _ELLIPTIC = 0.0, 1.0, 2.0
-# rigid rotation: omega (body), q0, omega_world
-_R_OMEGA, _R_Q0, _R_OMEGA_WORLD = 1, 4, 8
+# rigid rotation: omega (body), q0, omega_world, |omega| (a double-double), the unit axis (world)
+_R_OMEGA, _R_Q0, _R_OMEGA_WORLD, _R_RATE, _R_AXIS = 1, 4, 8, 11, 13
 # symmetric: moments, axis, rate_world, beta, l_body, q0
 _S_MOMENTS, _S_AXIS, _S_RATE, _S_BETA, _S_L, _S_Q0 = 1, 4, 5, 8, 9, 12
 # elliptic (relabelled frame): order, axis signs, moments, amplitudes, signs, psi scale,
@@ -292,9 +292,13 @@ def flow_state(params, agm_a, agm_c, tau):
     """``(q, omega)`` as tuples, tau (s) after the anchor of the flow ``params``."""
     kind = params[_KIND]
     if kind == _RIGID:
-        wx, wy, wz = params[_R_OMEGA_WORLD], params[_R_OMEGA_WORLD + 1], params[_R_OMEGA_WORLD + 2]
         q0 = (params[_R_Q0], params[_R_Q0 + 1], params[_R_Q0 + 2], params[_R_Q0 + 3])
-        q = quat.normalize(quat.multiply(quat.exp_rotation_vector((tau * wx, tau * wy, tau * wz)), q0))
+        # the half angle tau |omega| / 2 in double-double, reduced by 2 pi before sin / cos
+        half_h, half_l = two_product(0.5 * params[_R_RATE], tau)
+        half_h, half_l = dd_reduce(half_h, half_l + 0.5 * params[_R_RATE + 1] * tau, TWO_PI_DD[0], TWO_PI_DD[1])
+        s, c = dd_sin_cos(half_h, half_l)
+        spin = (s * params[_R_AXIS], s * params[_R_AXIS + 1], s * params[_R_AXIS + 2], c)
+        q = quat.normalize(quat.multiply(spin, q0))
         return q, (params[_R_OMEGA], params[_R_OMEGA + 1], params[_R_OMEGA + 2])
     if kind == _SYMMETRIC_FLOW:
         axis = int(params[_S_AXIS])
@@ -481,9 +485,14 @@ def _rigid_params(omega, q0, params):
     """omega constant in the body; q(t) = exp(tau omega_world) q0."""
     params[_KIND] = _RIGID
     omega_world = quat.rotate(q0, omega)
+    rate = dd_sqrt(*dd_add(*dd_add(*two_product(omega[0], omega[0]), *two_product(omega[1], omega[1])),
+                           *two_product(omega[2], omega[2])))
+    norm_world = math.sqrt(omega_world[0] ** 2 + omega_world[1] ** 2 + omega_world[2] ** 2)
     for idx in range(3):
         params[_R_OMEGA + idx] = omega[idx]
         params[_R_OMEGA_WORLD + idx] = omega_world[idx]
+        params[_R_AXIS + idx] = omega_world[idx] / norm_world if norm_world > 0.0 else 0.0
+    params[_R_RATE], params[_R_RATE + 1] = rate
     for idx in range(4):
         params[_R_Q0 + idx] = q0[idx]
 
