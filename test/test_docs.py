@@ -164,6 +164,24 @@ def test_route_reference_resolves(name):
     )
 
 
+# --- links -------------------------------------------------------------------------------------
+
+LINK = re.compile(r"\]\(([^)\s]+)\)")
+
+
+def document_links() -> Iterator[tuple[str, str]]:
+    for path in documents():
+        for target in LINK.findall(path.read_text(encoding="utf-8")):
+            if "://" not in target and not target.startswith(("#", "mailto:")):
+                yield str(path.relative_to(ROOT)), target
+
+
+@pytest.mark.parametrize(("document", "target"), list(document_links()))
+def test_relative_link_points_to_a_file(document, target):
+    path = (ROOT / document).parent / target.split("#", 1)[0]
+    assert path.exists(), f"{document}: link to {target!r}: {path.relative_to(ROOT)} does not exist"
+
+
 # --- shell examples -----------------------------------------------------------------------------
 
 

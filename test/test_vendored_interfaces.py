@@ -23,6 +23,8 @@ from pathlib import Path
 import pytest
 from ament_index_python.packages import get_package_share_directory
 
+from rigid_rot_sim.share import ensure_ament_prefix_path
+
 ROOT = Path(__file__).resolve().parents[1]
 VENDOR = ROOT / "rigid_rot_msgs" / "vendor"
 
@@ -60,6 +62,7 @@ TF2_MSGS = {"msg/TFMessage": "RIHS01_e369d0f05a23ae52508854b66f6aa0437f3449d652e
 
 def built_hashes(package: str) -> dict[str, str]:
     """Type name (``msg/X``, ``srv/Y_Request``) -> RIHS01 hash, over the package's installed descriptions."""
+    ensure_ament_prefix_path()  # the venv's console scripts do this; a bare `python -m pytest` needs it too
     share = Path(get_package_share_directory(package))
     hashes: dict[str, str] = {}
     for path in sorted(share.glob("*/*.json")):
@@ -92,6 +95,7 @@ def test_tf2_msgs_hash_is_upstream():
 def test_the_built_definitions_are_the_vendored_ones(package):
     """Where the venv built the package from vendor/, its installed definitions are the vendored files
     (so the hashes above are those of this repository's files, not of some other installation)."""
+    ensure_ament_prefix_path()
     share = Path(get_package_share_directory(package))
     source = VENDOR / package
     vendored = sorted(p.relative_to(source) for pattern in ("msg/*.msg", "srv/*.srv") for p in source.glob(pattern))

@@ -208,8 +208,9 @@ def torque_at(torque: Any, t: float, q: Floats, w: Floats) -> Vector:
 
 
 @overload(torque_at)
-def _torque_at_compiled(torque: Any, t: Any, q: Any, w: Any) -> Callable[[Any, Any, Any, Any], Vector]:
-    def impl(torque: Any, t: float, q: Floats, w: Floats) -> Vector:
+def _torque_at_compiled(torque: Any, t: Any, q: Any, w: Any) -> Callable[..., Vector]:
+    # numba requires the implementation's parameters, annotations included, to equal the typing function's.
+    def impl(torque: Any, t: Any, q: Any, w: Any) -> Vector:
         return evaluate_torque_data(torque[0], torque[1], torque[2], t, q, w)
 
     return impl
