@@ -29,7 +29,7 @@ def module_names() -> list[str]:
 def examples(name: str) -> list[doctest.DocTest]:
     module = importlib.import_module(name)
     finder = doctest.DocTestFinder(exclude_empty=True)
-    return [test for test in finder.find(module, name, globs={"np": np}) if test.examples]
+    return [test for test in finder.find(module, name, extraglobs={"np": np}) if test.examples]
 
 
 MODULES = module_names()
