@@ -31,8 +31,9 @@ from __future__ import annotations
 
 import math
 import os
-from dataclasses import dataclass, field, make_dataclass
-from typing import Any, Callable, Mapping
+from collections.abc import Iterator, Mapping
+from dataclasses import dataclass
+from typing import Any, Callable
 
 import numpy as np
 from rigid_rot_sim.core import limits, validation
@@ -63,7 +64,7 @@ __all__ = [
     "TorqueSchedule",
     "Gravity",
     "IntegratorSpec",
-    "Outputs",
+    "OutputRates",
     "OutputQos",
     "CommandSettings",
     "Scene",
@@ -213,21 +214,45 @@ class IntegratorSpec:
     options: tuple[tuple[str, Any], ...] = ()
 
 
-def _rates_as_dict(self: Any) -> dict[str, float]:
-    return {name: getattr(self, name) for name in OUTPUT_NAMES}
+class OutputRates(Mapping[str, float]):
+    """Publication rates in Hz of sim time (0 = not published), one per output, in publishing order.
 
+    A frozen mapping over :data:`OUTPUT_NAMES` (the outputs of
+    :data:`~rigid_rot_sim.scene.scene_schema.OUTPUTS`); an output not given keeps its default
+    rate there. ``OutputRates(imu=5.0)["imu"] == 5.0``; an unknown name is a ``KeyError``.
+    """
 
-#: Publication rates in Hz of sim time (0 = not published): one float field per output of
-#: :data:`~rigid_rot_sim.scene.scene_schema.OUTPUTS` (``state``, ``orientation``, ... ``odom``),
-#: defaulting to its rate there; ``as_dict()`` gives them by name, in publishing order.
-Outputs = make_dataclass(
-    "Outputs",
-    [(name, float, field(default=output.rate)) for name, output in OUTPUTS.items()],
-    frozen=True,
-    namespace={"as_dict": _rates_as_dict},
-)
-Outputs.__module__ = __name__
-Outputs.__doc__ = "Publication rates in Hz of sim time (0 = not published), one field per output."
+    __slots__ = ("_rates",)
+    _rates: dict[str, float]
+
+    def __init__(self, rates: Mapping[str, float] | None = None, **by_name: float) -> None:
+        given = {**(rates or {}), **by_name}
+        unknown = sorted(set(given) - set(OUTPUT_NAMES))
+        if unknown:
+            raise KeyError(f"unknown output(s) {', '.join(unknown)}; known: {', '.join(OUTPUT_NAMES)}")
+        rates_by_name = {name: float(given.get(name, DEFAULT_OUTPUT_RATES[name])) for name in OUTPUT_NAMES}
+        object.__setattr__(self, "_rates", rates_by_name)
+
+    def __getitem__(self, name: str) -> float:
+        return self._rates[name]
+
+    def __iter__(self) -> Iterator[str]:
+        return iter(self._rates)
+
+    def __len__(self) -> int:
+        return len(self._rates)
+
+    def __hash__(self) -> int:
+        return hash(tuple(self._rates.items()))
+
+    def __setattr__(self, name: str, value: Any) -> None:
+        raise AttributeError(f"{type(self).__name__} is frozen")
+
+    def __reduce__(self) -> tuple[type[OutputRates], tuple[dict[str, float]]]:
+        return (type(self), (self._rates,))  # pickled by value (scenes travel to sweep workers)
+
+    def __repr__(self) -> str:
+        return f"{type(self).__name__}({self._rates!r})"
 
 
 @dataclass(frozen=True)
@@ -272,7 +297,7 @@ class Scene:
     integrator: IntegratorSpec = IntegratorSpec()
     duration: float | None = None
     real_time_factor: float = 1.0
-    outputs: Outputs = Outputs()
+    outputs: OutputRates = OutputRates()
     qos: OutputQos = OutputQos()
     recording: str | None = None
     commands: CommandSettings = CommandSettings()
@@ -380,7 +405,7 @@ def _scene(spec: Mapping[str, Any], source: str, text: str) -> Scene:
         integrator=_integrator(spec.get("integrator") or {}),
         duration=None if duration is None else float(duration),
         real_time_factor=float(spec.get("real_time_factor", 1.0)),
-        outputs=Outputs(**{name: float(rate) for name, rate in (spec.get("outputs") or {}).items()}),
+        outputs=OutputRates(spec.get("outputs") or {}),
         qos=OutputQos(reliability=qos.get("reliability", OutputQos.reliability), depth=qos.get("depth", OutputQos.depth)),
         recording=None if recording is None else recording.strip(),
         commands=CommandSettings(
