@@ -41,6 +41,8 @@ def add_parser(subparsers) -> None:
     parser.add_argument("--record", metavar="OUT.mcap", help="record the run to this MCAP file")
     parser.add_argument("--record-log-time", choices=LOG_TIME_BASES, dest="record_log_time",
                         help="MCAP log times of the recording: sim time (default) or wall clock")
+    parser.add_argument("--foxglove", metavar="[HOST:]PORT",
+                        help="serve the run live to Foxglove (WebSocket, host default 127.0.0.1); needs foxglove-sdk")
     parser.add_argument("--echo", type=positive_number, metavar="PERIOD", help="print the received ~/state every PERIOD s of sim time")
     add_ros_args(parser)
     parser.set_defaults(handler=run)
@@ -58,6 +60,7 @@ def node_arguments(args: argparse.Namespace) -> list[str]:
         (p.DT, None if args.dt is None else repr(float(args.dt))),
         (p.RECORD_PATH, None if args.record is None else os.path.abspath(args.record)),
         (p.RECORD_LOG_TIME, args.record_log_time),
+        (p.FOXGLOVE, args.foxglove),
     ]
     argv = ["rigid_rot_sim_node", "--ros-args"]
     for spec, value in options:

@@ -15,9 +15,11 @@ Topics (names relative to the node; QoS in the README, section "The simulation n
 ~/angular_velocity (Vector3Stamped, body frame), ~/angular_momentum (Vector3Stamped,
 world frame), ~/mass_properties (geometry_msgs/InertiaStamped, transient local, once),
 ~/top_state (rigid_rot_msgs/HeavyTopState, gravity scenes), ~/rejected
-(rigid_rot_msgs/RejectedCommand), ~/imu (sensor_msgs/Imu) and ~/odom (nav_msgs/Odometry)
-when the scene asks for them, /tf (world -> body) and /tf_static (body -> principal
-frame, where it differs from the body frame), /clock (sim time). QoS: rigid_rot_sim.ros.qos.
+(rigid_rot_msgs/RejectedCommand), ~/imu (sensor_msgs/Imu; the gyro's readings when the scene
+has ``sensors.gyro``) and ~/odom (nav_msgs/Odometry) when the scene asks for them,
+~/star_tracker (geometry_msgs/PoseWithCovarianceStamped) with ``sensors.star_tracker``
+(docs/sensors.md), /tf (world -> body) and /tf_static (body -> principal frame, where it
+differs from the body frame), /clock (sim time). QoS: rigid_rot_sim.ros.qos.
 Every header stamp is sim time. Frame names: the ``world_frame`` / ``body_frame``
 parameters (default: the scene's ``frames``, REP 105 ``odom`` / ``base_link``), used by
 every output, /tf and the recording. Torque inputs: the scene's topics (WrenchStamped or
@@ -64,6 +66,7 @@ from rclpy.signals import SignalHandlerOptions
 
 from rigid_rot_sim.core import limits
 from rigid_rot_sim.ros import simulation_services
+from rigid_rot_sim.run.sensors import SensorSuite
 from rigid_rot_sim.ros.inputs import Rejections, TorqueInputs
 from rigid_rot_sim.ros.outputs import Outputs
 from rigid_rot_sim.ros import parameters as params
@@ -76,6 +79,7 @@ from rigid_rot_sim.scene.scene import OutputQos, Scene, load_scene
 from rigid_rot_sim.share import ensure_ament_prefix_path, resolve_scene
 
 if TYPE_CHECKING:  # imported when recording only: the mcap packages are optional at run time
+    from rigid_rot_sim.ros.foxglove_live import FoxgloveLive
     from rigid_rot_sim.ros.recording import NodeRecording
 
 NODE_NAME = "rigid_rot_sim"
@@ -96,7 +100,10 @@ class SceneRun:
         self.sim = sim = Simulator(scene, method=settings[params.INTEGRATOR], dt=settings[params.DT])
         sim.max_torque = settings[params.MAX_TORQUE]
         state_qos = output_qos(OutputQos(settings[params.QOS_RELIABILITY], settings[params.QOS_DEPTH]))
-        self.outputs = Outputs(node, scene, settings.rates(), state_qos, settings[params.GROUND_TRUTH_VARIANCE])
+        has_sensors = scene.sensors.gyro is not None or scene.sensors.star_tracker is not None
+        self.sensors = SensorSuite(scene.sensors) if has_sensors else None
+        self.outputs = Outputs(node, scene, settings.rates(), state_qos, settings[params.GROUND_TRUTH_VARIANCE],
+                               self.sensors)
         schedule = OutputSchedule.from_rates(self.outputs.rates, sim.dt)
         pacer = Pacer(settings[params.REAL_TIME_FACTOR])
         self.driver = RunDriver(sim, schedule, pacer, settings[params.DURATION] or None, observers=[self.outputs])
@@ -108,7 +115,10 @@ class SceneRun:
         self.recording: NodeRecording | None = None
         if settings[params.RECORD_PATH]:
             self.recording = self._start_recording(node, settings[params.RECORD_PATH], settings[params.RECORD_LOG_TIME])
+        self.foxglove: FoxgloveLive | None = None
+        self.foxglove_words = ""
         try:
+            self.foxglove, self.foxglove_words = self._start_foxglove(node, settings[params.FOXGLOVE])
             sim.pause(settings[params.START_PAUSED])
             self.driver.pacer.anchor(sim.t)
             # steady clock: the pacing never depends on /clock, which this node itself publishes
@@ -141,6 +151,21 @@ class SceneRun:
             self.inputs.listeners.append(recording)  # every torque command as received
         return recording
 
+    def _start_foxglove(self, node: Node, address: str) -> tuple[FoxgloveLive | None, str]:
+        """The Foxglove live server, a listener of the outputs (None without an address or foxglove-sdk)."""
+        if not address:
+            return None, ""
+        from rigid_rot_sim.ros import foxglove_live
+
+        name = node.get_namespace().rstrip("/") + "/" + node.get_name()
+        try:
+            live, words = foxglove_live.start(address, self.sim, self.outputs.body_view, self.scene.frames, name)
+        except (OSError, RuntimeError) as exc:  # the port is taken, the host is not ours
+            raise ValueError(f"foxglove: cannot serve on {address}: {exc}") from None
+        if live is not None:
+            self.outputs.listeners.append(live)  # every message published, as the bytes published
+        return live, words
+
     def _startup_line(self, auto: bool, record_path: str, log_time: str) -> str:
         """What was built and what was left out (and why), in one line."""
         sim, scene, pacer, duration = self.sim, self.scene, self.driver.pacer, self.driver.duration
@@ -149,6 +174,11 @@ class SceneRun:
         for part_built, part_left_out in (self.outputs.describe(), self.inputs.describe()):
             built += part_built
             left_out += part_left_out
+        if self.sensors is None:
+            left_out.append("sensor models (~/imu, if asked for, is ideal; no ~/star_tracker)")
+        else:
+            drawn = "" if scene.sensors.seed is not None else ", drawn"
+            built.append(f"sensors {', '.join(self.sensors.names)} (seed {self.sensors.seed}{drawn})")
         if scene.schedules:
             built.append(f"{len(scene.schedules)} torque schedule(s)")
         if scene.gravity is None:
@@ -164,6 +194,8 @@ class SceneRun:
                          else "no recording (see the error above)")
         else:
             left_out.append("recorder (nothing recorded)")
+        if self.foxglove_words:
+            (built if self.foxglove is not None else left_out).append(self.foxglove_words)
         return (
             f"scene {scene.name!r} ({scene.source}), rtf {pacer.real_time_factor:g}, {'paused, ' if sim.paused else ''}"
             f"duration {'unbounded' if duration is None else f'{duration:g} s'}; "
@@ -193,9 +225,11 @@ class SceneRun:
             self.logger.info(f"duration reached: t = {self.sim.t:.9g} s after {self.sim.step_index} steps; stopping")
 
     def close(self) -> None:
-        """Close the recording (summary and indexes: the file is complete); idempotent."""
+        """Close the recording (summary and indexes: the file is complete) and the live server; idempotent."""
         if self.recording is not None:
             self.recording.close()
+        if self.foxglove is not None:
+            self.foxglove.close()
 
 
 class RigidRotSimNode(Node):

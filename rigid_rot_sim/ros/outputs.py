@@ -2,7 +2,9 @@
 
 :data:`OUTPUTS` maps each scene output name (``scene.scene.OUTPUT_NAMES``) to its message
 type and the function that builds its message from a
-:class:`~rigid_rot_sim.run.simulator.StateSnapshot`. :class:`Outputs` creates a publisher
+:class:`~rigid_rot_sim.run.simulator.StateSnapshot`; :data:`SENSOR_OUTPUTS` the outputs that
+carry a sensor's reading instead (``~/imu`` with a gyro, ``~/star_tracker``), drawn from the
+run's :class:`~rigid_rot_sim.run.sensors.SensorSuite` once per message. :class:`Outputs` creates a publisher
 for each output the scene asks for (rate > 0), plus ``~/mass_properties`` (latched, once),
 ``~/rejected`` and ``/tf_static`` (the principal-axes frame, where it differs from the body
 frame), all in :attr:`Outputs.publishers`, keyed on those names.
@@ -19,7 +21,7 @@ from __future__ import annotations
 from collections.abc import Mapping
 from typing import Any, Callable, Protocol, Sequence
 
-from geometry_msgs.msg import InertiaStamped, QuaternionStamped, Vector3Stamped
+from geometry_msgs.msg import InertiaStamped, PoseWithCovarianceStamped, QuaternionStamped, Vector3Stamped
 from nav_msgs.msg import Odometry
 from rclpy.node import Node
 from rclpy.publisher import Publisher
@@ -29,31 +31,53 @@ from rigid_rot_msgs.msg import HeavyTopState, RejectedCommand, RigidBodyState
 from rosgraph_msgs.msg import Clock
 from sensor_msgs.msg import Imu
 from tf2_msgs.msg import TFMessage  # built into the venv by `make setup` (vendored), a ROS dependency
+from visualization_msgs.msg import MarkerArray
 
 from rigid_rot_sim import conversions
 from rigid_rot_sim.core.inertia import principal_frame_pose
+from rigid_rot_sim.run.body_view import body_view
 from rigid_rot_sim.run.observer import SimulationObserver
 from rigid_rot_sim.scene.scene import OUTPUT_NAMES, Frames, Scene
+from rigid_rot_sim.run.sensors import SensorSuite
 from rigid_rot_sim.run.simulator import StateSnapshot
 from rigid_rot_sim.ros.qos import CLOCK_QOS, LATCHED_QOS, REJECTED_QOS, TF_QOS, TF_STATIC_QOS, describe as describe_qos
 
 
-#: A message from the state, the frames and the ground-truth variance (imu, odom).
-MessageBuilder = Callable[[StateSnapshot, Frames, float], Any]
+#: A message from the state and the outputs' settings (frames, ground-truth variance, body view).
+MessageBuilder = Callable[[StateSnapshot, "Outputs"], Any]
 
 #: Scene output name -> (message type, builder). Topics: :func:`output_topic`.
 OUTPUTS: dict[str, tuple[Any, MessageBuilder]] = {
-    "state": (RigidBodyState, lambda s, f, v: conversions.snapshot_to_state(s, f.world, f.body)),
-    "orientation": (QuaternionStamped, lambda s, f, v: conversions.snapshot_to_orientation(s, f.world)),
-    "angular_velocity": (Vector3Stamped, lambda s, f, v: conversions.vector_stamped(s.angular_velocity_body, s.t, f.body)),
-    "angular_momentum": (Vector3Stamped, lambda s, f, v: conversions.vector_stamped(s.angular_momentum_world, s.t, f.world)),
-    "top_state": (HeavyTopState, lambda s, f, v: conversions.snapshot_to_top_state(s, f.world)),
-    "tf": (TFMessage, lambda s, f, v: TFMessage(transforms=[conversions.transform_stamped(s, f.world, f.body)])),
-    "clock": (Clock, lambda s, f, v: conversions.clock_message(s.t)),
-    "imu": (Imu, lambda s, f, v: conversions.snapshot_to_imu(s, f.body, v)),
-    "odom": (Odometry, lambda s, f, v: conversions.snapshot_to_odometry(s, f.world, f.body, v)),
+    "state": (RigidBodyState, lambda s, o: conversions.snapshot_to_state(s, o.frames.world, o.frames.body)),
+    "orientation": (QuaternionStamped, lambda s, o: conversions.snapshot_to_orientation(s, o.frames.world)),
+    "angular_velocity": (Vector3Stamped,
+                         lambda s, o: conversions.vector_stamped(s.angular_velocity_body, s.t, o.frames.body)),
+    "angular_momentum": (Vector3Stamped,
+                         lambda s, o: conversions.vector_stamped(s.angular_momentum_world, s.t, o.frames.world)),
+    "top_state": (HeavyTopState, lambda s, o: conversions.snapshot_to_top_state(s, o.frames.world)),
+    "tf": (TFMessage,
+           lambda s, o: TFMessage(transforms=[conversions.transform_stamped(s, o.frames.world, o.frames.body)])),
+    "clock": (Clock, lambda s, o: conversions.clock_message(s.t)),
+    "imu": (Imu, lambda s, o: conversions.snapshot_to_imu(s, o.frames.body, o.ground_truth_variance)),
+    "odom": (Odometry,
+             lambda s, o: conversions.snapshot_to_odometry(s, o.frames.world, o.frames.body, o.ground_truth_variance)),
+    "markers": (MarkerArray,
+                lambda s, o: conversions.body_markers(o.body_view, s, o.frames.world, o.frames.body)),
+    "star_tracker": (PoseWithCovarianceStamped, None),  # a sensor's reading: SENSOR_OUTPUTS
 }
 assert tuple(OUTPUTS) == OUTPUT_NAMES, "one entry per scene output, in the scene's order"
+
+#: A sensor reading's message from the sensors, the state, the frames and the ground-truth variance.
+SensorBuilder = Callable[[SensorSuite, StateSnapshot, Frames, float], Any]
+
+#: Outputs that carry a sensor's reading when the scene has that sensor (``~/imu``: the gyro's,
+#: instead of the ideal rate): output name -> (sensor, builder). Each message is one reading.
+SENSOR_OUTPUTS: dict[str, tuple[str, SensorBuilder]] = {
+    "imu": ("gyro", lambda sensors, s, f, v: conversions.gyro_to_imu(
+        sensors.read_gyro(s), s.t, f.body, sensors.gyro.reading_variance or v)),
+    "star_tracker": ("star_tracker", lambda sensors, s, f, v: conversions.star_tracker_pose(
+        sensors.read_star_tracker(s), s.t, f.world, sensors.star_tracker.covariance)),
+}
 
 
 def output_topic(name: str) -> str:
@@ -76,10 +100,15 @@ class Outputs(SimulationObserver):
     """
 
     def __init__(self, node: Node, scene: Scene, rates: Mapping[str, float], state_qos: QoSProfile,
-                 ground_truth_variance: float) -> None:
+                 ground_truth_variance: float, sensors: SensorSuite | None = None) -> None:
         self.scene = scene
+        self.sensors = sensors
+        #: Output name -> the builder of its sensor reading (the outputs whose sensor the scene has).
+        self.readings = {name: builder for name, (sensor, builder) in SENSOR_OUTPUTS.items()
+                         if sensors is not None and sensor in sensors.names}
         self.frames = scene.frames
         self.ground_truth_variance = ground_truth_variance
+        self.body_view = body_view(scene)
         self.listeners: list[PublishedListener] = []
         self.publishers: dict[str, Publisher] = {}
         self.rates: dict[str, float] = {}
@@ -97,7 +126,8 @@ class Outputs(SimulationObserver):
 
     def _offered(self) -> list[str]:
         """The outputs this scene can have (``top_state`` only with gravity)."""
-        return [name for name in OUTPUT_NAMES if name != "top_state" or self.scene.is_top]
+        return [name for name in OUTPUT_NAMES if (name != "top_state" or self.scene.is_top)
+                and (name != "star_tracker" or name in self.readings)]
 
     def _static_transforms(self) -> list[Any]:
         """With /tf: body -> principal-axes frame, where the principal axes are not the body axes."""
@@ -148,4 +178,8 @@ class Outputs(SimulationObserver):
 
     def outputs_due(self, step: int, snapshot: StateSnapshot, names: Sequence[str]) -> None:
         for name in names:
-            self.publish(name, OUTPUTS[name][1](snapshot, self.frames, self.ground_truth_variance))
+            reading = self.readings.get(name)
+            if reading is not None:
+                self.publish(name, reading(self.sensors, snapshot, self.frames, self.ground_truth_variance))
+            else:
+                self.publish(name, OUTPUTS[name][1](snapshot, self))

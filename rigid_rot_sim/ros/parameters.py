@@ -211,6 +211,10 @@ RECORD_LOG_TIME = ParamSpec(
     "MCAP log time of the recording: 'sim' (sim time in ns, as ros2 bag record --use-sim-time; "
     "continued across resets) or 'wall' (wall clock)",
     choices=LOG_TIME_BASES, read_only=True)
+FOXGLOVE = ParamSpec(
+    "foxglove", str, lambda scene: scene.foxglove or "",
+    "Foxglove live server address [HOST:]PORT (host default 127.0.0.1); empty = no server "
+    "(needs foxglove-sdk: pip install rigid_rot_sim[viewer])", read_only=True)
 WORLD_FRAME = ParamSpec(
     "world_frame", str, lambda scene: scene.frames.world,
     "Fixed frame of the attitude (header.frame_id of the outputs, /tf parent); "
@@ -257,7 +261,7 @@ COMMAND_DEPTH = ParamSpec(
 
 #: Every parameter of a node with a scene, in declaration order (``scene`` itself: :data:`SCENE`).
 PARAMETERS: tuple[ParamSpec[Any], ...] = (
-    INTEGRATOR, DT, REAL_TIME_FACTOR, DURATION, START_PAUSED, RECORD_PATH, RECORD_LOG_TIME,
+    INTEGRATOR, DT, REAL_TIME_FACTOR, DURATION, START_PAUSED, RECORD_PATH, RECORD_LOG_TIME, FOXGLOVE,
     WORLD_FRAME, BODY_FRAME, GROUND_TRUTH_VARIANCE, QOS_RELIABILITY, QOS_DEPTH,
     *RATES.values(), MAX_TORQUE, COMMAND_DEPTH,
 )

@@ -42,7 +42,7 @@ from rigid_rot_sim.run.simulator import Simulator
 #: Topics registered after the scene's outputs, in this order.
 _LATER = ("rejected", "mass_properties", "tf_static")
 #: Outputs whose topic the ``rigid_rot_sim`` metadata names by role (for resim and plot).
-_ROLES = ("state", "clock", "rejected", "mass_properties")
+_ROLES = ("state", "clock", "rejected", "mass_properties", "imu", "star_tracker")
 
 
 class NodeRecording(SimulationObserver):
@@ -83,6 +83,7 @@ class NodeRecording(SimulationObserver):
                 integrator={"method": sim.method, "dt": sim.dt, "options": sim.options},
                 events_topic=node.resolve_topic_name("~/sim_events"), on_error=on_error,
                 sim_seconds=(lambda: sim.t) if log_time == "sim" else None,
+                sensors=None if outputs.sensors is None else {"seed": outputs.sensors.seed},
             )
         except RecorderError as exc:
             log.error(f"{exc}; the simulation runs without recording")

@@ -29,6 +29,7 @@ masses give their inertia about their centre of mass.
 
 from __future__ import annotations
 
+import datetime
 import math
 import os
 from collections.abc import Iterator, Mapping
@@ -42,9 +43,11 @@ from rigid_rot_sim.scene.bounded_yaml import load_input, read_input
 from rigid_rot_sim.core.quaternion import zxz_to_quaternion
 from rigid_rot_sim.core.inertia import inertia_about_center_of_mass, mass_properties
 from rigid_rot_sim.core.integrators import get_method
+from rigid_rot_sim.core.sensors import GyroModel, StarTrackerModel
 from rigid_rot_sim.scene.schema import validated
 from rigid_rot_sim.scene.scene_schema import (
     DEFAULT_BODY_FRAME,
+    DEFAULT_EPOCH,
     DEFAULT_GRAVITY,
     DEFAULT_WORLD_FRAME,
     OUTPUTS,
@@ -67,6 +70,7 @@ __all__ = [
     "OutputRates",
     "OutputQos",
     "CommandSettings",
+    "Sensors",
     "Scene",
     "load_scene",
     "parse_scene",
@@ -284,6 +288,19 @@ class CommandSettings:
 
 
 @dataclass(frozen=True)
+class Sensors:
+    """The scene's sensor models (:mod:`rigid_rot_sim.core.sensors`) and the seed of their noise.
+
+    ``seed`` None: the run draws one at start and records it. ``gyro``: ~/imu carries its
+    readings (at ``gyro.rate``); ``star_tracker``: ~/star_tracker at its rate.
+    """
+
+    seed: int | None = None
+    gyro: GyroModel | None = None
+    star_tracker: StarTrackerModel | None = None
+
+
+@dataclass(frozen=True)
 class Scene:
     """A validated scene. ``source`` is the file it came from, ``text`` the YAML as given."""
 
@@ -300,8 +317,12 @@ class Scene:
     outputs: OutputRates = OutputRates()
     qos: OutputQos = OutputQos()
     recording: str | None = None
+    foxglove: str | None = None  # [HOST:]PORT of a Foxglove live server (a node setting; see ros/foxglove_live)
     commands: CommandSettings = CommandSettings()
+    sensors: Sensors = Sensors()
     description: str = ""
+    #: UTC date and time of sim time 0 (ISO 8601; see :data:`scene_schema.DEFAULT_EPOCH`).
+    epoch: str = DEFAULT_EPOCH
     source: str = "<string>"
     text: str = ""
 
@@ -393,9 +414,13 @@ def _scene(spec: Mapping[str, Any], source: str, text: str) -> Scene:
     qos = spec.get("qos") or {}
     commands = spec.get("commands") or {}
     recording = spec.get("recording")
+    foxglove = spec.get("foxglove")
+    sensors = _sensors(spec.get("sensors") or {})
+    outputs = spec.get("outputs") or {}
     return Scene(
         name=spec.get("name", default_name).strip(),
         description=(spec.get("description") or "").strip(),
+        epoch=_at("epoch", _epoch, spec.get("epoch") or DEFAULT_EPOCH),
         frames=frames,
         body=body,
         initial=_initial(spec.get("initial") or {}),
@@ -405,9 +430,11 @@ def _scene(spec: Mapping[str, Any], source: str, text: str) -> Scene:
         integrator=_integrator(spec.get("integrator") or {}),
         duration=None if duration is None else float(duration),
         real_time_factor=float(spec.get("real_time_factor", 1.0)),
-        outputs=OutputRates(spec.get("outputs") or {}),
+        outputs=OutputRates(_sensor_rates(sensors, {name: float(rate) for name, rate in outputs.items()})),
+        sensors=sensors,
         qos=OutputQos(reliability=qos.get("reliability", OutputQos.reliability), depth=qos.get("depth", OutputQos.depth)),
         recording=None if recording is None else recording.strip(),
+        foxglove=None if foxglove is None else str(foxglove).strip(),
         commands=CommandSettings(
             max_torque=float(commands.get("max_torque", 0.0)),
             qos_depth=commands.get("qos_depth", limits.DEFAULT_COMMAND_DEPTH),
@@ -415,6 +442,15 @@ def _scene(spec: Mapping[str, Any], source: str, text: str) -> Scene:
         source=source,
         text=text,
     )
+
+
+def _epoch(text: str) -> str:
+    """A real UTC date and time (the schema's pattern also passes 2026-02-30T25:00:00)."""
+    try:
+        datetime.datetime.fromisoformat(text.rstrip("Z")[:26])
+    except ValueError:
+        raise ValueError(f"not a valid date and time: {text!r}") from None
+    return text
 
 
 def _frames(spec: Mapping[str, Any]) -> Frames:
@@ -533,3 +569,33 @@ def _integrator(spec: Mapping[str, Any]) -> IntegratorSpec:
         dt=float(spec.get("dt", IntegratorSpec.dt)),
         options=tuple(sorted((str(name), value) for name, value in options.items())),
     )
+
+
+def _sensors(spec: Mapping[str, Any]) -> Sensors:
+    gyro = spec.get("gyro")
+    star_tracker = spec.get("star_tracker")
+    return Sensors(
+        seed=spec.get("seed"),
+        gyro=None if gyro is None else GyroModel(**{
+            name: _floats(value) if isinstance(value, list) else float(value) for name, value in gyro.items()
+        }),
+        star_tracker=None if star_tracker is None else StarTrackerModel(
+            rate=float(star_tracker.get("rate", StarTrackerModel.rate)),
+            noise_equivalent_angle=_floats(star_tracker["noise_equivalent_angle"]),  # type: ignore[arg-type]
+        ),
+    )
+
+
+def _sensor_rates(sensors: Sensors, rates: dict[str, float]) -> dict[str, float]:
+    """The output rates with ~/imu at the gyro's rate and ~/star_tracker at the star tracker's."""
+    for output, sensor, key in (("imu", sensors.gyro, "sensors.gyro.rate"),
+                                ("star_tracker", sensors.star_tracker, "sensors.star_tracker.rate")):
+        if sensor is None:
+            if output == "star_tracker" and rates.get(output, 0.0) > 0.0:
+                raise ValueError("outputs.star_tracker: needs a sensors.star_tracker section (its noise)")
+            continue
+        if output in rates and rates[output] != sensor.rate:
+            raise ValueError(f"outputs.{output}: {rates[output]:g} Hz differs from {key} {sensor.rate:g} Hz "
+                             f"(give the rate once, in {key})")
+        rates[output] = sensor.rate
+    return rates

@@ -42,6 +42,8 @@ __all__ = [
     "DEFAULT_WORLD_FRAME",
     "DEFAULT_BODY_FRAME",
     "DEFAULT_GRAVITY",
+    "DEFAULT_EPOCH",
+    "EPOCH_PATTERN",
 ]
 
 TORQUE_MESSAGE_TYPES = ("WrenchStamped", "Vector3Stamped")
@@ -54,6 +56,11 @@ DEFAULT_WORLD_FRAME = "odom"
 DEFAULT_BODY_FRAME = "base_link"
 #: Standard gravity, m/s^2.
 DEFAULT_GRAVITY = 9.80665
+#: UTC date and time of sim time 0 when a scene names none (used by exports such as CCSDS AEM):
+#: noon of 1 January 2000, UTC.
+DEFAULT_EPOCH = "2000-01-01T12:00:00Z"
+#: ISO 8601 UTC date and time, whole seconds or up to nanoseconds, 'Z' or no zone.
+EPOCH_PATTERN = r"^[0-9]{4}-[0-9]{2}-[0-9]{2}T[0-9]{2}:[0-9]{2}:[0-9]{2}(\.[0-9]{1,9})?Z?$"
 
 
 class OutputSpec(NamedTuple):
@@ -73,8 +80,13 @@ OUTPUTS: dict[str, OutputSpec] = {
     "tf": OutputSpec(50.0, "world -> body transform on /tf (where tf2_msgs is installed)"),
     "clock": OutputSpec(100.0, "sim time on /clock"),
     # sensor_msgs/Imu and nav_msgs/Odometry: built only when the scene asks
-    "imu": OutputSpec(0.0, "sensor_msgs/Imu on ~/imu (0: not built, the default)"),
+    "imu": OutputSpec(0.0, "sensor_msgs/Imu on ~/imu: ideal, or the gyro's readings (set by sensors.gyro.rate); "
+                           "0: not built, the default"),
     "odom": OutputSpec(0.0, "nav_msgs/Odometry on ~/odom (0: not built, the default)"),
+    "markers": OutputSpec(0.0, "visualization_msgs/MarkerArray on ~/markers: the inertia box (body frame), omega "
+                               "(body) and L (world) arrows (0: not built, the default)"),
+    "star_tracker": OutputSpec(0.0, "geometry_msgs/PoseWithCovarianceStamped on ~/star_tracker "
+                                    "(set by sensors.star_tracker.rate; 0: not built)"),
 }
 
 _DURATION_MAX = limits.DURATION_RANGE[1]
@@ -214,6 +226,50 @@ _INTEGRATOR = nullable(mapping(
     },
 ))
 
+#: Largest sensor noise seed + 1 (Philox's 64-bit key word).
+SEED_LIMIT = 1 << 64
+
+_GYRO = mapping(
+    "A three-axis rate gyro along the body axes; ~/imu publishes its readings (docs/sensors.md).",
+    {
+        "rate": number("Samples per second, Hz of sim time (the ~/imu rate).", exclusive_minimum=0.0,
+                       maximum=limits.RATE_RANGE[1], default=100.0),
+        "angle_random_walk": number("Angle random walk N, rad/sqrt(s) (white rate noise of density N).",
+                                    minimum=0.0, default=0.0),
+        "bias_instability": number("Bias instability B, rad/s: the Allan deviation floor is 0.664 B "
+                                   "(a Gauss-Markov bias).", minimum=0.0, default=0.0),
+        "bias_correlation_time": number("Correlation time T_c of the Gauss-Markov bias, s (the Allan "
+                                        "floor lies at 1.89 T_c).", exclusive_minimum=0.0, default=100.0),
+        "turn_on_bias": vector("Constant bias [x, y, z], rad/s, body axes.", 3),
+        "turn_on_bias_sigma": number("1-sigma of a constant bias per axis drawn once from the seed, rad/s.",
+                                     minimum=0.0, default=0.0),
+        "scale_factor": vector("Scale factor error [x, y, z], fraction (100 ppm = 1e-4).", 3),
+        "saturation": number("Largest |reading| per axis, rad/s; 0 = none.", minimum=0.0, default=0.0),
+        "quantization": number("Resolution, rad/s per LSB; 0 = none.", minimum=0.0, default=0.0),
+    },
+)
+
+_STAR_TRACKER = mapping(
+    "A star tracker along the body axes: ~/star_tracker (geometry_msgs/PoseWithCovarianceStamped).",
+    {
+        "rate": number("Attitude solutions per second, Hz of sim time.", exclusive_minimum=0.0,
+                       maximum=limits.RATE_RANGE[1], default=10.0),
+        "noise_equivalent_angle": vector("Noise equivalent angle [x, y, z], rad (1 sigma) about each body axis.",
+                                         3, item=number("rad", minimum=0.0)),
+    },
+    required=["noise_equivalent_angle"],
+)
+
+_SENSORS = nullable(mapping(
+    "Sensor models with seeded noise; ground-truth topics stay exact (docs/sensors.md).",
+    {
+        "seed": integer("Seed of every sensor noise; omitted: drawn at start and recorded.",
+                        minimum=0, maximum=SEED_LIMIT - 1),
+        "gyro": nullable(_GYRO),
+        "star_tracker": nullable(_STAR_TRACKER),
+    },
+))
+
 SCENE_SCHEMA: dict[str, Any] = {
     "$schema": DIALECT,
     "title": "rigid_rot_sim scene",
@@ -239,6 +295,11 @@ SCENE_SCHEMA: dict[str, Any] = {
             "integrator": _INTEGRATOR,
             "duration": nullable(number("Sim time to run, s; null runs unbounded.", exclusive_minimum=0.0,
                                         maximum=_DURATION_MAX)),
+            "epoch": nullable({
+                "description": "UTC date and time of sim time 0, ISO 8601 (YYYY-MM-DDThh:mm:ss[.f...][Z]); "
+                               f"used by exports (CCSDS AEM). Default {DEFAULT_EPOCH}.",
+                "type": "string", "pattern": EPOCH_PATTERN, "default": DEFAULT_EPOCH,
+            }),
             "real_time_factor": number("Pace: 1 = wall clock, 0 = as fast as possible.",
                                        minimum=limits.REAL_TIME_FACTOR_RANGE[0],
                                        maximum=limits.REAL_TIME_FACTOR_RANGE[1], default=1.0),
@@ -255,6 +316,12 @@ SCENE_SCHEMA: dict[str, Any] = {
                 },
             )),
             "recording": nullable(text("Path of an .mcap file to record the run to.", limits.MAX_TEXT_LENGTH)),
+            "foxglove": nullable({
+                "description": "Serve the run live to Foxglove at [HOST:]PORT (WebSocket; host default 127.0.0.1, "
+                               "loopback); needs foxglove-sdk (pip install rigid_rot_sim[viewer]).",
+                "type": ["string", "integer"], "pattern": r"^(\S+:)?[0-9]{1,5}$", "minimum": 0, "maximum": 65535,
+            }),
+            "sensors": _SENSORS,
             "commands": nullable(mapping(
                 "Settings of the torque command inputs.",
                 {
