@@ -37,7 +37,7 @@ from typing import Any, Literal
 
 import numpy as np
 
-from rigid_rot_sim.analysis.engine import map_tasks, open_client, wants_cluster
+from rigid_rot_sim.analysis.cluster import map_tasks, open_client, wants_cluster
 from rigid_rot_sim.analysis.metrics import attitude_error_angle, omega_error, relative_change
 from rigid_rot_sim.analysis.problems import P1, Problem
 from rigid_rot_sim.analysis.stability_cases import Case, Criterion, case_named
@@ -55,8 +55,19 @@ SAMPLES = 200
 BISECTION_STEPS = 1000
 BISECTION_GROWTH = 0.01
 #: Fixed-step methods whose largest stable step is bisected (the explicit ones, and the
-#: solver / accuracy limits of implicit_midpoint and splitting).
-BISECTED = ("euler", "rk4", "lie_rk4", "implicit_midpoint", "splitting")
+#: measured solver / accuracy limits of implicit_midpoint and splitting).
+BISECTED = advice.EXPLICIT_FIXED_STEP + advice.MEASURED_STEP_LIMITS
+
+#: A method as the suite runs it: registry name and keyword options, e.g. ("splitting", (("order", 4),)).
+MethodVariant = tuple[str, tuple[tuple[str, Any], ...]]
+
+
+def method_label(method: str | MethodVariant) -> str:
+    """The report's name of a method variant: ``("splitting", (("order", 4),))`` -> 'splitting(order=4)'."""
+    if isinstance(method, str):
+        return method
+    name, options = method
+    return f"{name}({', '.join(f'{key}={value}' for key, value in options)})" if options else name
 
 
 @dataclass
@@ -90,23 +101,10 @@ def _invariants(problem: Problem, q: np.ndarray, omega: np.ndarray) -> tuple[flo
 
 
 def _integrator(method: str, case: Case, dt: float, torque: Any) -> Any:
-    """The integrator of ``method`` (a label such as 'splitting(order=4)') on ``case``'s body, at step ``dt``."""
+    """The integrator of ``method`` (a registry name) on ``case``'s body, at step ``dt``, with the case's options."""
     problem = case.problem
-    name, options = _method_and_options(method)
-    options.update(case.options.get(method, {}))
-    return get_method(name)(problem.moments, dt, torque, q0=problem.q0, omega0=problem.omega0, **options)
-
-
-def _method_and_options(label: str) -> tuple[str, dict[str, Any]]:
-    """'splitting(order=4)' -> ('splitting', {'order': 4})."""
-    if "(" not in label:
-        return label, {}
-    name, rest = label.split("(", 1)
-    options = {}
-    for item in rest.rstrip(")").split(","):
-        key, value = item.split("=")
-        options[key.strip()] = int(value) if value.strip().isdigit() else float(value)
-    return name, options
+    return get_method(method)(problem.moments, dt, torque, q0=problem.q0, omega0=problem.omega0,
+                              **case.options.get(method, {}))
 
 
 def run_case(case: Case, method: str) -> CaseRun:
@@ -281,18 +279,23 @@ class LongHorizon:
 #: Energy errors below this are round-off (a random walk of ~1e-16 per step over 1e7 steps).
 ROUNDOFF_FLOOR = 1e-11
 
-LONG_HORIZON_METHODS = ("rk4", "lie_rk4", "implicit_midpoint", "splitting(order=2)", "splitting(order=4)")
+LONG_HORIZON_METHODS: tuple[MethodVariant, ...] = (
+    ("rk4", ()), ("lie_rk4", ()), ("implicit_midpoint", ()),
+    ("splitting", (("order", 2),)), ("splitting", (("order", 4),)),
+)
 
 
-def long_horizon(method: str, steps: int, dt: float = 0.01, samples: int = 1000) -> LongHorizon:
+def long_horizon(method: str | MethodVariant, steps: int, dt: float = 0.01, samples: int = 1000) -> LongHorizon:
     """P1's body for ``steps`` steps of ``dt``: is the relative energy error bounded or secular?
 
-    Secular when the mean error over the last tenth exceeds twice the maximum over the
-    first tenth and the round-off floor (1e-11).
+    ``method``: a registry name or a (name, options) variant. Secular when the mean error
+    over the last tenth exceeds twice the maximum over the first tenth and the round-off
+    floor (1e-11).
     """
     problem = P1
-    name, options = _method_and_options(method)
-    integrator = get_method(name)(problem.moments, dt, None, q0=problem.q0, omega0=problem.omega0, **options)
+    name, options = (method, ()) if isinstance(method, str) else method
+    integrator = get_method(name)(problem.moments, dt, None, q0=problem.q0, omega0=problem.omega0, **dict(options))
+    label = method_label(method)
     e0 = problem.energy(problem.q0, problem.omega0)
     chunks = np.diff(np.linspace(0, steps, samples + 1).round().astype(int))
     errors = np.empty(samples)
@@ -302,13 +305,13 @@ def long_horizon(method: str, steps: int, dt: float = 0.01, samples: int = 1000)
             integrator.advance(int(chunk))
             errors[k] = relative_change(e0, problem.energy(integrator.q, integrator.omega))
     except (NonFiniteStateError, ArithmeticError) as exc:
-        return LongHorizon(method, steps, dt, time.perf_counter() - start, math.nan, math.nan, math.nan, True,
+        return LongHorizon(label, steps, dt, time.perf_counter() - start, math.nan, math.nan, math.nan, True,
                            "unstable", str(exc)[:240])
     seconds = time.perf_counter() - start
     tenth = max(1, samples // 10)
     first, last = float(errors[:tenth].max()), float(errors[-tenth:].mean())
     secular = last > max(2.0 * first, ROUNDOFF_FLOOR)
-    return LongHorizon(method, steps, dt, seconds, first, last, float(errors[-1]), secular)
+    return LongHorizon(label, steps, dt, seconds, first, last, float(errors[-1]), secular)
 
 
 def bisection_row(case: Case, method: str, steps: int) -> dict[str, Any]:
@@ -342,7 +345,7 @@ def bisection_task(name: str, quick: bool, method: str) -> dict[str, Any]:
     return bisection_row(case_named(name, quick), method, BISECTION_STEPS // (4 if quick else 1))
 
 
-def long_horizon_task(method: str, steps: int) -> dict[str, Any]:
+def long_horizon_task(method: str | MethodVariant, steps: int) -> dict[str, Any]:
     """A Dask task: :func:`long_horizon` as a dict."""
     return dataclasses.asdict(long_horizon(method, steps))
 
@@ -358,7 +361,7 @@ def method_labels() -> list[str]:
 def run_all(
     cases: list[Case],
     methods: list[str],
-    long_methods: tuple[str, ...],
+    long_methods: tuple[str | MethodVariant, ...],
     long_steps: int,
     quick: bool,
     bar: Any,
@@ -392,7 +395,7 @@ def _run_here(cases, methods, long_methods, long_steps, quick, bar):
     bar.update(1)
     horizon = []
     for method in long_methods:
-        bar.set_postfix_str(f"long horizon {method}", refresh=True)
+        bar.set_postfix_str(f"long horizon {method_label(method)}", refresh=True)
         horizon.append(dataclasses.asdict(long_horizon(method, long_steps)))
         bar.update(1)
     return case_runs, bisection, horizon

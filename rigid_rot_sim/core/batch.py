@@ -66,7 +66,7 @@ def _as_batch(name: str, value: Any, n: int | None, width: int) -> np.ndarray:
 
 
 @register_jitable
-def _advance_body(b, method, moments, q, omega, torque, dt, n_steps, failed_step, failure):
+def _advance_body(b, method, moments, q, omega, torque, dt, n_steps, normalize_q, failed_step, failure):
     """Advance body b in place; if it fails it keeps its last good state and records the
     (1-based) failing step and the status."""
     row = torque[b : b + 1]
@@ -74,7 +74,10 @@ def _advance_body(b, method, moments, q, omega, torque, dt, n_steps, failed_step
     body_torque = (kind, row, np.zeros(4))
     body_moments = (moments[b, 0], moments[b, 1], moments[b, 2])
     # normalised as Integrator.set_state does it, so that the bits match a single body's
-    qx, qy, qz, qw = quat.normalize((q[b, 0], q[b, 1], q[b, 2], q[b, 3]))
+    # (not when continuing: a single body carries its q from one step to the next as it is)
+    qx, qy, qz, qw = q[b, 0], q[b, 1], q[b, 2], q[b, 3]
+    if normalize_q:
+        qx, qy, qz, qw = quat.normalize((qx, qy, qz, qw))
     state = (qx, qy, qz, qw, omega[b, 0], omega[b, 1], omega[b, 2])
     if method == _EXACT:
         # as ExactFlow.advance(n_steps): one evaluation of the flow at n_steps * dt
@@ -102,17 +105,17 @@ def _advance_body(b, method, moments, q, omega, torque, dt, n_steps, failed_step
 
 
 @compiled(parallel=True)
-def _advance_bodies_parallel(method, moments, q, omega, torque, dt, n_steps, failed_step, failure):
+def _advance_bodies_parallel(method, moments, q, omega, torque, dt, n_steps, normalize_q, failed_step, failure):
     for b in prange(q.shape[0]):
-        _advance_body(b, method, moments, q, omega, torque, dt, n_steps, failed_step, failure)
+        _advance_body(b, method, moments, q, omega, torque, dt, n_steps, normalize_q, failed_step, failure)
 
 
 # Serial for small jobs: starting the parallel region costs up to a scheduler time slice
 # (milliseconds) when the cores are busy with other work.
 @compiled
-def _advance_bodies_serial(method, moments, q, omega, torque, dt, n_steps, failed_step, failure):
+def _advance_bodies_serial(method, moments, q, omega, torque, dt, n_steps, normalize_q, failed_step, failure):
     for b in range(q.shape[0]):
-        _advance_body(b, method, moments, q, omega, torque, dt, n_steps, failed_step, failure)
+        _advance_body(b, method, moments, q, omega, torque, dt, n_steps, normalize_q, failed_step, failure)
 
 
 _PARALLEL_BODY_STEPS = 200_000
@@ -126,6 +129,8 @@ def advance_batch(
     dt: float,
     n_steps: int,
     torque_body: Any = None,
+    *,
+    normalize_q: bool = True,
 ) -> tuple[np.ndarray, np.ndarray]:
     """Advance N bodies by ``n_steps`` steps of ``dt`` (s); returns new ``(q, omega)``.
 
@@ -135,7 +140,8 @@ def advance_batch(
     principal_moments : array_like, (3,) or (N, 3)
         kg*m^2, each row > 0.
     q : array_like, (N, 4)
-        Unit quaternions (x, y, z, w), principal -> world; normalised on entry.
+        Unit quaternions (x, y, z, w), principal -> world; normalised on entry unless
+        ``normalize_q`` is False.
     omega : array_like, (N, 3)
         rad/s, principal body frame.
     dt : float
@@ -144,6 +150,11 @@ def advance_batch(
         >= 0.
     torque_body : array_like, (3,) or (N, 3), optional
         N*m, principal body frame, constant over the run (one per body or shared).
+    normalize_q : bool, optional
+        False to continue from states this function returned, as a single body's
+        integrator continues from its own: q is taken as it is (normalising it again would
+        round it differently), so a run cut into calls (torque changes) has the bits of one
+        integrator stepping through it.
 
     Raises
     ------
@@ -180,7 +191,7 @@ def advance_batch(
     failure = np.zeros(n, dtype=np.int64)
     parallel = n > 1 and n * int(n_steps) >= _PARALLEL_BODY_STEPS
     run = _advance_bodies_parallel if parallel else _advance_bodies_serial
-    run(_KERNELS[method], moments, q, omega, torque, float(dt), int(n_steps), failed_step, failure)
+    run(_KERNELS[method], moments, q, omega, torque, float(dt), int(n_steps), bool(normalize_q), failed_step, failure)
     if failed_step.any():
         # report the earliest failure (the bodies ran independently, in parallel)
         bad = int(np.argmin(np.where(failed_step > 0, failed_step, np.iinfo(np.int64).max)))

@@ -108,7 +108,8 @@ class CommandSchedule:
 
     ``max_torque`` (N*m): the largest accepted torque norm of a command or apply request
     (0 = no limit). :attr:`body_sum` and :attr:`world_sum` (None when zero) are the torque
-    acting from the current step on, in the user body and world frames.
+    acting from the current step on, in the user body and world frames. :attr:`next_event`
+    is the step of the earliest pending event (None when none is pending).
     """
 
     def __init__(self, scene: Scene, clock: StepClock) -> None:
@@ -123,7 +124,7 @@ class CommandSchedule:
     def clear(self) -> None:
         """Forget every command and applied torque; the schedules start again from their first segment."""
         self._events: list[tuple[int, int, EventKind, Any]] = []
-        self.next_event: float = math.inf
+        self.next_event: int | None = None
         self._held: dict[str, _Held] = {}
         self._applied: dict[int, TorqueCommand] = {}
         self._scheduled: dict[int, Torque] = {}
@@ -257,7 +258,7 @@ class CommandSchedule:
     def reschedule(self) -> None:
         """Recompute the step of every pending event from its time (after a dt change)."""
         events, self._events = self._events, []
-        self.next_event = math.inf
+        self.next_event = None
         for _, _, kind, payload in events:
             if kind is EventKind.COMMAND or kind is EventKind.APPLY_START:
                 step = self.clock.step_at_or_after(payload.effective_time)
@@ -268,7 +269,7 @@ class CommandSchedule:
 
     def _push(self, step: int, kind: EventKind, payload: Any) -> None:
         heapq.heappush(self._events, (step, next(self._serial), kind, payload))
-        if step < self.next_event:
+        if self.next_event is None or step < self.next_event:
             self.next_event = step
 
     # ------------------------------------------------------------------ taking effect
@@ -299,7 +300,7 @@ class CommandSchedule:
             elif kind is EventKind.SCHEDULE:
                 _, index, torque = payload
                 self._scheduled[index] = torque
-        self.next_event = events[0][0] if events else math.inf
+        self.next_event = events[0][0] if events else None
         self._sum_torques()
 
     def _sum_torques(self) -> None:

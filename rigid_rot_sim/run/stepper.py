@@ -155,19 +155,21 @@ class Stepper:
         """Give the integrator the commanded torque for the next step (principal frame)."""
         if self.gravity is not None:
             return  # gravity scenes have no command inputs (scene validation)
+        integrator = self.integrator
+        assert integrator is not None
         principal_from_body = self.observables.principal_from_body
         body = self.commands.body_sum
         world = self.commands.world_sum
         if world is not None:
-            q_body = quat.multiply(self.integrator.q, principal_from_body)  # type: ignore[union-attr]
+            q_body = quat.multiply(tuple(integrator.q), principal_from_body)
             world_in_body = quat.rotate_inverse(q_body, world)
             body = (body[0] + world_in_body[0], body[1] + world_in_body[1], body[2] + world_in_body[2])
         self.step_torque_body = body
         if not any(body):
             torque = None
         else:
-            torque = ConstantTorque(quat.rotate(principal_from_body, body))
-        self.integrator.torque = torque  # type: ignore[union-attr]
+            torque = ConstantTorque(np.array(quat.rotate(principal_from_body, body)))
+        integrator.torque = torque
 
     # ------------------------------------------------------------------ stepping
 
@@ -183,12 +185,15 @@ class Stepper:
         end = clock.k + int(n)
         done = 0
         while clock.k < end:
-            due = clock.k >= commands.next_event
+            due = commands.next_event is not None and clock.k >= commands.next_event
             if due:
                 commands.process_due()
             if due or commands.world_sum is not None:  # a world torque: re-expressed at every boundary
                 self.set_command_torque()
-            stop = clock.k + 1 if commands.world_sum is not None else min(end, commands.next_event)
+            if commands.world_sum is not None:
+                stop = clock.k + 1
+            else:
+                stop = end if commands.next_event is None else min(end, commands.next_event)
             chunk = stop - clock.k
             reason = self.rotation_failure(clock.dt)
             if reason is not None:

@@ -44,6 +44,7 @@ from rigid_rot_sim.core.quaternion import zxz_to_quaternion
 from rigid_rot_sim.core.inertia import inertia_about_center_of_mass, mass_properties
 from rigid_rot_sim.core.integrators import get_method
 from rigid_rot_sim.core.sensors import GyroModel, StarTrackerModel
+from rigid_rot_sim.core.steps import step_at_or_after
 from rigid_rot_sim.scene.schema import validated
 from rigid_rot_sim.scene.scene_schema import (
     DEFAULT_BODY_FRAME,
@@ -184,16 +185,29 @@ class ScheduleSegment:
 
 @dataclass(frozen=True)
 class TorqueSchedule:
-    """Piecewise-constant torque written in the scene, expressed in ``frame`` (body or world)."""
+    """Piecewise-constant torque written in the scene, expressed in ``frame`` (body or world).
+
+    On a grid of fixed steps ``dt`` (s) from t = 0, a segment takes effect on the first
+    step boundary at or after its start (:func:`rigid_rot_sim.core.steps.step_at_or_after`,
+    the run engine's rule) and acts until the next segment takes over; of segments landing
+    on the same boundary the last one acts.
+    """
 
     frame: str
     segments: tuple[ScheduleSegment, ...]
 
-    def torque_at(self, t: float) -> Vector3:
-        """The scheduled torque (N*m) at sim time t (s); zero before the first segment."""
+    def change_steps(self, dt: float) -> tuple[int, ...]:
+        """The step boundary where each segment takes effect at step ``dt`` (s), in segment order."""
+        return tuple(step_at_or_after(segment.start, dt) for segment in self.segments)
+
+    def torque_at_step(self, k: int, dt: float) -> Vector3:
+        """The scheduled torque (N*m) acting over step k (from boundary k to k + 1) at step ``dt`` (s).
+
+        Zero before the first segment takes effect.
+        """
         value: Vector3 = (0.0, 0.0, 0.0)
-        for segment in self.segments:
-            if segment.start <= t:
+        for segment, step in zip(self.segments, self.change_steps(dt)):
+            if step <= k:
                 value = segment.torque
         return value
 

@@ -395,7 +395,7 @@ def test_simulate_with_a_full_inertia_tensor_matches_dop853():
 
 
 def test_class_order_is_the_default_series_order():
-    assert Taylor.order == Taylor(MOMENTS, 1.0).series_order == order_for_tolerance(1e-12)
+    assert Taylor.orders[0] == Taylor(MOMENTS, 1.0).series_order == order_for_tolerance(1e-12)
     assert Taylor.fixed_step is False
 
 

@@ -42,12 +42,12 @@ def recorded(tmp_path):
         node = RigidRotSimNode(context=context, parameter_overrides=[
             Parameter("scene", value=str(scene)), Parameter("record_path", value=str(bag)),
             Parameter("real_time_factor", value=0.0)])
-        sensors = node.outputs.sensors
-        assert sensors.names == ["gyro", "star_tracker"] and set(node.outputs.publishers) >= {"imu", "star_tracker"}
+        sensors = node.run.outputs.sensors
+        assert sensors.names == ["gyro", "star_tracker"] and set(node.run.outputs.publishers) >= {"imu", "star_tracker"}
         for _ in range(2):
             while not node.finished:
-                node.timer_callback()
-            response = node.run_services.reset_callback(Trigger.Request(), Trigger.Response())  # as ~/reset
+                node.run.tick()
+            response = node.run.services.reset_callback(Trigger.Request(), Trigger.Response())  # as ~/reset
             assert response.success, response.message
         node.destroy_node()
     finally:

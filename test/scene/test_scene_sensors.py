@@ -11,7 +11,7 @@ BODY = "body: {principal_moments: [1.0, 2.0, 2.5]}\n"
 def test_no_sensors_section_builds_none_and_keeps_the_default_rates():
     scene = parse_scene_text(BODY)
     assert scene.sensors.gyro is None and scene.sensors.star_tracker is None and scene.sensors.seed is None
-    assert scene.outputs.imu == 0.0 and scene.outputs.star_tracker == 0.0
+    assert scene.outputs["imu"] == 0.0 and scene.outputs["star_tracker"] == 0.0
 
 
 def test_sensors_are_read_with_defaults_and_set_the_output_rates():
@@ -25,7 +25,7 @@ sensors:
     assert scene.sensors.gyro == GyroModel(angle_random_walk=1e-4, turn_on_bias=(1e-3, 0.0, -1e-3),
                                            scale_factor=(1e-4, 0.0, 0.0))
     assert scene.sensors.star_tracker == StarTrackerModel(rate=4.0, noise_equivalent_angle=(1e-5, 1e-5, 5e-5))
-    assert scene.outputs.imu == 100.0 and scene.outputs.star_tracker == 4.0  # the gyro's default rate, 100 Hz
+    assert scene.outputs["imu"] == 100.0 and scene.outputs["star_tracker"] == 4.0  # the gyro's default rate, 100 Hz
 
 
 @pytest.mark.parametrize("text, expected", [
@@ -50,4 +50,4 @@ def test_errors_name_the_key(text, expected):
 
 def test_the_same_rate_given_twice_is_accepted():
     scene = parse_scene_text(BODY + "sensors: {gyro: {rate: 50}}\noutputs: {imu: 50}")
-    assert scene.outputs.imu == 50.0
+    assert scene.outputs["imu"] == 50.0

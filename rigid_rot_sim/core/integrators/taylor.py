@@ -174,7 +174,8 @@ class Taylor(Integrator):
     """
 
     name: ClassVar[str] = "taylor"
-    order: ClassVar[int] = 28  # the series order at the default tol; per instance: series_order
+    orders: ClassVar[tuple[int, ...]] = (28,)  # the series order at the default tol; per instance: series_order
+    stability = "adaptive"
     fixed_step: ClassVar[bool] = False
 
     def __init__(
