@@ -17,6 +17,8 @@ import math
 import numpy as np
 from numba.extending import register_jitable
 
+from rigid_rot_sim.core.validation import FloatArray
+
 _EPS = 2.220446049250313e-16
 #: Most AGM levels kept (the AGM converges quadratically: 40 is never reached for m < 1).
 AGM_LEVELS = 40
@@ -34,7 +36,7 @@ FOUR_PI_DD = (12.566370614359172, 4.898587196589413e-16)
 
 
 @register_jitable
-def two_sum(a, b):
+def two_sum(a: float, b: float) -> tuple[float, float]:
     """a + b = s + e exactly (Knuth; any magnitudes)."""
     s = a + b
     bv = s - a
@@ -42,14 +44,14 @@ def two_sum(a, b):
 
 
 @register_jitable
-def fast_two_sum(a, b):
+def fast_two_sum(a: float, b: float) -> tuple[float, float]:
     """a + b = s + e exactly, for |a| >= |b| (or a = 0)."""
     s = a + b
     return s, b - (s - a)
 
 
 @register_jitable
-def two_product(a, b):
+def two_product(a: float, b: float) -> tuple[float, float]:
     """a b = p + e exactly (Dekker's splitting; no FMA needed)."""
     p = a * b
     split = 134217729.0  # 2^27 + 1
@@ -63,7 +65,7 @@ def two_product(a, b):
 
 
 @register_jitable
-def dd_add(ah, al, bh, bl):
+def dd_add(ah: float, al: float, bh: float, bl: float) -> tuple[float, float]:
     """(ah + al) + (bh + bl) as a double-double."""
     s, e = two_sum(ah, bh)
     t, f = two_sum(al, bl)
@@ -72,21 +74,21 @@ def dd_add(ah, al, bh, bl):
 
 
 @register_jitable
-def dd_add_d(ah, al, b):
+def dd_add_d(ah: float, al: float, b: float) -> tuple[float, float]:
     """(ah + al) + b (a double) as a double-double."""
     s, e = two_sum(ah, b)
     return fast_two_sum(s, e + al)
 
 
 @register_jitable
-def dd_mul(ah, al, bh, bl):
+def dd_mul(ah: float, al: float, bh: float, bl: float) -> tuple[float, float]:
     """(ah + al) (bh + bl) as a double-double."""
     p, e = two_product(ah, bh)
     return fast_two_sum(p, e + (ah * bl + al * bh))
 
 
 @register_jitable
-def dd_div(ah, al, bh, bl):
+def dd_div(ah: float, al: float, bh: float, bl: float) -> tuple[float, float]:
     """(ah + al) / (bh + bl) as a double-double."""
     q1 = ah / bh
     ph, pl = dd_mul(q1, 0.0, bh, bl)
@@ -99,7 +101,7 @@ def dd_div(ah, al, bh, bl):
 
 
 @register_jitable
-def dd_sqrt(ah, al):
+def dd_sqrt(ah: float, al: float) -> tuple[float, float]:
     """sqrt(ah + al) as a double-double (ah + al >= 0)."""
     if ah <= 0.0:
         return 0.0, 0.0
@@ -109,14 +111,14 @@ def dd_sqrt(ah, al):
 
 
 @register_jitable
-def dd_sin_cos(h, l):
+def dd_sin_cos(h: float, l: float) -> tuple[float, float]:
     """sin and cos of the angle h + l (rad), |l| <= ulp(h): first order in l is exact to rounding."""
     s, c = math.sin(h), math.cos(h)
     return s + c * l, c - s * l
 
 
 @register_jitable
-def dd_reduce(h, l, period_h, period_l):
+def dd_reduce(h: float, l: float, period_h: float, period_l: float) -> tuple[float, float]:
     """(h + l) - k period, k the nearest integer to (h + l) / period: a double-double in
     [-period / 2, period / 2] (period > 0 a double-double)."""
     k = math.floor(h / period_h + 0.5)
@@ -126,7 +128,7 @@ def dd_reduce(h, l, period_h, period_l):
 
 
 @register_jitable
-def dd_complete_integrals(m1h, m1l, nh, nl):
+def dd_complete_integrals(m1h: float, m1l: float, nh: float, nl: float) -> tuple[float, float, float, float]:
     """Double-double K(m) and Pi(n|m) - K(m) for 1 - m = m1h + m1l in (0, 1] and n = nh + nl < 1.
 
     DLMF 19.8.6 (the AGM of 1 and k' with its companion sequence p_j):
@@ -163,7 +165,7 @@ def dd_complete_integrals(m1h, m1l, nh, nl):
 
 
 @register_jitable
-def carlson_rf(x, y, z):
+def carlson_rf(x: float, y: float, z: float) -> float:
     """R_F(x, y, z) for x, y, z >= 0, at most one of them zero (NaN for a non-finite argument)."""
     if not math.isfinite(x + y + z):
         return math.nan  # the duplication below would never converge
@@ -182,7 +184,7 @@ def carlson_rf(x, y, z):
 
 
 @register_jitable
-def carlson_rc(x, y):
+def carlson_rc(x: float, y: float) -> float:
     """R_C(x, y) for x >= 0, y > 0 (NaN for a non-finite argument)."""
     if not math.isfinite(x + y):
         return math.nan  # the duplication below would never converge
@@ -198,7 +200,7 @@ def carlson_rc(x, y):
 
 
 @register_jitable
-def carlson_rj(x, y, z, p):
+def carlson_rj(x: float, y: float, z: float, p: float) -> float:
     """R_J(x, y, z, p) for x, y, z >= 0 (at most one zero) and p > 0 (NaN for a non-finite argument)."""
     if not math.isfinite(x + y + z + p):
         return math.nan  # the duplication below would never converge
@@ -231,7 +233,7 @@ def carlson_rj(x, y, z, p):
 
 
 @register_jitable
-def agm_tables(m, m1, a, c):
+def agm_tables(m: float, m1: float, a: FloatArray, c: FloatArray) -> int:
     """Fill a[0..L], c[0..L] with the descending AGM of (1, sqrt(1 - m)); returns L.
 
     ``m1`` = 1 - m is passed exactly; ``c_{i+1} = c_i^2 / (4 a_{i+1})`` avoids the
@@ -251,7 +253,7 @@ def agm_tables(m, m1, a, c):
 
 
 @register_jitable
-def jacobi(r, a, c, levels, m1):
+def jacobi(r: float, a: FloatArray, c: FloatArray, levels: int, m1: float) -> tuple[float, float, float]:
     """sn, cn, dn of r (|r| <= K) from the AGM tables (Abramowitz & Stegun 16.4)."""
     phi = (2.0**levels * a[levels]) * r
     for i in range(levels, 0, -1):
@@ -262,7 +264,9 @@ def jacobi(r, a, c, levels, m1):
 
 
 @register_jitable
-def jacobi_dd(rh, rl, a, c, levels, m1, top_h, top_l):
+def jacobi_dd(
+    rh: float, rl: float, a: FloatArray, c: FloatArray, levels: int, m1: float, top_h: float, top_l: float
+) -> tuple[float, float, float]:
     """sn, cn, dn of r = rh + rl (|r| <= K) as :func:`jacobi`, with the amplitude carried in
     double-double: phi_N = 2^N a_N r from a_N = top_h + top_l (a double-double of the AGM
     limit), and each descent phi_{i-1} = (phi_i + asin(c_i sin(phi_i) / a_i)) / 2 adds a
@@ -277,6 +281,6 @@ def jacobi_dd(rh, rl, a, c, levels, m1, top_h, top_l):
     return sn, cn, math.sqrt(cn * cn + m1 * sn * sn)
 
 
-def agm_buffers() -> tuple[np.ndarray, np.ndarray]:
+def agm_buffers() -> tuple[FloatArray, FloatArray]:
     """Zeroed (a, c) arrays for :func:`agm_tables`."""
     return np.zeros(AGM_LEVELS), np.zeros(AGM_LEVELS)
