@@ -111,20 +111,20 @@ def dd_sqrt(ah: float, al: float) -> tuple[float, float]:
 
 
 @register_jitable
-def dd_sin_cos(h: float, l: float) -> tuple[float, float]:
-    """sin and cos of the angle h + l (rad), |l| <= ulp(h): first order in l is exact to rounding."""
+def dd_sin_cos(h: float, lo: float) -> tuple[float, float]:
+    """sin and cos of the angle h + lo (rad), |lo| <= ulp(h): first order in lo is exact to rounding."""
     s, c = math.sin(h), math.cos(h)
-    return s + c * l, c - s * l
+    return s + c * lo, c - s * lo
 
 
 @register_jitable
-def dd_reduce(h: float, l: float, period_h: float, period_l: float) -> tuple[float, float]:
-    """(h + l) - k period, k the nearest integer to (h + l) / period: a double-double in
+def dd_reduce(h: float, lo: float, period_h: float, period_l: float) -> tuple[float, float]:
+    """(h + lo) - k period, k the nearest integer to (h + lo) / period: a double-double in
     [-period / 2, period / 2] (period > 0 a double-double)."""
     k = math.floor(h / period_h + 0.5)
     ph, pl = two_product(k, period_h)
     s, e = two_sum(h, -ph)
-    return fast_two_sum(s, ((e + l) - pl) - k * period_l)
+    return fast_two_sum(s, ((e + lo) - pl) - k * period_l)
 
 
 @register_jitable

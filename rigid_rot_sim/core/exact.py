@@ -90,9 +90,25 @@ from scipy.spatial.transform import Rotation
 from rigid_rot_sim.core import quaternion as quat
 from rigid_rot_sim.core import validation
 from rigid_rot_sim.core.dynamics import axes_by_moment
-from rigid_rot_sim.core.elliptic import (AGM_LEVELS, FOUR_PI_DD, PI_DD, TWO_PI_DD, agm_tables, carlson_rf, carlson_rj, dd_add,
-                                         dd_complete_integrals, dd_div, dd_mul, dd_reduce, dd_sin_cos, dd_sqrt,
-                                         jacobi_dd, two_product, two_sum)
+from rigid_rot_sim.core.elliptic import (
+    AGM_LEVELS,
+    FOUR_PI_DD,
+    PI_DD,
+    TWO_PI_DD,
+    agm_tables,
+    carlson_rf,
+    carlson_rj,
+    dd_add,
+    dd_complete_integrals,
+    dd_div,
+    dd_mul,
+    dd_reduce,
+    dd_sin_cos,
+    dd_sqrt,
+    jacobi_dd,
+    two_product,
+    two_sum,
+)
 from rigid_rot_sim.core.jit import compiled
 
 CASES = ("spherical", "symmetric", "below_separatrix", "above_separatrix", "separatrix")
@@ -363,7 +379,7 @@ def _elliptic_params(moments, omega, q0, order, d, params, agm_a, agm_c, long_ru
     coeff_dd = dd_div(*dd_mul(*l_dd, *d31), *dd_mul(*two_product(i1, i3), *lam_dd))
     separatrix = d == 0.0
     m1 = m1_dd[0]
-    lam, n = lam_dd[0], n_dd[0]
+    n = n_dd[0]
     s3 = _sign(w3)
     s1 = _sign(w1) if separatrix else 1.0
     sigma = eps * s1 * s3

@@ -21,13 +21,12 @@ from __future__ import annotations
 import math
 import sys
 
+import mpmath  # pinned in the Makefile's TEST_PINS
 import numpy as np
 import pytest
+from mp_reference import Reference, ode_residual  # test/core, on sys.path under pytest
 
-mpmath = pytest.importorskip("mpmath")  # pinned in the Makefile's TEST_PINS
-
-from rigid_rot_sim.core.exact import torque_free_solution  # noqa: E402
-from mp_reference import Reference, ode_residual  # noqa: E402
+from rigid_rot_sim.core.exact import torque_free_solution
 
 Q0 = (0.5, -0.5, 0.5, 0.5)  # exactly unit, not the identity
 # name: (moments, omega0, t_end); |omega| t_end >= 100 rad
@@ -50,7 +49,7 @@ SAMPLES = 24
 def _scaled_errors(values, reference, scale):
     """Errors in the units of the module docstring (against the mpf reference itself)."""
     out = []
-    for x, r in zip(values, reference):
+    for x, r in zip(values, reference, strict=True):
         error = float(abs(mpmath.mpf(float(x)) - r))
         rounded = float(r)
         unit = math.ulp(rounded) if abs(rounded) >= 0.125 * scale else 2.5e-17 * scale
@@ -69,7 +68,7 @@ def max_errors(name: str, samples: int = SAMPLES) -> dict[str, float]:
     worst_q = worst_w = 0.0
     for k, t in enumerate(times):
         q_ref, w_ref = ref.state(float(t))
-        sign = 1.0 if sum(float(a) * b for a, b in zip(q_ref, q_ours[k])) >= 0.0 else -1.0
+        sign = 1.0 if sum(float(a) * b for a, b in zip(q_ref, q_ours[k], strict=True)) >= 0.0 else -1.0
         worst_q = max(worst_q, *_scaled_errors(sign * q_ours[k], q_ref, 1.0))
         worst_w = max(worst_w, *_scaled_errors(w_ours[k], w_ref, scale))
     return {"q": worst_q, "omega": worst_w}
@@ -82,8 +81,8 @@ def test_reference_satisfies_the_equations_of_motion(name):
     for t in (0.7, 0.61 * t_end):
         assert ode_residual(ref, t) < 1e-19
     q, w = ref.state(0.0)
-    assert max(abs(float(a) - b) for a, b in zip(w, omega0)) == 0.0
-    assert min(max(abs(sign * a - b) for a, b in zip(q, Q0)) for sign in (1, -1)) < 1e-30  # q ~ -q
+    assert max(abs(float(a) - b) for a, b in zip(w, omega0, strict=True)) == 0.0
+    assert min(max(abs(sign * a - b) for a, b in zip(q, Q0, strict=True)) for sign in (1, -1)) < 1e-30  # q ~ -q
 
 
 @pytest.mark.parametrize("name", sorted(CASES))
