@@ -264,20 +264,28 @@ def jacobi(r: float, a: FloatArray, c: FloatArray, levels: int, m1: float) -> tu
 
 
 @register_jitable
-def jacobi_dd(
-    rh: float, rl: float, a: FloatArray, c: FloatArray, levels: int, m1: float, top_h: float, top_l: float
-) -> tuple[float, float, float]:
-    """sn, cn, dn of r = rh + rl (|r| <= K) as :func:`jacobi`, with the amplitude carried in
-    double-double: phi_N = 2^N a_N r from a_N = top_h + top_l (a double-double of the AGM
-    limit), and each descent phi_{i-1} = (phi_i + asin(c_i sin(phi_i) / a_i)) / 2 adds a
-    bounded term to it, so the amplitude keeps the digits of r instead of a few ulps of it."""
+def jacobi_amplitude_dd(
+    rh: float, rl: float, a: FloatArray, c: FloatArray, levels: int, top_h: float, top_l: float
+) -> tuple[float, float]:
+    """The amplitude am(r) of r = rh + rl (|r| <= K) as a double-double, from the AGM tables:
+    phi_N = 2^N a_N r from a_N = top_h + top_l (a double-double of the AGM limit), and each
+    descent phi_{i-1} = (phi_i + asin(c_i sin(phi_i) / a_i)) / 2 (A&S 16.4) adds a bounded term
+    to it, so the amplitude keeps the digits of r instead of a few ulps of it."""
     scale = 2.0**levels
     ph, pl = dd_mul(top_h, top_l, rh, rl)
     ph, pl = scale * ph, scale * pl
     for i in range(levels, 0, -1):
         ph, pl = dd_add_d(ph, pl, math.asin(c[i] * math.sin(ph) / a[i]))
         ph, pl = 0.5 * ph, 0.5 * pl
-    sn, cn = dd_sin_cos(ph, pl)
+    return ph, pl
+
+
+@register_jitable
+def jacobi_dd(
+    rh: float, rl: float, a: FloatArray, c: FloatArray, levels: int, m1: float, top_h: float, top_l: float
+) -> tuple[float, float, float]:
+    """sn, cn, dn of r = rh + rl (|r| <= K) as :func:`jacobi`, from :func:`jacobi_amplitude_dd`."""
+    sn, cn = dd_sin_cos(*jacobi_amplitude_dd(rh, rl, a, c, levels, top_h, top_l))
     return sn, cn, math.sqrt(cn * cn + m1 * sn * sn)
 
 

@@ -61,8 +61,9 @@ lam, u0, K, |L| / I1 and the precession per half period 2K (``Pi(n|m) - K`` by t
 DLMF 19.8.6) are built to ~1e-32 from the floats given, u = lam t + u0 and its reduction by
 2K, the Jacobi amplitude, phi and its reduction by 4 pi are carried in double-double, so the
 phase does not lose a digit per decade of t. Accuracy against a 40-digit mpmath reference
-(test/core/test_exact_ulps.py, 100 rad of rotation): omega within ~5 ulps of the correctly
-rounded value, q within ~14 (in 1e-16 absolute units near a zero crossing); what is left in
+(test/core/test_exact_ulps.py, 100 rad of rotation): omega within ~2 ulps of the correctly
+rounded value (u0 refined by a Newton step on its amplitude), q within ~14 (in 1e-16
+absolute units near a zero crossing); what is left in
 q is the rounding of the product q_WL (x) q_zxz (x) q_perm. Next to the separatrix the
 problem itself is ill-conditioned and the error stays below that of a 1-ulp change of omega0.
 
@@ -99,12 +100,14 @@ from rigid_rot_sim.core.elliptic import (
     carlson_rf,
     carlson_rj,
     dd_add,
+    dd_add_d,
     dd_complete_integrals,
     dd_div,
     dd_mul,
     dd_reduce,
     dd_sin_cos,
     dd_sqrt,
+    jacobi_amplitude_dd,
     jacobi_dd,
     two_product,
     two_sum,
@@ -415,6 +418,19 @@ def _elliptic_params(moments, omega, q0, order, d, params, agm_a, agm_c, long_ru
             u0_dd = (f, 0.0)
         else:
             u0_dd = dd_add(math.copysign(2.0 * k_h, sn0), math.copysign(2.0 * k_l, sn0), -f, 0.0)
+        if long_run and a1 > 0.0:
+            # one Newton step on am(u0) = am0 (d am / du = dn), am0 from
+            # tan am0 = sigma w2 A1 / (w1 A2) with A1 / A2 = sqrt(I2 (I3 - I2) / (I1 (I3 - I1)))
+            ratio = dd_sqrt(*dd_div(*dd_mul(i2, 0.0, *d32), *dd_mul(i1, 0.0, *d31)))[0]
+            am0 = math.atan2(sigma * w2 * ratio, w1)
+            top = dd_div(*PI_DD, 2.0 * k_h, 2.0 * k_l)
+            j = math.floor((u0_dd[0] + k_h) / (2.0 * k_h))
+            ph, pl = two_product(j, 2.0 * k_h)
+            rh, rl = dd_add(u0_dd[0], u0_dd[1], -ph, -pl - j * 2.0 * k_l)
+            am_h, am_l = jacobi_amplitude_dd(rh, rl, agm_a, agm_c, levels, top[0], top[1])
+            sn_u = math.sin(am_h)
+            miss = ((am0 - j * PI_DD[0]) - am_h) - (am_l + j * PI_DD[1])
+            u0_dd = dd_add_d(u0_dd[0], u0_dd[1], miss / math.sqrt(1.0 - m * sn_u * sn_u))
     for idx in range(3):
         params[_E_ORDER + idx] = order[idx]
         params[_E_AXIS_SIGNS + idx] = axis_signs[idx]
