@@ -121,7 +121,7 @@ def dd_sin_cos(h: float, lo: float) -> tuple[float, float]:
 def dd_reduce(h: float, lo: float, period_h: float, period_l: float) -> tuple[float, float]:
     """(h + lo) - k period, k the nearest integer to (h + lo) / period: a double-double in
     [-period / 2, period / 2] (period > 0 a double-double)."""
-    k = math.floor(h / period_h + 0.5)
+    k = math.floor(h * (1.0 / period_h) + 0.5)  # k may be off by one at a tie: either is a reduction
     ph, pl = two_product(k, period_h)
     s, e = two_sum(h, -ph)
     return fast_two_sum(s, ((e + lo) - pl) - k * period_l)
