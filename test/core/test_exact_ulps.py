@@ -10,10 +10,11 @@ ulp(r) where 4 ulp(r) >= 1e-16 (|r| >= 1/8 of the scale), else in units of 2.5e-
 (near a zero crossing 4 units are 1e-16 absolute); scale is 1 for q and |omega| for omega.
 
 Issue 21 asks for 4 units on every component. Measured (100 times per case, the __main__
-below; 24 times in the tests): omega <= 2.2, q <= 15.6, where the flow before the double-double phase was at up to
-570 (omega) and 1222 (q). omega is held to the target; q to the bound reached, so that a
-regression fails: what is left in q is the rounding of the attitude's composition
-q_WL (x) q_zxz (x) q_perm and of q_WL itself (~1.5e-16 each), not the phase.
+below; 24 times in the tests): omega <= 2.2, q <= 15.6, where the flow before the
+double-double phase was at up to 570 (omega) and 1222 (q). omega is held to the target; q to
+a bound just above the one reached, so that a regression fails: what is left in q is the
+rounding of the attitude's composition q_WL (x) q_zxz (x) q_perm and of q_WL itself
+(~1.5e-16 each), not the phase.
 """
 
 from __future__ import annotations
