@@ -42,6 +42,7 @@ setup(
         "console_scripts": [
             "rigid-rot = rigid_rot_sim.cli:main",
             "rigid_rot_sim_node = rigid_rot_sim.ros.node:main",
+            "rigid-rot-controller = rigid_rot_sim.ros.controller:main",
         ],
     },
 )

@@ -66,6 +66,7 @@ from rigid_rot_sim.scene.scene import load_scene
 from rigid_rot_sim.run.simulator import Simulator
 from rigid_rot_sim.ros import simulation_services
 from rigid_rot_sim.ros.inputs import Rejections, TorqueInputs
+from rigid_rot_sim.ros.lockstep import NodeLockstep, declare_lockstep_parameters, lockstep_from_parameters, timer_period
 from rigid_rot_sim.ros.outputs import Outputs
 from rigid_rot_sim.ros.parameters import (
     USE_SIM_TIME_REFUSAL,
@@ -101,6 +102,7 @@ class RigidRotSimNode(Node):
             raise ValueError(USE_SIM_TIME_REFUSAL)
         scene = load_scene(resolve_scene(scene_path))  # SceneError names the file, key and problem
         declare_parameters(self, scene)
+        declare_lockstep_parameters(self, scene)
         settings = read_settings(self, scene)
         self.scene = scene = settings.scene
         self.sim = sim = Simulator(scene, method=settings.integrator, dt=settings.dt)
@@ -115,6 +117,14 @@ class RigidRotSimNode(Node):
                              Pacer(settings.real_time_factor), settings.duration, observers=[self.outputs])
         rejections = Rejections(self, sim, self.outputs)
         self.inputs = TorqueInputs(self, sim, scene, settings.command_depth, rejections, built, left_out)
+        self.lockstep: NodeLockstep | None = None
+        lockstep = lockstep_from_parameters(self, scene, sim.dt)
+        if lockstep is not None:
+            self.lockstep = NodeLockstep(self, lockstep, self.run, self.timer_callback)
+            self.inputs.listeners.append(self.lockstep)  # wakes the run when a turn is answered
+            built.insert(0, self.lockstep.describe())
+        else:
+            left_out.append("lockstep (commands act when they arrive)")
         if scene.schedules:
             built.append(f"{len(scene.schedules)} torque schedule(s)")
         if scene.gravity is None:
@@ -139,7 +149,8 @@ class RigidRotSimNode(Node):
             sim.pause(settings.start_paused)
             self.run.pacer.anchor(sim.t)
             # steady clock: the pacing never depends on /clock, which this node itself publishes
-            self.timer = self.create_timer(self.run.pacer.tick_period(sim.dt), self.timer_callback,
+            period = self.run.pacer.tick_period(sim.dt) if self.lockstep is None else timer_period(self.run, sim.dt)
+            self.timer = self.create_timer(period, self.timer_callback,
                                            clock=SteadyClock(clock_type=ClockType.STEADY_TIME))
             self.parameter_callbacks.attach(self.run, self.timer)
             log.info(
@@ -180,7 +191,11 @@ class RigidRotSimNode(Node):
 
     def timer_callback(self) -> None:
         try:
-            self.report_progress(self.run.tick())
+            if self.lockstep is None:
+                self.report_progress(self.run.tick())
+            else:
+                self.report_progress(self.lockstep.turns.tick(self.run))
+                self.lockstep.after_tick()
         except Exception as exc:  # never out of a callback: the run pauses with the reason, the node serves on
             self.get_logger().error(f"simulation paused: internal error {exc!r} (reset or set_state to continue)")
             self.sim.fail(f"internal error: {exc!r}")
@@ -190,6 +205,8 @@ class RigidRotSimNode(Node):
         log = self.get_logger()
         if progress.falling_behind is not None:
             log.warning(progress.falling_behind, throttle_duration_sec=5.0)
+        if progress.lockstep_timeout is not None:
+            log.warning(progress.lockstep_timeout)
         if progress.failure is not None:
             log.error(f"simulation paused: {progress.failure} (reset or set_state to continue)")
         if progress.finished:

@@ -30,6 +30,7 @@ from pathlib import Path
 from typing import Any, Sequence
 
 from rigid_rot_sim import conversions
+from rigid_rot_sim.run.digest import format_digest
 from rigid_rot_sim.run.observer import SimulationObserver
 from rigid_rot_sim.run.pacing import OutputSchedule
 from rigid_rot_sim.recording import LOG_TIME_BASES
@@ -116,6 +117,8 @@ class NodeRecording(SimulationObserver):
         if not self.active:
             return
         self.file.record_serialized(topic, data)
+        if name == "state":  # the run digest of the last recorded state: the file's `digest` metadata
+            self.last_state_digest = (msg.digest, msg.header.stamp.sec, msg.header.stamp.nanosec)
         if name == self.tf_from and self.sim.step_index % self.tf_period == 0:
             orientation = conversions.quaternion_to_array(msg.orientation if name == "state" else msg.quaternion)
             stamp = msg.header.stamp
@@ -163,11 +166,21 @@ class NodeRecording(SimulationObserver):
             method=method, dt=float(dt), options=dict(options),
         )
 
+    def lockstep_timeout(self, step: int, reason: str, action: str) -> None:
+        self._event("lockstep_timeout", step, f"{reason} ({action})", reason=reason, action=action)
+
     # ------------------------------------------------------------------ end
 
     def close(self) -> None:
         """Finish the file (idempotent); logs where it is and how to inspect it."""
         if self.file.error is None and self.file.active:
+            digest = getattr(self, "last_state_digest", None)
+            if digest is not None:
+                self.file.add_metadata("digest", {
+                    "digest": format_digest(digest[0]),
+                    "stamp": f"{digest[1]}.{digest[2]:09d}",
+                    "definition": "rigid_rot_sim.run.digest (FNV-1a 64 over the float64 words of every step's t, q, omega)",
+                })
             self.file.close()
             path = self.file.path
             self.logger.info(

@@ -43,7 +43,7 @@ and :meth:`Simulator.set_state` clear the failure and resume a run that the fail
 
 from __future__ import annotations
 
-from typing import Any
+from typing import Any, Callable
 
 from rigid_rot_sim.core import validation
 from rigid_rot_sim.run import advice
@@ -86,6 +86,9 @@ class Simulator:
         #: Told what happens to the run, in order (:class:`SimulationObserver`); add with :meth:`add_observer`.
         self.observers: list[SimulationObserver] = []
         self.paused = False
+        #: Called as ``command_gate(source, stamp)`` for every topic command that passed the checks,
+        #: before it is scheduled; raises CommandRejected to refuse it (lockstep's turns). None: all pass.
+        self.command_gate: Callable[[str, float | None], None] | None = None
         self.failure: str | None = None
         self._paused_by_failure = False
         self.clock = StepClock(validation.positive_scalar("dt", scene.integrator.dt if dt is None else dt))
@@ -188,6 +191,8 @@ class Simulator:
         """
         try:
             values, frame, effective, stamp = self.commands.admit(source, torque, frame_id, stamp, force)
+            if self.command_gate is not None:
+                self.command_gate(source, stamp)
         except CommandRejected as rejected:
             self._report_rejected(rejected, frame_id, torque)
             raise

@@ -24,6 +24,7 @@ from rigid_rot_sim.run import advice
 from rigid_rot_sim.core import quaternion as quat
 from rigid_rot_sim.run.clock import StepClock
 from rigid_rot_sim.run.commands import CommandSchedule
+from rigid_rot_sim.run.digest import DIGEST_SEED, fold_steps
 from rigid_rot_sim.core.dynamics import RigidBody
 from rigid_rot_sim.core.integrators import get_method
 from rigid_rot_sim.core.integrators.base import Integrator, NonFiniteStateError
@@ -34,11 +35,6 @@ from rigid_rot_sim.core.torque import ConstantTorque
 __all__ = ["Stepper"]
 
 _ZERO3 = (0.0, 0.0, 0.0)
-
-#: Methods whose ``advance(n)`` differs in the last bits from n single steps: dop853 lands
-#: on ``t + n * dt`` (one rounding) instead of n additions. Stepped one at a time so that
-#: states do not depend on how the node chunks the run (publish rates, wall clock).
-_STEPWISE_METHODS = frozenset({"dop853"})
 
 #: Largest kinetic energy (J), |L| (kg*m^2/s) and |omega| (rad/s) a state may have: the snapshot's
 #: rotations and drifts of such values stay finite (a NaN compares false: refused too).
@@ -67,6 +63,8 @@ class Stepper:
         self.method = ""
         self.options: dict[str, Any] = {}
         self.step_torque_body: tuple[float, float, float] = _ZERO3
+        #: The run digest (:mod:`~rigid_rot_sim.run.digest`) of every step taken so far.
+        self.digest = DIGEST_SEED
         self._i_min = float(np.min(body.principal_moments))
         self.configure(method, clock.dt, options, first=True)
 
@@ -149,7 +147,8 @@ class Stepper:
         """The integrator's state at the clock's step, as the user sees it (:meth:`Observables.snapshot`)."""
         integrator = self.integrator
         assert integrator is not None
-        return self.observables.snapshot(self.clock.t, self.clock.k, integrator.q, integrator.omega, self.step_torque_body)
+        return self.observables.snapshot(self.clock.t, self.clock.k, integrator.q, integrator.omega, self.step_torque_body,
+                                         self.digest)
 
     def set_command_torque(self) -> None:
         """Give the integrator the commanded torque for the next step (principal frame)."""
@@ -196,11 +195,8 @@ class Stepper:
             chunk = min(chunk, self._steps_within_rotation_limit())
             start = (integrator.t, integrator.q, integrator.omega, integrator.n_steps)
             try:
-                if integrator.name in _STEPWISE_METHODS:
-                    for _ in range(chunk):
-                        integrator.advance(1)
-                else:
-                    integrator.advance(chunk)
+                # every step's state, for the digest (advance_saving equals advance, step for step)
+                q_steps, omega_steps = integrator.advance_saving(chunk, 1)
             except (ArithmeticError, ValueError) as exc:
                 # NonFiniteStateError, or a math error on the way to it (sin(inf), overflow)
                 good = integrator.n_steps - start[3]
@@ -208,6 +204,9 @@ class Stepper:
                 if kept and self._derived_failure() is None:
                     clock.k += good  # the method stopped at its last good step (energy and momentum finite)
                     done += good
+                    # the steps before it are not handed back: the kept state folds in once
+                    self.digest = fold_steps(self.digest, np.array([clock.t]), integrator.q[None, :],
+                                             integrator.omega[None, :])
                 else:
                     integrator.set_state(*start[:3])
                     integrator.n_steps = start[3]
@@ -218,6 +217,8 @@ class Stepper:
                 integrator.set_state(*start[:3])
                 integrator.n_steps = start[3]
                 return done, f"NonFiniteStateError: {reason}"
+            times = clock.t_epoch + (np.arange(clock.k + 1, clock.k + chunk + 1) - clock.k_epoch) * clock.dt
+            self.digest = fold_steps(self.digest, times, q_steps, omega_steps)
             clock.k += chunk
             done += chunk
         return done, None
