@@ -124,20 +124,24 @@ class Lockstep(SimulationObserver):
     def at_turn_boundary(self) -> bool:
         return self.sim.step_index % self.period_steps == 0
 
-    def open_turn(self) -> None:
-        """The run is at a turn boundary: wait for that turn's answers from now."""
-        self.open_step = self.sim.step_index
-        self.answered = set()
-        self.waiting_since = self.sent_at = self.clock()
+    def _sync(self) -> None:
+        """Start the bookkeeping of the turn the run stands on (once per turn; keeps early answers)."""
+        if self.open_step != self.sim.step_index:
+            self.open_step = self.sim.step_index
+            self.answered = set()
+            self.waiting_since = self.sent_at = self.clock()
 
     def close_turn(self) -> None:
+        """Forget the open turn (reset, set_state): the boundary the run stands on opens anew."""
         self.open_step = None
         self.answered = set()
+        self._done_step = None
 
     @property
     def waiting(self) -> bool:
-        """A turn is open at the current step."""
-        return self.open_step is not None and self.open_step == self.sim.step_index
+        """The run stands on a turn boundary whose turn is not done: it waits for answers."""
+        sim = self.sim
+        return self.at_turn_boundary() and sim.step_index != self._done_step and sim.failure is None
 
     def missing(self) -> list[str]:
         """The inputs that have not answered the open turn yet."""
@@ -172,14 +176,9 @@ class Lockstep(SimulationObserver):
     def finish_turn(self) -> None:
         """The open turn is done (answered or held): the run may go on."""
         self.turns += 1
-        self._done_step = self.open_step
-        self.close_turn()
-
-    def _open_if_due(self, run: "RunDriver") -> None:
-        sim = self.sim
-        if (not self.waiting and self.at_turn_boundary() and sim.step_index != self._done_step
-                and not run.finished and sim.failure is None):
-            self.open_turn()
+        self._done_step = self.sim.step_index
+        self.open_step = None
+        self.answered = set()
 
     def tick(self, run: "RunDriver") -> Progress:
         """One tick of a lockstep run (the node's timer, or as soon as a turn is answered).
@@ -191,9 +190,9 @@ class Lockstep(SimulationObserver):
         sim = self.sim
         if run.finished:
             return Progress()
-        self._open_if_due(run)
         note = None
         if self.waiting:
+            self._sync()
             decision = self.decide()
             if decision is Decision.RESEND:
                 self.resends += 1
@@ -213,6 +212,7 @@ class Lockstep(SimulationObserver):
                 note = f"{note}: {action}"
                 if decision is Decision.PAUSE:
                     sim.pause(True)
+                    self._was_paused = True  # on resume the turn waits a whole timeout again
                     return Progress(lockstep_timeout=note)
             self.finish_turn()
         if sim.paused:
@@ -222,7 +222,8 @@ class Lockstep(SimulationObserver):
         stop = self.next_turn_step() if target is None else min(target, self.next_turn_step())
         progress = run.run(stop, now + MAX_TICK_WALL)
         progress.lockstep_timeout = note
-        self._open_if_due(run)
+        if self.waiting:
+            self._sync()  # the timeout counts from the publication of the turn's state
         return progress
 
     # ------------------------------------------------------------------ the command gate
@@ -243,6 +244,7 @@ class Lockstep(SimulationObserver):
                 f"lockstep: no turn is open at t = {t:.9g} s (turns every {self.spec.period:g} s; "
                 "answer the state of a turn with its stamp)",
             )
+        self._sync()
         turn = k // self.period_steps
         if stamp is None:
             stamp = 0.0  # a zero stamp reaches here as None: the stamp of turn 0
@@ -261,8 +263,6 @@ class Lockstep(SimulationObserver):
 
     def reset(self, step: int) -> None:
         self.close_turn()
-        self._done_step = None
 
     def state_set(self, step: int, orientation: Any, angular_velocity: Any) -> None:
         self.close_turn()
-        self._done_step = None
