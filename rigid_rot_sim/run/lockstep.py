@@ -149,21 +149,21 @@ class Lockstep(SimulationObserver):
 
     def decide(self) -> Decision:
         """What the open turn comes to now (call only while :attr:`waiting`)."""
+        now = self.clock()
         if self.sim.paused:
             self._was_paused = True
-            return Decision.WAIT
-        now = self.clock()
-        if self._was_paused:  # resumed: the timeout counts from now
-            self._was_paused = False
-            self.waiting_since = now
-        if not self.missing():
-            return Decision.RELEASE
-        if now - self.waiting_since < self.timeout:
-            if not self.answered and now - self.sent_at >= min(RESEND_WALL, self.timeout / 4):
-                self.sent_at = now
-                return Decision.RESEND
-            return Decision.WAIT
-        return Decision.PAUSE if self.on_timeout == "pause" else Decision.HOLD
+        else:
+            if self._was_paused:  # resumed: the timeout counts from now
+                self._was_paused = False
+                self.waiting_since = now
+            if not self.missing():
+                return Decision.RELEASE
+            if now - self.waiting_since >= self.timeout:
+                return Decision.PAUSE if self.on_timeout == "pause" else Decision.HOLD
+        if not self.answered and now - self.sent_at >= min(RESEND_WALL, self.timeout / 4):
+            self.sent_at = now  # also while paused: a controller may answer a paused turn
+            return Decision.RESEND
+        return Decision.WAIT
 
     def timeout_reason(self) -> str:
         """Why the open turn timed out (for ~/sim_events, the log and Simulator.fail)."""
