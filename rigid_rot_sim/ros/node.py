@@ -211,6 +211,8 @@ class RigidRotSimNode(Node):
             log.error(f"simulation paused: {progress.failure} (reset or set_state to continue)")
         if progress.finished:
             log.info(f"duration reached: t = {self.sim.t:.9g} s after {self.sim.step_index} steps; stopping")
+            if self.lockstep is not None:
+                log.info(self.lockstep.turns.summary())
 
     def flush_publishers(self, timeout: float = 1.0) -> None:
         """Wait (at most ``timeout`` s each) until reliable subscribers acknowledged what was published."""

@@ -113,6 +113,14 @@ class Lockstep(SimulationObserver):
         self.turns = 0
         self.timeouts = 0
         self.resends = 0
+        self.first_released = 0.0  # wall time the first turn was released
+
+    def summary(self) -> str:
+        """Turns done and their pace since the first was released (for the log at the end of a run)."""
+        wall = self.clock() - self.first_released
+        pace = f", {self.turns / wall:.0f} turns/s, {self.turns * self.spec.period / wall:.1f}x real time" if wall > 0 else ""
+        return (f"lockstep: {self.turns} turns in {wall:.3f} s of wall time since the first{pace}; "
+                f"{self.timeouts} timed out, {self.resends} states sent again")
 
     # ------------------------------------------------------------------ turns
 
@@ -175,6 +183,8 @@ class Lockstep(SimulationObserver):
 
     def finish_turn(self) -> None:
         """The open turn is done (answered or held): the run may go on."""
+        if self.turns == 0:
+            self.first_released = self.clock()
         self.turns += 1
         self._done_step = self.sim.step_index
         self.open_step = None
