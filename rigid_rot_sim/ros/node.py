@@ -42,6 +42,12 @@ batches of at most ``MAX_TICK_WALL`` wall time per tick. The states do not depen
 or on the publish rates (see the Simulator's determinism notes). The timer runs on the
 steady clock: the node is the source of sim time (/clock), so ``use_sim_time`` true is
 refused (at start-up and at run time).
+
+Lockstep (the scene's ``lockstep`` section or the read-only ``lockstep.*`` parameters): the
+run waits at every turn for the controllers' commands stamped with the turn's time
+(:mod:`rigid_rot_sim.run.lockstep` has the contract, :mod:`.lockstep` the wiring, docs/lockstep.md
+the user's view); the timer then only decides timeouts and pacing, a guard condition wakes the
+run the moment a turn is answered. ``dt`` is fixed in lockstep.
 """
 
 from __future__ import annotations

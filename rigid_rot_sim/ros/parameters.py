@@ -294,6 +294,8 @@ class ParameterCallbacks:
             if "integrator" in values or "dt" in values:
                 method = values.get("integrator", self.node.get_parameter("integrator").value)
                 dt = values.get("dt", sim.dt)
+                if dt != sim.dt and getattr(self.node, "lockstep", None) is not None:
+                    raise ValueError("dt is fixed in lockstep (the turns are whole steps of it); restart to change it")
                 if not isinstance(dt, float) or not (math.isfinite(dt) and dt > 0.0):
                     raise ValueError(f"dt must be a finite number > 0 s, got {dt!r}")
                 sim.check_integrator(method, dt)
