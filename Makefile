@@ -39,7 +39,10 @@ PY_PINS := \
 	jsonschema==4.26.0
 # Sweeps: dask.distributed is the engine (local cluster or `dask scheduler`/`dask worker`), Parquet output.
 SWEEP_PINS := dask==2026.8.0 distributed==2026.8.0 pyarrow==26.0.1
-TEST_PINS := pytest==9.2.0 hypothesis==6.170.15 rosbags==0.11.9
+# The viewer extra (pip install rigid_rot_sim[viewer]): Foxglove's SDK, a live WebSocket server without ROS.
+VIEWER_PINS := foxglove-sdk==0.30.3
+# websockets: the tests' Foxglove ws-protocol client.
+TEST_PINS := pytest==9.2.0 hypothesis==6.170.15 rosbags==0.11.9 websockets==15.0.1
 
 # The compiled kernels are built from these (rigid_rot_sim/core/jit.py keys their cache on them).
 CORE_SOURCES := $(shell find rigid_rot_sim/core -name '*.py' 2>/dev/null)
@@ -153,7 +156,7 @@ $(VPY):
 # Rewritten only when the pins change, so that its timestamp drives the pip step.
 $(STAMPS)/requirements.txt: FORCE | $(VPY)
 	@mkdir -p $(STAMPS)
-	@printf '%s\n' $(ROS_PINS) $(PY_PINS) $(SWEEP_PINS) $(TEST_PINS) > $@.new
+	@printf '%s\n' $(ROS_PINS) $(PY_PINS) $(SWEEP_PINS) $(VIEWER_PINS) $(TEST_PINS) > $@.new
 	@if cmp -s $@.new $@; then rm $@.new; else mv $@.new $@; fi
 
 $(STAMPS)/pip: $(STAMPS)/requirements.txt

@@ -64,11 +64,11 @@ def steps_per_second(method: str, seconds: float) -> tuple[float, int]:
     executor.add_node(node)
     try:
         executor.spin_once(timeout_sec=0.1)
-        k0, t0 = node.sim.step_index, time.perf_counter()
+        k0, t0 = node.run.sim.step_index, time.perf_counter()
         while time.perf_counter() - t0 < seconds:
             executor.spin_once(timeout_sec=0.1)
         elapsed = time.perf_counter() - t0
-        steps = node.sim.step_index - k0
+        steps = node.run.sim.step_index - k0
         return steps / elapsed, steps
     finally:
         executor.shutdown()
@@ -118,8 +118,8 @@ def command_latency(n_commands: int, method: str) -> None:
     context, node = make_node("torque_driven", method, real_time_factor=1.0, **{"rates.state": 1000.0})
     arrivals: dict[float, float] = {}
     latencies: list[float] = []
-    received = node.inputs.torque_callback
-    state_publisher = node.outputs.publishers["state"]
+    received = node.run.inputs.torque_callback
+    state_publisher = node.run.outputs.publishers["state"]
     publish = state_publisher.publish
 
     def timed_callback(msg, source, topic):
@@ -132,7 +132,7 @@ def command_latency(n_commands: int, method: str) -> None:
         if arrived is not None:
             latencies.append(time.perf_counter() - arrived)
 
-    node.inputs.torque_callback = timed_callback
+    node.run.inputs.torque_callback = timed_callback
     state_publisher.publish = timed_publish
     executor = SingleThreadedExecutor(context=context)
     executor.add_node(node)
@@ -140,12 +140,12 @@ def command_latency(n_commands: int, method: str) -> None:
     try:
         while not arrivals and source.poll() is None:
             executor.spin_once(timeout_sec=0.05)
-        cpu0, wall0, k0 = time.process_time(), time.perf_counter(), node.sim.step_index
+        cpu0, wall0, k0 = time.process_time(), time.perf_counter(), node.run.sim.step_index
         while source.poll() is None:
             executor.spin_once(timeout_sec=0.05)
         wall = time.perf_counter() - wall0
         cpu = (time.process_time() - cpu0) / wall
-        steps = node.sim.step_index - k0
+        steps = node.run.sim.step_index - k0
     finally:
         if source.poll() is None:
             source.terminate()

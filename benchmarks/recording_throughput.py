@@ -159,7 +159,7 @@ def node_rate(sim_seconds: float, record: Path | None) -> float:
     while not node.finished:
         executor.spin_once(timeout_sec=0.1)
     elapsed = time.perf_counter() - start
-    steps = node.sim.step_index
+    steps = node.run.sim.step_index
     executor.shutdown()
     node.destroy_node()
     rclpy.try_shutdown(context=context)

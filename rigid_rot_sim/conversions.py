@@ -29,6 +29,8 @@ from rigid_rot_msgs.msg import HeavyTopState, RejectedCommand, RigidBodyState
 from rigid_rot_msgs.srv import ComputeInertia
 from rosgraph_msgs.msg import Clock
 from sensor_msgs.msg import Imu
+from std_msgs.msg import ColorRGBA
+from visualization_msgs.msg import Marker, MarkerArray
 
 from rigid_rot_sim.core.inertia import MassProperties, principal_orientation
 from rigid_rot_sim.message_fields import (  # noqa: F401 (the readers are part of this module's API)
@@ -37,6 +39,8 @@ from rigid_rot_sim.message_fields import (  # noqa: F401 (the readers are part o
     time_to_seconds,
     vector3_to_array,
 )
+
+from rigid_rot_sim.run.body_view import BOX_COLOR, MOMENTUM_COLOR, OMEGA_COLOR, BodyView
 
 if TYPE_CHECKING:
     from rigid_rot_sim.run.simulator import StateSnapshot
@@ -340,3 +344,39 @@ def snapshot_to_odometry(snapshot: StateSnapshot, world_frame: str, body_frame: 
     msg.pose.covariance = _diagonal(6, [variance] * 6)
     msg.twist.covariance = _diagonal(6, [variance] * 6)
     return msg
+
+
+#: Marker namespace and ids of ``~/markers`` (replaced in place every message).
+MARKER_NAMESPACE = "rigid_rot_sim"
+BOX_MARKER, OMEGA_MARKER, MOMENTUM_MARKER = range(3)
+#: Smallest drawn side, m: a rod's or plate's zero side still renders.
+_MIN_SIDE = 1e-3
+
+
+def _marker(kind: int, marker_id: int, t: float, frame_id: str, color) -> Marker:
+    marker = Marker(type=kind, id=marker_id, ns=MARKER_NAMESPACE, action=Marker.ADD, frame_locked=True)
+    marker.header.stamp = seconds_to_time(t)
+    marker.header.frame_id = frame_id
+    marker.color = ColorRGBA(r=float(color[0]), g=float(color[1]), b=float(color[2]), a=float(color[3]))
+    marker.pose.orientation.w = 1.0
+    return marker
+
+
+def _arrow(marker: Marker, tail, tip, view: BodyView) -> Marker:
+    marker.points = [array_to_point(tail), array_to_point(tip)]
+    marker.scale = Vector3(x=view.shaft_diameter, y=2.0 * view.shaft_diameter, z=view.head_size)
+    return marker
+
+
+def body_markers(view: BodyView, snapshot: StateSnapshot, world_frame: str, body_frame: str) -> MarkerArray:
+    """``~/markers``: the inertia box and omega (body frame), L (world frame); see :mod:`.run.body_view`."""
+    box = _marker(Marker.CUBE, BOX_MARKER, snapshot.t, body_frame, BOX_COLOR)
+    box.pose.position = array_to_point(view.box_center)
+    box.pose.orientation = array_to_quaternion(view.box_orientation)
+    box.scale = array_to_vector3([max(side, _MIN_SIDE) for side in view.box_sides])
+    omega = _arrow(_marker(Marker.ARROW, OMEGA_MARKER, snapshot.t, body_frame, OMEGA_COLOR),
+                   *view.omega_arrow(snapshot.angular_velocity_body), view)
+    momentum = _arrow(_marker(Marker.ARROW, MOMENTUM_MARKER, snapshot.t, world_frame, MOMENTUM_COLOR),
+                      *view.momentum_arrow(snapshot.angular_momentum_world), view)
+    momentum.frame_locked = False
+    return MarkerArray(markers=[box, omega, momentum])

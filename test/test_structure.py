@@ -109,7 +109,7 @@ LAYERS = (
     ("run",),
     ("message_fields", "share"),
     ("recording",),
-    ("conversions",),
+    ("conversions", "viewer"),
     ("ros", "analysis"),
     ("cli",),
 )

@@ -29,7 +29,7 @@ from typing import Sequence
 from rigid_rot_sim.share import ensure_ament_prefix_path
 
 #: Subcommand modules of rigid_rot_sim.cli, in the order ``--help`` lists them.
-SUBCOMMANDS = ["inertia", "report", "stability", "sweep", "bag", "resim", "plot", "replay", "run", "torque"]
+SUBCOMMANDS = ["inertia", "report", "stability", "sweep", "bag", "resim", "plot", "replay", "view", "export", "run", "torque"]
 
 PROG = "rigid-rot"
 

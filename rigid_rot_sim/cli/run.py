@@ -17,6 +17,7 @@ from __future__ import annotations
 
 import argparse
 import os
+from typing import Any
 
 from rigid_rot_sim.cli.argtypes import nonnegative_number, positive_number
 from rigid_rot_sim.cli.ros_args import add_ros_args
@@ -40,6 +41,8 @@ def add_parser(subparsers) -> None:
     parser.add_argument("--record", metavar="OUT.mcap", help="record the run to this MCAP file")
     parser.add_argument("--record-log-time", choices=LOG_TIME_BASES, dest="record_log_time",
                         help="MCAP log times of the recording: sim time (default) or wall clock")
+    parser.add_argument("--foxglove", metavar="[HOST:]PORT",
+                        help="serve the run live to Foxglove (WebSocket, host default 127.0.0.1); needs foxglove-sdk")
     parser.add_argument("--echo", type=positive_number, metavar="PERIOD", help="print the received ~/state every PERIOD s of sim time")
     add_ros_args(parser)
     parser.set_defaults(handler=run)
@@ -47,22 +50,22 @@ def add_parser(subparsers) -> None:
 
 def node_arguments(args: argparse.Namespace) -> list[str]:
     """The argv for the node: ``--ros-args -p name:=value ...`` plus the pass-through arguments."""
-    params = {"scene": resolve_scene(args.scene)}
-    if args.duration is not None:
-        params["duration"] = repr(float(args.duration))
-    if args.real_time_factor is not None:
-        params["real_time_factor"] = repr(float(args.real_time_factor))
-    if args.integrator is not None:
-        params["integrator"] = args.integrator
-    if args.dt is not None:
-        params["dt"] = repr(float(args.dt))
-    if args.record is not None:
-        params["record_path"] = os.path.abspath(args.record)
-    if args.record_log_time is not None:
-        params["record_log_time"] = args.record_log_time
+    from rigid_rot_sim.ros import parameters as p  # the names, from the node's table (imports rclpy)
+
+    options: list[tuple[p.ParamSpec[Any], str | None]] = [
+        (p.SCENE, resolve_scene(args.scene)),
+        (p.DURATION, None if args.duration is None else repr(float(args.duration))),
+        (p.REAL_TIME_FACTOR, None if args.real_time_factor is None else repr(float(args.real_time_factor))),
+        (p.INTEGRATOR, args.integrator),
+        (p.DT, None if args.dt is None else repr(float(args.dt))),
+        (p.RECORD_PATH, None if args.record is None else os.path.abspath(args.record)),
+        (p.RECORD_LOG_TIME, args.record_log_time),
+        (p.FOXGLOVE, args.foxglove),
+    ]
     argv = ["rigid_rot_sim_node", "--ros-args"]
-    for name, value in params.items():
-        argv += ["-p", f"{name}:={value}"]
+    for spec, value in options:
+        if value is not None:
+            argv += ["-p", f"{spec.name}:={value}"]
     # after ours, so that a params file or -p given here overrides the options above
     return argv + list(args.ros_args or [])
 
@@ -79,59 +82,52 @@ def run(args: argparse.Namespace) -> int:
 def _run_with_echo(argv: list[str], period: float) -> int:
     """The node plus a subscriber to its ~/state in one executor, printing every ``period`` s."""
     import rclpy
-    from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
+    from rclpy.node import Node
     from rigid_rot_msgs.msg import RigidBodyState
 
     from rigid_rot_sim import conversions
-    from rigid_rot_sim.ros.node import STARTUP_ERRORS, RigidRotSimNode
+    from rigid_rot_sim.ros.node import STARTUP_ERRORS, RigidRotSimNode, init_ros, run_until_finished
     from rigid_rot_sim.ros.qos import STATE_QOS
 
     try:
-        rclpy.init(args=argv)
+        init_ros(argv)
     except RuntimeError as exc:  # rclpy's RCLError: an unparsable --ros-args rule
         raise ValueError(f"bad ROS arguments: {exc}") from None
-    node = echo = None
-    try:
-        try:
-            node = RigidRotSimNode()
-        except STARTUP_ERRORS as exc:  # printed as one line by rigid-rot's main, exit code 2
-            raise ValueError(str(exc)) from None
+    next_print = [0.0]
+    received = [0]
+    state_topic = ""
+
+    def on_state(msg: RigidBodyState) -> None:
+        received[0] += 1
+        s = conversions.state_to_arrays(msg)
+        if s["t"] + 1e-9 < next_print[0]:
+            return
+        next_print[0] = s["t"] + period
+        q, w = s["orientation"], s["angular_velocity_body"]
+        print(
+            f"t={s['t']:8.3f} s  q=({q[0]:+.4f} {q[1]:+.4f} {q[2]:+.4f} {q[3]:+.4f})  "
+            f"w_body=({w[0]:+.4f} {w[1]:+.4f} {w[2]:+.4f}) rad/s  "
+            f"|L|={float(sum(v * v for v in s['angular_momentum_world'])) ** 0.5:.6f}  "
+            f"E={s['kinetic_energy'] + s['potential_energy']:.6f} J  "
+            f"drift E={s['energy_drift']:+.1e} |L|={s['angular_momentum_drift']:+.1e}",
+            flush=True,
+        )
+
+    def start(nodes: list[Node]) -> RigidRotSimNode:
+        nonlocal state_topic
+        node = RigidRotSimNode()
+        nodes.append(node)
         echo = rclpy.create_node("rigid_rot_echo")
+        nodes.append(echo)
         state_topic = node.resolve_topic_name("~/state")
-        next_print = [0.0]
-        received = [0]
-
-        def on_state(msg: RigidBodyState) -> None:
-            received[0] += 1
-            s = conversions.state_to_arrays(msg)
-            if s["t"] + 1e-9 < next_print[0]:
-                return
-            next_print[0] = s["t"] + period
-            q, w = s["orientation"], s["angular_velocity_body"]
-            print(
-                f"t={s['t']:8.3f} s  q=({q[0]:+.4f} {q[1]:+.4f} {q[2]:+.4f} {q[3]:+.4f})  "
-                f"w_body=({w[0]:+.4f} {w[1]:+.4f} {w[2]:+.4f}) rad/s  "
-                f"|L|={float(sum(v * v for v in s['angular_momentum_world'])) ** 0.5:.6f}  "
-                f"E={s['kinetic_energy'] + s['potential_energy']:.6f} J  "
-                f"drift E={s['energy_drift']:+.1e} |L|={s['angular_momentum_drift']:+.1e}",
-                flush=True,
-            )
-
         echo.create_subscription(RigidBodyState, state_topic, on_state, STATE_QOS)
         print(f"echo: printing {state_topic} every {period:g} s of sim time", flush=True)
-        executor = SingleThreadedExecutor()
-        executor.add_node(node)
-        executor.add_node(echo)
-        while rclpy.ok() and not node.finished:
-            executor.spin_once(timeout_sec=0.1)
-        for _ in range(20):  # let the last states arrive
-            executor.spin_once(timeout_sec=0.01)
+        return node
+
+    try:
+        run_until_finished(start, drain=0.2)  # drain: let the last states arrive
+    except STARTUP_ERRORS as exc:  # printed as one line by rigid-rot's main, exit code 2
+        raise ValueError(str(exc)) from None
+    if state_topic:
         print(f"echo: {received[0]} messages received on {state_topic}", flush=True)
-    except (KeyboardInterrupt, ExternalShutdownException):
-        pass
-    finally:
-        for n in (echo, node):
-            if n is not None:
-                n.destroy_node()
-        rclpy.try_shutdown()
     return 0

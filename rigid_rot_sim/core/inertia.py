@@ -284,3 +284,28 @@ def _mass_properties(mass_array: np.ndarray, position_array: np.ndarray, origin_
             principal_moments, total_mass * float(np.max(np.sum(position_array**2, axis=1)))
         ),
     )
+
+
+#: Longest side, m, of the box drawn for a body whose scene gives no mass (only its proportions are known).
+NOMINAL_BOX_SIZE = 1.0
+
+
+def equivalent_box(principal_moments: Any, mass: float | None = None) -> np.ndarray:
+    """Sides (a, b, c), m, of the uniform box with these principal moments, along the principal axes.
+
+    A uniform box of mass m and sides a, b, c has ``I1 = m (b^2 + c^2) / 12`` (cyclic), so
+    ``a^2 = 6 (I2 + I3 - I1) / m``. Without a mass (None or 0) the proportions are the same and
+    the box is scaled so that its longest side is :data:`NOMINAL_BOX_SIZE`. A side that the
+    triangle inequality makes zero (a rod, a flat plate) stays zero.
+
+    >>> [round(float(s), 12) for s in equivalent_box([5.0, 5.0, 2.0], mass=12.0)]
+    [1.0, 1.0, 2.0]
+    """
+    moments = validation.finite_vector("principal_moments", principal_moments)
+    i1, i2, i3 = moments
+    squares = np.clip(6.0 * np.array([i2 + i3 - i1, i3 + i1 - i2, i1 + i2 - i3]), 0.0, None)
+    if mass:
+        return np.sqrt(squares / mass)
+    sides = np.sqrt(squares)
+    longest = sides.max()
+    return sides * (NOMINAL_BOX_SIZE / longest) if longest > 0.0 else np.full(3, NOMINAL_BOX_SIZE)

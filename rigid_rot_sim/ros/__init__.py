@@ -34,7 +34,7 @@ A torque command's route, top to bottom
    ``~/sim_events`` as a ``torque`` event: what resim replays.
 5. Back in ``torque_callback``: the message as received goes to the input listeners;
    ``NodeRecording.received`` records it on the torque topic.
-6. Later, on the wall-clock timer: ``node.RigidRotSimNode.timer_callback`` ->
+6. Later, on the wall-clock timer: ``node.SceneRun.tick`` ->
    ``run.pacing.RunDriver.tick`` (``Pacer.target_step``: the step due now) ->
    ``RunDriver.run`` -> ``Simulator.advance_to`` -> ``Simulator.advance`` ->
    ``run.stepper.Stepper.advance``: at the command's step ``CommandSchedule.process_due``
@@ -48,5 +48,5 @@ A torque command's route, top to bottom
 
 There is one route: no method or publisher is wrapped, and whether the run is recorded
 only decides whether the recorder is among the observers and listeners
-(``RigidRotSimNode._start_recording``).
+(``SceneRun._start_recording``).
 """

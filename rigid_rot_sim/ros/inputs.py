@@ -17,6 +17,7 @@ from typing import Any, Protocol
 from geometry_msgs.msg import Vector3Stamped, WrenchStamped
 from rclpy.node import Node
 from rclpy.qos import QoSProfile
+from rclpy.subscription import Subscription
 
 from rigid_rot_sim import conversions
 from rigid_rot_sim.core import limits
@@ -67,12 +68,12 @@ class TorqueInputs:
     ``depth``: keep-last depth of the subscriptions (``commands.qos_depth``).
     """
 
-    def __init__(self, node: Node, sim: Simulator, scene: Scene, depth: int, rejections: Rejections,
-                 built: list[str], left_out: list[str]) -> None:
+    def __init__(self, node: Node, sim: Simulator, scene: Scene, depth: int, rejections: Rejections) -> None:
         self.sim = sim
         self.rejections = rejections
         self.listeners: list[ReceivedListener] = []
-        self.subscriptions: list[Any] = []
+        self.subscriptions: list[Subscription] = []
+        self.topic_inputs = scene.topic_inputs
         qos = QoSProfile(depth=depth, reliability=COMMAND_QOS.reliability, durability=COMMAND_QOS.durability)
         for spec in scene.topic_inputs:
             msg_type = WrenchStamped if spec.message_type == "WrenchStamped" else Vector3Stamped
@@ -81,14 +82,22 @@ class TorqueInputs:
                 msg_type, spec.topic, lambda msg, source=spec.topic, topic=topic: self.torque_callback(msg, source, topic), qos
             )
             self.subscriptions.append(subscription)
-            hold = "hold until replaced" if spec.timeout is None else f"zero {spec.timeout:g} s after the last command"
-            built.append(f"torque input {topic} ({spec.message_type}, frame {spec.frame}, {hold}, depth {qos.depth})")
             if spec.message_type == "WrenchStamped":
                 node.get_logger().info(
                     f"{topic}: only wrench.torque acts on the body; a command with a non-zero wrench.force is rejected"
                 )
-        if not scene.topic_inputs:
-            left_out.append("torque subscriptions (no topic input)")
+
+    def describe(self) -> tuple[list[str], list[str]]:
+        """For the start-up line: (what was built, what was left out and why)."""
+        if not self.subscriptions:
+            return [], ["torque subscriptions (no topic input)"]
+        built = []
+        for spec, subscription in zip(self.topic_inputs, self.subscriptions):
+            hold = "hold until replaced" if spec.timeout is None else f"zero {spec.timeout:g} s after the last command"
+            depth = subscription.qos_profile.depth
+            built.append(f"torque input {subscription.topic_name} ({spec.message_type}, frame {spec.frame}, {hold}, "
+                         f"depth {depth})")
+        return built, []
 
     def torque_callback(self, msg: Any, source: str, topic: str) -> None:
         """A command on ``source`` (the scene's topic; ``topic`` fully qualified): to the simulator, or rejected."""

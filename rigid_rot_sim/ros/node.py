@@ -4,8 +4,10 @@ The node wires: parameters (:mod:`.parameters`), outputs (:mod:`.outputs`), torq
 (:mod:`.inputs`), services (:mod:`.services`, :mod:`.simulation_services`) and the
 recording (:mod:`rigid_rot_sim.ros.recording`) around the simulator and the
 run driver that paces it (:mod:`rigid_rot_sim.run.pacing`). It builds only what the scene
-needs and logs one start-up line saying what was built and what was left out. Without a
-``scene`` parameter it serves ``~/compute_inertia`` only.
+needs (a :class:`SceneRun`) and logs one start-up line saying what was built and what was
+left out. Without a ``scene`` parameter it serves ``~/compute_inertia`` only (``node.run``
+is None). :func:`run_until_finished` is the one loop that runs it, for :func:`main` and for
+``rigid-rot run --echo``.
 
 Topics (names relative to the node; QoS in the README, section "The simulation node")
 -----------------------------------------------------------------------------------
@@ -15,8 +17,7 @@ world frame), ~/mass_properties (geometry_msgs/InertiaStamped, transient local, 
 ~/top_state (rigid_rot_msgs/HeavyTopState, gravity scenes), ~/rejected
 (rigid_rot_msgs/RejectedCommand), ~/imu (sensor_msgs/Imu) and ~/odom (nav_msgs/Odometry)
 when the scene asks for them, /tf (world -> body) and /tf_static (body -> principal
-frame, where it differs from the body frame), both where tf2_msgs imports (``make setup``
-builds it into the venv), /clock (sim time). QoS: rigid_rot_sim.ros.qos.
+frame, where it differs from the body frame), /clock (sim time). QoS: rigid_rot_sim.ros.qos.
 Every header stamp is sim time. Frame names: the ``world_frame`` / ``body_frame``
 parameters (default: the scene's ``frames``, REP 105 ``odom`` / ``base_link``), used by
 every output, /tf and the recording. Torque inputs: the scene's topics (WrenchStamped or
@@ -55,179 +56,232 @@ from __future__ import annotations
 import signal
 import sys
 import threading
-from typing import Any
+from collections.abc import Callable
+from typing import TYPE_CHECKING, Any
 
 import rclpy
 from rclpy.clock import Clock as SteadyClock
 from rclpy.clock_type import ClockType
+from rclpy.duration import Duration
 from rclpy.exceptions import NameValidationException, ParameterException
 from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
-from rclpy.impl.implementation_singleton import rclpy_implementation as _rclpy
 from rclpy.node import Node
 from rclpy.signals import SignalHandlerOptions
 
 from rigid_rot_sim.core import limits
-from rigid_rot_sim.run.pacing import OutputSchedule, Pacer, Progress, RunDriver
-from rigid_rot_sim.scene.scene import load_scene
-from rigid_rot_sim.run.simulator import Simulator
 from rigid_rot_sim.ros import simulation_services
 from rigid_rot_sim.ros.inputs import Rejections, TorqueInputs
 from rigid_rot_sim.ros.lockstep import NodeLockstep, declare_lockstep_parameters, lockstep_from_parameters, timer_period
 from rigid_rot_sim.ros.outputs import Outputs
-from rigid_rot_sim.ros.parameters import (
-    USE_SIM_TIME_REFUSAL,
-    ParameterCallbacks,
-    accept_integers_for_doubles,
-    declare_parameters,
-    declare_scene_parameter,
-    read_settings,
-)
+from rigid_rot_sim.ros import parameters as params
+from rigid_rot_sim.ros.parameters import RunParameters, declare_parameters, declare_scene_parameter, read_settings
+from rigid_rot_sim.ros.qos import output_qos
 from rigid_rot_sim.ros.services import InertiaService, RunServices
+from rigid_rot_sim.run.pacing import OutputSchedule, Pacer, Progress, RunDriver
+from rigid_rot_sim.run.simulator import Simulator
+from rigid_rot_sim.scene.scene import OutputQos, Scene, load_scene
 from rigid_rot_sim.share import ensure_ament_prefix_path, resolve_scene
+
+if TYPE_CHECKING:  # imported when recording only: the mcap packages are optional at run time
+    from rigid_rot_sim.ros.foxglove_live import FoxgloveLive
+    from rigid_rot_sim.ros.recording import NodeRecording
 
 NODE_NAME = "rigid_rot_sim"
 
 
-class RigidRotSimNode(Node):
-    """Node ``rigid_rot_sim``; keyword arguments go to :class:`rclpy.node.Node`."""
+class SceneRun:
+    """A scene being simulated by ``node``: the simulator, its run driver and the ROS parts around them.
 
-    def __init__(self, **kwargs: Any) -> None:
-        super().__init__(NODE_NAME, **kwargs)
-        log = self.get_logger()
-        accept_integers_for_doubles(self)  # `ros2 param set ... real_time_factor 2` stores 2.0
-        self.sim: Simulator | None = None
-        self.run: RunDriver | None = None
-        self.recording = None
-        self.parameter_callbacks = ParameterCallbacks(self)  # refuses use_sim_time, with or without a scene
-        self.inertia_service = InertiaService(self)
-        scene_path = declare_scene_parameter(self)
-        if not scene_path:
-            log.info("no scene parameter: serving ~/compute_inertia only (rigid-rot run SCENE starts a simulation)")
-            return
-        if self.get_parameter("use_sim_time").value is True:
-            raise ValueError(USE_SIM_TIME_REFUSAL)
-        scene = load_scene(resolve_scene(scene_path))  # SceneError names the file, key and problem
-        declare_parameters(self, scene)
-        declare_lockstep_parameters(self, scene)
-        settings = read_settings(self, scene)
-        self.scene = scene = settings.scene
-        self.sim = sim = Simulator(scene, method=settings.integrator, dt=settings.dt)
-        sim.max_torque = settings.max_torque
-        auto = ", auto" if settings.integrator == "auto" else ""
-        built: list[str] = [f"integrator {sim.method} (dt {sim.dt:g} s{auto})"]
-        left_out: list[str] = []
+    Built only when the node has a scene; declares the node's parameters (:mod:`.parameters`)
+    with the scene's values as defaults.
+    """
 
-        self.outputs = Outputs(self, scene, settings.rates, settings.state_qos, settings.ground_truth_variance,
-                               built, left_out)
-        self.run = RunDriver(sim, OutputSchedule.from_rates(self.outputs.rates, sim.dt),
-                             Pacer(settings.real_time_factor), settings.duration, observers=[self.outputs])
-        rejections = Rejections(self, sim, self.outputs)
-        self.inputs = TorqueInputs(self, sim, scene, settings.command_depth, rejections, built, left_out)
+    def __init__(self, node: Node, scene: Scene) -> None:
+        self.logger = node.get_logger()
+        declare_parameters(node, scene)
+        declare_lockstep_parameters(node, scene)
+        settings = read_settings(node, scene)
+        self.scene = scene = settings.scene  # with the frame parameters' names
+        self.sim = sim = Simulator(scene, method=settings[params.INTEGRATOR], dt=settings[params.DT])
+        sim.max_torque = settings[params.MAX_TORQUE]
+        state_qos = output_qos(OutputQos(settings[params.QOS_RELIABILITY], settings[params.QOS_DEPTH]))
+        self.outputs = Outputs(node, scene, settings.rates(), state_qos, settings[params.GROUND_TRUTH_VARIANCE])
+        schedule = OutputSchedule.from_rates(self.outputs.rates, sim.dt)
+        pacer = Pacer(settings[params.REAL_TIME_FACTOR])
+        self.driver = RunDriver(sim, schedule, pacer, settings[params.DURATION] or None, observers=[self.outputs])
+        rejections = Rejections(node, sim, self.outputs)
+        self.inputs = TorqueInputs(node, sim, scene, settings[params.COMMAND_DEPTH], rejections)
         self.lockstep: NodeLockstep | None = None
-        lockstep = lockstep_from_parameters(self, scene, sim.dt)
+        lockstep = lockstep_from_parameters(node, scene, sim.dt)
         if lockstep is not None:
-            self.lockstep = NodeLockstep(self, lockstep, self.run, self.timer_callback)
-            self.inputs.listeners.append(self.lockstep)  # wakes the run when a turn is answered
-            built.insert(0, self.lockstep.describe())
-        else:
-            left_out.append("lockstep (commands act when they arrive)")
-        if scene.schedules:
-            built.append(f"{len(scene.schedules)} torque schedule(s)")
-        if scene.gravity is None:
-            left_out.append("gravity (no potential energy, no ~/top_state)")
-        else:
-            built.append(f"gravity {scene.gravity.acceleration:g} m/s^2 about the pivot")
-        self.run_services = RunServices(self, self.run, scene, rejections, self.report_progress)
-        self.simulation_services = None
-        if simulation_services.AVAILABLE:
-            self.simulation_services = simulation_services.SimulationServices(self, self.run_services)
-            built.append("simulation_interfaces services (~/step_simulation, ~/reset_simulation, ...)")
-        else:
-            left_out.append("simulation_interfaces services (package not installed)")
-        if settings.record_path:
-            self.recording = self._start_recording(settings.record_path, settings.record_log_time)
-            built.append(f"recording to {settings.record_path} (log time: {settings.record_log_time})"
-                         if self.recording else "no recording (see the error above)")
-        else:
-            left_out.append("recorder (nothing recorded)")
-
+            self.lockstep = NodeLockstep(node, lockstep, self.driver, self.tick)
+            self.inputs.listeners.append(self.lockstep)  # wakes the run the moment a turn is answered
+        self.services = RunServices(node, self.driver, scene, rejections, self.report_progress)
+        self.simulation_services = (simulation_services.SimulationServices(node, self.services)
+                                    if simulation_services.AVAILABLE else None)
+        self.recording: NodeRecording | None = None
+        if settings[params.RECORD_PATH]:
+            self.recording = self._start_recording(node, settings[params.RECORD_PATH], settings[params.RECORD_LOG_TIME])
+        self.foxglove: FoxgloveLive | None = None
+        self.foxglove_words = ""
         try:
-            sim.pause(settings.start_paused)
-            self.run.pacer.anchor(sim.t)
+            self.foxglove, self.foxglove_words = self._start_foxglove(node, settings[params.FOXGLOVE])
+            sim.pause(settings[params.START_PAUSED])
+            self.driver.pacer.anchor(sim.t)
             # steady clock: the pacing never depends on /clock, which this node itself publishes
-            period = self.run.pacer.tick_period(sim.dt) if self.lockstep is None else timer_period(self.run, sim.dt)
-            self.timer = self.create_timer(period, self.timer_callback,
+            period = self.driver.pacer.tick_period(sim.dt) if self.lockstep is None else timer_period(self.driver, sim.dt)
+            self.timer = node.create_timer(period, self.tick,
                                            clock=SteadyClock(clock_type=ClockType.STEADY_TIME))
-            self.parameter_callbacks.attach(self.run, self.timer)
-            log.info(
-                f"scene {scene.name!r} ({scene.source}), rtf {settings.real_time_factor:g}, "
-                f"{'paused, ' if sim.paused else ''}"
-                f"duration {'unbounded' if settings.duration is None else f'{settings.duration:g} s'}; "
-                f"built: {'; '.join(built)}; left out: {'; '.join(left_out) or 'nothing'}"
-            )
+            self.parameters = RunParameters(node, self.driver, self.timer)
+            self.logger.info(self._startup_line(settings[params.INTEGRATOR] == "auto", settings[params.RECORD_PATH],
+                                                settings[params.RECORD_LOG_TIME]))
             for warning in sim.warnings():
-                log.warning(warning)
+                self.logger.warning(warning)
             self.outputs.publish_latched(sim.t)
-            self.run.publish_due(force=True)
+            self.driver.publish_due(force=True)
         except BaseException:  # e.g. Ctrl-C / SIGTERM while starting (main's start-up handler)
-            if self.recording is not None:
-                self.recording.close()  # the recording started above ends as a complete file
+            self.close()  # the recording started above ends as a complete file
             raise
 
-    def _start_recording(self, path: str, log_time: str) -> Any:
+    def _start_recording(self, node: Node, path: str, log_time: str) -> NodeRecording | None:
         """The recording, an observer of the simulator and a listener of the outputs and inputs;
         None (error logged) when it cannot start: the run goes on."""
         try:
             from rigid_rot_sim.ros.recording import NodeRecording  # imported only when recording
         except ImportError as exc:  # the mcap packages are optional at run time
             missing = (exc.name or "").split(".")[0] or str(exc)
-            self.get_logger().error(f"recording disabled: {missing} is not installed (pip install mcap mcap-ros2-support)")
+            self.logger.error(f"recording disabled: {missing} is not installed (pip install mcap mcap-ros2-support)")
             return None
-        recording = NodeRecording.start(self, self.sim, self.outputs, self.inputs.subscriptions, path, log_time)
+        recording = NodeRecording.start(node, self.sim, self.outputs, self.inputs.subscriptions, path, log_time)
         if recording is not None:
             self.sim.add_observer(recording)  # events: commands accepted, torques applied, set_state, ...
             self.outputs.listeners.append(recording)  # every message published, as the bytes published
             self.inputs.listeners.append(recording)  # every torque command as received
         return recording
 
+    def _start_foxglove(self, node: Node, address: str) -> tuple[FoxgloveLive | None, str]:
+        """The Foxglove live server, a listener of the outputs (None without an address or foxglove-sdk)."""
+        if not address:
+            return None, ""
+        from rigid_rot_sim.ros import foxglove_live
+
+        name = node.get_namespace().rstrip("/") + "/" + node.get_name()
+        try:
+            live, words = foxglove_live.start(address, self.sim, self.outputs.body_view, self.scene.frames, name)
+        except (OSError, RuntimeError) as exc:  # the port is taken, the host is not ours
+            raise ValueError(f"foxglove: cannot serve on {address}: {exc}") from None
+        if live is not None:
+            self.outputs.listeners.append(live)  # every message published, as the bytes published
+        return live, words
+
+    def _startup_line(self, auto: bool, record_path: str, log_time: str) -> str:
+        """What was built and what was left out (and why), in one line."""
+        sim, scene, pacer, duration = self.sim, self.scene, self.driver.pacer, self.driver.duration
+        built = [f"integrator {sim.method} (dt {sim.dt:g} s{', auto' if auto else ''})"]
+        left_out: list[str] = []
+        if self.lockstep is not None:
+            built.insert(0, self.lockstep.describe())
+        else:
+            left_out.append("lockstep (commands act when they arrive)")
+        for part_built, part_left_out in (self.outputs.describe(), self.inputs.describe()):
+            built += part_built
+            left_out += part_left_out
+        if scene.schedules:
+            built.append(f"{len(scene.schedules)} torque schedule(s)")
+        if scene.gravity is None:
+            left_out.append("gravity (no potential energy, no ~/top_state)")
+        else:
+            built.append(f"gravity {scene.gravity.acceleration:g} m/s^2 about the pivot")
+        if self.simulation_services is not None:
+            built.append("simulation_interfaces services (~/step_simulation, ~/reset_simulation, ...)")
+        else:
+            left_out.append("simulation_interfaces services (package not installed)")
+        if record_path:
+            built.append(f"recording to {record_path} (log time: {log_time})" if self.recording
+                         else "no recording (see the error above)")
+        else:
+            left_out.append("recorder (nothing recorded)")
+        if self.foxglove_words:
+            (built if self.foxglove is not None else left_out).append(self.foxglove_words)
+        return (
+            f"scene {scene.name!r} ({scene.source}), rtf {pacer.real_time_factor:g}, {'paused, ' if sim.paused else ''}"
+            f"duration {'unbounded' if duration is None else f'{duration:g} s'}; "
+            f"built: {'; '.join(built)}; left out: {'; '.join(left_out) or 'nothing'}"
+        )
+
+    @property
+    def finished(self) -> bool:
+        """The run reached its duration."""
+        return self.driver.finished
+
+    def tick(self) -> None:
+        """The timer callback: advance the run by one slice and publish what is due."""
+        try:
+            if self.lockstep is None:
+                self.report_progress(self.driver.tick())
+            else:
+                self.report_progress(self.lockstep.turns.tick(self.driver))
+                self.lockstep.after_tick()
+        except Exception as exc:  # never out of a callback: the run pauses with the reason, the node serves on
+            self.logger.error(f"simulation paused: internal error {exc!r} (reset or set_state to continue)")
+            self.sim.fail(f"internal error: {exc!r}")
+
+    def report_progress(self, progress: Progress) -> None:
+        """Log what a slice of the run came to: falling behind, a failure, the duration reached."""
+        if progress.falling_behind is not None:
+            self.logger.warning(progress.falling_behind, throttle_duration_sec=5.0)
+        if progress.lockstep_timeout is not None:
+            self.logger.warning(progress.lockstep_timeout)
+        if progress.failure is not None:
+            self.logger.error(f"simulation paused: {progress.failure} (reset or set_state to continue)")
+        if progress.finished:
+            self.logger.info(f"duration reached: t = {self.sim.t:.9g} s after {self.sim.step_index} steps; stopping")
+            if self.lockstep is not None:
+                self.logger.info(self.lockstep.turns.summary())
+
+    def close(self) -> None:
+        """Close the recording (summary and indexes: the file is complete) and the live server; idempotent."""
+        if self.recording is not None:
+            self.recording.close()
+        if self.foxglove is not None:
+            self.foxglove.close()
+
+
+class RigidRotSimNode(Node):
+    """Node ``rigid_rot_sim``; keyword arguments go to :class:`rclpy.node.Node`.
+
+    ``run``: the :class:`SceneRun` of the ``scene`` parameter; None without one (the node then
+    serves ``~/compute_inertia`` only).
+    """
+
+    def __init__(self, **kwargs: Any) -> None:
+        super().__init__(NODE_NAME, **kwargs)
+        params.accept_integers_for_doubles(self)  # `ros2 param set ... real_time_factor 2` stores 2.0
+        params.refuse_use_sim_time(self)  # with or without a scene
+        self.inertia_service = InertiaService(self)
+        self.run: SceneRun | None = None
+        scene_path = declare_scene_parameter(self)
+        if not scene_path:
+            self.get_logger().info(
+                "no scene parameter: serving ~/compute_inertia only (rigid-rot run SCENE starts a simulation)")
+            return
+        if self.get_parameter("use_sim_time").value is True:
+            raise ValueError(params.USE_SIM_TIME_REFUSAL)
+        self.run = SceneRun(self, load_scene(resolve_scene(scene_path)))  # SceneError names the file, key, problem
+
     @property
     def finished(self) -> bool:
         """The run reached its duration."""
         return self.run is not None and self.run.finished
 
-    def timer_callback(self) -> None:
-        try:
-            if self.lockstep is None:
-                self.report_progress(self.run.tick())
-            else:
-                self.report_progress(self.lockstep.turns.tick(self.run))
-                self.lockstep.after_tick()
-        except Exception as exc:  # never out of a callback: the run pauses with the reason, the node serves on
-            self.get_logger().error(f"simulation paused: internal error {exc!r} (reset or set_state to continue)")
-            self.sim.fail(f"internal error: {exc!r}")
-
-    def report_progress(self, progress: Progress) -> None:
-        """Log what a slice of the run came to: falling behind, a failure, the duration reached."""
-        log = self.get_logger()
-        if progress.falling_behind is not None:
-            log.warning(progress.falling_behind, throttle_duration_sec=5.0)
-        if progress.lockstep_timeout is not None:
-            log.warning(progress.lockstep_timeout)
-        if progress.failure is not None:
-            log.error(f"simulation paused: {progress.failure} (reset or set_state to continue)")
-        if progress.finished:
-            log.info(f"duration reached: t = {self.sim.t:.9g} s after {self.sim.step_index} steps; stopping")
-            if self.lockstep is not None:
-                log.info(self.lockstep.turns.summary())
-
     def flush_publishers(self, timeout: float = 1.0) -> None:
         """Wait (at most ``timeout`` s each) until reliable subscribers acknowledged what was published."""
         for publisher in self.publishers:
-            publisher.wait_for_all_acked(rclpy.duration.Duration(seconds=timeout))
+            publisher.wait_for_all_acked(Duration(seconds=timeout))
 
     def destroy_node(self) -> None:
-        if self.recording is not None:
-            self.recording.close()  # summary and indexes: the file is complete (also on SIGINT / SIGTERM)
+        if self.run is not None:
+            self.run.close()  # the recording's file is complete (also on SIGINT / SIGTERM)
         super().destroy_node()
 
 
@@ -244,6 +298,56 @@ def _interrupt(signum: int, frame: Any) -> None:
     raise KeyboardInterrupt
 
 
+def init_ros(args: list[str] | None) -> None:
+    """``rclpy.init`` without rclpy's signal handlers: while nodes start, Ctrl-C / SIGTERM stop them at once.
+
+    RuntimeError (rclpy's RCLError) for ROS arguments rcl cannot parse.
+    """
+    rclpy.init(args=args, signal_handler_options=SignalHandlerOptions.NO)
+    for signum in (signal.SIGINT, signal.SIGTERM):
+        signal.signal(signum, _interrupt)
+
+
+def run_until_finished(start: Callable[[list[Node]], RigidRotSimNode], drain: float = 0.0) -> None:
+    """Start the nodes and spin them in one executor until the run finishes, Ctrl-C, SIGTERM or shutdown.
+
+    ``start`` creates the nodes, adding each to the list it is given as soon as it exists,
+    and returns the simulation node. Once they are started, SIGINT and SIGTERM only ask the
+    loop to stop: the nodes (and the recording) then close here, never interrupted in a
+    callback or a file write. When the run reached its duration, reliable subscribers get
+    what was published (at most 1 s per publisher) and the executor spins ``drain`` s more
+    for them. Then every node is destroyed (last started first) and rclpy shut down.
+    A start-up error (:data:`STARTUP_ERRORS`) is raised after that.
+    """
+    nodes: list[Node] = []
+    stop = threading.Event()
+    try:
+        node = start(nodes)
+        for signum in (signal.SIGINT, signal.SIGTERM):
+            signal.signal(signum, lambda *_: stop.set())
+        executor = SingleThreadedExecutor()
+        for each in nodes:
+            executor.add_node(each)
+        while rclpy.ok() and not node.finished and not stop.is_set():
+            executor.spin_once(timeout_sec=0.1)
+        if node.finished:
+            node.flush_publishers()
+            for _ in range(round(drain / 0.01)):
+                executor.spin_once(timeout_sec=0.01)
+    except (KeyboardInterrupt, ExternalShutdownException):
+        pass
+    finally:
+        for each in reversed(nodes):
+            each.destroy_node()
+        rclpy.try_shutdown()
+
+
+def _start_node(nodes: list[Node]) -> RigidRotSimNode:
+    node = RigidRotSimNode()
+    nodes.append(node)
+    return node
+
+
 def main(args: list[str] | None = None) -> int:
     """Run the node until shut down or until the scene's duration is reached (exit code 0).
 
@@ -251,36 +355,15 @@ def main(args: list[str] | None = None) -> int:
     """
     ensure_ament_prefix_path()  # the console script works without activating the venv
     try:
-        rclpy.init(args=args, signal_handler_options=SignalHandlerOptions.NO)
-    except _rclpy.RCLError as exc:  # e.g. an unparsable --ros-args rule
-        print(startup_error_line(f"bad ROS arguments: {exc}"), file=sys.stderr, flush=True)
+        init_ros(args)
+    except RuntimeError as exc:  # rclpy's RCLError: e.g. an unparsable --ros-args rule
+        print(startup_error_line(RuntimeError(f"bad ROS arguments: {exc}")), file=sys.stderr, flush=True)
         return 2
-    # while the node starts (the scene loads), Ctrl-C / SIGTERM stop it at once
-    for signum in (signal.SIGINT, signal.SIGTERM):
-        signal.signal(signum, _interrupt)
-    stop = threading.Event()
-    node = None
     try:
-        node = RigidRotSimNode()
-        # from here SIGINT and SIGTERM only ask the loop below to stop: the node (and its
-        # recording) then closes in `finally`, never interrupted in a callback or a file write
-        for signum in (signal.SIGINT, signal.SIGTERM):
-            signal.signal(signum, lambda *_: stop.set())
-        executor = SingleThreadedExecutor()
-        executor.add_node(node)
-        while rclpy.ok() and not node.finished and not stop.is_set():
-            executor.spin_once(timeout_sec=0.1)
-        if node.finished:
-            node.flush_publishers()
-    except (KeyboardInterrupt, ExternalShutdownException):
-        pass
+        run_until_finished(_start_node)
     except STARTUP_ERRORS as exc:  # SceneError, a scene the integrator cannot run, a bad parameter
         print(startup_error_line(exc), file=sys.stderr, flush=True)
         return 2
-    finally:
-        if node is not None:
-            node.destroy_node()
-        rclpy.try_shutdown()
     return 0
 
 

@@ -16,42 +16,50 @@ which outputs are due at a step.
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from typing import Any, Callable, Protocol, Sequence
 
 from geometry_msgs.msg import InertiaStamped, QuaternionStamped, Vector3Stamped
 from nav_msgs.msg import Odometry
 from rclpy.node import Node
+from rclpy.publisher import Publisher
+from rclpy.qos import QoSProfile
 from rclpy.serialization import serialize_message
 from rigid_rot_msgs.msg import HeavyTopState, RejectedCommand, RigidBodyState
 from rosgraph_msgs.msg import Clock
 from sensor_msgs.msg import Imu
+from tf2_msgs.msg import TFMessage  # built into the venv by `make setup` (vendored), a ROS dependency
+from visualization_msgs.msg import MarkerArray
 
 from rigid_rot_sim import conversions
 from rigid_rot_sim.core.inertia import principal_frame_pose
+from rigid_rot_sim.run.body_view import body_view
 from rigid_rot_sim.run.observer import SimulationObserver
 from rigid_rot_sim.scene.scene import OUTPUT_NAMES, Frames, Scene
 from rigid_rot_sim.run.simulator import StateSnapshot
 from rigid_rot_sim.ros.qos import CLOCK_QOS, LATCHED_QOS, REJECTED_QOS, TF_QOS, TF_STATIC_QOS, describe as describe_qos
 
-try:  # never required: /tf exists only where tf2_msgs is installed
-    from tf2_msgs.msg import TFMessage
-except ImportError:  # pragma: no cover - depends on the installation
-    TFMessage = None
 
-#: A message from the state, the frames and the ground-truth variance (imu, odom).
-MessageBuilder = Callable[[StateSnapshot, Frames, float], Any]
+#: A message from the state and the outputs' settings (frames, ground-truth variance, body view).
+MessageBuilder = Callable[[StateSnapshot, "Outputs"], Any]
 
 #: Scene output name -> (message type, builder). Topics: :func:`output_topic`.
 OUTPUTS: dict[str, tuple[Any, MessageBuilder]] = {
-    "state": (RigidBodyState, lambda s, f, v: conversions.snapshot_to_state(s, f.world, f.body)),
-    "orientation": (QuaternionStamped, lambda s, f, v: conversions.snapshot_to_orientation(s, f.world)),
-    "angular_velocity": (Vector3Stamped, lambda s, f, v: conversions.vector_stamped(s.angular_velocity_body, s.t, f.body)),
-    "angular_momentum": (Vector3Stamped, lambda s, f, v: conversions.vector_stamped(s.angular_momentum_world, s.t, f.world)),
-    "top_state": (HeavyTopState, lambda s, f, v: conversions.snapshot_to_top_state(s, f.world)),
-    "tf": (TFMessage, lambda s, f, v: TFMessage(transforms=[conversions.transform_stamped(s, f.world, f.body)])),
-    "clock": (Clock, lambda s, f, v: conversions.clock_message(s.t)),
-    "imu": (Imu, lambda s, f, v: conversions.snapshot_to_imu(s, f.body, v)),
-    "odom": (Odometry, lambda s, f, v: conversions.snapshot_to_odometry(s, f.world, f.body, v)),
+    "state": (RigidBodyState, lambda s, o: conversions.snapshot_to_state(s, o.frames.world, o.frames.body)),
+    "orientation": (QuaternionStamped, lambda s, o: conversions.snapshot_to_orientation(s, o.frames.world)),
+    "angular_velocity": (Vector3Stamped,
+                         lambda s, o: conversions.vector_stamped(s.angular_velocity_body, s.t, o.frames.body)),
+    "angular_momentum": (Vector3Stamped,
+                         lambda s, o: conversions.vector_stamped(s.angular_momentum_world, s.t, o.frames.world)),
+    "top_state": (HeavyTopState, lambda s, o: conversions.snapshot_to_top_state(s, o.frames.world)),
+    "tf": (TFMessage,
+           lambda s, o: TFMessage(transforms=[conversions.transform_stamped(s, o.frames.world, o.frames.body)])),
+    "clock": (Clock, lambda s, o: conversions.clock_message(s.t)),
+    "imu": (Imu, lambda s, o: conversions.snapshot_to_imu(s, o.frames.body, o.ground_truth_variance)),
+    "odom": (Odometry,
+             lambda s, o: conversions.snapshot_to_odometry(s, o.frames.world, o.frames.body, o.ground_truth_variance)),
+    "markers": (MarkerArray,
+                lambda s, o: conversions.body_markers(o.body_view, s, o.frames.world, o.frames.body)),
 }
 assert tuple(OUTPUTS) == OUTPUT_NAMES, "one entry per scene output, in the scene's order"
 
@@ -72,50 +80,60 @@ class Outputs(SimulationObserver):
     """The node's publishers, keyed on output name, and the one path that publishes to them.
 
     ``rates`` (Hz of sim time) says which outputs to build (rate > 0); :attr:`rates` keeps
-    those built. ``built`` and ``left_out`` collect the start-up line.
+    those built. ``state_qos``: the profile of the state-like outputs.
     """
 
-    def __init__(self, node: Node, scene: Scene, rates: dict[str, float], state_qos: Any,
-                 ground_truth_variance: float, built: list[str], left_out: list[str]) -> None:
+    def __init__(self, node: Node, scene: Scene, rates: Mapping[str, float], state_qos: QoSProfile,
+                 ground_truth_variance: float) -> None:
         self.scene = scene
         self.frames = scene.frames
         self.ground_truth_variance = ground_truth_variance
+        self.body_view = body_view(scene)
         self.listeners: list[PublishedListener] = []
-        self.publishers: dict[str, Any] = {}
+        self.publishers: dict[str, Publisher] = {}
         self.rates: dict[str, float] = {}
-        for name in OUTPUT_NAMES:
+        for name in self._offered():
             rate = rates.get(name, 0.0)
-            if name == "top_state" and not scene.is_top:
-                continue  # listed with gravity by the node
-            if name == "tf" and TFMessage is None:
-                left_out.append("/tf (tf2_msgs not installed)")
-                continue
-            if rate <= 0.0:
-                left_out.append(f"{output_topic(name)} (rate 0)")
-                continue
-            qos = {"tf": TF_QOS, "clock": CLOCK_QOS}.get(name, state_qos)
-            publisher = node.create_publisher(OUTPUTS[name][0], output_topic(name), qos)
-            self.publishers[name] = publisher
-            self.rates[name] = rate
-            built.append(f"{output_topic(name)} {rate:g} Hz ({describe_qos(publisher.qos_profile)})")
-        self.static_transforms = self._static_transforms(left_out)
+            if rate > 0.0:
+                qos = {"tf": TF_QOS, "clock": CLOCK_QOS}.get(name, state_qos)
+                self.publishers[name] = node.create_publisher(OUTPUTS[name][0], output_topic(name), qos)
+                self.rates[name] = rate
+        self.static_transforms = self._static_transforms()
         if self.static_transforms:
             self.publishers["tf_static"] = node.create_publisher(TFMessage, "/tf_static", TF_STATIC_QOS)
-            built.append(f"/tf_static {self.frames.body} -> {self.frames.principal} ({describe_qos(TF_STATIC_QOS)})")
         self.publishers["mass_properties"] = node.create_publisher(InertiaStamped, "~/mass_properties", LATCHED_QOS)
         self.publishers["rejected"] = node.create_publisher(RejectedCommand, "~/rejected", REJECTED_QOS)
-        built += ["~/mass_properties (transient local)", "~/rejected"]
 
-    def _static_transforms(self, left_out: list[str]) -> list[Any]:
+    def _offered(self) -> list[str]:
+        """The outputs this scene can have (``top_state`` only with gravity)."""
+        return [name for name in OUTPUT_NAMES if name != "top_state" or self.scene.is_top]
+
+    def _static_transforms(self) -> list[Any]:
         """With /tf: body -> principal-axes frame, where the principal axes are not the body axes."""
         if "tf" not in self.publishers:
             return []
         _, com, tensor = self.scene.mass_properties_about_com()
         pose = principal_frame_pose(tensor, com)
         if pose is None:
-            left_out.append(f"/tf_static (the body axes are the principal axes, {self.frames.principal} not needed)")
             return []
         return [conversions.static_transform(*pose, self.frames.body, self.frames.principal)]
+
+    def describe(self) -> tuple[list[str], list[str]]:
+        """For the start-up line: (what was built, what was left out and why)."""
+        built: list[str] = []
+        left_out: list[str] = []
+        for name in self._offered():
+            if name in self.publishers:
+                qos = describe_qos(self.publishers[name].qos_profile)
+                built.append(f"{output_topic(name)} {self.rates[name]:g} Hz ({qos})")
+            else:
+                left_out.append(f"{output_topic(name)} (rate 0)")
+        if self.static_transforms:
+            built.append(f"/tf_static {self.frames.body} -> {self.frames.principal} ({describe_qos(TF_STATIC_QOS)})")
+        elif "tf" in self.publishers:
+            left_out.append(f"/tf_static (the body axes are the principal axes, {self.frames.principal} not needed)")
+        built += ["~/mass_properties (transient local)", "~/rejected"]
+        return built, left_out
 
     def publish(self, name: str, msg: Any) -> None:
         """Publish ``msg`` on output ``name``: serialised once when someone listens, the same bytes to each."""
@@ -139,4 +157,4 @@ class Outputs(SimulationObserver):
 
     def outputs_due(self, step: int, snapshot: StateSnapshot, names: Sequence[str]) -> None:
         for name in names:
-            self.publish(name, OUTPUTS[name][1](snapshot, self.frames, self.ground_truth_variance))
+            self.publish(name, OUTPUTS[name][1](snapshot, self))

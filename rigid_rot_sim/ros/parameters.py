@@ -1,43 +1,284 @@
-"""The node's parameters: declared once with descriptors, checked, then applied.
+"""The node's parameters as data: one table drives declaration, reading, validation and application.
 
-:func:`declare_parameters` declares every parameter with a ``ParameterDescriptor`` (ranges
-from :mod:`rigid_rot_sim.core.limits`, ``read_only`` for what is set at start-up), the
-scene's values as defaults; :func:`read_settings` reads them back once into
-:class:`Settings`. :class:`ParameterCallbacks` refuses bad run-time values with a reason
-(``validate_parameters_callback``) and applies good ones to the run
-(``apply_parameters_callback``), as ros2/demos' ``set_parameters_callback.py`` does.
+:data:`PARAMETERS` holds one :class:`ParamSpec` per parameter: name, type, default (read
+from the scene), description, range or choices, ``read_only`` and, for those that change a
+running simulation, ``check`` (refuse a bad value with a reason) and ``apply`` (act on the
+run). Everything else is a loop over the table:
 
-Double parameters that accept integers:
+* :func:`declare_parameters` declares each with a ``ParameterDescriptor`` (ranges from
+  :mod:`rigid_rot_sim.core.limits`), the scene's value as default;
+* :func:`read_settings` reads them back once into :class:`NodeSettings`, frozen and read
+  by spec (``settings[DT]`` is a float), refusing a value outside its choices;
+* :class:`RunParameters` refuses bad run-time values (``validate``) and applies good ones
+  (``apply``), each check and apply function called once per change, as ros2/demos'
+  ``set_parameters_callback.py`` does. rclpy itself enforces types, ranges and read-only.
 
+Adding a parameter is one entry in :data:`PARAMETERS` (plus, where it acts at run time, its
+``apply``), and reading it where it is used: ``settings[NEW]``.
+
+Scene or node?
+--------------
+The *scene* describes the world: the body (inertia, mass, centre of mass), the initial
+state, the torques (topic inputs, schedules), gravity and the frame names. These are not
+parameters, except the frame names (``world_frame``, ``body_frame``), which a deployment
+may have to rename to fit its tf tree. The *node* settings say how one run of that world is
+served: integrator and step, pacing (``real_time_factor``, ``duration``,
+``start_paused``), publish rates, QoS, command limits and recording. They are parameters;
+a scene may carry a default for most of them (keys ``integrator``, ``real_time_factor``,
+``duration``, ``outputs``, ``qos``, ``commands``, ``recording``) so that a scene file runs
+as its author meant, and a parameter (``-p``, a params file, ``ros2 param set``) wins.
+
+Where the parameter names appear besides this table
+---------------------------------------------------
+* :mod:`rigid_rot_sim.scene.scene_schema`: the scene keys that give the defaults, named
+  for a scene file (``integrator.dt``, ``outputs.state``, ...), not for the node;
+* :mod:`rigid_rot_sim.cli.run` turns its options into ``-p`` arguments, by the specs here;
+* ``launch/rigid_rot_sim.launch.py`` (``scene``, ``record_path``), ``config/params/*.yaml``,
+  the docs and the tests: interfaces that users type, which must name them.
+
+Double parameters that accept integers
+--------------------------------------
 ``ros2 param set /rigid_rot_sim real_time_factor 2`` sends an INTEGER; rclpy refuses it
 for a parameter declared DOUBLE ("expected DOUBLE got INTEGER"), and so does a params file
-or ``-p dt:=1`` at start-up. Users type integers, so the node converts them, and the value is
-stored as a float (the parameter stays statically typed DOUBLE, as ``ros2 param describe``
-shows).
+or ``-p dt:=1`` at start-up. Users type integers, so the node converts them for every
+``float`` entry of the table, and the value is stored as a float (the parameter stays
+statically typed DOUBLE, as ``ros2 param describe`` shows).
 """
 
 from __future__ import annotations
 
 import dataclasses
+import importlib.metadata
 import math
+import types
+from collections.abc import Callable, Iterable, Mapping
 from dataclasses import dataclass
-from typing import Any
+from typing import Any, Generic, TypeVar
 
-from rcl_interfaces.msg import FloatingPointRange, IntegerRange, ParameterDescriptor, ParameterType, SetParametersResult
+from rcl_interfaces.msg import FloatingPointRange, IntegerRange, ParameterDescriptor, SetParametersResult
 from rclpy.node import Node
 from rclpy.parameter import Parameter
+from rclpy.timer import Timer
 
 from rigid_rot_sim.core import limits
-from rigid_rot_sim.run.pacing import RunDriver
-from rigid_rot_sim.scene.scene import MAX_QOS_DEPTH, Frames, OutputQos, Scene
 from rigid_rot_sim.recording import LOG_TIME_BASES  # the package itself is light (no mcap)
 from rigid_rot_sim.ros.outputs import output_topic
-from rigid_rot_sim.ros.qos import output_qos
+from rigid_rot_sim.run.lockstep import Lockstep
+from rigid_rot_sim.run.pacing import RunDriver
+from rigid_rot_sim.scene.scene import MAX_QOS_DEPTH, OUTPUT_NAMES, QOS_RELIABILITIES, Frames, Scene
 
 USE_SIM_TIME_REFUSAL = (
     "use_sim_time true is refused: this node is the source of sim time (it publishes /clock and "
     "stamps every output with sim time); its pacing runs on the steady clock"
 )
+
+V = TypeVar("V", bool, int, float, str)
+
+
+class Change:
+    """A set of new parameter values, read by spec; a parameter not in it reads as it is now."""
+
+    def __init__(self, new: Mapping[str, Any], current: Callable[[str], Any]) -> None:
+        self.new = new
+        self.current = current
+
+    def __contains__(self, spec: ParamSpec[Any]) -> bool:
+        return spec.name in self.new
+
+    def __getitem__(self, spec: ParamSpec[V]) -> V:
+        return self.new[spec.name] if spec.name in self.new else self.current(spec.name)
+
+
+#: What a parameter does to the running simulation (``apply``) or how it refuses a value
+#: (``check``: ValueError with the reason). Called once per change, however many of the
+#: parameters sharing the function it holds.
+Action = Callable[["RunParameters", Change], None]
+
+
+@dataclass(frozen=True)
+class ParamSpec(Generic[V]):
+    """One node parameter: what :func:`declare_parameters` declares and the callbacks act on.
+
+    ``type``: bool, int, float or str (an integer given for a float is stored as a float).
+    ``default``: its default from the scene. ``range``: inclusive (low, high), for int and
+    float. ``choices``: the accepted strings. ``read_only``: set at start-up only.
+    """
+
+    name: str
+    type: type[V]
+    default: Callable[[Scene], V]
+    description: str
+    range: tuple[float, float] | None = None
+    choices: tuple[str, ...] = ()
+    read_only: bool = False
+    check: Action | None = None
+    apply: Action | None = None
+
+    def descriptor(self) -> ParameterDescriptor:
+        descriptor = ParameterDescriptor(description=self.description, read_only=self.read_only)
+        if self.range is not None and self.type is float:
+            descriptor.floating_point_range = [FloatingPointRange(from_value=float(self.range[0]),
+                                                                  to_value=float(self.range[1]), step=0.0)]
+        elif self.range is not None and self.type is int:
+            descriptor.integer_range = [IntegerRange(from_value=int(self.range[0]), to_value=int(self.range[1]),
+                                                     step=1)]
+        if self.choices:
+            descriptor.additional_constraints = "one of: " + ", ".join(self.choices)
+        return descriptor
+
+    def check_choice(self, value: Any) -> None:
+        """ValueError naming the parameter when ``value`` is not one of its choices."""
+        if self.choices and value not in self.choices:
+            raise ValueError(f"{self.name} must be one of {', '.join(self.choices)}, got {value!r}")
+
+
+# ---------------------------------------------------------------- run-time checks and actions
+
+
+def _check_integrator(run: RunParameters, change: Change) -> None:
+    dt = change[DT] if DT in change else run.driver.sim.dt
+    if not isinstance(dt, float) or not (math.isfinite(dt) and dt > 0.0):
+        raise ValueError(f"dt must be a finite number > 0 s, got {dt!r}")
+    if dt != run.driver.sim.dt and any(isinstance(o, Lockstep) for o in run.driver.sim.observers):
+        raise ValueError("dt is fixed in lockstep (the turns are whole steps of it); restart to change it")
+    run.driver.sim.check_integrator(change[INTEGRATOR], dt)
+
+
+def _set_integrator(run: RunParameters, change: Change) -> None:
+    sim, log = run.driver.sim, run.logger
+    try:
+        sim.set_integrator(method=change[INTEGRATOR], dt=change[DT] if DT in change else sim.dt)
+    except ValueError as exc:  # e.g. a method that cannot take this scene's torque
+        log.error(f"integrator unchanged ({sim.method}, dt {sim.dt:g} s): {exc}")
+    else:
+        log.info(f"integrator {sim.method}, dt {sim.dt:g} s from t = {sim.t:.9g} s")
+        for warning in sim.warnings():
+            log.warning(warning)
+    run.retime()
+    _set_rates(run, change)  # periods in steps depend on dt
+
+
+def _set_real_time_factor(run: RunParameters, change: Change) -> None:
+    run.driver.pacer.real_time_factor = change[REAL_TIME_FACTOR]
+    run.driver.pacer.anchor(run.driver.sim.t)
+    run.retime()
+
+
+def _set_duration(run: RunParameters, change: Change) -> None:
+    run.driver.duration = change[DURATION] or None
+
+
+def _set_max_torque(run: RunParameters, change: Change) -> None:
+    run.driver.sim.max_torque = change[MAX_TORQUE]
+
+
+def _check_rates(run: RunParameters, change: Change) -> None:
+    periods = run.driver.schedule.periods
+    for output, spec in RATES.items():
+        if spec in change and change[spec] > 0.0 and output not in periods:
+            raise ValueError(f"{output_topic(output)} was not built at start-up; restart with {spec.name} > 0")
+        if spec in change and change[spec] <= 0.0 and output in periods:
+            raise ValueError(f"{spec.name} must be > 0 for a built output (publishers are not destroyed at run time)")
+
+
+def _set_rates(run: RunParameters, change: Change) -> None:
+    schedule = run.driver.schedule
+    schedule.set_rates({output: change[RATES[output]] for output in schedule.periods}, run.driver.sim.dt)
+
+
+# ---------------------------------------------------------------- the table
+
+INTEGRATOR = ParamSpec(
+    "integrator", str, lambda scene: scene.integrator.method,
+    "Integrator name from the registry, or 'auto' (the scene's choice)",
+    check=_check_integrator, apply=_set_integrator)
+DT = ParamSpec(
+    "dt", float, lambda scene: scene.integrator.dt, "Physics step, s of sim time",
+    range=limits.DT_RANGE, check=_check_integrator, apply=_set_integrator)
+REAL_TIME_FACTOR = ParamSpec(
+    "real_time_factor", float, lambda scene: scene.real_time_factor,
+    "Sim seconds per wall second; 0 = as fast as possible",
+    range=limits.REAL_TIME_FACTOR_RANGE, apply=_set_real_time_factor)
+DURATION = ParamSpec(
+    "duration", float, lambda scene: scene.duration or 0.0,
+    "Sim time (s) after which the node stops and exits; 0 = unbounded",
+    range=limits.DURATION_RANGE, apply=_set_duration)
+START_PAUSED = ParamSpec(
+    "start_paused", bool, lambda scene: False,
+    "Start paused at t = 0 (resume with ~/pause data=false, e.g. once a controller is up)", read_only=True)
+RECORD_PATH = ParamSpec(
+    "record_path", str, lambda scene: scene.recording or "",
+    "MCAP file to record the run to; empty = no recording", read_only=True)
+RECORD_LOG_TIME = ParamSpec(
+    "record_log_time", str, lambda scene: "sim",
+    "MCAP log time of the recording: 'sim' (sim time in ns, as ros2 bag record --use-sim-time; "
+    "continued across resets) or 'wall' (wall clock)",
+    choices=LOG_TIME_BASES, read_only=True)
+FOXGLOVE = ParamSpec(
+    "foxglove", str, lambda scene: scene.foxglove or "",
+    "Foxglove live server address [HOST:]PORT (host default 127.0.0.1); empty = no server "
+    "(needs foxglove-sdk: pip install rigid_rot_sim[viewer])", read_only=True)
+WORLD_FRAME = ParamSpec(
+    "world_frame", str, lambda scene: scene.frames.world,
+    "Fixed frame of the attitude (header.frame_id of the outputs, /tf parent); "
+    "default: the scene's frames.world (odom)", read_only=True)
+BODY_FRAME = ParamSpec(
+    "body_frame", str, lambda scene: scene.frames.body,
+    "Body frame (child frame of /tf, ~/state and ~/odom, frame of ~/imu); "
+    "default: the scene's frames.body (base_link)", read_only=True)
+GROUND_TRUTH_VARIANCE = ParamSpec(
+    "ground_truth_variance", float, lambda scene: 1e-12,
+    "Variance on the covariance diagonals of ~/imu and ~/odom (the values are exact; "
+    "0 would read as 'unknown' to sensor_msgs consumers)",
+    range=(0.0, 1e6), read_only=True)
+QOS_RELIABILITY = ParamSpec(
+    "qos.reliability", str, lambda scene: scene.qos.reliability,
+    "Reliability of the state-like outputs (~/state ... ~/top_state): reliable | best_effort "
+    "(set at start-up; /tf, /tf_static, /clock keep their standard profiles)",
+    choices=QOS_RELIABILITIES, read_only=True)
+QOS_DEPTH = ParamSpec(
+    "qos.depth", int, lambda scene: scene.qos.depth,
+    "Keep-last depth of the state-like outputs (set at start-up)",
+    range=(1, MAX_QOS_DEPTH), read_only=True)
+def _scene_rate(output: str) -> Callable[[Scene], float]:
+    return lambda scene: scene.outputs[output]
+
+
+#: ``rates.<output>``: one per scene output, keyed on the output's name.
+RATES: dict[str, ParamSpec[float]] = {
+    output: ParamSpec(
+        f"rates.{output}", float, _scene_rate(output),
+        f"Publish rate of {output_topic(output)}, Hz of sim time (rounded to whole steps); "
+        "0 = not built (set at start-up)",
+        range=limits.RATE_RANGE, check=_check_rates, apply=_set_rates)
+    for output in OUTPUT_NAMES
+}
+MAX_TORQUE = ParamSpec(
+    "commands.max_torque", float, lambda scene: scene.commands.max_torque,
+    "Largest accepted |torque| (N*m) of a command or ~/apply_torque; 0 = no limit",
+    range=limits.MAX_TORQUE_RANGE, apply=_set_max_torque)
+COMMAND_DEPTH = ParamSpec(
+    "commands.qos_depth", int, lambda scene: scene.commands.qos_depth,
+    "Keep-last depth of the torque subscriptions (a larger burst loses its oldest commands)",
+    range=limits.COMMAND_DEPTH_RANGE, read_only=True)
+
+#: Every parameter of a node with a scene, in declaration order (``scene`` itself: :data:`SCENE`).
+PARAMETERS: tuple[ParamSpec[Any], ...] = (
+    INTEGRATOR, DT, REAL_TIME_FACTOR, DURATION, START_PAUSED, RECORD_PATH, RECORD_LOG_TIME, FOXGLOVE,
+    WORLD_FRAME, BODY_FRAME, GROUND_TRUTH_VARIANCE, QOS_RELIABILITY, QOS_DEPTH,
+    *RATES.values(), MAX_TORQUE, COMMAND_DEPTH,
+)
+
+#: Declared first, with or without a scene (default empty: no simulation); not in the table.
+SCENE = ParamSpec(
+    "scene", str, lambda scene: "",
+    "Scene YAML path, or the name of a shipped scene (e.g. free_tumble); empty: serve ~/compute_inertia only",
+    read_only=True)
+
+_DOUBLES = frozenset(spec.name for spec in PARAMETERS if spec.type is float)
+
+
+# ---------------------------------------------------------------- declaring and reading
 
 
 def _as_double(parameter: Parameter) -> Parameter:
@@ -45,296 +286,138 @@ def _as_double(parameter: Parameter) -> Parameter:
 
 
 def accept_integers_for_doubles(node: Node) -> None:
-    """Convert INTEGER values set at run time for declared DOUBLE parameters (a pre-set callback)."""
+    """Convert INTEGER values set at run time for the table's float parameters (a pre-set callback)."""
 
     def convert(parameters: list[Parameter]) -> list[Parameter]:
-        converted = []
-        for parameter in parameters:
-            if (
-                parameter.type_ == Parameter.Type.INTEGER
-                and node.has_parameter(parameter.name)
-                and node.describe_parameter(parameter.name).type == ParameterType.PARAMETER_DOUBLE
-            ):
-                parameter = _as_double(parameter)
-            converted.append(parameter)
-        return converted
+        return [_as_double(p) if p.type_ == Parameter.Type.INTEGER and p.name in _DOUBLES else p
+                for p in parameters]
 
     node.add_pre_set_parameters_callback(convert)
 
 
-def integer_overrides_as_doubles(node: Node, names: list[str]) -> None:
-    """Before declaring the DOUBLE parameters ``names``: integer start-up values become floats.
+#: rclpy major versions whose private ``Node._parameter_overrides`` (name -> Parameter) we
+#: convert in place; Jazzy ships rclpy 7. Elsewhere an integer start-up value for a float
+#: parameter gets rclpy's own error (one line, exit code 2).
+_OVERRIDES_TABLE_RCLPY_MAJORS = (7,)
 
-    Start-up values (``-p``, ``--params-file``, ``parameter_overrides``) are checked against the
-    declared type inside ``declare_parameter``, without the pre-set callbacks, so they are
-    converted here, in rclpy's table of overrides.
+
+def _startup_overrides(node: Node) -> dict[str, Parameter] | None:
+    """rclpy's table of start-up values (``-p``, ``--params-file``, ``parameter_overrides``).
+
+    They are checked against the declared type inside ``declare_parameter``, without the
+    pre-set callbacks, and rclpy offers no public hook before that check: this reads the
+    private table, only on the rclpy versions where we know it.
     """
+    try:
+        major = int(importlib.metadata.version("rclpy").split(".")[0])
+    except (importlib.metadata.PackageNotFoundError, ValueError):  # pragma: no cover - installation
+        return None
     overrides = getattr(node, "_parameter_overrides", None)
-    if not isinstance(overrides, dict):  # pragma: no cover - a future rclpy; test_node covers it
-        return
-    for name in names:
-        override = overrides.get(name)
-        if override is not None and override.type_ == Parameter.Type.INTEGER:
-            overrides[name] = _as_double(override)
-
-
-def _float_range(low: float, high: float) -> list[FloatingPointRange]:
-    return [FloatingPointRange(from_value=low, to_value=high, step=0.0)]
+    if major not in _OVERRIDES_TABLE_RCLPY_MAJORS or not isinstance(overrides, dict):  # pragma: no cover
+        return None
+    return overrides
 
 
 def declare_scene_parameter(node: Node) -> str:
-    """The read-only ``scene`` parameter (a path or a shipped scene's name; empty: no simulation)."""
-    return node.declare_parameter(
-        "scene",
-        "",
-        ParameterDescriptor(
-            description="Scene YAML path, or the name of a shipped scene (e.g. free_tumble); "
-            "empty: serve ~/compute_inertia only",
-            read_only=True,
-        ),
-    ).value
+    """The read-only ``scene`` parameter's value (empty: no simulation)."""
+    return node.declare_parameter(SCENE.name, "", SCENE.descriptor()).value
 
 
-def declare_parameters(node: Node, scene: Scene) -> None:
-    """Declare every parameter once, with the scene's values as defaults."""
-    doubles = ["dt", "real_time_factor", "duration", "commands.max_torque", "ground_truth_variance",
-               *(f"rates.{name}" for name in scene.outputs.as_dict())]
-    integer_overrides_as_doubles(node, doubles)  # `-p dt:=1` or `dt: 1` in a params file: 1.0
-    declare = node.declare_parameter
-    declare(
-        "integrator",
-        scene.integrator.method,
-        ParameterDescriptor(description="Integrator name from the registry, or 'auto' (the scene's choice)"),
-    )
-    declare(
-        "dt",
-        scene.integrator.dt,
-        ParameterDescriptor(description="Physics step, s of sim time", floating_point_range=_float_range(*limits.DT_RANGE)),
-    )
-    declare(
-        "real_time_factor",
-        scene.real_time_factor,
-        ParameterDescriptor(
-            description="Sim seconds per wall second; 0 = as fast as possible",
-            floating_point_range=_float_range(*limits.REAL_TIME_FACTOR_RANGE),
-        ),
-    )
-    declare(
-        "duration",
-        scene.duration if scene.duration is not None else 0.0,
-        ParameterDescriptor(
-            description="Sim time (s) after which the node stops and exits; 0 = unbounded",
-            floating_point_range=_float_range(*limits.DURATION_RANGE),
-        ),
-    )
-    declare(
-        "start_paused",
-        False,
-        ParameterDescriptor(
-            description="Start paused at t = 0 (resume with ~/pause data=false, e.g. once a controller is up)",
-            read_only=True,
-        ),
-    )
-    declare(
-        "record_path",
-        scene.recording or "",
-        ParameterDescriptor(description="MCAP file to record the run to; empty = no recording", read_only=True),
-    )
-    declare(
-        "record_log_time",
-        "sim",
-        ParameterDescriptor(
-            description="MCAP log time of the recording: 'sim' (sim time in ns, as ros2 bag record "
-            "--use-sim-time; continued across resets) or 'wall' (wall clock)",
-            read_only=True,
-            additional_constraints="one of: " + ", ".join(LOG_TIME_BASES),
-        ),
-    )
-    declare(
-        "world_frame",
-        scene.frames.world,
-        ParameterDescriptor(description="Fixed frame of the attitude (header.frame_id of the outputs, /tf parent); "
-                            "default: the scene's frames.world (odom)", read_only=True),
-    )
-    declare(
-        "body_frame",
-        scene.frames.body,
-        ParameterDescriptor(description="Body frame (child frame of /tf, ~/state and ~/odom, frame of ~/imu); "
-                            "default: the scene's frames.body (base_link)", read_only=True),
-    )
-    declare(
-        "ground_truth_variance",
-        1e-12,
-        ParameterDescriptor(
-            description="Variance on the covariance diagonals of ~/imu and ~/odom (the values are exact; "
-            "0 would read as 'unknown' to sensor_msgs consumers)",
-            floating_point_range=_float_range(0.0, 1e6),
-            read_only=True,
-        ),
-    )
-    declare(
-        "qos.reliability",
-        scene.qos.reliability,
-        ParameterDescriptor(
-            description="Reliability of the state-like outputs (~/state ... ~/top_state): reliable | best_effort "
-            "(set at start-up; /tf, /tf_static, /clock keep their standard profiles)",
-            read_only=True,
-            additional_constraints="reliable | best_effort",
-        ),
-    )
-    declare(
-        "qos.depth",
-        scene.qos.depth,
-        ParameterDescriptor(
-            description="Keep-last depth of the state-like outputs (set at start-up)",
-            read_only=True,
-            integer_range=[IntegerRange(from_value=1, to_value=MAX_QOS_DEPTH, step=1)],
-        ),
-    )
-    for name, rate in scene.outputs.as_dict().items():
-        declare(
-            f"rates.{name}",
-            float(rate),
-            ParameterDescriptor(
-                description=f"Publish rate of {output_topic(name)}, Hz of sim time (rounded to whole steps); "
-                "0 = not built (set at start-up)",
-                floating_point_range=_float_range(*limits.RATE_RANGE),
-            ),
-        )
-    declare(
-        "commands.max_torque",
-        float(scene.commands.max_torque),
-        ParameterDescriptor(
-            description="Largest accepted |torque| (N*m) of a command or ~/apply_torque; 0 = no limit",
-            floating_point_range=_float_range(*limits.MAX_TORQUE_RANGE),
-        ),
-    )
-    declare(
-        "commands.qos_depth",
-        int(scene.commands.qos_depth),
-        ParameterDescriptor(
-            description="Keep-last depth of the torque subscriptions (a larger burst loses its oldest commands)",
-            integer_range=[IntegerRange(from_value=limits.COMMAND_DEPTH_RANGE[0], to_value=limits.COMMAND_DEPTH_RANGE[1], step=1)],
-            read_only=True,
-        ),
-    )
+def declare_parameters(node: Node, scene: Scene, specs: Iterable[ParamSpec[Any]] = PARAMETERS) -> None:
+    """Declare ``specs`` once, the scene's values as defaults; integer start-up values of floats become floats."""
+    specs = tuple(specs)
+    overrides = _startup_overrides(node) or {}
+    for spec in specs:
+        override = overrides.get(spec.name)
+        if spec.type is float and override is not None and override.type_ == Parameter.Type.INTEGER:
+            overrides[spec.name] = _as_double(override)  # `-p dt:=1` or `dt: 1` in a params file: 1.0
+        node.declare_parameter(spec.name, spec.type(spec.default(scene)), spec.descriptor())
 
 
 @dataclass(frozen=True)
-class Settings:
-    """The parameters' values at start-up (the scene with the parameters' frames in ``scene``)."""
+class NodeSettings:
+    """The parameters' values at start-up, read by spec (``settings[DT]``), and the scene
+    they configure (with the frame parameters' names: they override the scene's everywhere)."""
 
     scene: Scene
-    integrator: str
-    dt: float
-    real_time_factor: float
-    duration: float | None
-    start_paused: bool
-    record_path: str | None
-    record_log_time: str
-    ground_truth_variance: float
-    state_qos: Any
-    rates: dict[str, float]
-    max_torque: float
-    command_depth: int
+    values: Mapping[str, Any]
+
+    def __getitem__(self, spec: ParamSpec[V]) -> V:
+        return self.values[spec.name]
+
+    def rates(self) -> dict[str, float]:
+        """Publish rate by output name, Hz of sim time."""
+        return {output: self[spec] for output, spec in RATES.items()}
 
 
-def read_settings(node: Node, scene: Scene) -> Settings:
-    """The declared parameters' values; ValueError for bad frame names or log time base."""
-    value = lambda name: node.get_parameter(name).value  # noqa: E731
-    # the frame parameters override the scene's names everywhere (simulator included)
-    frames = Frames(value("world_frame"), value("body_frame"))
-    scene = dataclasses.replace(scene, frames=frames.checked())
-    if value("record_log_time") not in LOG_TIME_BASES:
-        raise ValueError(f"record_log_time must be one of {', '.join(LOG_TIME_BASES)}, got {value('record_log_time')!r}")
-    return Settings(
-        scene=scene,
-        integrator=value("integrator"),
-        dt=value("dt"),
-        real_time_factor=float(value("real_time_factor")),
-        duration=float(value("duration")) if value("duration") > 0.0 else None,
-        start_paused=value("start_paused"),
-        record_path=value("record_path") or None,
-        record_log_time=value("record_log_time"),
-        ground_truth_variance=float(value("ground_truth_variance")),
-        state_qos=output_qos(OutputQos(value("qos.reliability"), value("qos.depth"))),
-        rates={name: value(f"rates.{name}") for name in scene.outputs.as_dict()},
-        max_torque=float(value("commands.max_torque")),
-        command_depth=value("commands.qos_depth"),
-    )
+def read_settings(node: Node, scene: Scene, specs: Iterable[ParamSpec[Any]] = PARAMETERS) -> NodeSettings:
+    """The declared parameters' values; ValueError for a value outside its choices or bad frame names."""
+    values = {spec.name: node.get_parameter(spec.name).value for spec in specs}
+    settings = NodeSettings(scene, types.MappingProxyType(values))
+    for spec in specs:
+        spec.check_choice(settings[spec])
+    frames = Frames(settings[WORLD_FRAME], settings[BODY_FRAME]).checked()
+    return dataclasses.replace(settings, scene=dataclasses.replace(scene, frames=frames))
 
 
-class ParameterCallbacks:
-    """Run-time parameter changes: refused with a reason, or applied to the run.
+# ---------------------------------------------------------------- run-time changes
 
-    Registered at once, so that ``use_sim_time`` true is refused even without a scene;
-    :meth:`attach` gives it the run (and the timer whose period follows ``dt`` and r).
+
+def refuse_use_sim_time(node: Node) -> None:
+    """Refuse ``use_sim_time`` true at run time, with or without a scene (the node is the time source)."""
+
+    def validate(parameters: list[Parameter]) -> SetParametersResult:
+        if any(p.name == "use_sim_time" and p.value is True for p in parameters):
+            return SetParametersResult(successful=False, reason=USE_SIM_TIME_REFUSAL)
+        return SetParametersResult(successful=True)
+
+    node.add_on_set_parameters_callback(validate)
+
+
+def _once(actions: Iterable[Action | None]) -> list[Action]:
+    """The distinct actions, in table order."""
+    return list(dict.fromkeys(action for action in actions if action is not None))
+
+
+class RunParameters:
+    """Run-time parameter changes of a running scene: refused with a reason, or applied.
+
+    ``driver``: the run; ``timer``: the node's tick timer, whose period follows dt and the
+    real-time factor.
     """
 
-    def __init__(self, node: Node) -> None:
+    def __init__(self, node: Node, driver: RunDriver, timer: Timer,
+                 specs: Iterable[ParamSpec[Any]] = PARAMETERS) -> None:
         self.node = node
-        self.run: RunDriver | None = None
-        self.timer: Any = None
-        node.add_on_set_parameters_callback(self.validate_parameters_callback)
-
-    def attach(self, run: RunDriver, timer: Any) -> None:
-        self.run = run
+        self.driver = driver
         self.timer = timer
-        self.node.add_post_set_parameters_callback(self.apply_parameters_callback)
+        self.logger = node.get_logger()
+        self.specs = tuple(specs)
+        node.add_on_set_parameters_callback(self.validate)
+        node.add_post_set_parameters_callback(self.apply)
 
-    def validate_parameters_callback(self, parameters: list[Parameter]) -> SetParametersResult:
+    def _change(self, parameters: list[Parameter]) -> tuple[Change, list[ParamSpec[Any]]]:
+        change = Change({p.name: p.value for p in parameters}, lambda name: self.node.get_parameter(name).value)
+        return change, [spec for spec in self.specs if spec in change]
+
+    def validate(self, parameters: list[Parameter]) -> SetParametersResult:
         """Refuse bad values with a reason; nothing changes then (applied after, if all are valid)."""
-        values = {p.name: p.value for p in parameters}
+        change, changed = self._change(parameters)
         try:
-            if values.get("use_sim_time") is True:
-                raise ValueError(USE_SIM_TIME_REFUSAL)
-            if self.run is None:
-                return SetParametersResult(successful=True)
-            sim, periods = self.run.sim, self.run.schedule.periods
-            if "integrator" in values or "dt" in values:
-                method = values.get("integrator", self.node.get_parameter("integrator").value)
-                dt = values.get("dt", sim.dt)
-                if dt != sim.dt and getattr(self.node, "lockstep", None) is not None:
-                    raise ValueError("dt is fixed in lockstep (the turns are whole steps of it); restart to change it")
-                if not isinstance(dt, float) or not (math.isfinite(dt) and dt > 0.0):
-                    raise ValueError(f"dt must be a finite number > 0 s, got {dt!r}")
-                sim.check_integrator(method, dt)
-            for name, value in values.items():
-                if name.startswith("rates."):
-                    output = name[len("rates."):]
-                    if value > 0.0 and output not in periods:
-                        raise ValueError(f"{output_topic(output)} was not built at start-up; restart with {name} > 0")
-                    if value <= 0.0 and output in periods:
-                        raise ValueError(f"{name} must be > 0 for a built output (publishers are not destroyed at run time)")
+            for spec in changed:
+                spec.check_choice(change[spec])
+            for check in _once(spec.check for spec in changed):
+                check(self, change)
         except ValueError as exc:
             return SetParametersResult(successful=False, reason=str(exc))
         return SetParametersResult(successful=True)
 
-    def apply_parameters_callback(self, parameters: list[Parameter]) -> None:
-        values = {p.name: p.value for p in parameters}
-        run, log = self.run, self.node.get_logger()
-        sim = run.sim
-        if "integrator" in values or "dt" in values:
-            try:
-                sim.set_integrator(
-                    method=values.get("integrator", self.node.get_parameter("integrator").value), dt=values.get("dt", sim.dt)
-                )
-            except ValueError as exc:  # e.g. a method that cannot take this scene's torque
-                log.error(f"integrator unchanged ({sim.method}, dt {sim.dt:g} s): {exc}")
-            else:
-                log.info(f"integrator {sim.method}, dt {sim.dt:g} s from t = {sim.t:.9g} s")
-                for warning in sim.warnings():
-                    log.warning(warning)
-        if "real_time_factor" in values:
-            run.pacer.real_time_factor = float(values["real_time_factor"])
-            run.pacer.anchor(sim.t)
-        if "duration" in values:
-            run.duration = values["duration"] if values["duration"] > 0.0 else None
-        if "commands.max_torque" in values:
-            sim.max_torque = float(values["commands.max_torque"])
-        if {"integrator", "dt", "real_time_factor"} & values.keys():
-            self.timer.timer_period_ns = int(run.pacer.tick_period(sim.dt) * 1e9)
-        if {"integrator", "dt"} & values.keys() or any(name.startswith("rates.") for name in values):
-            # periods in steps depend on dt; get_parameter already returns the new values here
-            run.schedule.set_rates({name: self.node.get_parameter(f"rates.{name}").value
-                                    for name in run.schedule.periods}, sim.dt)
+    def apply(self, parameters: list[Parameter]) -> None:
+        """Apply the accepted values to the run (``get_parameter`` already returns them)."""
+        change, changed = self._change(parameters)
+        for action in _once(spec.apply for spec in changed):
+            action(self, change)
+
+    def retime(self) -> None:
+        """The tick timer's period after a change of dt or of the real-time factor."""
+        self.timer.timer_period_ns = int(self.driver.pacer.tick_period(self.driver.sim.dt) * 1e9)

@@ -2,7 +2,7 @@
 
 :meth:`NodeRecording.start` opens a :class:`~rigid_rot_sim.recording.session.RunRecorder`
 and registers the node's topics; the node then attaches the recording in three visible
-lines (``RigidRotSimNode._start_recording``):
+lines (``SceneRun._start_recording`` in :mod:`.node`):
 
 * ``sim.add_observer(recording)``: the simulator reports every change made from outside
   the physics (:class:`~rigid_rot_sim.run.observer.SimulationObserver`), which is recorded
@@ -15,9 +15,7 @@ lines (``RigidRotSimNode._start_recording``):
   receive time (:meth:`received`).
 
 The node closes the recording in ``destroy_node``. ``/tf`` and ``/tf_static`` are recorded as
-published (``make setup`` installs tf2_msgs into the venv). When ``tf2_msgs`` is not installed
-the node publishes no ``/tf``; the recording still gets ``/tf`` (world -> body), built from the
-state messages at the ``rates.tf`` rate.
+published, like every other output.
 
 A recording that cannot start or that fails (full disk) is logged as an error and the
 simulation runs on unrecorded.
@@ -29,13 +27,18 @@ import json
 from pathlib import Path
 from typing import Any, Sequence
 
-from rigid_rot_sim import conversions
-from rigid_rot_sim.run.digest import format_digest
-from rigid_rot_sim.run.observer import SimulationObserver
-from rigid_rot_sim.run.pacing import OutputSchedule
+from rclpy.impl.rcutils_logger import RcutilsLogger
+from rclpy.node import Node
+from rclpy.subscription import Subscription
+
 from rigid_rot_sim.recording import LOG_TIME_BASES
 from rigid_rot_sim.recording.session import RunRecorder
 from rigid_rot_sim.recording.writer import QosProfile, RecorderError
+from rigid_rot_sim.ros.outputs import Outputs
+from rigid_rot_sim.run.commands import TorqueCommand
+from rigid_rot_sim.run.digest import format_digest
+from rigid_rot_sim.run.observer import SimulationObserver
+from rigid_rot_sim.run.simulator import Simulator
 
 #: Topics registered after the scene's outputs, in this order.
 _LATER = ("rejected", "mass_properties", "tf_static")
@@ -44,24 +47,16 @@ _ROLES = ("state", "clock", "rejected", "mass_properties")
 
 
 class NodeRecording(SimulationObserver):
-    """The run's file, fed by the simulator's reports and the node's published and received messages.
+    """The run's file, fed by the simulator's reports and the node's published and received messages."""
 
-    ``tf_from``: the output (``state`` or ``orientation``) from which ``/tf`` is recorded every
-    ``tf_period`` steps when the node publishes no ``/tf`` itself (None: not needed).
-    """
-
-    def __init__(self, file: RunRecorder, sim: Any, logger: Any, body_frame: str,
-                 tf_from: str | None = None, tf_period: int = 0) -> None:
+    def __init__(self, file: RunRecorder, sim: Simulator, logger: RcutilsLogger) -> None:
         self.file = file
         self.sim = sim
         self.logger = logger
-        self.body_frame = body_frame
-        self.tf_from = tf_from
-        self.tf_period = tf_period
 
     @classmethod
-    def start(cls, node: Any, sim: Any, outputs: Any, subscriptions: Sequence[Any], path: str,
-              log_time: str = "sim") -> "NodeRecording | None":
+    def start(cls, node: Node, sim: Simulator, outputs: Outputs, subscriptions: Sequence[Subscription], path: str,
+              log_time: str = "sim") -> NodeRecording | None:
         """Open ``path`` for ``node``'s run and register its topics; None (error logged) if it cannot.
 
         ``log_time`` is the time base of the MCAP log times: ``sim`` (the run's sim time) or
@@ -77,7 +72,8 @@ class NodeRecording(SimulationObserver):
             scene_text = Path(scene.source).read_text(encoding="utf-8")
         except OSError:
             scene_text = getattr(scene, "text", "") or ""
-        parameters = {name: _jsonable(p.value) for name, p in sorted(node.get_parameters_by_prefix("").items())}
+        names = sorted(node.list_parameters([], 0).names)  # every parameter (depth 0: all levels)
+        parameters = {p.name: _jsonable(p.value) for p in node.get_parameters(names)}
 
         def on_error(error: RecorderError) -> None:
             log.error(f"{error}; the simulation continues without recording")
@@ -99,12 +95,7 @@ class NodeRecording(SimulationObserver):
                            role=name if name in _ROLES else None)
         for subscription in subscriptions:
             file.add_topic(subscription.topic_name, subscription.msg_type, _subscription_qos(subscription), role="torque")
-        rate = float(node.get_parameter("rates.tf").value) if node.has_parameter("rates.tf") else 0.0
-        tf_period = OutputSchedule.period_steps(rate, sim.dt) if rate > 0.0 else 0
-        tf_from = next((name for name in ("state", "orientation") if name in publishers), None)
-        if "tf" in publishers or not tf_period:
-            tf_from = None
-        return cls(file, sim, log, outputs.frames.body, tf_from, tf_period)
+        return cls(file, sim, log)
 
     @property
     def active(self) -> bool:
@@ -114,15 +105,10 @@ class NodeRecording(SimulationObserver):
 
     def published(self, name: str, topic: str, data: bytes, msg: Any) -> None:
         """A message the node published on output ``name``: recorded as the bytes published."""
-        if not self.active:
-            return
-        self.file.record_serialized(topic, data)
-        if name == "state":  # the run digest of the last recorded state: the file's `digest` metadata
-            self.last_state_digest = (msg.digest, msg.header.stamp.sec, msg.header.stamp.nanosec)
-        if name == self.tf_from and self.sim.step_index % self.tf_period == 0:
-            orientation = conversions.quaternion_to_array(msg.orientation if name == "state" else msg.quaternion)
-            stamp = msg.header.stamp
-            self.file.record_tf(stamp.sec, stamp.nanosec, orientation, msg.header.frame_id, self.body_frame)
+        if self.active:
+            self.file.record_serialized(topic, data)
+            if name == "state":  # the run digest of the last recorded state: the file's `digest` metadata
+                self.last_state_digest = (msg.digest, msg.header.stamp.sec, msg.header.stamp.nanosec)
 
     def received(self, topic: str, msg: Any, received_ns: int) -> None:
         """A torque command message as received (log time: receive time in the run's time base)."""
@@ -135,7 +121,7 @@ class NodeRecording(SimulationObserver):
         if self.active:
             self.file.record_event(kind, step, summary, **values)
 
-    def command_accepted(self, step: int, command: Any) -> None:
+    def command_accepted(self, step: int, command: TorqueCommand) -> None:
         self._event(
             "torque", step,
             f"{command.source}: {list(command.torque)} N*m ({command.frame}) from t = {command.effective_time:.9g} s",
@@ -143,12 +129,12 @@ class NodeRecording(SimulationObserver):
             effective_time=float(command.effective_time), receipt_time=command.receipt_time, stamp=command.stamp,
         )
 
-    def torque_applied(self, step: int, command: Any) -> None:
+    def torque_applied(self, step: int, command: TorqueCommand) -> None:
         self._event(
             "apply_torque", step,
             f"apply_torque: {list(command.torque)} N*m ({command.frame}) for {command.duration:g} s from t = {command.effective_time:.9g} s",
             frame=command.frame, torque=tuple(float(v) for v in command.torque),
-            duration=float(command.duration), effective_time=float(command.effective_time),
+            duration=float(command.duration or 0.0), effective_time=float(command.effective_time),
         )
 
     def state_set(self, step: int, orientation: Sequence[float], angular_velocity: Sequence[float]) -> None:
@@ -191,7 +177,7 @@ class NodeRecording(SimulationObserver):
             self.file.close()
 
 
-def _subscription_qos(subscription: Any) -> QosProfile:
+def _subscription_qos(subscription: Subscription) -> QosProfile:
     """What a commanding peer offers is unknown here; record the subscription's own profile."""
     profile = getattr(subscription, "qos_profile", None)
     return QosProfile.from_rclpy(profile) if profile is not None else QosProfile()

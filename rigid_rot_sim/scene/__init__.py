@@ -10,6 +10,18 @@ Built on :mod:`rigid_rot_sim.core` (limits, inertia, the integrator registry); i
 from :mod:`rigid_rot_sim.run` or above.
 """
 
-from rigid_rot_sim.scene.scene import Scene, SceneError, load_scene, parse_scene, parse_scene_text
+from __future__ import annotations
+
+from typing import Any
 
 __all__ = ["Scene", "SceneError", "load_scene", "parse_scene", "parse_scene_text"]
+
+
+def __getattr__(name: str) -> Any:
+    """The names of :mod:`.scene`, loaded on first use (``python -m rigid_rot_sim.scene.scene_schema``
+    then runs the schema module without having imported it first)."""
+    if name not in __all__:
+        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+    from rigid_rot_sim.scene import scene
+
+    return getattr(scene, name)

@@ -29,10 +29,12 @@ masses give their inertia about their centre of mass.
 
 from __future__ import annotations
 
+import datetime
 import math
 import os
-from dataclasses import dataclass, field, make_dataclass
-from typing import Any, Callable, Mapping
+from collections.abc import Iterator, Mapping
+from dataclasses import dataclass
+from typing import Any, Callable
 
 import numpy as np
 from rigid_rot_sim.core import limits, validation
@@ -44,6 +46,7 @@ from rigid_rot_sim.core.integrators import get_method
 from rigid_rot_sim.scene.schema import validated
 from rigid_rot_sim.scene.scene_schema import (
     DEFAULT_BODY_FRAME,
+    DEFAULT_EPOCH,
     DEFAULT_GRAVITY,
     DEFAULT_WORLD_FRAME,
     OUTPUTS,
@@ -63,7 +66,7 @@ __all__ = [
     "TorqueSchedule",
     "Gravity",
     "IntegratorSpec",
-    "Outputs",
+    "OutputRates",
     "OutputQos",
     "CommandSettings",
     "LockstepSpec",
@@ -214,21 +217,45 @@ class IntegratorSpec:
     options: tuple[tuple[str, Any], ...] = ()
 
 
-def _rates_as_dict(self: Any) -> dict[str, float]:
-    return {name: getattr(self, name) for name in OUTPUT_NAMES}
+class OutputRates(Mapping[str, float]):
+    """Publication rates in Hz of sim time (0 = not published), one per output, in publishing order.
 
+    A frozen mapping over :data:`OUTPUT_NAMES` (the outputs of
+    :data:`~rigid_rot_sim.scene.scene_schema.OUTPUTS`); an output not given keeps its default
+    rate there. ``OutputRates(imu=5.0)["imu"] == 5.0``; an unknown name is a ``KeyError``.
+    """
 
-#: Publication rates in Hz of sim time (0 = not published): one float field per output of
-#: :data:`~rigid_rot_sim.scene.scene_schema.OUTPUTS` (``state``, ``orientation``, ... ``odom``),
-#: defaulting to its rate there; ``as_dict()`` gives them by name, in publishing order.
-Outputs = make_dataclass(
-    "Outputs",
-    [(name, float, field(default=output.rate)) for name, output in OUTPUTS.items()],
-    frozen=True,
-    namespace={"as_dict": _rates_as_dict},
-)
-Outputs.__module__ = __name__
-Outputs.__doc__ = "Publication rates in Hz of sim time (0 = not published), one field per output."
+    __slots__ = ("_rates",)
+    _rates: dict[str, float]
+
+    def __init__(self, rates: Mapping[str, float] | None = None, **by_name: float) -> None:
+        given = {**(rates or {}), **by_name}
+        unknown = sorted(set(given) - set(OUTPUT_NAMES))
+        if unknown:
+            raise KeyError(f"unknown output(s) {', '.join(unknown)}; known: {', '.join(OUTPUT_NAMES)}")
+        rates_by_name = {name: float(given.get(name, DEFAULT_OUTPUT_RATES[name])) for name in OUTPUT_NAMES}
+        object.__setattr__(self, "_rates", rates_by_name)
+
+    def __getitem__(self, name: str) -> float:
+        return self._rates[name]
+
+    def __iter__(self) -> Iterator[str]:
+        return iter(self._rates)
+
+    def __len__(self) -> int:
+        return len(self._rates)
+
+    def __hash__(self) -> int:
+        return hash(tuple(self._rates.items()))
+
+    def __setattr__(self, name: str, value: Any) -> None:
+        raise AttributeError(f"{type(self).__name__} is frozen")
+
+    def __reduce__(self) -> tuple[type[OutputRates], tuple[dict[str, float]]]:
+        return (type(self), (self._rates,))  # pickled by value (scenes travel to sweep workers)
+
+    def __repr__(self) -> str:
+        return f"{type(self).__name__}({self._rates!r})"
 
 
 @dataclass(frozen=True)
@@ -288,12 +315,15 @@ class Scene:
     integrator: IntegratorSpec = IntegratorSpec()
     duration: float | None = None
     real_time_factor: float = 1.0
-    outputs: Outputs = Outputs()
+    outputs: OutputRates = OutputRates()
     qos: OutputQos = OutputQos()
     recording: str | None = None
+    foxglove: str | None = None  # [HOST:]PORT of a Foxglove live server (a node setting; see ros/foxglove_live)
     commands: CommandSettings = CommandSettings()
     lockstep: LockstepSpec | None = None
     description: str = ""
+    #: UTC date and time of sim time 0 (ISO 8601; see :data:`scene_schema.DEFAULT_EPOCH`).
+    epoch: str = DEFAULT_EPOCH
     source: str = "<string>"
     text: str = ""
 
@@ -385,9 +415,11 @@ def _scene(spec: Mapping[str, Any], source: str, text: str) -> Scene:
     qos = spec.get("qos") or {}
     commands = spec.get("commands") or {}
     recording = spec.get("recording")
+    foxglove = spec.get("foxglove")
     return Scene(
         name=spec.get("name", default_name).strip(),
         description=(spec.get("description") or "").strip(),
+        epoch=_at("epoch", _epoch, spec.get("epoch") or DEFAULT_EPOCH),
         frames=frames,
         body=body,
         initial=_initial(spec.get("initial") or {}),
@@ -397,9 +429,10 @@ def _scene(spec: Mapping[str, Any], source: str, text: str) -> Scene:
         integrator=_integrator(spec.get("integrator") or {}),
         duration=None if duration is None else float(duration),
         real_time_factor=float(spec.get("real_time_factor", 1.0)),
-        outputs=Outputs(**{name: float(rate) for name, rate in (spec.get("outputs") or {}).items()}),
+        outputs=OutputRates(spec.get("outputs") or {}),
         qos=OutputQos(reliability=qos.get("reliability", OutputQos.reliability), depth=qos.get("depth", OutputQos.depth)),
         recording=None if recording is None else recording.strip(),
+        foxglove=None if foxglove is None else str(foxglove).strip(),
         commands=CommandSettings(
             max_torque=float(commands.get("max_torque", 0.0)),
             qos_depth=commands.get("qos_depth", limits.DEFAULT_COMMAND_DEPTH),
@@ -429,6 +462,15 @@ def lockstep_spec(spec: Mapping[str, Any] | None, topics: tuple[TopicInput, ...]
         raise ValueError(f"lockstep.period: {period:g} s is not a whole number of steps of integrator.dt {dt:g} s")
     return LockstepSpec(period=period, inputs=tuple(inputs), timeout=float(spec.get("timeout", LockstepSpec.timeout)),
                         on_timeout=spec.get("on_timeout", LockstepSpec.on_timeout))
+
+
+def _epoch(text: str) -> str:
+    """A real UTC date and time (the schema's pattern also passes 2026-02-30T25:00:00)."""
+    try:
+        datetime.datetime.fromisoformat(text.rstrip("Z")[:26])
+    except ValueError:
+        raise ValueError(f"not a valid date and time: {text!r}") from None
+    return text
 
 
 def _frames(spec: Mapping[str, Any]) -> Frames:

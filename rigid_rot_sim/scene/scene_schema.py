@@ -43,6 +43,8 @@ __all__ = [
     "DEFAULT_BODY_FRAME",
     "DEFAULT_GRAVITY",
     "LOCKSTEP_ON_TIMEOUT",
+    "DEFAULT_EPOCH",
+    "EPOCH_PATTERN",
 ]
 
 TORQUE_MESSAGE_TYPES = ("WrenchStamped", "Vector3Stamped")
@@ -55,6 +57,11 @@ DEFAULT_WORLD_FRAME = "odom"
 DEFAULT_BODY_FRAME = "base_link"
 #: Standard gravity, m/s^2.
 DEFAULT_GRAVITY = 9.80665
+#: UTC date and time of sim time 0 when a scene names none (used by exports such as CCSDS AEM):
+#: noon of 1 January 2000, UTC.
+DEFAULT_EPOCH = "2000-01-01T12:00:00Z"
+#: ISO 8601 UTC date and time, whole seconds or up to nanoseconds, 'Z' or no zone.
+EPOCH_PATTERN = r"^[0-9]{4}-[0-9]{2}-[0-9]{2}T[0-9]{2}:[0-9]{2}:[0-9]{2}(\.[0-9]{1,9})?Z?$"
 
 
 class OutputSpec(NamedTuple):
@@ -76,6 +83,8 @@ OUTPUTS: dict[str, OutputSpec] = {
     # sensor_msgs/Imu and nav_msgs/Odometry: built only when the scene asks
     "imu": OutputSpec(0.0, "sensor_msgs/Imu on ~/imu (0: not built, the default)"),
     "odom": OutputSpec(0.0, "nav_msgs/Odometry on ~/odom (0: not built, the default)"),
+    "markers": OutputSpec(0.0, "visualization_msgs/MarkerArray on ~/markers: the inertia box (body frame), omega "
+                               "(body) and L (world) arrows (0: not built, the default)"),
 }
 
 _DURATION_MAX = limits.DURATION_RANGE[1]
@@ -261,6 +270,11 @@ SCENE_SCHEMA: dict[str, Any] = {
             "integrator": _INTEGRATOR,
             "duration": nullable(number("Sim time to run, s; null runs unbounded.", exclusive_minimum=0.0,
                                         maximum=_DURATION_MAX)),
+            "epoch": nullable({
+                "description": "UTC date and time of sim time 0, ISO 8601 (YYYY-MM-DDThh:mm:ss[.f...][Z]); "
+                               f"used by exports (CCSDS AEM). Default {DEFAULT_EPOCH}.",
+                "type": "string", "pattern": EPOCH_PATTERN, "default": DEFAULT_EPOCH,
+            }),
             "real_time_factor": number("Pace: 1 = wall clock, 0 = as fast as possible.",
                                        minimum=limits.REAL_TIME_FACTOR_RANGE[0],
                                        maximum=limits.REAL_TIME_FACTOR_RANGE[1], default=1.0),
@@ -277,6 +291,11 @@ SCENE_SCHEMA: dict[str, Any] = {
                 },
             )),
             "recording": nullable(text("Path of an .mcap file to record the run to.", limits.MAX_TEXT_LENGTH)),
+            "foxglove": nullable({
+                "description": "Serve the run live to Foxglove at [HOST:]PORT (WebSocket; host default 127.0.0.1, "
+                               "loopback); needs foxglove-sdk (pip install rigid_rot_sim[viewer]).",
+                "type": ["string", "integer"], "pattern": r"^(\S+:)?[0-9]{1,5}$", "minimum": 0, "maximum": 65535,
+            }),
             "commands": nullable(mapping(
                 "Settings of the torque command inputs.",
                 {

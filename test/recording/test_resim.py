@@ -39,7 +39,7 @@ def record_like_the_node(path: Path, scene_name: str, steps: int, publish_every:
         run.add_topic("/rigid_rot_sim/state", RigidBodyState, role="state")
         run.add_topic(torque_topic, WrenchStamped, role="torque")
         # as the node does: the recording observes the simulator, so every command is recorded as an event
-        recording = NodeRecording(run, sim, None, "base_link")
+        recording = NodeRecording(run, sim, None)
         sim.add_observer(recording)
         states = []
         for k in range(0, steps, publish_every):

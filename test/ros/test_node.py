@@ -24,7 +24,7 @@ from std_srvs.srv import SetBool, Trigger  # noqa: E402
 from rigid_rot_sim.ros.node import RigidRotSimNode  # noqa: E402
 from rigid_rot_sim.ros.qos import COMMAND_QOS, REJECTED_QOS, STATE_QOS  # noqa: E402
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 SCENES = ROOT / "config" / "scenes"
 
 
@@ -91,7 +91,7 @@ def harness(context):
 
 def test_without_scene_only_compute_inertia_is_served(harness):
     h = harness(None)
-    assert h.node.sim is None
+    assert h.node.run is None
     request = ComputeInertia.Request(masses=[1.0, 1.0])
     request.positions = [_point(0.5, 0, 0), _point(-0.5, 0, 0)]
     response = h.call(ComputeInertia, "compute_inertia", request)
@@ -108,8 +108,8 @@ def _point(x, y, z):
 
 def test_torque_free_scene_builds_no_subscription_and_picks_exact(harness):
     h = harness("free_tumble", real_time_factor=0.0)
-    assert h.node.sim.method == "exact"
-    assert h.node.inputs.subscriptions == []
+    assert h.node.run.sim.method == "exact"
+    assert h.node.run.inputs.subscriptions == []
     subscriptions = dict(h.client.get_subscriber_names_and_types_by_node("rigid_rot_sim", "/"))
     assert not any("torque" in topic for topic in subscriptions)
     assert h.spin_until(lambda: "/rigid_rot_sim/state" in h.published_topics())
@@ -118,17 +118,17 @@ def test_torque_free_scene_builds_no_subscription_and_picks_exact(harness):
                   "/rigid_rot_sim/angular_momentum", "/rigid_rot_sim/mass_properties", "/rigid_rot_sim/rejected", "/clock"):
         assert topic in topics, topic
     assert "/rigid_rot_sim/top_state" not in topics
-    assert h.node.recording is None
+    assert h.node.run.recording is None
 
 
 def test_top_scene_builds_top_state_and_torque_scene_subscribes(harness):
     top = harness("heavy_top", real_time_factor=0.0)
     assert top.spin_until(lambda: "/rigid_rot_sim/top_state" in top.published_topics())
-    assert top.node.sim.method == "exact_split"
+    assert top.node.run.sim.method == "exact_split"
     top.close()
     driven = harness("torque_driven", real_time_factor=0.0)
-    assert [s.topic_name for s in driven.node.inputs.subscriptions] == ["/rigid_rot_sim/torque"]
-    assert driven.node.sim.method == "taylor"
+    assert [s.topic_name for s in driven.node.run.inputs.subscriptions] == ["/rigid_rot_sim/torque"]
+    assert driven.node.run.sim.method == "taylor"
 
 
 def test_parameters_are_validated_and_applied(harness):
@@ -136,24 +136,24 @@ def test_parameters_are_validated_and_applied(harness):
     node = h.node
     refused = node.set_parameters([Parameter("integrator", value="magic")])[0]
     assert not refused.successful and "unknown integrator 'magic'" in refused.reason
-    assert node.sim.method == "taylor" and node.get_parameter("integrator").value == "auto"
+    assert node.run.sim.method == "taylor" and node.get_parameter("integrator").value == "auto"
     for bad_dt in (-0.001, 0.0):
         result = node.set_parameters([Parameter("dt", value=bad_dt)])[0]
         assert not result.successful and result.reason
-    assert node.sim.dt == 0.001
+    assert node.run.sim.dt == 0.001
     assert not node.set_parameters([Parameter("scene", value="other.yaml")])[0].successful
     refused_rate = node.set_parameters([Parameter("rates.top_state", value=10.0)])[0]
     assert not refused_rate.successful and "not built" in refused_rate.reason
     ok = node.set_parameters([Parameter("integrator", value="rk4"), Parameter("dt", value=0.002)])[0]
     assert ok.successful
-    assert node.sim.method == "rk4" and node.sim.dt == 0.002
+    assert node.run.sim.method == "rk4" and node.run.sim.dt == 0.002
     assert node.set_parameters([Parameter("real_time_factor", value=2.0)])[0].successful
-    assert node.run.pacer.real_time_factor == 2.0
+    assert node.run.driver.pacer.real_time_factor == 2.0
     assert node.set_parameters([Parameter("rates.state", value=25.0)])[0].successful
-    assert node.run.schedule.periods["state"] == 20  # 25 Hz at dt = 2 ms
+    assert node.run.driver.schedule.periods["state"] == 20  # 25 Hz at dt = 2 ms
     # the run continues
-    k = node.sim.step_index
-    assert h.spin_until(lambda: node.sim.step_index > k + 100)
+    k = node.run.sim.step_index
+    assert h.spin_until(lambda: node.run.sim.step_index > k + 100)
 
 
 def test_params_file_overrides_the_scene(context, tmp_path):
@@ -165,8 +165,8 @@ def test_params_file_overrides_the_scene(context, tmp_path):
     )
     node = RigidRotSimNode(context=context, cli_args=["--ros-args", "--params-file", str(params)])
     try:
-        assert node.sim.method == "rk4" and node.sim.dt == 0.0005 and node.run.pacer.real_time_factor == 0.0
-        assert node.run.schedule.periods["state"] == 10 and "clock" not in node.run.schedule.periods
+        assert node.run.sim.method == "rk4" and node.run.sim.dt == 0.0005 and node.run.driver.pacer.real_time_factor == 0.0
+        assert node.run.driver.schedule.periods["state"] == 10 and "clock" not in node.run.driver.schedule.periods
     finally:
         node.destroy_node()
 
@@ -178,20 +178,20 @@ def test_pause_step_reset_set_state_services(harness):
     refused = h.call(Step, "step", Step.Request(steps=5))
     assert not refused.success and "not paused" in refused.message
     assert h.call(SetBool, "pause", SetBool.Request(data=True)).success
-    k = h.node.sim.step_index
+    k = h.node.run.sim.step_index
     h.spin_until(lambda: False, timeout=0.2)
-    assert h.node.sim.step_index == k  # paused: no steps
+    assert h.node.run.sim.step_index == k  # paused: no steps
     zero = h.call(Step, "step", Step.Request(steps=0))
     assert not zero.success
     stepped = h.call(Step, "step", Step.Request(steps=25))
-    assert stepped.success and h.node.sim.step_index == k + 25
+    assert stepped.success and h.node.run.sim.step_index == k + 25
     t = stepped.state.header.stamp.sec + stepped.state.header.stamp.nanosec * 1e-9
     assert t == pytest.approx((k + 25) * 0.01, abs=1e-9)
     request = SetState.Request()
     request.orientation.w = 2.0  # normalised by the simulator
     request.angular_velocity = Vector3(x=0.0, y=0.0, z=1.5)
     assert h.call(SetState, "set_state", request).success
-    snap = h.node.sim.snapshot()
+    snap = h.node.run.sim.snapshot()
     assert snap.orientation.tolist() == [0.0, 0.0, 0.0, 1.0] and snap.angular_velocity_body.tolist() == [0.0, 0.0, 1.5]
     bad = SetState.Request()
     bad.orientation.w = 0.0  # all-zero quaternion (the message default is w = 1)
@@ -202,10 +202,10 @@ def test_pause_step_reset_set_state_services(harness):
     bad_omega.angular_velocity.x = math.nan
     assert not h.call(SetState, "set_state", bad_omega).success
     assert h.call(Trigger, "reset", Trigger.Request()).success
-    assert h.node.sim.step_index == 0
-    assert h.node.sim.snapshot().angular_velocity_body.tolist() == [0.3, 0.2, 2.0]
+    assert h.node.run.sim.step_index == 0
+    assert h.node.run.sim.snapshot().angular_velocity_body.tolist() == [0.3, 0.2, 2.0]
     assert h.call(SetBool, "pause", SetBool.Request(data=False)).success
-    assert h.spin_until(lambda: h.node.sim.step_index > 5)
+    assert h.spin_until(lambda: h.node.run.sim.step_index > 5)
 
 
 def test_apply_torque_service_and_rejections(harness):
@@ -238,23 +238,23 @@ def test_apply_torque_service_and_rejections(harness):
     assert any("neither the body frame" in r for r in reasons)
     assert any("non-finite torque.x" in r for r in reasons) and any("non-zero force" in r for r in reasons)
     assert sources == {"/rigid_rot_sim/apply_torque", "/rigid_rot_sim/torque"}
-    assert h.spin_until(lambda: h.node.sim.t > 0.5)
+    assert h.spin_until(lambda: h.node.run.sim.t > 0.5)
     # only the 0.1 s applied torque acted: omega_z = 0.004 * 0.1 / 0.04
-    assert h.node.sim.snapshot().angular_velocity_body[2] == pytest.approx(0.01, rel=1e-9)
+    assert h.node.run.sim.snapshot().angular_velocity_body[2] == pytest.approx(0.01, rel=1e-9)
 
 
 def test_start_paused_waits_for_resume(harness):
     h = harness("free_tumble", real_time_factor=0.0, start_paused=True)
     h.spin_until(lambda: False, timeout=0.3)
-    assert h.node.sim.paused and h.node.sim.step_index == 0
+    assert h.node.run.sim.paused and h.node.run.sim.step_index == 0
     assert h.call(SetBool, "pause", SetBool.Request(data=False)).success
-    assert h.spin_until(lambda: h.node.sim.step_index > 100)
+    assert h.spin_until(lambda: h.node.run.sim.step_index > 100)
 
 
 def test_duration_reached_finishes(harness):
     h = harness("free_tumble", real_time_factor=0.0, duration=0.5)
     assert h.spin_until(lambda: h.node.finished)
-    assert h.node.sim.t == pytest.approx(0.5, abs=1e-12) and h.node.sim.step_index == 50
+    assert h.node.run.sim.t == pytest.approx(0.5, abs=1e-12) and h.node.run.sim.step_index == 50
 
 
 def test_rep105_frames_by_default_on_every_output_and_recorded_tf(harness, tmp_path):
@@ -275,8 +275,8 @@ def test_rep105_frames_by_default_on_every_output_and_recorded_tf(harness, tmp_p
         h.client.create_subscription(msg_type, f"/rigid_rot_sim/{topic}", got[topic].append, qos)
     got["tf"] = []
     h.client.create_subscription(TFMessage, "/tf", got["tf"].append, TF_QOS)
-    h.node.sim.pause(True)
-    publishers = [p for name, p in h.node.outputs.publishers.items() if name in got]
+    h.node.run.sim.pause(True)
+    publishers = [p for name, p in h.node.run.outputs.publishers.items() if name in got]
     assert h.spin_until(lambda: all(p.get_subscription_count() > 0 for p in publishers))
     assert h.call(Trigger, "reset", Trigger.Request()).success  # republishes every output at t = 0, matched now
     assert h.spin_until(lambda: all(got.values()))
@@ -286,10 +286,10 @@ def test_rep105_frames_by_default_on_every_output_and_recorded_tf(harness, tmp_p
     assert got["mass_properties"][0].header.frame_id == "base_link"
     transform = got["tf"][0].transforms[0]
     assert (transform.header.frame_id, transform.child_frame_id) == ("odom", "base_link")
-    assert "/rigid_rot_sim/imu" not in h.published_topics() and "imu" not in h.node.outputs.publishers  # not asked for
-    h.node.sim.pause(False)
+    assert "/rigid_rot_sim/imu" not in h.published_topics() and "imu" not in h.node.run.outputs.publishers  # not asked for
+    h.node.run.sim.pause(False)
     assert h.spin_until(lambda: h.node.finished)
-    h.node.recording.close()
+    h.node.run.recording.close()
     frames = {(m.transforms[0].header.frame_id, m.transforms[0].child_frame_id) for _, m in BagReader(bag).decoded(["/tf"])}
     assert frames == {("odom", "base_link")}
 
@@ -298,13 +298,13 @@ def test_frame_parameters_override_the_scene_and_bad_names_are_refused(context):
     scene = str(SCENES / "heavy_top.yaml")  # frames {world: world, body: top} in the file
     node = RigidRotSimNode(context=context, parameter_overrides=[Parameter("scene", value=scene)])
     try:
-        assert (node.scene.frames.world, node.scene.frames.body) == ("world", "top") and node.sim.frames == node.scene.frames
+        assert (node.run.scene.frames.world, node.run.scene.frames.body) == ("world", "top") and node.run.sim.frames == node.run.scene.frames
     finally:
         node.destroy_node()
     node = RigidRotSimNode(context=context, parameter_overrides=[
         Parameter("scene", value=scene), Parameter("world_frame", value="map"), Parameter("body_frame", value="base_link")])
     try:
-        assert (node.scene.frames.world, node.scene.frames.body) == ("map", "base_link") and node.sim.frames == node.scene.frames
+        assert (node.run.scene.frames.world, node.run.scene.frames.body) == ("map", "base_link") and node.run.sim.frames == node.run.scene.frames
     finally:
         node.destroy_node()
     for world, body, reason in (("map", "map", "must differ"), ("", "base_link", "non-empty")):
@@ -319,7 +319,8 @@ def test_frame_parameters_override_the_scene_and_bad_names_are_refused(context):
 def test_recording_without_the_mcap_package_is_disabled_with_a_message(context, tmp_path, monkeypatch, capfd):
     import sys
 
-    for name in [n for n in sys.modules if n == "mcap" or n.startswith(("mcap.", "rigid_rot_sim.recording."))]:
+    for name in [n for n in sys.modules if n in ("mcap", "rigid_rot_sim.ros.recording")
+                 or n.startswith(("mcap.", "rigid_rot_sim.recording."))]:
         parent, _, child = name.rpartition(".")
         if parent in sys.modules and hasattr(sys.modules[parent], child):
             # undone after the test: the package attribute points at the original module again
@@ -329,11 +330,11 @@ def test_recording_without_the_mcap_package_is_disabled_with_a_message(context, 
     node = RigidRotSimNode(context=context, parameter_overrides=[
         Parameter("scene", value=str(SCENES / "free_tumble.yaml")), Parameter("record_path", value=str(tmp_path / "x.mcap"))])
     try:
-        assert node.recording is None and node.sim is not None and not (tmp_path / "x.mcap").exists()
+        assert node.run.recording is None and node.run.sim is not None and not (tmp_path / "x.mcap").exists()
         assert "recording disabled: mcap is not installed" in capfd.readouterr().err
-        k = node.sim.step_index  # the run itself goes on
-        node.sim.advance_to(k + 3)
-        assert node.sim.step_index == k + 3
+        k = node.run.sim.step_index  # the run itself goes on
+        node.run.sim.advance_to(k + 3)
+        assert node.run.sim.step_index == k + 3
     finally:
         node.destroy_node()
 
@@ -350,7 +351,7 @@ def test_without_simulation_interfaces_the_node_runs_without_the_standard_servic
     executor.add_node(node)
     executor.add_node(probe)
     try:
-        assert node.simulation_services is None
+        assert node.run.simulation_services is None
 
         def services():
             return dict(probe.get_service_names_and_types_by_node("rigid_rot_plain", "/"))
@@ -387,7 +388,7 @@ def test_integer_values_for_double_parameters_are_stored_as_floats(context, tmp_
         for name, value in (("real_time_factor", 0.0), ("duration", 5.0), ("rates.state", 50.0), ("dt", 1.0)):
             stored = node.get_parameter(name)
             assert stored.type_ == Parameter.Type.DOUBLE and stored.value == value and isinstance(stored.value, float)
-        assert node.run.pacer.real_time_factor == 0.0 and node.run.duration == 5.0 and node.sim.dt == 1.0
+        assert node.run.driver.pacer.real_time_factor == 0.0 and node.run.driver.duration == 5.0 and node.run.sim.dt == 1.0
         # what `ros2 param set` sends: the SetParameters service of the node, an INTEGER value
         service = client.create_client(SetParameters, "/rigid_rot_sim/set_parameters")
         assert service.wait_for_service(timeout_sec=30.0)
@@ -399,12 +400,12 @@ def test_integer_values_for_double_parameters_are_stored_as_floats(context, tmp_
         (result,) = future.result().results
         assert result.successful, result.reason
         stored = node.get_parameter("real_time_factor")
-        assert stored.type_ == Parameter.Type.DOUBLE and stored.value == 2.0 and node.run.pacer.real_time_factor == 2.0
+        assert stored.type_ == Parameter.Type.DOUBLE and stored.value == 2.0 and node.run.driver.pacer.real_time_factor == 2.0
         # the ranges still apply, and other types are still refused
         assert not node.set_parameters([Parameter("real_time_factor", value=5000)])[0].successful
         assert not node.set_parameters([Parameter("dt", value="fast")])[0].successful
         assert node.set_parameters([Parameter("rates.state", value=20)])[0].successful
-        assert node.get_parameter("rates.state").value == 20.0 and node.run.schedule.periods["state"] == 1  # dt = 1 s
+        assert node.get_parameter("rates.state").value == 20.0 and node.run.driver.schedule.periods["state"] == 1  # dt = 1 s
     finally:
         executor.shutdown()
         client.destroy_node()
@@ -418,11 +419,11 @@ def test_output_qos_from_parameters_and_scene(harness, context, tmp_path):
 
     h = harness("free_tumble", real_time_factor=0.0, **{"qos.reliability": "best_effort", "qos.depth": 1000})
     for name in ("state", "orientation", "angular_velocity", "angular_momentum"):
-        profile = h.node.outputs.publishers[name].qos_profile
+        profile = h.node.run.outputs.publishers[name].qos_profile
         assert profile.reliability == ReliabilityPolicy.BEST_EFFORT and profile.depth == 1000
         assert profile.durability == DurabilityPolicy.VOLATILE
-    assert h.node.outputs.publishers["tf"].qos_profile.depth == TF_QOS.depth  # /tf keeps tf2's profile
-    assert h.node.outputs.publishers["tf"].qos_profile.reliability == ReliabilityPolicy.RELIABLE
+    assert h.node.run.outputs.publishers["tf"].qos_profile.depth == TF_QOS.depth  # /tf keeps tf2's profile
+    assert h.node.run.outputs.publishers["tf"].qos_profile.reliability == ReliabilityPolicy.RELIABLE
     assert not h.node.set_parameters([Parameter("qos.depth", value=5)])[0].successful  # read only
     h.close()
 
@@ -430,7 +431,7 @@ def test_output_qos_from_parameters_and_scene(harness, context, tmp_path):
     scene.write_text((SCENES / "free_tumble.yaml").read_text() + "qos: {reliability: reliable, depth: 3}\n")
     node = RigidRotSimNode(context=context, parameter_overrides=[Parameter("scene", value=str(scene))])
     try:
-        profile = node.outputs.publishers["state"].qos_profile
+        profile = node.run.outputs.publishers["state"].qos_profile
         assert profile.reliability == ReliabilityPolicy.RELIABLE and profile.depth == 3
         assert node.get_parameter("qos.depth").value == 3
     finally:
@@ -444,24 +445,24 @@ def test_tf_static_carries_the_principal_frame_only_where_it_differs(harness):
     from rigid_rot_sim.core.inertia import principal_frame, principal_orientation
 
     h = harness("from_point_masses", real_time_factor=0.0)
-    (transform,) = h.node.outputs.static_transforms
+    (transform,) = h.node.run.outputs.static_transforms
     assert (transform.header.frame_id, transform.child_frame_id) == ("base_link", "base_link_principal")
-    tensor = h.node.scene.body.inertia_array
+    tensor = h.node.run.scene.body.inertia_array
     r = transform.transform.rotation
     assert [r.x, r.y, r.z, r.w] == principal_orientation(principal_frame(tensor)[1]).tolist()
     t = transform.transform.translation
-    assert [t.x, t.y, t.z] == list(h.node.scene.body.center_of_mass)
+    assert [t.x, t.y, t.z] == list(h.node.run.scene.body.center_of_mass)
     # by topic, not by node name: a node of an earlier test with the same name may linger in the graph
     assert h.spin_until(lambda: any(info.node_name == "rigid_rot_sim"
                                     for info in h.client.get_publishers_info_by_topic("/tf_static")))
     h.close()
     top = harness("heavy_top", real_time_factor=0.0)  # principal moments about the pivot, centre of mass on z
-    (shifted,) = top.node.outputs.static_transforms
+    (shifted,) = top.node.run.outputs.static_transforms
     assert shifted.transform.rotation.w == 1.0
-    assert shifted.transform.translation.z == top.node.scene.body.center_of_mass[2] > 0.0
+    assert shifted.transform.translation.z == top.node.run.scene.body.center_of_mass[2] > 0.0
     top.close()
     plain = harness("torque_driven", real_time_factor=0.0)
-    assert plain.node.outputs.static_transforms == [] and "tf_static" not in plain.node.outputs.publishers
+    assert plain.node.run.outputs.static_transforms == [] and "tf_static" not in plain.node.run.outputs.publishers
 
 
 @pytest.mark.parametrize("override,expected", [

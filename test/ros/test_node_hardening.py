@@ -39,16 +39,16 @@ def test_reset_after_a_failure_brings_the_run_back(harness):
     # before: 1e30 N*m overflowed, ~/reset answered success and the run stayed paused
     huge = ApplyTorque.Request(torque=Vector3(x=1e12), duration=Duration(sec=10))
     assert h.call(ApplyTorque, "apply_torque", huge).success
-    assert h.spin_until(lambda: h.node.sim.failure is not None)
-    assert h.node.sim.paused and "rotation limit" in h.node.sim.failure
+    assert h.spin_until(lambda: h.node.run.sim.failure is not None)
+    assert h.node.run.sim.paused and "rotation limit" in h.node.run.sim.failure
     reply = h.call(Trigger, "reset", Trigger.Request())
     assert reply.success and "running" in reply.message, reply.message
-    k = h.node.sim.step_index
-    assert h.spin_until(lambda: h.node.sim.step_index > k + 100)
+    k = h.node.run.sim.step_index
+    assert h.spin_until(lambda: h.node.run.sim.step_index > k + 100)
     # a pause asked for is kept by reset, and the reply says so
     assert h.call(SetBool, "pause", SetBool.Request(data=True)).success
     reply = h.call(Trigger, "reset", Trigger.Request())
-    assert reply.success and "still paused" in reply.message and h.node.sim.paused
+    assert reply.success and "still paused" in reply.message and h.node.run.sim.paused
 
 
 def test_compute_inertia_results_are_finite_or_refused_and_large_requests_are_refused(harness):
@@ -92,15 +92,15 @@ def test_huge_angular_velocity_is_refused_and_every_published_field_is_finite(ha
 def test_step_requests_are_bounded_and_other_services_keep_answering(harness):
     h = harness("thin_rod", real_time_factor=1.0, integrator="taylor")
     assert h.call(SetBool, "pause", SetBool.Request(data=True)).success
-    k = h.node.sim.step_index
+    k = h.node.run.sim.step_index
     # before: 1e9 steps never replied, every other service was dead and SIGTERM was ignored
     start = time.monotonic()
     reply = h.call(Step, "step", Step.Request(steps=1_000_000_000))
     assert not reply.success and f"exceeds the limit of {limits.MAX_STEPS_PER_REQUEST}" in reply.message
-    assert h.node.sim.step_index == k
+    assert h.node.run.sim.step_index == k
     reply = h.call(Step, "step", Step.Request(steps=limits.MAX_STEPS_PER_REQUEST))
     elapsed = time.monotonic() - start
-    done = h.node.sim.step_index - k
+    done = h.node.run.sim.step_index - k
     assert 0 < done <= limits.MAX_STEPS_PER_REQUEST
     if done < limits.MAX_STEPS_PER_REQUEST:  # stopped at the request's wall budget, and says so
         assert not reply.success and f"only {done} of" in reply.message
@@ -109,18 +109,18 @@ def test_step_requests_are_bounded_and_other_services_keep_answering(harness):
     assert elapsed < 10.0  # ~0.25 s of stepping plus DDS round trips on a loaded machine
     other = ComputeInertia.Request(masses=[1.0], positions=[Point()])
     assert h.call(ComputeInertia, "compute_inertia", other).success
-    assert h.node.sim.paused and h.node.sim.step_index == k + done  # no racing while paused
+    assert h.node.run.sim.paused and h.node.run.sim.step_index == k + done  # no racing while paused
 
 
 def test_use_sim_time_is_refused_and_the_timer_is_steady(context, harness):
     h = harness("free_tumble", real_time_factor=1.0)
-    assert h.node.timer.clock.clock_type == ClockType.STEADY_TIME
+    assert h.node.run.timer.clock.clock_type == ClockType.STEADY_TIME
     # before: use_sim_time true froze the node (its timer waited for the /clock it publishes)
     result = h.node.set_parameters([Parameter("use_sim_time", value=True)])[0]
     assert not result.successful and "source of sim time" in result.reason
     assert h.node.get_parameter("use_sim_time").value is False
-    k = h.node.sim.step_index
-    assert h.spin_until(lambda: h.node.sim.step_index > k + 20)
+    k = h.node.run.sim.step_index
+    assert h.spin_until(lambda: h.node.run.sim.step_index > k + 20)
     with pytest.raises(ValueError, match="use_sim_time true is refused"):
         RigidRotSimNode(
             context=context,
@@ -146,7 +146,7 @@ def test_max_torque_and_long_frame_ids_are_rejected_on_the_rejected_topic(harnes
     send(Vector3(x=1e6))
     assert h.spin_until(lambda: any("exceeds max_torque = 1 N*m" in m.reason for m in rejected))
     assert h.node.set_parameters([Parameter("commands.max_torque", value=1e7)])[0].successful
-    assert h.node.sim.max_torque == 1e7
+    assert h.node.run.sim.max_torque == 1e7
     # before: a 1 MB frame_id was echoed twice into ~/rejected
     send(Vector3(z=0.001), frame_id="f" * 1_000_000)
     assert h.spin_until(lambda: any("exceeds the limit of 256" in m.reason for m in rejected))
@@ -156,7 +156,7 @@ def test_max_torque_and_long_frame_ids_are_rejected_on_the_rejected_topic(harnes
 
 def test_command_qos_depth_is_a_read_only_parameter(harness):
     h = harness("torque_driven", real_time_factor=0.0, **{"commands.qos_depth": 500})
-    subscription = h.node.inputs.subscriptions[0]
+    subscription = h.node.run.inputs.subscriptions[0]
     assert subscription.qos_profile.depth == 500
     assert not h.node.set_parameters([Parameter("commands.qos_depth", value=5)])[0].successful
     with pytest.raises(rclpy.exceptions.InvalidParameterValueException):

@@ -21,7 +21,7 @@ def test_a_publish_interrupted_on_the_wire_is_already_recorded(tmp_path):
             rclpy.parameter.Parameter("record_path", value=str(bag)),
             rclpy.parameter.Parameter("real_time_factor", value=0.0),
         ])
-        state_publisher = node.outputs.publishers["state"]
+        state_publisher = node.run.outputs.publishers["state"]
         sent = []
 
         def publish_then_interrupt(data):
@@ -30,7 +30,7 @@ def test_a_publish_interrupted_on_the_wire_is_already_recorded(tmp_path):
 
         state_publisher.publish = publish_then_interrupt
         with pytest.raises(KeyboardInterrupt):
-            node.run.publish_due(force=True)
+            node.run.driver.publish_due(force=True)
         node.destroy_node()
     finally:
         rclpy.try_shutdown(context=context)

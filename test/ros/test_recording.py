@@ -25,7 +25,7 @@ def test_every_event_kind_is_recorded_and_replayed_bit_for_bit(tmp_path):
                       integrator={"method": sim.method, "dt": sim.dt, "options": sim.options},
                       events_topic="/rigid_rot_sim/sim_events")
     run.add_topic("/rigid_rot_sim/state", RigidBodyState, role="state")
-    sim.add_observer(NodeRecording(run, sim, None, "base_link"))
+    sim.add_observer(NodeRecording(run, sim, None))
 
     def publish():
         run.record("/rigid_rot_sim/state", conversions.snapshot_to_state(sim.snapshot(), "odom", "base_link"))
@@ -67,7 +67,7 @@ def test_rejected_commands_record_no_event(tmp_path):
     sim = Simulator(load_scene(SCENE), method="rk4")
     with RunRecorder(bag, scene_text=SCENE.read_text(), scene_file=str(SCENE), parameters={},
                      integrator={"method": sim.method, "dt": sim.dt}, events_topic="/e/sim_events") as run:
-        sim.add_observer(NodeRecording(run, sim, None, "base_link"))
+        sim.add_observer(NodeRecording(run, sim, None))
         with pytest.raises(CommandRejected):
             sim.receive_torque("~/torque", (float("inf"), 0.0, 0.0), "base_link", 0.0)
     assert BagReader(bag).counts().get("/e/sim_events", 0) == 0
@@ -88,29 +88,6 @@ def test_tf_and_the_latched_tf_static_are_recorded_as_published(tmp_path):
     assert static.transforms[0].child_frame_id == "base_link_principal"
 
 
-def test_without_tf2_msgs_the_recording_still_gets_tf_from_the_states(tmp_path, monkeypatch):
-    from rigid_rot_sim.recording.reader import BagReader
-    from rigid_rot_sim.ros import outputs
-
-    monkeypatch.setattr(outputs, "TFMessage", None)  # as on an install without tf2_msgs
-    bag = tmp_path / "no_tf2.mcap"
-
-    def no_tf_publisher(node):
-        assert "tf" not in node.outputs.publishers and node.count_publishers("/tf") == 0
-
-    _record_half_a_second(bag, check_node=no_tf_publisher)
-    reader = BagReader(bag)
-    assert reader.complete and "/tf_static" not in reader.counts()
-    assert reader.counts()["/tf"] == 26  # 50 Hz over 0.5 s, both ends, built from ~/state
-    states = {(m.header.stamp.sec, m.header.stamp.nanosec): m for _, m in reader.decoded(["/rigid_rot_sim/state"])}
-    for _, tf in reader.decoded(["/tf"]):
-        (transform,) = tf.transforms
-        state = states[(transform.header.stamp.sec, transform.header.stamp.nanosec)]
-        assert transform.child_frame_id == "base_link" and transform.header.frame_id == "odom"
-        rotation, orientation = transform.transform.rotation, state.orientation
-        assert (rotation.x, rotation.y, rotation.z, rotation.w) == (orientation.x, orientation.y, orientation.z, orientation.w)
-
-
 def _record_half_a_second(bag: Path, check_node=None) -> None:
     """An in-process node on from_point_masses, recorded to ``bag`` for 0.5 s of sim time as fast as it goes."""
     import rclpy
@@ -129,7 +106,7 @@ def _record_half_a_second(bag: Path, check_node=None) -> None:
         if check_node is not None:
             check_node(node)
         while not node.finished:
-            node.timer_callback()
+            node.run.tick()
         node.destroy_node()
     finally:
         rclpy.try_shutdown(context=context)

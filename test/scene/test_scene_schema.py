@@ -1,9 +1,11 @@
 """The scene schema: exported as committed, valid JSON Schema, bounded like the node's parameters,
 described for editors, and its errors turned into one line naming the key."""
 
+import copy
 import dataclasses
 import doctest
 import json
+import pickle
 import re
 from pathlib import Path
 
@@ -12,7 +14,7 @@ from jsonschema import Draft202012Validator
 
 from rigid_rot_sim.core import limits
 from rigid_rot_sim.scene import schema
-from rigid_rot_sim.scene.scene import DEFAULT_OUTPUT_RATES, OUTPUT_NAMES, Outputs, SceneError, parse_scene_text
+from rigid_rot_sim.scene.scene import DEFAULT_OUTPUT_RATES, OUTPUT_NAMES, OutputRates, SceneError, parse_scene_text
 from rigid_rot_sim.scene.scene_schema import OUTPUTS, SCENE_SCHEMA
 
 ROOT = Path(__file__).resolve().parents[2]
@@ -64,10 +66,22 @@ def test_bounds_are_the_node_parameter_ranges(path, bounds):
 
 
 def test_outputs_come_from_one_table():
-    assert OUTPUT_NAMES == tuple(OUTPUTS) == tuple(f.name for f in dataclasses.fields(Outputs))
-    assert DEFAULT_OUTPUT_RATES == {name: f.default for name, f in zip(OUTPUT_NAMES, dataclasses.fields(Outputs))}
+    assert OUTPUT_NAMES == tuple(OUTPUTS) == tuple(OutputRates())
+    assert DEFAULT_OUTPUT_RATES == dict(OutputRates())
     assert list(SCENE_SCHEMA["properties"]["outputs"]["properties"]) == list(OUTPUTS)
-    assert Outputs(imu=5.0).as_dict()["imu"] == 5.0 and Outputs().as_dict() == DEFAULT_OUTPUT_RATES
+    assert OutputRates(imu=5.0)["imu"] == 5.0 and OutputRates({"odom": 2})["odom"] == 2.0
+
+
+def test_output_rates_are_a_frozen_mapping():
+    rates = OutputRates(imu=5.0)
+    assert rates == OutputRates({"imu": 5.0}) != OutputRates() and hash(rates) == hash(OutputRates(imu=5.0))
+    with pytest.raises(AttributeError):
+        rates.imu = 1.0  # type: ignore[attr-defined]
+    with pytest.raises(TypeError):
+        rates["imu"] = 1.0  # type: ignore[index]
+    with pytest.raises(KeyError, match="velocity"):
+        OutputRates(velocity=1.0)
+    assert pickle.loads(pickle.dumps(rates)) == rates and copy.deepcopy(rates) == rates
 
 
 @pytest.mark.parametrize("path", sorted((ROOT / "config" / "scenes").glob("*.yaml")), ids=lambda p: p.stem)

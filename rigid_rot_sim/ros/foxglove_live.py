@@ -1,0 +1,55 @@
+"""The node's Foxglove live server: a listener of every message the node publishes.
+
+Attached like the recorder (``outputs.listeners``), so the server streams exactly the bytes
+that go on the wire, stamped with the sim time they were published at; each ``state`` (or,
+without it, ``orientation``/``angular_velocity`` are not enough: the body scene needs omega
+and L, so it follows ``state``) also updates the body scene entity and the server's time. See
+:mod:`rigid_rot_sim.viewer.foxglove` for what Foxglove shows.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+from rigid_rot_sim.message_fields import state_to_arrays
+from rigid_rot_sim.recording.session import type_name_of
+from rigid_rot_sim.run.body_view import BodyView
+from rigid_rot_sim.run.simulator import Simulator
+from rigid_rot_sim.scene.scene import Frames
+from rigid_rot_sim.viewer.foxglove import BodyScene, FoxgloveServer, available, parse_address
+
+__all__ = ["FoxgloveLive", "start"]
+
+
+class FoxgloveLive:
+    """Streams the node's published messages to a :class:`FoxgloveServer` (a ``PublishedListener``)."""
+
+    def __init__(self, server: FoxgloveServer, sim: Simulator) -> None:
+        self.server = server
+        self.sim = sim
+        self._types: dict[type, str] = {}
+
+    def published(self, name: str, topic: str, data: bytes, msg: Any) -> None:
+        t_ns = round(self.sim.t * 1e9)
+        kind = type(msg)
+        type_name = self._types.get(kind) or self._types.setdefault(kind, type_name_of(kind))
+        self.server.log(topic, type_name, data, t_ns)
+        if name == "state":
+            state = state_to_arrays(msg)
+            self.server.log_state(t_ns, state["angular_velocity_body"], state["angular_momentum_world"])
+
+    def close(self) -> None:
+        self.server.close()
+
+
+def start(address: str, sim: Simulator, view: BodyView, frames: Frames, namespace: str) -> tuple[FoxgloveLive | None, str]:
+    """The live server on ``[HOST:]PORT`` and the start-up line's words; (None, why) without foxglove-sdk.
+
+    ValueError for a malformed address; OSError when the port cannot be bound.
+    """
+    host, port = parse_address(address)
+    if not available():
+        return None, "Foxglove live server (foxglove-sdk not installed: pip install rigid_rot_sim[viewer])"
+    scene_topic = f"{namespace.rstrip('/')}/body_scene"
+    server = FoxgloveServer(host, port, BodyScene(view, frames.world, frames.body), scene_topic=scene_topic)
+    return FoxgloveLive(server, sim), f"Foxglove live server ws://{host}:{server.port} ({scene_topic})"

@@ -1,0 +1,90 @@
+"""The node's parameter table: what it declares is what the table says, and each name is written once."""
+
+import ast
+from pathlib import Path
+
+import pytest
+
+rclpy = pytest.importorskip("rclpy")
+from rcl_interfaces.msg import ParameterType  # noqa: E402
+from rclpy.parameter import Parameter  # noqa: E402
+
+from rigid_rot_sim.ros import parameters  # noqa: E402
+from rigid_rot_sim.ros.node import RigidRotSimNode  # noqa: E402
+from rigid_rot_sim.scene.scene import OUTPUT_NAMES, load_scene  # noqa: E402
+from rigid_rot_sim.share import resolve_scene  # noqa: E402
+
+PACKAGE = Path(parameters.__file__).resolve().parents[1]
+TYPES = {bool: ParameterType.PARAMETER_BOOL, int: ParameterType.PARAMETER_INTEGER,
+         float: ParameterType.PARAMETER_DOUBLE, str: ParameterType.PARAMETER_STRING}
+#: String literals in ros/ and cli/ equal to a parameter name that are NOT that parameter:
+#: the recording's integrator record and event kind, and argparse's names for the CLI options.
+NOT_PARAMETERS = {
+    ("ros/recording.py", "dt"), ("ros/recording.py", "integrator"),
+    ("cli/run.py", "scene"), ("cli/run.py", "real_time_factor"), ("cli/run.py", "record_log_time"),
+}
+
+
+@pytest.fixture
+def node():
+    context = rclpy.Context()
+    rclpy.init(context=context)
+    made = RigidRotSimNode(context=context, parameter_overrides=[Parameter("scene", value="heavy_top")])
+    yield made
+    made.destroy_node()
+    rclpy.shutdown(context=context)
+
+
+def test_the_table_is_what_the_node_declares(node):
+    names = [spec.name for spec in parameters.PARAMETERS]
+    assert len(names) == len(set(names))
+    assert [spec.name for spec in parameters.RATES.values()] == [f"rates.{name}" for name in OUTPUT_NAMES]
+    declared = set(node.list_parameters([], 0).names)
+    assert declared == set(names) | {parameters.SCENE.name, "use_sim_time", "start_type_description_service"}
+    scene = load_scene(resolve_scene("heavy_top"))
+    for spec in parameters.PARAMETERS:
+        described = node.describe_parameter(spec.name)
+        assert described.type == TYPES[spec.type], spec.name
+        assert described.read_only == spec.read_only and described.description == spec.description, spec.name
+        assert node.get_parameter(spec.name).value == spec.default(scene), spec.name
+        if spec.range is not None:
+            (declared_range,) = described.floating_point_range or described.integer_range
+            assert (declared_range.from_value, declared_range.to_value) == spec.range, spec.name
+        if spec.choices:
+            assert described.additional_constraints == "one of: " + ", ".join(spec.choices)
+
+
+def test_settings_read_by_spec_are_typed_values(node):
+    settings = parameters.read_settings(node, node.run.scene)
+    assert settings[parameters.DT] == node.run.sim.dt and isinstance(settings[parameters.DT], float)
+    assert settings.rates() == {name: node.get_parameter(f"rates.{name}").value for name in OUTPUT_NAMES}
+
+
+def test_run_time_checks_and_actions_run_once_per_change(node):
+    # integrator and dt share their check and action: one set_integrator for both
+    from rigid_rot_sim.run.observer import SimulationObserver
+
+    changes = []
+
+    class Spy(SimulationObserver):
+        def integrator_changed(self, step, method, dt, options):
+            changes.append((method, dt))
+
+    node.run.sim.add_observer(Spy())
+    result = node.set_parameters_atomically([Parameter("integrator", value="rk4"), Parameter("dt", value=0.002)])
+    assert result.successful and changes == [("rk4", 0.002)]
+    refused = node.set_parameters([Parameter("rates.odom", value=5.0)])[0]  # ~/odom was not built
+    assert not refused.successful and "restart with rates.odom > 0" in refused.reason
+
+
+def test_each_parameter_name_is_written_once_in_ros_and_cli():
+    rates = {spec.name for spec in parameters.RATES.values()}  # written once, as f"rates.{output}"
+    names = {spec.name for spec in parameters.PARAMETERS} - rates | {parameters.SCENE.name, "rates."}
+    written: dict[str, list[str]] = {}
+    for path in [*PACKAGE.joinpath("ros").glob("*.py"), *PACKAGE.joinpath("cli").glob("*.py")]:
+        where = path.relative_to(PACKAGE).as_posix()
+        for item in ast.walk(ast.parse(path.read_text())):
+            if isinstance(item, ast.Constant) and item.value in names and (where, item.value) not in NOT_PARAMETERS:
+                written.setdefault(item.value, []).append(f"{where}:{item.lineno}")
+    assert {name: places for name, places in written.items() if len(places) != 1} == {}
+    assert set(written) == names
