@@ -21,7 +21,9 @@ from rclpy.serialization import serialize_message
 from rigid_rot_msgs.msg import RejectedCommand, RigidBodyState
 from std_srvs.srv import SetBool
 
+from rigid_rot_sim.recording.reader import BagReader, info
 from rigid_rot_sim.recording.resim import resimulate
+from rigid_rot_sim.run.digest import format_digest
 
 
 STATE = "/rigid_rot_sim/state"
@@ -102,6 +104,8 @@ def test_the_closed_loop_is_bit_identical_on_every_repeat_even_under_load(launch
     assert report.identical, report.format()
     assert report.states >= expected_turns  # the recording has every turn, t_0 included
     assert report.digest == report.recorded_digest == digest
+    assert BagReader(bag).metadata["digest"]["digest"] == format_digest(digest)  # the file's summary
+    assert f"Digest:     {format_digest(digest)}" in info(bag)  # rigid-rot bag info
 
 
 def _answer(collector, publisher, stamp, torque_z=0.001):
