@@ -183,7 +183,7 @@ $(STAMPS)/msgs: $(STAMPS)/cmake-includes $(MSGS_SOURCES)
 VENDORED_MSGS := tf2_msgs simulation_interfaces
 VENDOR_STAMPS := $(VENDORED_MSGS:%=$(STAMPS)/vendor-%)
 .SECONDEXPANSION:
-$(STAMPS)/vendor-%: $(STAMPS)/cmake-includes $$(wildcard rigid_rot_msgs/vendor/$$*/*.* rigid_rot_msgs/vendor/$$*/msg/* rigid_rot_msgs/vendor/$$*/srv/*)
+$(STAMPS)/vendor-%: $(STAMPS)/cmake-includes $$(wildcard rigid_rot_msgs/vendor/$$*/*.* rigid_rot_msgs/vendor/$$*/msg/* rigid_rot_msgs/vendor/$$*/srv/* rigid_rot_msgs/vendor/$$*/action/*)
 	@if "$(VPY)" -c 'import importlib.util, sys; s = importlib.util.find_spec("$*"); sys.exit(0 if s and not (s.origin or "").startswith("$(VENV)/") else 1)'; then \
 		echo "setup: using the installed $* (nothing built)"; \
 	else \

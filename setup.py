@@ -41,9 +41,9 @@ setup(
     tests_require=["pytest", "hypothesis", "rosbags"],
     entry_points={
         "console_scripts": [
-            "rigid-rot = rigid_rot_sim.cli:main",
-            "rigid_rot_sim_node = rigid_rot_sim.ros.node:main",
-            "rigid-rot-controller = rigid_rot_sim.ros.controller:main",
+            "rigid-rot = rigid_rot_sim.console_scripts:rigid_rot",
+            "rigid_rot_sim_node = rigid_rot_sim.console_scripts:rigid_rot_sim_node",
+            "rigid-rot-controller = rigid_rot_sim.console_scripts:rigid_rot_controller",
         ],
     },
 )

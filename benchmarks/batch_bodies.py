@@ -6,7 +6,9 @@ Each figure is the best of three timed runs, each run advancing N random bodies
 (I in [1, 3] kg*m^2, |omega| ~ 1 rad/s, a constant body torque per body) by as many steps
 of 1 ms as fill about ``--seconds / 3`` of wall-clock time. Then, for rk4 at the largest N,
 the same compiled loop on one thread (``numba.set_num_threads(1)``) in the same run: the
-parallel speed-up over the cores. For reference, the numpy-vectorised batch core this
+parallel speed-up over the cores; and rk4's structure-of-arrays loop (the default layout)
+against the per-body loop it replaced (``layout="per_body"``), on all threads and on one,
+interleaved in the same run (issue 21). For reference, the numpy-vectorised batch core this
 replaced did about 2e6 body-steps/s for rk4 on this machine (issue 11). Printed, never
 asserted: on a shared machine compare ratios of one run.
 """
@@ -27,20 +29,20 @@ from rigid_rot_sim.core.batch import BATCH_METHODS, advance_batch
 OLD_NUMPY_RK4 = 2e6
 
 
-def body_steps_per_second(method: str, n: int, seconds: float, rng: np.random.Generator) -> float:
+def body_steps_per_second(method: str, n: int, seconds: float, rng: np.random.Generator, layout: str = "soa") -> float:
     moments = np.sort(rng.uniform(1.0, 3.0, size=(n, 3)), axis=1)
     q = rng.normal(size=(n, 4))
     omega = rng.normal(size=(n, 3))
     torque = 0.01 * rng.normal(size=(n, 3))
     # calibrate the number of steps on one step
     start = time.perf_counter()
-    advance_batch(method, moments, q, omega, 1e-3, 1, torque)
+    advance_batch(method, moments, q, omega, 1e-3, 1, torque, layout=layout)
     one = time.perf_counter() - start
     steps = max(1, int(seconds / 3.0 / max(one, 1e-7)))
     best = float("inf")
     for _ in range(3):
         start = time.perf_counter()
-        advance_batch(method, moments, q, omega, 1e-3, steps, torque)
+        advance_batch(method, moments, q, omega, 1e-3, steps, torque, layout=layout)
         best = min(best, time.perf_counter() - start)
     return n * steps / best
 
@@ -66,7 +68,20 @@ def main() -> None:
     numba.set_num_threads(threads)
     print(f"rk4, N = {sizes[-1]}: {rk4:.3e} body-steps/s on {threads} threads, {one:.3e} on 1 thread "
           f"({rk4 / one:.2f}x); {rk4 / OLD_NUMPY_RK4:.1f}x the numpy batch core's {OLD_NUMPY_RK4:.0e}")
-
+    # issue 21: the structure-of-arrays rk4 against the per-body loop it replaced, same run, same bodies
+    n = sizes[-1]
+    rates = {}
+    for label, count in ((f"{threads} threads", threads), ("1 thread", 1)):
+        numba.set_num_threads(count)
+        for layout in ("per_body", "soa", "per_body", "soa"):  # interleaved: load bursts hit both alike
+            rate = body_steps_per_second("rk4", n, args.seconds, rng, layout)
+            rates[label, layout] = max(rates.get((label, layout), 0.0), rate)
+    numba.set_num_threads(threads)
+    for label in (f"{threads} threads", "1 thread"):
+        old, new = rates[label, "per_body"], rates[label, "soa"]
+        print(f"rk4 with attitude, N = {n}, {label}: per-body loop {old:.3e}, SIMD layout {new:.3e} body-steps/s "
+              f"({new / old:.2f}x)")
+    print(f"load average {' '.join(f'{v:.2f}' for v in os.getloadavg())}")
 
 if __name__ == "__main__":
     main()

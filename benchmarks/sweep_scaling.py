@@ -27,7 +27,7 @@ import time
 
 import numpy as np
 
-from rigid_rot_sim.analysis.engine import open_client, run_local, run_sweep
+from rigid_rot_sim.analysis.cluster import open_client, run_local, run_sweep
 from rigid_rot_sim.analysis.sweep_spec import parse_sweep_text
 
 SPEC = """

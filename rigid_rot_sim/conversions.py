@@ -18,6 +18,7 @@ from geometry_msgs.msg import (
     Inertia,
     InertiaStamped,
     Point,
+    PoseWithCovarianceStamped,
     Quaternion,
     QuaternionStamped,
     TransformStamped,
@@ -25,10 +26,10 @@ from geometry_msgs.msg import (
     Vector3Stamped,
 )
 from nav_msgs.msg import Odometry
-from rigid_rot_msgs.msg import HeavyTopState, RejectedCommand, RigidBodyState
+from rigid_rot_msgs.msg import HeavyTopState, RejectedCommand, RigidBodyState, TorqueBreakdown, WheelTorques
 from rigid_rot_msgs.srv import ComputeInertia
 from rosgraph_msgs.msg import Clock
-from sensor_msgs.msg import Imu
+from sensor_msgs.msg import Imu, JointState
 from std_msgs.msg import ColorRGBA
 from visualization_msgs.msg import Marker, MarkerArray
 
@@ -346,6 +347,35 @@ def snapshot_to_odometry(snapshot: StateSnapshot, world_frame: str, body_frame: 
     return msg
 
 
+def wheel_torques_from_msg(msg: WheelTorques) -> tuple[list[float], float]:
+    """rigid_rot_msgs/WheelTorques -> (motor torques N*m, unvalidated; header stamp s, 0 = none)."""
+    return [float(v) for v in msg.torques], time_to_seconds(msg.header.stamp)
+
+
+def snapshot_to_joint_state(snapshot: StateSnapshot, body_frame: str) -> JointState:
+    """The reaction wheels as sensor_msgs/JointState: name, velocity = speed relative to the body (rad/s),
+    effort = the motor torque acting (N*m); position is left empty (a wheel's angle is not simulated)."""
+    msg = JointState()
+    msg.header.stamp = seconds_to_time(snapshot.t)
+    msg.header.frame_id = body_frame
+    msg.name = list(snapshot.wheel_names or ())
+    msg.velocity = [float(v) for v in (snapshot.wheel_speeds if snapshot.wheel_speeds is not None else ())]
+    msg.effort = [float(v) for v in (snapshot.wheel_torques if snapshot.wheel_torques is not None else ())]
+    return msg
+
+
+def snapshot_to_torque_breakdown(snapshot: StateSnapshot, body_frame: str) -> TorqueBreakdown:
+    """Every torque on the body by source and their total (N*m, body frame) as rigid_rot_msgs/TorqueBreakdown."""
+    msg = TorqueBreakdown()
+    msg.header.stamp = seconds_to_time(snapshot.t)
+    msg.header.frame_id = body_frame
+    sources = snapshot.torque_sources or ()
+    msg.names = [name for name, _ in sources]
+    msg.torques = [array_to_vector3(vector) for _, vector in sources]
+    msg.total = array_to_vector3(np.sum([v for _, v in sources], axis=0) if sources else np.zeros(3))
+    return msg
+
+
 #: Marker namespace and ids of ``~/markers`` (replaced in place every message).
 MARKER_NAMESPACE = "rigid_rot_sim"
 BOX_MARKER, OMEGA_MARKER, MOMENTUM_MARKER = range(3)
@@ -380,3 +410,46 @@ def body_markers(view: BodyView, snapshot: StateSnapshot, world_frame: str, body
                       *view.momentum_arrow(snapshot.angular_momentum_world), view)
     momentum.frame_locked = False
     return MarkerArray(markers=[box, omega, momentum])
+# --------------------------------------------------------------------- sensor models (issue 20)
+# Readings of the scene's sensors (rigid_rot_sim.run.sensors), not the ground truth: their
+# covariances are the models' own. A quantity a sensor does not measure is marked as such.
+
+#: Variance (m^2) of the position block of ~/star_tracker: a star tracker measures no position.
+UNMEASURED_POSITION_VARIANCE = 1e6
+
+
+def gyro_to_imu(reading, t: float, body_frame: str, variance: float) -> Imu:
+    """sensor_msgs/Imu of a gyro reading (rad/s, body frame) at sim time t (s).
+
+    ``angular_velocity_covariance``: ``variance`` ((rad/s)^2) on the diagonal, the model's
+    per-sample noise. A gyro gives no orientation and no linear acceleration: both
+    covariances have -1 in element 0 (the message's "not provided"), the orientation is the
+    identity.
+    """
+    msg = Imu()
+    msg.header.stamp = seconds_to_time(t)
+    msg.header.frame_id = body_frame
+    msg.orientation.w = 1.0
+    _set_vector3(msg.angular_velocity, reading)
+    msg.orientation_covariance = [-1.0] + [0.0] * 8
+    msg.angular_velocity_covariance = _diagonal(3, [variance] * 3)
+    msg.linear_acceleration_covariance = [-1.0] + [0.0] * 8
+    return msg
+
+
+def star_tracker_pose(orientation, t: float, world_frame: str, covariance) -> PoseWithCovarianceStamped:
+    """geometry_msgs/PoseWithCovarianceStamped of a star tracker attitude (x, y, z, w; body -> world).
+
+    Position (0, 0, 0), not measured (variance ``UNMEASURED_POSITION_VARIANCE``); the rotation
+    block is ``covariance`` (3x3, rad^2): the attitude error's, about the body axes.
+    """
+    msg = PoseWithCovarianceStamped()
+    msg.header.stamp = seconds_to_time(t)
+    msg.header.frame_id = world_frame
+    q = msg.pose.pose.orientation
+    q.x, q.y, q.z, q.w = np.asarray(orientation, dtype=float).tolist()
+    block = np.zeros((6, 6))
+    block[:3, :3] = np.eye(3) * UNMEASURED_POSITION_VARIANCE
+    block[3:, 3:] = np.asarray(covariance, dtype=float).reshape(3, 3)
+    msg.pose.covariance = block.reshape(36).tolist()
+    return msg

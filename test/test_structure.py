@@ -112,6 +112,7 @@ LAYERS = (
     ("conversions", "viewer"),
     ("ros", "analysis"),
     ("cli",),
+    ("console_scripts",),
 )
 
 

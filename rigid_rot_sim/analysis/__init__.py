@@ -12,7 +12,7 @@
 * :mod:`.plot`: matplotlib (Agg) figures of both (as :mod:`rigid_rot_sim.recording.plot` draws a recording).
 * :mod:`.sweep_spec`: sweep specs (a base scene, dispersions, grids) validated from YAML.
 * :mod:`.sweep`: a sweep's seeded inputs, its chunks, and the batch simulation of one chunk.
-* :mod:`.engine`: dask.distributed (local or existing cluster) for sweeps, report and stability.
+* :mod:`.cluster`: dask.distributed (local or existing cluster) for sweeps, report and stability.
 * :mod:`.sweep_output`: the Parquet file, summary.md and plots of a sweep.
 
 Nothing here is imported by the core or the node; the ``rigid-rot report``,

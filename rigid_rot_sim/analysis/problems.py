@@ -10,7 +10,12 @@ P2     P1's body under a constant body torque (0.1, -0.05, 0.02) N m, 20 s     D
 P3     heavy symmetric top on its separatrix (closed form), and a general      closed form / quadrature
        heavy top (P3b) with its conserved E, p_phi, p_psi
 P4     Basilisk's case, I = diag(500, 200, 300), w0 = (0.5, -0.4, 0.7), 10 s  exact
+P5     gyrostat: P1's body with a free wheel (J = 0.05 kg m^2 about            DOP853 at rtol = atol = 1e-14,
+       (1, 1, 1)/sqrt(3), 40 rad/s), w0 = (1, 0.1, 0.5) rad/s, 20 s             certified by our dopri5
 =====  =====================================================================  ==============================
+
+P5 is run by the gyrostat methods only (``rk4``; the others are refused): its state carries
+the wheel speed, the report compares the body's final (q, omega).
 
 Every problem starts at t = 0 from the identity attitude unless stated; states are in the
 principal frame (the moments are given in that frame, in the order listed).
@@ -38,7 +43,9 @@ from rigid_rot_sim.core.heavy_top import (
     separatrix_state,
 )
 from rigid_rot_sim.core.simulate import simulate
+from rigid_rot_sim.core.integrators.gyrostat import get_gyrostat_method
 from rigid_rot_sim.core.torque import ConstantTorque
+from rigid_rot_sim.core.wheels import NO_ORBIT, WheelModel, gyrostat_rhs, hub_inertia, wheel_model
 
 IDENTITY = (0.0, 0.0, 0.0, 1.0)
 
@@ -77,6 +84,12 @@ class Problem:
     torque_kind: str = "none"
     reference_note: str = ""
     top: Any = None  # the HeavyTop of a heavy-top problem (moments are its pivot moments)
+    wheels: WheelModel | None = None  # a gyrostat's free wheels (principal frame), with their initial speeds:
+    wheel_speeds0: tuple[float, ...] = ()
+
+    def initial_vector(self) -> np.ndarray:
+        """The initial state for solve_ivp: (q, omega), and the wheel speeds of a gyrostat."""
+        return np.concatenate((self.q0, self.omega0, self.wheel_speeds0))
 
     @property
     def moments(self) -> np.ndarray:
@@ -103,6 +116,13 @@ class Problem:
         final state; ``options`` go to the integrator.
         """
         n_steps = max(1, round(self.t_end / dt))
+        if self.wheels is not None:  # only the gyrostat methods carry the wheels (ValueError: refused)
+            gyrostat = get_gyrostat_method(method)(
+                self.moments, self.t_end / n_steps, wheels=self.wheels, q0=self.q0, omega0=self.omega0,
+                wheel_speeds0=self.wheel_speeds0, **options,
+            )
+            gyrostat.advance(n_steps)
+            return gyrostat.q, gyrostat.omega
         traj = simulate(
             self.moments, self.omega0, self.t_end, dt, method, self.q0, self.torque, save_every=n_steps, **options
         )
@@ -124,6 +144,8 @@ def scipy_rhs(problem: Problem) -> Callable[[float, np.ndarray], np.ndarray]:
     The right-hand side a careful user of solve_ivp would write: Euler's equations and
     ``q' = 1/2 q (x) (omega, 0)`` on floats, one array built per call.
     """
+    if problem.wheels is not None:
+        return _gyrostat_scipy_rhs(problem)
     i1, i2, i3 = problem.principal_moments
     torque = problem.torque
     constant = torque.value.tolist() if isinstance(torque, ConstantTorque) else None
@@ -141,6 +163,40 @@ def scipy_rhs(problem: Problem) -> Callable[[float, np.ndarray], np.ndarray]:
         return np.array((dqx, dqy, dqz, dqw, a1, a2, a3))
 
     return fun
+
+
+def _gyrostat_scipy_rhs(problem: Problem) -> Callable[[float, np.ndarray], np.ndarray]:
+    """``fun(t, y)`` with y = (q, omega, wheel speeds): the core's gyrostat formula, run by Python."""
+    assert problem.wheels is not None
+    moments, wheels = problem.moments, problem.wheels.compiled()
+    hub_inverse = np.linalg.inv(hub_inertia(moments, problem.wheels))
+    external, orbit = np.zeros(3), NO_ORBIT.compiled()
+    commands = np.zeros(problem.wheels.count)
+
+    def fun(t: float, y: np.ndarray) -> np.ndarray:
+        dy = np.empty_like(y)
+        gyrostat_rhs(t, y, moments, wheels, hub_inverse, external, orbit, commands, dy, np.empty(len(commands)))
+        return dy
+
+    return fun
+
+
+def _gyrostat_reference(problem: Problem) -> Reference:
+    """scipy DOP853 at rtol = atol = 1e-14 on (q, omega, Omega), checked against our dopri5 at rtol = 1e-13."""
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", UserWarning)
+        sol = solve_ivp(scipy_rhs(problem), (0.0, problem.t_end), problem.initial_vector(), method="DOP853",
+                        rtol=1e-14, atol=1e-14)
+    if not sol.success:
+        raise RuntimeError(f"{problem.key}: reference DOP853 failed: {sol.message}")
+    q_ref = np.asarray(quat.normalize(sol.y[:4, -1]))
+    w_ref = sol.y[4:7, -1]
+    second = "dopri5 rtol=1e-13"
+    q_check, w_check = problem.final_state("dopri5", problem.t_end, rtol=1e-13, atol=1e-15)
+    gap = max(omega_error(w_ref, w_check), attitude_error_angle(q_ref, q_check))
+    if not gap <= 1e-10:
+        raise RuntimeError(f"{problem.key}: DOP853 and {second} references disagree by {gap:.3g} (> 1e-10)")
+    return Reference(q_ref, w_ref, f"scipy DOP853 rtol=atol=1e-14, certified by {second} (gap {gap:.1e})", gap)
 
 
 def exact_reference(problem: Problem) -> Reference:
@@ -285,8 +341,21 @@ P4 = Problem(
     reference_note="exact elliptic-function solution (core/exact.py)",
 )
 
+P5 = Problem(
+    key="P5",
+    title="gyrostat (a free reaction wheel)",
+    principal_moments=(1.0, 2.0, 3.0),
+    omega0=(1.0, 0.1, 0.5),
+    t_end=20.0,
+    torque_kind="spacecraft",
+    wheels=wheel_model(np.diag((1.0, 2.0, 3.0)), ["wheel"], [[1.0, 1.0, 1.0]], [0.05], [1.0], [1000.0]),
+    wheel_speeds0=(40.0,),
+    reference_factory=_gyrostat_reference,
+    reference_note="scipy DOP853 at rtol = atol = 1e-14 on (q, omega, Omega), certified against dopri5 at rtol = 1e-13",
+)
+
 #: Problems by key, in report order.
-PROBLEMS: dict[str, Problem] = {p.key: p for p in (P1, P1B, P2, P3, P3B, P4)}
+PROBLEMS: dict[str, Problem] = {p.key: p for p in (P1, P1B, P2, P3, P3B, P4, P5)}
 
 
 def get_problem(key: str) -> Problem:

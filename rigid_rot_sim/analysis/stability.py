@@ -37,9 +37,11 @@ from typing import Any, Literal
 
 import numpy as np
 
-from rigid_rot_sim.analysis.engine import map_tasks, open_client, wants_cluster
+from rigid_rot_sim.analysis.cluster import map_tasks, open_client, wants_cluster
 from rigid_rot_sim.analysis.metrics import attitude_error_angle, omega_error, relative_change
 from rigid_rot_sim.analysis.problems import P1, Problem
+from rigid_rot_sim.core.integrators.gyrostat import get_gyrostat_method
+from rigid_rot_sim.core.wheels import gyrostat_energy, total_momentum_body
 from rigid_rot_sim.analysis.stability_cases import Case, Criterion, case_named
 from rigid_rot_sim.run import advice
 from rigid_rot_sim.core.exact import torque_free_solution
@@ -55,8 +57,19 @@ SAMPLES = 200
 BISECTION_STEPS = 1000
 BISECTION_GROWTH = 0.01
 #: Fixed-step methods whose largest stable step is bisected (the explicit ones, and the
-#: solver / accuracy limits of implicit_midpoint and splitting).
-BISECTED = ("euler", "rk4", "lie_rk4", "implicit_midpoint", "splitting")
+#: measured solver / accuracy limits of implicit_midpoint and splitting).
+BISECTED = advice.EXPLICIT_FIXED_STEP + advice.MEASURED_STEP_LIMITS
+
+#: A method as the suite runs it: registry name and keyword options, e.g. ("splitting", (("order", 4),)).
+MethodVariant = tuple[str, tuple[tuple[str, Any], ...]]
+
+
+def method_label(method: str | MethodVariant) -> str:
+    """The report's name of a method variant: ``("splitting", (("order", 4),))`` -> 'splitting(order=4)'."""
+    if isinstance(method, str):
+        return method
+    name, options = method
+    return f"{name}({', '.join(f'{key}={value}' for key, value in options)})" if options else name
 
 
 @dataclass
@@ -80,8 +93,12 @@ class CaseRun:
 # ---------------------------------------------------------------- running
 
 
-def _invariants(problem: Problem, q: np.ndarray, omega: np.ndarray) -> tuple[float, float, float]:
-    """(energy, momentum 1, momentum 2): |L| (twice) for a free body, (E, p_phi, p_psi) for a heavy top."""
+def _invariants(problem: Problem, q: np.ndarray, omega: np.ndarray, speeds: Any = None) -> tuple[float, float, float]:
+    """(energy, momentum 1, momentum 2): |L| (twice) for a free body, (E, p_phi, p_psi) for a heavy top,
+    total energy and |H| (body + wheels, twice) for a gyrostat (``speeds``: its wheel speeds, rad/s)."""
+    if problem.wheels is not None and speeds is not None:
+        norm = float(np.linalg.norm(total_momentum_body(problem.moments, problem.wheels, omega, speeds)))
+        return float(gyrostat_energy(problem.moments, problem.wheels, omega, speeds)), norm, norm
     if problem.top is not None:
         energy, p_phi, p_psi = problem.top.invariants(q, omega)
         return float(energy), float(p_phi), float(p_psi)
@@ -90,23 +107,13 @@ def _invariants(problem: Problem, q: np.ndarray, omega: np.ndarray) -> tuple[flo
 
 
 def _integrator(method: str, case: Case, dt: float, torque: Any) -> Any:
-    """The integrator of ``method`` (a label such as 'splitting(order=4)') on ``case``'s body, at step ``dt``."""
+    """The integrator of ``method`` (a registry name) on ``case``'s body, at step ``dt``, with the case's options."""
     problem = case.problem
-    name, options = _method_and_options(method)
-    options.update(case.options.get(method, {}))
-    return get_method(name)(problem.moments, dt, torque, q0=problem.q0, omega0=problem.omega0, **options)
-
-
-def _method_and_options(label: str) -> tuple[str, dict[str, Any]]:
-    """'splitting(order=4)' -> ('splitting', {'order': 4})."""
-    if "(" not in label:
-        return label, {}
-    name, rest = label.split("(", 1)
-    options = {}
-    for item in rest.rstrip(")").split(","):
-        key, value = item.split("=")
-        options[key.strip()] = int(value) if value.strip().isdigit() else float(value)
-    return name, options
+    options = case.options.get(method, {})
+    if problem.wheels is not None:  # a gyrostat: only the gyrostat methods carry the wheels (ValueError: refused)
+        return get_gyrostat_method(method)(problem.moments, dt, torque, q0=problem.q0, omega0=problem.omega0,
+                                           wheels=problem.wheels, wheel_speeds0=problem.wheel_speeds0, **options)
+    return get_method(method)(problem.moments, dt, torque, q0=problem.q0, omega0=problem.omega0, **options)
 
 
 def run_case(case: Case, method: str) -> CaseRun:
@@ -127,7 +134,7 @@ def run_case(case: Case, method: str) -> CaseRun:
         else:
             integrator = _integrator(method, case, dt, problem.torque)
         # conserved from here on (right after the kick, for an impulse)
-        first = _invariants(problem, integrator.q, integrator.omega)
+        first = _invariants(problem, integrator.q, integrator.omega, getattr(integrator, "wheel_speeds", None))
         drift_e = drift_m = qnorm = 0.0
         for chunk in chunks:
             if chunk:
@@ -135,7 +142,7 @@ def run_case(case: Case, method: str) -> CaseRun:
             q, omega = integrator.q, integrator.omega
             qnorm = max(qnorm, abs(float(np.linalg.norm(q)) - 1.0))
             if case.conserved:
-                e, m1, m2 = _invariants(problem, q, omega)
+                e, m1, m2 = _invariants(problem, q, omega, getattr(integrator, "wheel_speeds", None))
                 drift_e = max(drift_e, relative_change(first[0], e))
                 drift_m = max(drift_m, relative_change(first[1], m1), relative_change(first[2], m2))
                 if drift_e > GROWTH_LIMIT or drift_m > GROWTH_LIMIT:
@@ -281,18 +288,23 @@ class LongHorizon:
 #: Energy errors below this are round-off (a random walk of ~1e-16 per step over 1e7 steps).
 ROUNDOFF_FLOOR = 1e-11
 
-LONG_HORIZON_METHODS = ("rk4", "lie_rk4", "implicit_midpoint", "splitting(order=2)", "splitting(order=4)")
+LONG_HORIZON_METHODS: tuple[MethodVariant, ...] = (
+    ("rk4", ()), ("lie_rk4", ()), ("implicit_midpoint", ()),
+    ("splitting", (("order", 2),)), ("splitting", (("order", 4),)),
+)
 
 
-def long_horizon(method: str, steps: int, dt: float = 0.01, samples: int = 1000) -> LongHorizon:
+def long_horizon(method: str | MethodVariant, steps: int, dt: float = 0.01, samples: int = 1000) -> LongHorizon:
     """P1's body for ``steps`` steps of ``dt``: is the relative energy error bounded or secular?
 
-    Secular when the mean error over the last tenth exceeds twice the maximum over the
-    first tenth and the round-off floor (1e-11).
+    ``method``: a registry name or a (name, options) variant. Secular when the mean error
+    over the last tenth exceeds twice the maximum over the first tenth and the round-off
+    floor (1e-11).
     """
     problem = P1
-    name, options = _method_and_options(method)
-    integrator = get_method(name)(problem.moments, dt, None, q0=problem.q0, omega0=problem.omega0, **options)
+    name, options = (method, ()) if isinstance(method, str) else method
+    integrator = get_method(name)(problem.moments, dt, None, q0=problem.q0, omega0=problem.omega0, **dict(options))
+    label = method_label(method)
     e0 = problem.energy(problem.q0, problem.omega0)
     chunks = np.diff(np.linspace(0, steps, samples + 1).round().astype(int))
     errors = np.empty(samples)
@@ -302,13 +314,13 @@ def long_horizon(method: str, steps: int, dt: float = 0.01, samples: int = 1000)
             integrator.advance(int(chunk))
             errors[k] = relative_change(e0, problem.energy(integrator.q, integrator.omega))
     except (NonFiniteStateError, ArithmeticError) as exc:
-        return LongHorizon(method, steps, dt, time.perf_counter() - start, math.nan, math.nan, math.nan, True,
+        return LongHorizon(label, steps, dt, time.perf_counter() - start, math.nan, math.nan, math.nan, True,
                            "unstable", str(exc)[:240])
     seconds = time.perf_counter() - start
     tenth = max(1, samples // 10)
     first, last = float(errors[:tenth].max()), float(errors[-tenth:].mean())
     secular = last > max(2.0 * first, ROUNDOFF_FLOOR)
-    return LongHorizon(method, steps, dt, seconds, first, last, float(errors[-1]), secular)
+    return LongHorizon(label, steps, dt, seconds, first, last, float(errors[-1]), secular)
 
 
 def bisection_row(case: Case, method: str, steps: int) -> dict[str, Any]:
@@ -342,7 +354,7 @@ def bisection_task(name: str, quick: bool, method: str) -> dict[str, Any]:
     return bisection_row(case_named(name, quick), method, BISECTION_STEPS // (4 if quick else 1))
 
 
-def long_horizon_task(method: str, steps: int) -> dict[str, Any]:
+def long_horizon_task(method: str | MethodVariant, steps: int) -> dict[str, Any]:
     """A Dask task: :func:`long_horizon` as a dict."""
     return dataclasses.asdict(long_horizon(method, steps))
 
@@ -358,7 +370,7 @@ def method_labels() -> list[str]:
 def run_all(
     cases: list[Case],
     methods: list[str],
-    long_methods: tuple[str, ...],
+    long_methods: tuple[str | MethodVariant, ...],
     long_steps: int,
     quick: bool,
     bar: Any,
@@ -392,7 +404,7 @@ def _run_here(cases, methods, long_methods, long_steps, quick, bar):
     bar.update(1)
     horizon = []
     for method in long_methods:
-        bar.set_postfix_str(f"long horizon {method}", refresh=True)
+        bar.set_postfix_str(f"long horizon {method_label(method)}", refresh=True)
         horizon.append(dataclasses.asdict(long_horizon(method, long_steps)))
         bar.update(1)
     return case_runs, bisection, horizon

@@ -17,6 +17,7 @@ from scipy.integrate import solve_ivp
 
 from rigid_rot_sim.analysis.problems import (
     P2,
+    P5,
     P3,
     P3B,
     TOP,
@@ -29,6 +30,7 @@ from rigid_rot_sim.analysis.problems import (
 from rigid_rot_sim.core import quaternion as quat
 from rigid_rot_sim.core.exact import torque_free_solution
 from rigid_rot_sim.core.torque import ConstantTorque
+from rigid_rot_sim.core.wheels import wheel_model
 
 
 @dataclass(frozen=True)
@@ -264,7 +266,28 @@ def catalogue(quick: bool = False) -> list[Case]:
     cases[-1] = dataclasses.replace(
         cases[-1], problem=dataclasses.replace(cases[-1].problem, reference_factory=_impulse_reference)
     )
+    cases.append(_fast_wheel_case(quick))
     return cases
+
+
+def _fast_wheel_case(quick: bool) -> Case:
+    """A slow body with a big, fast wheel: the gyroscopic nutation (~h / I, ~28 rad/s) is a thousand times
+    the body's rate, so the step is set by the wheel, not by the motion one wants to see."""
+    moments = (100.0, 120.0, 150.0)
+    wheels = wheel_model(np.diag(moments), ["fast"], [[1.0, 1.0, 1.0]], [5.0], [1.0], [1000.0])
+    problem = dataclasses.replace(
+        P5, key="fast_wheel", title="fast wheel on a slow body", principal_moments=moments,
+        omega0=(0.01, 0.02, 0.005), wheel_speeds0=(600.0,), wheels=wheels, t_end=5.0 if quick else 20.0,
+    )
+    return Case(
+        name="fast wheel, slow body",
+        description="gyrostat: I = (100, 120, 150) kg m², ω0 ≈ 0.02 rad/s, a 5 kg m² wheel about (1, 1, 1) at "
+        "600 rad/s (nutation ~28 rad/s), dt = 10 ms",
+        problem=problem,
+        dt=0.01,
+        criterion=Criterion(energy_drift=1e-6, momentum_drift=1e-6, omega_error=1e-4,
+                            text="total E and |H| (body + wheel) to 1e-6, ω error ≤ 1e-4 rad/s"),
+    )
 
 
 def case_named(name: str, quick: bool) -> Case:

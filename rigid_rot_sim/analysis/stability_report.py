@@ -18,6 +18,7 @@ from rigid_rot_sim.analysis.stability import (
     BISECTION_GROWTH,
     BISECTION_STEPS,
     LONG_HORIZON_METHODS,
+    MethodVariant,
     method_labels,
     run_all,
 )
@@ -28,7 +29,7 @@ def run_suite(
     out_dir: Any,
     quick: bool = False,
     long_steps: int | None = None,
-    long_methods: tuple[str, ...] = LONG_HORIZON_METHODS,
+    long_methods: tuple[str | MethodVariant, ...] = LONG_HORIZON_METHODS,
     case_names: list[str] | None = None,
     methods: list[str] | None = None,
     command: str = "rigid-rot stability",

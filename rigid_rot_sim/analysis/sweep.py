@@ -18,6 +18,12 @@ with other neighbours gives the same bits, because
 
 Frames: inputs and outputs are in the scene's body frame; the batch runs in each
 body's own (dispersed) principal frame. Quaternions scalar-last, body -> world.
+
+Time: a schedule segment acts from the step its scene says
+(:meth:`~rigid_rot_sim.scene.scene.TorqueSchedule.change_steps`, the run engine's rule),
+and torques and states change frames with the engine's quaternion formulas
+(:mod:`rigid_rot_sim.core.quaternion`), so an undispersed body is the node's body, bit for
+bit (``test/analysis/test_sweep_matches_engine.py``).
 """
 
 from __future__ import annotations
@@ -31,15 +37,15 @@ import numpy as np
 from scipy.spatial.transform import Rotation
 
 from rigid_rot_sim.analysis.sweep_spec import NORMAL_CUT_SIGMAS, Dispersion, SweepSpec
+from rigid_rot_sim.core import quaternion as quat
 from rigid_rot_sim.core.batch import advance_batch
 from rigid_rot_sim.core.dynamics import RigidBody
 from rigid_rot_sim.core.integrators.base import NonFiniteStateError
 from rigid_rot_sim.core.simulate import step_grid
+from rigid_rot_sim.core.steps import step_at_or_after, step_at_or_before
 
 __all__ = ["Chunk", "plan_chunks", "run_chunk", "run_nominal", "sample_inputs", "COLUMNS", "measure_step_cost", "choose_chunk_size"]
 
-# A time within this fraction of a step of a boundary counts as on it (as in run.simulator).
-_BOUNDARY_SLACK = 1e-9
 # Streams of SeedSequence(seed, spawn_key=(sample, k)): one per kind of dispersion.
 _STREAMS = ("principal_moments", "axis_misalignment", "initial_omega", "initial_attitude", "torque_scale", "torque_noise")
 
@@ -201,14 +207,17 @@ def _bodies(spec: SweepSpec, spin_rate: float | None, samples: range | None) -> 
 # ----------------------------------------------------------------------------- simulation
 
 
-def _advance_isolated(method: str, moments, q, omega, dt: float, n_steps: int, torque) -> tuple[np.ndarray, np.ndarray, dict[int, str]]:
+def _advance_isolated(
+    method: str, moments, q, omega, dt: float, n_steps: int, torque, normalize_q: bool
+) -> tuple[np.ndarray, np.ndarray, dict[int, str]]:
     """advance_batch, but a body that fails only fails itself: ``(q, omega, {index: error})``.
 
     A failing batch is split in halves and each half re-run (a body's bits do not depend
     on its neighbours); a single failing body is stepped once at a time to say when.
+    ``normalize_q``: as for advance_batch (False when continuing from its own states).
     """
     try:
-        q_new, omega_new = advance_batch(method, moments, q, omega, dt, n_steps, torque)
+        q_new, omega_new = advance_batch(method, moments, q, omega, dt, n_steps, torque, normalize_q=normalize_q)
         return q_new, omega_new, {}
     except (NonFiniteStateError, ArithmeticError) as exc:
         first_error = exc
@@ -217,7 +226,9 @@ def _advance_isolated(method: str, moments, q, omega, dt: float, n_steps: int, t
         q_k, omega_k = q, omega
         for k in range(n_steps):
             try:
-                q_k, omega_k = advance_batch(method, moments, q_k, omega_k, dt, 1, torque)
+                q_k, omega_k = advance_batch(
+                    method, moments, q_k, omega_k, dt, 1, torque, normalize_q=normalize_q and k == 0
+                )
             except (NonFiniteStateError, ArithmeticError) as exc:
                 reason = " ".join(str(exc).split())
                 return np.full_like(q, np.nan), np.full_like(omega, np.nan), {0: f"{type(exc).__name__} at step {k + 1} of the segment: {reason}"}
@@ -226,7 +237,9 @@ def _advance_isolated(method: str, moments, q, omega, dt: float, n_steps: int, t
     parts = [slice(0, half), slice(half, n)]
     qs, omegas, errors = [], [], {}
     for part in parts:
-        q_p, omega_p, err = _advance_isolated(method, moments[part], q[part], omega[part], dt, n_steps, torque[part])
+        q_p, omega_p, err = _advance_isolated(
+            method, moments[part], q[part], omega[part], dt, n_steps, torque[part], normalize_q
+        )
         qs.append(q_p)
         omegas.append(omega_p)
         errors.update({part.start + i: message for i, message in err.items()})
@@ -235,39 +248,49 @@ def _advance_isolated(method: str, moments, q, omega, dt: float, n_steps: int, t
 
 def _boundaries(spec: SweepSpec, dt: float, n_full: int) -> tuple[np.ndarray, np.ndarray]:
     """Step indices where the torque may change or a checkpoint is taken, and the checkpoint steps."""
-    def step_at_or_after(t: float) -> int:
-        return min(max(math.ceil(t / dt - _BOUNDARY_SLACK), 0), n_full)
-
     checkpoints = np.unique(np.linspace(0, n_full, spec.checkpoints + 1).round().astype(np.int64))
     marks = {0, n_full, *checkpoints.tolist()}
     for schedule in spec.scene.schedules:
         if schedule.frame == "world" and any(any(s.torque) for s in schedule.segments):
             marks.update(range(n_full + 1))  # re-expressed in the body frame at every step
-        marks.update(step_at_or_after(s.start) for s in schedule.segments)
+        marks.update(schedule.change_steps(dt))
     if spec.dispersions.torque_noise_sigma is not None:
         interval = spec.dispersions.torque_noise_interval
-        marks.update(step_at_or_after(k * interval) for k in range(math.ceil(spec.duration / interval)))
-    return np.array(sorted(marks), dtype=np.int64), checkpoints
+        marks.update(step_at_or_after(k * interval, dt) for k in range(math.ceil(spec.duration / interval)))
+    within = [min(max(mark, 0), n_full) for mark in marks]
+    return np.array(sorted(set(within)), dtype=np.int64), checkpoints
 
 
-def _body_torque(spec: SweepSpec, bodies: _Bodies, t: float, q_body: np.ndarray | None) -> np.ndarray:
-    """(N, 3) N*m in the body frame acting from sim time t: schedules (scaled) plus noise.
+def _rows(helper: Any, *arrays: np.ndarray) -> np.ndarray:
+    """A :mod:`~rigid_rot_sim.core.quaternion` helper applied row by row: (N, 4) / (N, 3) in, (N, 3 or 4) out.
 
-    ``q_body`` (N, 4) is needed for world-frame schedules only.
+    The helpers' scalar formulas run on columns, so each row gets the bits the engine's
+    per-body call gives it.
+    """
+    return np.stack(helper(*(array.T for array in arrays)), axis=-1)
+
+
+def _body_torque(spec: SweepSpec, bodies: _Bodies, k: int, dt: float, q_body: np.ndarray | None) -> np.ndarray:
+    """(N, 3) N*m in the body frame acting over step k (of ``dt`` s): schedules (scaled) plus noise.
+
+    ``q_body`` (N, 4) is needed for world-frame schedules only. As in the run engine, the
+    body-frame schedules are summed, then the world-frame ones re-expressed and added.
     """
     n = bodies.moments.shape[0]
     torque = np.zeros((n, 3))
+    world = np.zeros(3)
     for schedule in spec.scene.schedules:
-        value = np.asarray(schedule.torque_at(t), dtype=float)
-        if not value.any():
-            continue
+        value = np.asarray(schedule.torque_at_step(k, dt), dtype=float)
         if schedule.frame == "world":
-            torque += Rotation.from_quat(q_body).apply(value, inverse=True)
+            world += value
         else:
             torque += value
+    if world.any():
+        assert q_body is not None
+        torque += _rows(quat.rotate_inverse, q_body, np.broadcast_to(world, (n, 3)))
     torque *= bodies.torque_scale
     if bodies.noise.shape[1]:
-        index = min(int(t / spec.dispersions.torque_noise_interval + _BOUNDARY_SLACK), bodies.noise.shape[1] - 1)
+        index = min(step_at_or_before(k * dt, spec.dispersions.torque_noise_interval), bodies.noise.shape[1] - 1)
         torque += bodies.noise[:, index, :]
     return torque
 
@@ -292,6 +315,7 @@ def _simulate(spec: SweepSpec, bodies: _Bodies, method: str, dt: float) -> _Outc
     marks, checkpoints = _boundaries(spec, dt, n_full)
     checkpoint_set = set(checkpoints.tolist())
     bp = bodies.body_from_principal
+    principal_from_body = _rows(quat.conjugate, bp.as_quat(canonical=False))
     moments = bodies.moments
     q = (Rotation.from_quat(bodies.q0_body) * bp).as_quat()  # principal -> world
     omega = bp.apply(bodies.omega0_body, inverse=True)
@@ -342,11 +366,14 @@ def _simulate(spec: SweepSpec, bodies: _Bodies, method: str, dt: float) -> _Outc
         step = last if partial else dt
         if not alive.any():
             break
-        q_body = (Rotation.from_quat(q[alive]) * bp[alive].inv()).as_quat() if world_frame else None
-        torque_body = _body_torque(spec, _subset(bodies, alive), t_a, q_body)
+        q_body = _rows(quat.multiply, q[alive], principal_from_body[alive]) if world_frame else None
+        torque_body = _body_torque(spec, _subset(bodies, alive), a, dt, q_body)
         impulse[alive] += np.linalg.norm(torque_body, axis=1) * step * (b - a)
-        torque_p = bp[alive].apply(torque_body, inverse=True)
-        q_new, omega_new, failed = _advance_isolated(method, moments[alive], q[alive], omega[alive], step, b - a, torque_p)
+        torque_p = _rows(quat.rotate, principal_from_body[alive], torque_body)
+        # the first call normalises q as an integrator's set_state does; later ones continue from it
+        q_new, omega_new, failed = _advance_isolated(
+            method, moments[alive], q[alive], omega[alive], step, b - a, torque_p, normalize_q=a == 0
+        )
         index = np.flatnonzero(alive)
         for i, message in failed.items():
             errors[int(index[i])] = f"{message} (segment from t = {t_a:.9g} s, dt = {step:.9g} s)"
@@ -361,9 +388,9 @@ def _simulate(spec: SweepSpec, bodies: _Bodies, method: str, dt: float) -> _Outc
     with np.errstate(divide="ignore", invalid="ignore"):
         energy_drift = np.abs(energy - energy0) / np.where(energy0 > 0, energy0, 1.0)
         momentum_drift = np.abs(momentum - momentum0) / np.where(momentum0 > 0, momentum0, 1.0)
-    q_body = (Rotation.from_quat(np.where(alive[:, None], q, [0.0, 0.0, 0.0, 1.0])) * bp.inv()).as_quat()
+    q_body = _rows(quat.multiply, np.where(alive[:, None], q, [0.0, 0.0, 0.0, 1.0]), principal_from_body)
     q_body[~alive] = np.nan
-    omega_body = bp.apply(np.where(alive[:, None], omega, 0.0))
+    omega_body = _rows(quat.rotate, bp.as_quat(canonical=False), np.where(alive[:, None], omega, 0.0))
     omega_body[~alive] = np.nan
     omega_bound = (momentum0 + impulse) / moments.min(axis=1)
     return _Outcome(

@@ -22,7 +22,7 @@ from typing import Any
 
 import numpy as np
 
-from rigid_rot_sim.analysis.engine import SweepResult
+from rigid_rot_sim.analysis.cluster import SweepResult
 from rigid_rot_sim.analysis.sweep import COLUMNS
 from rigid_rot_sim.analysis.sweep_spec import METRICS
 from rigid_rot_sim.recording.provenance import package_versions

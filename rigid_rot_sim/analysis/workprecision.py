@@ -35,14 +35,12 @@ from typing import Any, Callable, Iterable, Literal
 import numpy as np
 from scipy.integrate import solve_ivp
 
-from rigid_rot_sim.analysis.engine import map_tasks, open_client
+from rigid_rot_sim.analysis.cluster import map_tasks, open_client
 from rigid_rot_sim.analysis.metrics import attitude_error_angle, omega_error, relative_change
 from rigid_rot_sim.analysis.problems import Problem, get_problem, scipy_rhs
 from rigid_rot_sim.core import quaternion as quat
 from rigid_rot_sim.core.integrators import METHODS
 from rigid_rot_sim.core.integrators.base import NonFiniteStateError
-from rigid_rot_sim.core.integrators.exact_flow import EXACT_SPLIT_ORDERS
-from rigid_rot_sim.core.integrators.splitting import COMPOSITIONS
 
 SCIPY_METHODS = ("RK45", "DOP853", "Radau", "LSODA")
 TARGETS = (1e-6, 1e-10)
@@ -54,7 +52,7 @@ BASELINE_METHOD = "DOP853"
 BASELINE_TOL = 1e-10
 
 #: The orders of the methods that come in several orders (one line each), as the integrators accept them.
-ORDER_VARIANTS = {"splitting": tuple(COMPOSITIONS), "exact_split": EXACT_SPLIT_ORDERS}
+ORDER_VARIANTS = {name: cls.orders for name, cls in METHODS.items() if len(cls.orders) > 1}
 #: How each of our adaptive methods takes a tolerance.
 TOLERANCE_OPTIONS: dict[str, Callable[[float], dict[str, float]]] = {
     "dop853": lambda tol: {"rtol": tol, "atol": tol},
@@ -139,7 +137,7 @@ def method_lines(methods: Iterable[str], problem: Problem) -> list[DiagramLine]:
         if name in ORDER_VARIANTS:
             for order in ORDER_VARIANTS[name]:
                 lines.append(DiagramLine(f"{name}(order={order})", "ours", name, (("order", order),), "step"))
-        elif name == "exact":
+        elif cls.stability == "exact":
             lines.append(DiagramLine(name, "ours", name, (), "single"))
         elif not getattr(cls, "fixed_step", True):
             lines.append(DiagramLine(name, "ours", name, (), "tol" if name in TOLERANCE_OPTIONS else "single"))
@@ -180,7 +178,7 @@ def _best_time(run: Callable[[], Any], repeats: int) -> tuple[Any, float, int]:
 def _runner(problem: Problem, line: DiagramLine, value: float) -> tuple[Callable[[], tuple[np.ndarray, np.ndarray, int]], str]:
     """A zero-argument callable doing the full timed run, and the sweep parameter name."""
     if line.family == "scipy":
-        y0 = np.concatenate((problem.q0, problem.omega0))
+        y0 = problem.initial_vector()
 
         def run_scipy() -> tuple[np.ndarray, np.ndarray, int]:
             sol = solve_ivp(scipy_rhs(problem), (0.0, problem.t_end), y0, method=line.method, rtol=value, atol=value)
@@ -189,7 +187,7 @@ def _runner(problem: Problem, line: DiagramLine, value: float) -> tuple[Callable
             y = sol.y[:, -1]
             if not np.all(np.isfinite(y)):
                 raise NonFiniteStateError(f"solve_ivp {line.method}: non-finite final state")
-            return np.asarray(quat.normalize(y[:4])), y[4:], int(sol.nfev)
+            return np.asarray(quat.normalize(y[:4])), y[4:7], int(sol.nfev)
 
         return run_scipy, "tol"
 
@@ -356,7 +354,7 @@ def run_problems(
     """Every line's sweep on each problem, in order; ``bar`` (tqdm) counts the points.
 
     With ``cluster`` every line of every problem is one Dask task (:func:`line_task`) on
-    :func:`~rigid_rot_sim.analysis.engine.open_client` ``(scheduler, workers)``, each point
+    :func:`~rigid_rot_sim.analysis.cluster.open_client` ``(scheduler, workers)``, each point
     timed with the scipy baseline in that task.
     """
     if not cluster:

@@ -15,7 +15,7 @@ from typing import Sequence
 
 from tqdm import tqdm
 
-from rigid_rot_sim.analysis.engine import wants_cluster
+from rigid_rot_sim.analysis.cluster import wants_cluster
 from rigid_rot_sim.analysis.plot import work_precision_plot
 from rigid_rot_sim.analysis.problems import PROBLEMS, Problem, get_problem
 from rigid_rot_sim.analysis.report_io import machine_info, machine_line, markdown_table, number, write_json

@@ -36,7 +36,7 @@ def add_parser(subparsers) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from rigid_rot_sim.analysis.engine import require, run_sweep
+    from rigid_rot_sim.analysis.cluster import require, run_sweep
 
     require("distributed", "pyarrow", "matplotlib")
     from rigid_rot_sim.analysis.sweep_output import summary_markdown, write_outputs

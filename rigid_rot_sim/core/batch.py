@@ -14,6 +14,9 @@ at ``n_steps * dt``; a torque is refused) run the single-body kernels of
 here has the same bits as the same body advanced alone by ``get_method(name)`` with a
 :class:`~rigid_rot_sim.core.torque.ConstantTorque`, and there is no second copy of any
 formula. The compiled loop is cached like the single-body one (``make setup`` builds it).
+``rk4`` (the sweeps' workhorse) runs by default in chunks of bodies laid out for SIMD
+(structure of arrays, the inner loops over bodies, see ``_rk4_soa_chunk``): rk4_step's
+operations in its order, so the same bits as the per-body loop (``layout="per_body"``).
 """
 
 from __future__ import annotations
@@ -66,7 +69,7 @@ def _as_batch(name: str, value: Any, n: int | None, width: int) -> np.ndarray:
 
 
 @register_jitable
-def _advance_body(b, method, moments, q, omega, torque, dt, n_steps, failed_step, failure):
+def _advance_body(b, method, moments, q, omega, torque, dt, n_steps, normalize_q, failed_step, failure):
     """Advance body b in place; if it fails it keeps its last good state and records the
     (1-based) failing step and the status."""
     row = torque[b : b + 1]
@@ -74,7 +77,10 @@ def _advance_body(b, method, moments, q, omega, torque, dt, n_steps, failed_step
     body_torque = (kind, row, np.zeros(4))
     body_moments = (moments[b, 0], moments[b, 1], moments[b, 2])
     # normalised as Integrator.set_state does it, so that the bits match a single body's
-    qx, qy, qz, qw = quat.normalize((q[b, 0], q[b, 1], q[b, 2], q[b, 3]))
+    # (not when continuing: a single body carries its q from one step to the next as it is)
+    qx, qy, qz, qw = q[b, 0], q[b, 1], q[b, 2], q[b, 3]
+    if normalize_q:
+        qx, qy, qz, qw = quat.normalize((qx, qy, qz, qw))
     state = (qx, qy, qz, qw, omega[b, 0], omega[b, 1], omega[b, 2])
     if method == _EXACT:
         # as ExactFlow.advance(n_steps): one evaluation of the flow at n_steps * dt
@@ -102,20 +108,172 @@ def _advance_body(b, method, moments, q, omega, torque, dt, n_steps, failed_step
 
 
 @compiled(parallel=True)
-def _advance_bodies_parallel(method, moments, q, omega, torque, dt, n_steps, failed_step, failure):
+def _advance_bodies_parallel(method, moments, q, omega, torque, dt, n_steps, normalize_q, failed_step, failure):
     for b in prange(q.shape[0]):
-        _advance_body(b, method, moments, q, omega, torque, dt, n_steps, failed_step, failure)
+        _advance_body(b, method, moments, q, omega, torque, dt, n_steps, normalize_q, failed_step, failure)
 
 
 # Serial for small jobs: starting the parallel region costs up to a scheduler time slice
 # (milliseconds) when the cores are busy with other work.
 @compiled
-def _advance_bodies_serial(method, moments, q, omega, torque, dt, n_steps, failed_step, failure):
+def _advance_bodies_serial(method, moments, q, omega, torque, dt, n_steps, normalize_q, failed_step, failure):
     for b in range(q.shape[0]):
-        _advance_body(b, method, moments, q, omega, torque, dt, n_steps, failed_step, failure)
+        _advance_body(b, method, moments, q, omega, torque, dt, n_steps, normalize_q, failed_step, failure)
 
 
 _PARALLEL_BODY_STEPS = 200_000
+
+# -- rk4 laid out for SIMD ------------------------------------------------------------------
+#
+# The loops above advance one body through all its steps: a step's stages depend on each
+# other, so the core waits on every division and square root (latency-bound, ~200 ns per
+# body-step). Below, the bodies are taken in chunks held as structure of arrays (one row per
+# component) and each step runs as three loops over the chunk's bodies: the stages up to the
+# rotation vector (branch-free arithmetic that LLVM vectorises: AVX2/AVX-512 lanes), the
+# exponential map's sine and cosine (libm, one body at a time: a vectorised sine would round
+# differently), and the product, normalisation and finiteness test (vectorised, with selects
+# instead of branches). Every operation is rk4_step's own, in its order (explicit.py: Euler's
+# equations, _dexpinv, quaternion.exp_rotation_vector, multiply, normalize), and numba
+# compiles without fastmath, so each body gets the bits of the single-body kernel;
+# test/core/test_batch.py checks it against RK4 body by body.
+
+_SOA_CHUNK = 512  # bodies per chunk: its scratch rows stay in the L1/L2 cache
+
+
+@register_jitable
+def _rk4_soa_chunk(start, stop, moments, q, omega, torque, dt, n_steps, normalize_q, failed_step, failure):
+    m = stop - start
+    # state and per-body constants, one row per component
+    x = np.empty((7, m))  # qx, qy, qz, qw, w1, w2, w3
+    k = np.empty((6, m))  # I1, I2, I3, N1, N2, N3
+    r = np.empty((7, m))  # rotation vector u, its angle, new omega
+    sc = np.empty((2, m))  # sin(|u|/2)/|u|, cos(|u|/2)
+    alive = np.ones(m, dtype=np.bool_)
+    for j in range(m):
+        b = start + j
+        qx, qy, qz, qw = q[b, 0], q[b, 1], q[b, 2], q[b, 3]
+        if normalize_q:  # as _advance_body: continuing from our own output takes q as it is
+            qx, qy, qz, qw = quat.normalize((qx, qy, qz, qw))
+        x[0, j], x[1, j], x[2, j], x[3, j] = qx, qy, qz, qw
+        for i in range(3):
+            x[4 + i, j] = omega[b, i]
+            k[i, j] = moments[b, i]
+        forced = torque[b, 0] != 0.0 or torque[b, 1] != 0.0 or torque[b, 2] != 0.0
+        for i in range(3):  # as torque_at: the row when any component is non-zero, else 0.0
+            k[3 + i, j] = torque[b, i] if forced else 0.0
+    h = dt
+    hh = 0.5 * h
+    h6 = h / 6.0
+    for step in range(n_steps):
+        for j in range(m):
+            i1, i2, i3, n1, n2, n3 = k[0, j], k[1, j], k[2, j], k[3, j], k[4, j], k[5, j]
+            w1, w2, w3 = x[4, j], x[5, j], x[6, j]
+            # stage 1
+            a1 = ((i2 - i3) * w2 * w3 + n1) / i1
+            b1 = ((i3 - i1) * w3 * w1 + n2) / i2
+            c1 = ((i1 - i2) * w1 * w2 + n3) / i3
+            # stage 2
+            x1, x2, x3 = w1 + hh * a1, w2 + hh * b1, w3 + hh * c1
+            u1, u2, u3 = hh * w1, hh * w2, hh * w3
+            a2 = ((i2 - i3) * x2 * x3 + n1) / i1
+            b2 = ((i3 - i1) * x3 * x1 + n2) / i2
+            c2 = ((i1 - i2) * x1 * x2 + n3) / i3
+            d1, d2, d3 = u2 * x3 - u3 * x2, u3 * x1 - u1 * x3, u1 * x2 - u2 * x1
+            v21 = x1 + 0.5 * d1 + (u2 * d3 - u3 * d2) / 12.0
+            v22 = x2 + 0.5 * d2 + (u3 * d1 - u1 * d3) / 12.0
+            v23 = x3 + 0.5 * d3 + (u1 * d2 - u2 * d1) / 12.0
+            # stage 3
+            x1, x2, x3 = w1 + hh * a2, w2 + hh * b2, w3 + hh * c2
+            u1, u2, u3 = hh * v21, hh * v22, hh * v23
+            a3 = ((i2 - i3) * x2 * x3 + n1) / i1
+            b3 = ((i3 - i1) * x3 * x1 + n2) / i2
+            c3 = ((i1 - i2) * x1 * x2 + n3) / i3
+            d1, d2, d3 = u2 * x3 - u3 * x2, u3 * x1 - u1 * x3, u1 * x2 - u2 * x1
+            v31 = x1 + 0.5 * d1 + (u2 * d3 - u3 * d2) / 12.0
+            v32 = x2 + 0.5 * d2 + (u3 * d1 - u1 * d3) / 12.0
+            v33 = x3 + 0.5 * d3 + (u1 * d2 - u2 * d1) / 12.0
+            # stage 4
+            x1, x2, x3 = w1 + h * a3, w2 + h * b3, w3 + h * c3
+            u1, u2, u3 = h * v31, h * v32, h * v33
+            a4 = ((i2 - i3) * x2 * x3 + n1) / i1
+            b4 = ((i3 - i1) * x3 * x1 + n2) / i2
+            c4 = ((i1 - i2) * x1 * x2 + n3) / i3
+            d1, d2, d3 = u2 * x3 - u3 * x2, u3 * x1 - u1 * x3, u1 * x2 - u2 * x1
+            v41 = x1 + 0.5 * d1 + (u2 * d3 - u3 * d2) / 12.0
+            v42 = x2 + 0.5 * d2 + (u3 * d1 - u1 * d3) / 12.0
+            v43 = x3 + 0.5 * d3 + (u1 * d2 - u2 * d1) / 12.0
+            v1 = h6 * (w1 + 2.0 * (v21 + v31) + v41)
+            v2 = h6 * (w2 + 2.0 * (v22 + v32) + v42)
+            v3 = h6 * (w3 + 2.0 * (v23 + v33) + v43)
+            r[0, j], r[1, j], r[2, j] = v1, v2, v3
+            r[3, j] = math.sqrt(v1 * v1 + v2 * v2 + v3 * v3)
+            r[4, j] = w1 + h6 * (a1 + 2.0 * (a2 + a3) + a4)
+            r[5, j] = w2 + h6 * (b1 + 2.0 * (b2 + b3) + b4)
+            r[6, j] = w3 + h6 * (c1 + 2.0 * (c2 + c3) + c4)
+        for j in range(m):  # exp_rotation_vector's scalar part
+            angle = r[3, j]
+            if not angle < math.inf:
+                sc[0, j], sc[1, j] = math.nan, math.nan
+            elif angle < quat.SMALL_ANGLE:
+                sc[0, j], sc[1, j] = 0.5 - angle * angle / 48.0, 1.0 - angle * angle / 8.0
+            else:
+                half = 0.5 * angle
+                sc[0, j], sc[1, j] = math.sin(half) / angle, math.cos(half)
+        for j in range(m):
+            s, c = sc[0, j], sc[1, j]
+            ex, ey, ez, ew = s * r[0, j], s * r[1, j], s * r[2, j], c
+            px, py, pz, pw = x[0, j], x[1, j], x[2, j], x[3, j]
+            nx = pw * ex + px * ew + py * ez - pz * ey
+            ny = pw * ey - px * ez + py * ew + pz * ex
+            nz = pw * ez + px * ey - py * ex + pz * ew
+            nw = pw * ew - px * ex - py * ey - pz * ez
+            inv = 1.0 / math.sqrt(nx * nx + ny * ny + nz * nz + nw * nw)
+            nx, ny, nz, nw = nx * inv, ny * inv, nz * inv, nw * inv
+            w1, w2, w3 = r[4, j], r[5, j], r[6, j]
+            finite = (
+                (nx - nx == 0.0) & (ny - ny == 0.0) & (nz - nz == 0.0) & (nw - nw == 0.0)
+                & (w1 - w1 == 0.0) & (w2 - w2 == 0.0) & (w3 - w3 == 0.0)
+            )
+            was_alive = alive[j]
+            keep = was_alive & finite
+            x[0, j] = nx if keep else px
+            x[1, j] = ny if keep else py
+            x[2, j] = nz if keep else pz
+            x[3, j] = nw if keep else pw
+            x[4, j] = w1 if keep else x[4, j]
+            x[5, j] = w2 if keep else x[5, j]
+            x[6, j] = w3 if keep else x[6, j]
+            failed_step[start + j] = step + 1 if was_alive != keep else failed_step[start + j]  # failed now
+            alive[j] = keep
+    for j in range(m):
+        b = start + j
+        for i in range(4):
+            q[b, i] = x[i, j]
+        for i in range(3):
+            omega[b, i] = x[4 + i, j]
+        if not alive[j]:
+            failure[b] = NON_FINITE
+
+
+# error_model="numpy": a division is the IEEE one without numba's zero-divisor test (a branch that
+# stops LLVM from vectorising); the divisors here are moments (> 0, checked), constants and a
+# quaternion norm, whose zero gives a non-finite state, reported as such.
+@compiled(parallel=True, error_model="numpy")
+def _rk4_soa_parallel(moments, q, omega, torque, dt, n_steps, normalize_q, failed_step, failure):
+    n = q.shape[0]
+    for c in prange((n + _SOA_CHUNK - 1) // _SOA_CHUNK):
+        start = c * _SOA_CHUNK
+        _rk4_soa_chunk(start, min(n, start + _SOA_CHUNK), moments, q, omega, torque, dt, n_steps, normalize_q,
+                       failed_step, failure)
+
+
+@compiled(error_model="numpy")
+def _rk4_soa_serial(moments, q, omega, torque, dt, n_steps, normalize_q, failed_step, failure):
+    n = q.shape[0]
+    for start in range(0, n, _SOA_CHUNK):
+        _rk4_soa_chunk(start, min(n, start + _SOA_CHUNK), moments, q, omega, torque, dt, n_steps, normalize_q,
+                       failed_step, failure)
+
 
 
 def advance_batch(
@@ -126,6 +284,9 @@ def advance_batch(
     dt: float,
     n_steps: int,
     torque_body: Any = None,
+    *,
+    normalize_q: bool = True,
+    layout: str = "soa",
 ) -> tuple[np.ndarray, np.ndarray]:
     """Advance N bodies by ``n_steps`` steps of ``dt`` (s); returns new ``(q, omega)``.
 
@@ -135,7 +296,8 @@ def advance_batch(
     principal_moments : array_like, (3,) or (N, 3)
         kg*m^2, each row > 0.
     q : array_like, (N, 4)
-        Unit quaternions (x, y, z, w), principal -> world; normalised on entry.
+        Unit quaternions (x, y, z, w), principal -> world; normalised on entry unless
+        ``normalize_q`` is False.
     omega : array_like, (N, 3)
         rad/s, principal body frame.
     dt : float
@@ -144,6 +306,14 @@ def advance_batch(
         >= 0.
     torque_body : array_like, (3,) or (N, 3), optional
         N*m, principal body frame, constant over the run (one per body or shared).
+    normalize_q : bool, optional
+        False to continue from states this function returned, as a single body's
+        integrator continues from its own: q is taken as it is (normalising it again would
+        round it differently), so a run cut into calls (torque changes) has the bits of one
+        integrator stepping through it.
+    layout : {'soa', 'per_body'}
+        How rk4 runs: 'soa' (default) in chunks of bodies laid out for SIMD, 'per_body' one
+        body after another (the loop the other methods use). The same bits either way.
 
     Raises
     ------
@@ -152,6 +322,8 @@ def advance_batch(
     NonFiniteStateError
         A step produced a non-finite state (names the step and the first body).
     """
+    if layout not in ("soa", "per_body"):
+        raise ValueError(f"layout must be 'soa' or 'per_body', got {layout!r}")
     if method not in _KERNELS:
         raise ValueError(f"method must be one of {list(BATCH_METHODS + FREE_BODY_METHODS)}, got {method!r}")
     omega = np.array(_as_batch("omega", omega, None, 3), dtype=float, order="C")
@@ -179,8 +351,13 @@ def advance_batch(
     failed_step = np.zeros(n, dtype=np.int64)
     failure = np.zeros(n, dtype=np.int64)
     parallel = n > 1 and n * int(n_steps) >= _PARALLEL_BODY_STEPS
-    run = _advance_bodies_parallel if parallel else _advance_bodies_serial
-    run(_KERNELS[method], moments, q, omega, torque, float(dt), int(n_steps), failed_step, failure)
+    if method == "rk4" and layout == "soa":
+        run_soa = _rk4_soa_parallel if parallel else _rk4_soa_serial
+        run_soa(moments, q, omega, torque, float(dt), int(n_steps), bool(normalize_q), failed_step, failure)
+    else:
+        run = _advance_bodies_parallel if parallel else _advance_bodies_serial
+        run(_KERNELS[method], moments, q, omega, torque, float(dt), int(n_steps), bool(normalize_q), failed_step,
+            failure)
     if failed_step.any():
         # report the earliest failure (the bodies ran independently, in parallel)
         bad = int(np.argmin(np.where(failed_step > 0, failed_step, np.iinfo(np.int64).max)))

@@ -470,12 +470,12 @@ class _Flow:
 
 
 def _floats3(v: Any) -> tuple[float, float, float]:
-    a, b, c = (float(x) for x in np.asarray(v, dtype=float).reshape(3))
+    a, b, c = np.asarray(v, dtype=float).reshape(3).tolist()
     return a, b, c
 
 
 def _floats4(v: Any) -> tuple[float, float, float, float]:
-    a, b, c, d = (float(x) for x in np.asarray(v, dtype=float).reshape(4))
+    a, b, c, d = np.asarray(v, dtype=float).reshape(4).tolist()
     return a, b, c, d
 
 

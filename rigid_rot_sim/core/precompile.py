@@ -20,16 +20,20 @@ import numpy as np
 def entry_points() -> dict[str, object]:
     """The compiled entry points of the core, by name."""
     from rigid_rot_sim.core import batch, exact
-    from rigid_rot_sim.core.integrators import kernels, taylor
+    from rigid_rot_sim.core.integrators import gyrostat, kernels, taylor
 
     return {
         "integrators.kernels.advance_compiled": kernels.advance_compiled,
         "integrators.taylor.taylor_advance": taylor.taylor_advance,
+        "integrators.gyrostat.rk4_advance": gyrostat.rk4_advance,
+        "integrators.gyrostat.dopri5_advance": gyrostat.dopri5_advance,
         "exact._build": exact._build,
         "exact.evaluate_flow": exact.evaluate_flow,
         "exact._free_flow_compiled": exact._free_flow_compiled,
         "batch._advance_bodies_serial": batch._advance_bodies_serial,
         "batch._advance_bodies_parallel": batch._advance_bodies_parallel,
+        "batch._rk4_soa_serial": batch._rk4_soa_serial,
+        "batch._rk4_soa_parallel": batch._rk4_soa_parallel,
     }
 
 
@@ -55,6 +59,13 @@ def exercise() -> None:
             integrator.advance(2)
             integrator.advance_saving(2, 1)
             integrator.step()
+    from rigid_rot_sim.core.integrators.gyrostat import GYROSTAT_METHODS
+    from rigid_rot_sim.core.wheels import orbit_model, wheel_model
+
+    wheels = wheel_model(np.diag(moments), ["w"], [[0.0, 0.0, 1.0]], [0.1], [0.1], [100.0])
+    for cls in GYROSTAT_METHODS.values():
+        gyrostat = cls(moments, 1e-3, ConstantTorque(np.ones(3)), wheels=wheels, orbit=orbit_model(4e14, 7e6))
+        gyrostat.advance(2)
     from rigid_rot_sim.core.exact import torque_free_flow, torque_free_solution
 
     solution = torque_free_solution(moments, (1.0, 0.1, 0.5))
@@ -66,6 +77,9 @@ def exercise() -> None:
         torque = None if method in FREE_BODY_METHODS else np.ones(3) * 1e-3
         for n, steps in ((1, 2), (2, 100_000)):  # serial, then parallel
             advance_batch(method, moments, rng.normal(size=(n, 4)), rng.normal(size=(n, 3)), 1e-4, steps, torque)
+            if method == "rk4":
+                advance_batch(method, moments, rng.normal(size=(n, 4)), rng.normal(size=(n, 3)), 1e-4, steps, torque,
+                              layout="per_body")
 
 
 def main() -> int:

@@ -31,7 +31,7 @@ IDENTITY: Quaternion = (0.0, 0.0, 0.0, 1.0)
 
 # Below this angle (rad) sin(a/2)/a is evaluated by its Taylor series: the division
 # itself is accurate for any a > 0, this only avoids 0/0 and denormal ratios.
-_SMALL_ANGLE = 1e-8
+SMALL_ANGLE = 1e-8
 
 
 @register_jitable
@@ -74,7 +74,7 @@ def exp_rotation_vector(v: Sequence[float]) -> Quaternion:
     angle = math.sqrt(vx * vx + vy * vy + vz * vz)
     if not angle < math.inf:  # math.sin(inf) raises; report a non-finite state instead
         return (math.nan, math.nan, math.nan, math.nan)
-    if angle < _SMALL_ANGLE:
+    if angle < SMALL_ANGLE:
         s = 0.5 - angle * angle / 48.0
         c = 1.0 - angle * angle / 8.0
     else:

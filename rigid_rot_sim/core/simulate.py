@@ -18,8 +18,9 @@ Example
 
 from __future__ import annotations
 
+import functools
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
@@ -46,20 +47,33 @@ class Trajectory:
         Attitude, unit quaternion (x, y, z, w) rotating body -> world.
     omega : ndarray, shape (n, 3)
         Angular velocity, rad/s, body frame.
-    energy : ndarray, shape (n,)
-        Rotational kinetic energy T = 1/2 omega . L, J.
-    L_world : ndarray, shape (n, 3)
-        Angular momentum in the world frame, kg*m^2/s.
     method : str
         Integrator name.
+    energy : ndarray, shape (n,)
+        Rotational kinetic energy T = 1/2 omega . L, J (computed on first access).
+    L_world : ndarray, shape (n, 3)
+        Angular momentum in the world frame, kg*m^2/s (computed on first access).
     """
 
     t: np.ndarray
     q: np.ndarray
     omega: np.ndarray
-    energy: np.ndarray
-    L_world: np.ndarray
     method: str
+    # the principal-frame samples and moments the invariants are computed from (on demand:
+    # a caller in a loop that never reads them does not pay for them)
+    principal_moments: np.ndarray = field(repr=False, compare=False)
+    q_principal: np.ndarray = field(repr=False, compare=False)
+    omega_principal: np.ndarray = field(repr=False, compare=False)
+
+    @functools.cached_property
+    def energy(self) -> np.ndarray:
+        """Rotational kinetic energy T = 1/2 omega . L, J, shape (n,)."""
+        return kinetic_energy(self.principal_moments, self.omega_principal)
+
+    @functools.cached_property
+    def L_world(self) -> np.ndarray:
+        """Angular momentum in the world frame, kg*m^2/s, shape (n, 3)."""
+        return angular_momentum_world(self.principal_moments, self.q_principal, self.omega_principal)
 
 
 def step_grid(t_end: float, dt: float) -> tuple[int, float]:
@@ -72,13 +86,13 @@ def step_grid(t_end: float, dt: float) -> tuple[int, float]:
     return n, t_end - n * dt
 
 
-def principal_torque(body: RigidBody, torque: Any) -> Any:
+def principal_torque(body: RigidBody, torque: Any, is_principal: bool | None = None) -> Any:
     """A user body-frame torque (None, vector, torque model or callable) as a principal-frame model."""
     if torque is None:
         return None
     if not callable(torque):
         torque = ConstantTorque(validation.finite_vector("torque", torque))
-    if body.is_principal:
+    if body.is_principal if is_principal is None else is_principal:
         return torque
     to_principal = body.vector_to_principal
     if isinstance(torque, ConstantTorque):
@@ -150,9 +164,9 @@ def simulate(
     NonFiniteStateError
         A step produced a non-finite state (names the step and the time).
     """
-    body = RigidBody.from_inertia(inertia, "inertia")
+    body, is_principal = rigid_body(inertia)
     omega0 = validation.finite_vector("omega0", omega0)
-    q0 = validation.quaternion("q0", q0)
+    q0 = _attitude(q0)
     t_end = validation.nonnegative_scalar("t_end", t_end)
     dt = validation.positive_scalar("dt", dt)
     if isinstance(save_every, bool) or not isinstance(save_every, (int, np.integer)) or save_every < 1:
@@ -160,43 +174,75 @@ def simulate(
     save_every = int(save_every)
     integrator_class = get_method(method)
 
-    if body.is_principal:  # nothing to rotate (and no Rotation objects to build)
+    if is_principal:  # nothing to rotate (and no Rotation objects to build)
         q0_p, omega0_p = q0, omega0
     else:
         q0_p = body.attitude_to_principal(q0)
         omega0_p = body.vector_to_principal(omega0)
     integrator = integrator_class(
-        body.principal_moments, dt, principal_torque(body, torque), q0=q0_p, omega0=omega0_p, **options
+        body.principal_moments, dt, principal_torque(body, torque, is_principal), q0=q0_p, omega0=omega0_p,
+        **options,
     )
 
     n_full, last = step_grid(t_end, dt)
     n_saves = n_full // save_every
-    q_saved, omega_saved = integrator.advance_saving(n_saves, save_every)
-    times = [np.arange(n_saves + 1) * (save_every * dt)]
-    q_parts = [q0_p.reshape(1, 4), q_saved]
-    omega_parts = [omega0_p.reshape(1, 3), omega_saved]
     rest = n_full - n_saves * save_every
+    tail = bool(rest) or last > 0.0
+    n_rows = n_saves + 1 + tail
+    t = np.arange(n_rows) * (save_every * dt)
+    q_p = np.empty((n_rows, 4))
+    omega_p = np.empty((n_rows, 3))
+    q_p[0] = q0_p
+    omega_p[0] = omega0_p
+    if n_saves:
+        q_p[1 : n_saves + 1], omega_p[1 : n_saves + 1] = integrator.advance_saving(n_saves, save_every)
     if rest:
         integrator.advance(rest)
     if last > 0.0:
         integrator.dt = last
         integrator.step()
-    if rest or last > 0.0:
-        times.append(np.array([t_end]))
-        q_parts.append(integrator.q.reshape(1, 4))
-        omega_parts.append(integrator.omega.reshape(1, 3))
-    elif n_full:
-        times[0][-1] = t_end  # the grid's last point is t_end up to rounding; report it exactly
+    if tail:
+        q_p[-1] = integrator.q
+        omega_p[-1] = integrator.omega
+    if n_full or tail:
+        t[-1] = t_end  # the grid's last point is t_end up to rounding; report it exactly
 
-    t = np.concatenate(times)
-    q_p = np.concatenate(q_parts)
-    omega_p = np.concatenate(omega_parts)
-    moments = body.principal_moments
-    energy = kinetic_energy(moments, omega_p)
-    L_world = angular_momentum_world(moments, q_p, omega_p)
-    if body.is_principal:
+    if is_principal:
         q_body, omega_body = q_p, omega_p
     else:
         q_body = body.attitude_from_principal(q_p)
         omega_body = body.vector_from_principal(omega_p)
-    return Trajectory(t=t, q=q_body, omega=omega_body, energy=energy, L_world=L_world, method=method)
+    return Trajectory(
+        t=t, q=q_body, omega=omega_body, method=method, principal_moments=body.principal_moments, q_principal=q_p,
+        omega_principal=omega_p,
+    )
+
+
+def rigid_body(inertia: Any) -> tuple[RigidBody, bool]:
+    """``(RigidBody.from_inertia(inertia), body.is_principal)``, cached per inertia value (arrays read-only)."""
+    try:
+        values = np.asarray(inertia, dtype=float)
+    except (TypeError, ValueError):
+        values = None
+    if values is None or values.shape not in ((3,), (3, 3)):
+        body = RigidBody.from_inertia(inertia, "inertia")  # raises the documented error
+        return body, body.is_principal
+    return _cached_body(values.shape, values.tobytes())
+
+
+@functools.lru_cache(maxsize=256)
+def _cached_body(shape: tuple[int, ...], data: bytes) -> tuple[RigidBody, bool]:
+    body = RigidBody.from_inertia(np.frombuffer(data).reshape(shape), "inertia")
+    for array in (body.principal_moments, body.body_from_principal, body.inertia_tensor):
+        array.setflags(write=False)
+    return body, body.is_principal
+
+
+_IDENTITY_ATTITUDE = (0.0, 0.0, 0.0, 1.0)
+
+
+def _attitude(q0: Any) -> np.ndarray:
+    """``validation.quaternion("q0", q0)``, with the identity (the default) looked up."""
+    if type(q0) is tuple and q0 == _IDENTITY_ATTITUDE:
+        return np.array(_IDENTITY_ATTITUDE)
+    return validation.quaternion("q0", q0)

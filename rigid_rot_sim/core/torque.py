@@ -15,6 +15,7 @@ callable is :data:`TORQUE_CALLABLE` and runs the kernels' interpreted (slower) p
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, field
 from typing import Any, Callable, NamedTuple, Protocol
 
@@ -40,7 +41,7 @@ class ConstantTorque:
 
     def __post_init__(self) -> None:
         value = np.asarray(self.value, dtype=float).reshape(3)
-        if not np.all(np.isfinite(value)):
+        if not all(map(math.isfinite, value.tolist())):
             raise ValueError(f"torque must be finite, got {value}")
         object.__setattr__(self, "value", value)
 
@@ -136,7 +137,7 @@ def torque_data(torque: Any) -> TorqueData:
     if torque is None:
         return TorqueData(TORQUE_NONE, _NO_POLYNOMIAL, _NO_GRAVITY)
     if isinstance(torque, ConstantTorque):
-        if not np.any(torque.value):
+        if not any(torque.value.tolist()):  # np.any's truth, without its call overhead
             return TorqueData(TORQUE_NONE, _NO_POLYNOMIAL, _NO_GRAVITY)
         return TorqueData(TORQUE_TIME, np.array(torque.value, dtype=float).reshape(1, 3), _NO_GRAVITY)
     if isinstance(torque, PolynomialTorque):

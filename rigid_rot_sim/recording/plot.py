@@ -7,7 +7,9 @@
 * ``torque.png``: the torque applied (body frame, total over each step), with the
   effective times of the recorded torque commands;
 * ``polhode.png``: the path of ω on the energy ellipsoid ω·Iω = 2T in the principal
-  frame (the polhode), coloured by time.
+  frame (the polhode), coloured by time;
+* ``sensors.png`` (runs with sensor models): the gyro's reading minus the true ω and the
+  star tracker's attitude error about the body axes, against their 1-sigma noise.
 """
 
 from __future__ import annotations
@@ -23,7 +25,8 @@ from rigid_rot_sim.scene.scene import parse_scene_text
 from rigid_rot_sim.message_fields import time_to_seconds
 from rigid_rot_sim.recording.events import EVENT_TYPE, decode_event
 from rigid_rot_sim.recording.reader import BagReader
-from rigid_rot_sim.recording.resim import STATE_TYPE
+from rigid_rot_sim.message_fields import quaternion_to_array, vector3_to_array
+from rigid_rot_sim.recording.resim import SENSOR_TYPES, STATE_TYPE
 
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
@@ -200,7 +203,65 @@ def plot_run(path: str | os.PathLike[str], out_dir: str | os.PathLike[str] | Non
     fig.colorbar(points, ax=ax2, shrink=0.8, label="sim time (s)")
     fig.suptitle(_title(reader, "Polhode: path of ω in the principal frame"))
     save(fig, "polhode.png")
+    figure = _sensor_errors(reader)
+    if figure is not None:
+        save(figure, "sensors.png")
     return written
+
+
+def _sensor_errors(reader: BagReader):
+    """The sensors' errors against the recorded states at the same stamps; None without sensor models."""
+    scene = reader.metadata.get("scene", {})
+    if "text" not in scene:
+        return None
+    models = parse_scene_text(scene["text"], source=scene.get("file", "<recorded scene>")).sensors
+    topics = {role: reader.find_topic(role, SENSOR_TYPES[role][0]) for role, (_, field) in SENSOR_TYPES.items()
+              if getattr(models, field) is not None}
+    topics = {role: topic for role, topic in topics.items() if topic is not None}
+    state_topic = reader.find_topic("state", STATE_TYPE)
+    if not topics or state_topic is None:
+        return None
+    truth = {time_to_seconds(m.header.stamp): m for _, m in reader.decoded([state_topic])}
+    fig, axes = plt.subplots(len(topics), 1, figsize=(9, 3.6 * len(topics)), squeeze=False)
+    for ax, (role, topic) in zip(axes[:, 0], topics.items()):
+        rows = []
+        for _, msg in reader.decoded([topic]):
+            state = truth.get(time_to_seconds(msg.header.stamp))
+            if state is None:
+                continue  # compared only where a state of the same instant was recorded
+            if role == "imu":
+                error = vector3_to_array(msg.angular_velocity) - vector3_to_array(state.angular_velocity_body)
+            else:  # body-frame error rotation q^-1 q_m, as a rotation vector
+                error = _rotation_vector(quaternion_to_array(state.orientation),
+                                         quaternion_to_array(msg.pose.pose.orientation))
+            rows.append([time_to_seconds(msg.header.stamp), *error])
+        data = np.array(rows).reshape(-1, 4)
+        for i, axis in enumerate("xyz"):
+            ax.plot(data[:, 0], data[:, i + 1], ".", markersize=2, color=_AXIS_COLOURS[i], label=axis)
+        if role == "imu":
+            sigma = np.full(3, np.sqrt(models.gyro.reading_variance))
+            note = "dashed: 1 sigma beyond the constant biases"
+            ax.set(ylabel="reading - true ω (rad/s)", title=f"Gyro error ({len(data)} readings at state stamps)")
+        else:
+            sigma = np.asarray(models.star_tracker.noise_equivalent_angle)
+            note = "dashed: noise equivalent angle"
+            ax.set(ylabel="attitude error, body axes (rad)",
+                   title=f"Star tracker error ({len(data)} solutions at state stamps)")
+        for i in range(3):
+            ax.axhline(sigma[i], color=_AXIS_COLOURS[i], linewidth=0.6, linestyle="--")
+            ax.axhline(-sigma[i], color=_AXIS_COLOURS[i], linewidth=0.6, linestyle="--")
+        ax.set_xlabel("sim time (s)")
+        ax.grid(True, alpha=0.3)
+        ax.legend(loc="upper right", ncols=3, title=note)
+    fig.suptitle(_title(reader, "Sensor errors"))
+    return fig
+
+
+def _rotation_vector(q_true: np.ndarray, q_measured: np.ndarray) -> np.ndarray:
+    """Rotation vector (rad) of q_true^-1 q_measured (both x, y, z, w): the error about the body axes."""
+    from scipy.spatial.transform import Rotation
+
+    return (Rotation.from_quat(q_true).inv() * Rotation.from_quat(q_measured)).as_rotvec()
 
 
 def _command_times(reader: BagReader) -> list[float]:

@@ -7,6 +7,11 @@ the events through :class:`rigid_rot_sim.run.simulator.Simulator` in recorded or
 advancing to the recorded step before each, rebuilds the run: with the same integrator
 the states are bit-identical to the recorded ones; with another integrator the report
 shows what that integrator changes on this very run.
+
+Sensor readings (``~/imu`` of a scene with ``sensors.gyro``, ``~/star_tracker``) are drawn
+again from the recorded seed (the ``sensors`` metadata record), one per recorded message
+in file order, at the recorded message's step (:class:`~rigid_rot_sim.run.sensors.SensorSuite`),
+and compared bit for bit: the re-simulation is BIT-EXACT only when they agree too.
 """
 
 from __future__ import annotations
@@ -22,6 +27,7 @@ import numpy as np
 from rigid_rot_sim.core import quaternion as quat
 from rigid_rot_sim.scene.scene import parse_scene_text
 from rigid_rot_sim.run.digest import format_digest
+from rigid_rot_sim.run.sensors import SensorSuite
 from rigid_rot_sim.run.simulator import Simulator, StateSnapshot
 from rigid_rot_sim.message_fields import quaternion_to_array, time_to_seconds, vector3_to_array
 from rigid_rot_sim.recording.events import EVENT_TYPE, SimEvent, decode_event
@@ -29,6 +35,9 @@ from rigid_rot_sim.recording.provenance import core_fingerprint
 from rigid_rot_sim.recording.reader import BagReader
 
 STATE_TYPE = "rigid_rot_msgs/msg/RigidBodyState"
+#: Sensor outputs: role -> (message type, the sensor's field of the scene's sensors section).
+SENSOR_TYPES = {"imu": ("sensor_msgs/msg/Imu", "gyro"),
+                "star_tracker": ("geometry_msgs/msg/PoseWithCovarianceStamped", "star_tracker")}
 
 _VECTOR_FIELDS = (
     "angular_velocity_body", "angular_velocity_world", "angular_momentum_body",
@@ -74,6 +83,8 @@ class ResimReport:
         if self.recorded_digest is None:
             return "not recorded (a recording made before the run digest)"
         return "equal" if self.digest == self.recorded_digest else "different"
+    sensor_readings: int = 0
+    sensor_mismatches: int = 0
 
     @property
     def verdict(self) -> str:
@@ -81,7 +92,11 @@ class ResimReport:
         if self.states == 0:
             return "NOTHING TO COMPARE: the recording holds no state messages"
         if self.identical:
-            return f"BIT-EXACT: all {self.states} states reproduced bit for bit"
+            readings = f" and {self.sensor_readings} sensor readings" if self.sensor_readings else ""
+            return f"BIT-EXACT: all {self.states} states{readings} reproduced bit for bit"
+        if self.sensor_mismatches and self.max_attitude_error == self.max_omega_error == 0.0:
+            return (f"MISMATCH: {self.sensor_mismatches} of {self.sensor_readings} sensor readings differ "
+                    "(the states agree; a different numpy draws different noise?)")
         same = self.method == self.recorded_method
         if same and self.core_changed:
             label = "DIFFERS (same integrator, but the numerical core changed since the recording)"
@@ -111,6 +126,8 @@ class ResimReport:
             f"  max |L| deviation       {self.max_momentum_error:.3e} kg*m^2/s (world frame)",
             f"  max energy deviation    {self.max_energy_error:.3e} J",
         ]
+        if self.sensor_readings:
+            lines.append(f"  sensor readings         {self.sensor_readings} redrawn, {self.sensor_mismatches} differ")
         if self.first_difference_t is not None:
             lines.append(f"  first difference at t = {self.first_difference_t:.9g} s")
         if self.digest is not None:
@@ -141,6 +158,9 @@ def _apply(sim: Simulator, event: SimEvent, override_method: str | None) -> None
             event.values["source"], event.vector("torque"), event.values["frame"], event.number("effective_time"),
             receipt_time=event.optional_float("receipt_time"), stamp=event.optional_float("stamp"),
         )
+    elif kind == "wheel_torque":  # the torques as clamped then: they clamp to themselves
+        torques = event.vector("torques", len(sim.scene.spacecraft.wheels))
+        sim.submit_wheel_torques(event.values["source"], torques, effective_time=event.number("effective_time"))
     elif kind == "apply_torque":
         frame_id = sim.frames.body if event.values["frame"] == "body" else sim.frames.world
         sim.apply_torque(event.vector("torque"), frame_id, event.number("duration"), effective_time=event.number("effective_time"))
@@ -183,7 +203,9 @@ def resimulate(path: str | os.PathLike[str], method: str | None = None) -> Resim
     events_topic = reader.find_topic("events", EVENT_TYPE)
     if events_topic is None:
         raise ValueError(f"{path}: no simulation event log (~/sim_events) in the recording")
-    topics = [events_topic] + ([state_topic] if state_topic else [])
+    sensors, sensor_topics = _sensors(reader, scene, path)
+    topics = [events_topic] + ([state_topic] if state_topic else []) + list(sensor_topics)
+    readings = mismatches = 0
 
     states = events = 0
     max_att = max_omega = max_l = max_e = 0.0
@@ -203,6 +225,13 @@ def resimulate(path: str | os.PathLike[str], method: str | None = None) -> Resim
         k = sim.step_index + round((t - sim.t) / sim.dt)
         sim.advance_to(k)
         snapshot = sim.snapshot()
+        if message.topic in sensor_topics:
+            readings += 1
+            if not _same_reading(sensor_topics[message.topic], sensors, decoded, snapshot):
+                mismatches += 1
+                if identical:
+                    identical, first_difference = False, t
+            continue
         differs, errors = _compare(decoded, snapshot)
         recorded_digest = getattr(decoded, "digest", None)  # absent before the digest field existed
         if recorded_digest is not None:
@@ -227,7 +256,34 @@ def resimulate(path: str | os.PathLike[str], method: str | None = None) -> Resim
         max_attitude_error=max_att, max_omega_error=max_omega, max_momentum_error=max_l,
         max_energy_error=max_e, identical=identical and states > 0, first_difference_t=first_difference,
         digest=digest, recorded_digest=recorded_digest,
+        sensor_readings=readings, sensor_mismatches=mismatches,
     )
+
+
+def _sensors(reader: BagReader, scene: Any, path: Any) -> tuple[SensorSuite | None, dict[str, str]]:
+    """The run's sensors with the recorded seed, and their recorded topics (topic -> role)."""
+    models = scene.sensors
+    roles = [role for role, (_, field) in SENSOR_TYPES.items() if getattr(models, field) is not None]
+    if not roles:
+        return None, {}
+    recorded = reader.metadata.get("sensors", {})
+    seed = json.loads(recorded["seed"]) if "seed" in recorded else models.seed
+    if seed is None:
+        raise ValueError(f"{path}: the scene has sensors but the recording holds no seed ('sensors' metadata)")
+    topics = {}
+    for role in roles:
+        topic = reader.find_topic(role, SENSOR_TYPES[role][0])
+        if topic is not None:
+            topics[topic] = role
+    return SensorSuite(models, seed=seed), topics
+
+
+def _same_reading(role: str, sensors: Any, recorded: Any, snapshot: StateSnapshot) -> bool:
+    """Draw the next reading of the sensor behind ``role`` and compare it with the recorded message."""
+    if role == "imu":
+        return bool(np.array_equal(vector3_to_array(recorded.angular_velocity), sensors.read_gyro(snapshot)))
+    attitude = quaternion_to_array(recorded.pose.pose.orientation)
+    return bool(np.array_equal(attitude, sensors.read_star_tracker(snapshot)))
 
 
 def _compare(recorded: Any, snapshot: StateSnapshot) -> tuple[bool, tuple[float, float, float, float]]:

@@ -6,7 +6,8 @@
 * MCAP metadata records written first (so a crashed file keeps them): ``scene`` (the
   scene file as given: ``file``, ``text``), ``parameters`` (resolved node parameters,
   JSON values), ``integrator`` (``method`` after ``auto`` was resolved, ``dt``,
-  ``options`` as JSON), ``versions`` (packages and dependencies), ``rigid_rot_sim`` (the
+  ``options`` as JSON), ``sensors`` (``seed``: of the sensor noise, JSON; runs with
+  sensor models), ``versions`` (packages and dependencies), ``rigid_rot_sim`` (the
   recorded topics by role, for resim and plot);
 * the messages the node publishes and receives (rclpy objects, ``rclpy.serialization``);
 * ``/tf`` (world -> body) encoded from the embedded TFMessage definition;
@@ -103,6 +104,9 @@ class RunRecorder:
     sim_seconds : callable, optional
         The run's sim time (s). Given: log times in sim time (time base ``sim``, see the
         module docstring); None: wall clock (``wall``).
+    sensors : mapping, optional
+        The run's sensor noise settings, recorded as the ``sensors`` metadata record (JSON
+        values): ``seed``, the seed of every sensor's noise (resim draws the same bits).
     """
 
     def __init__(
@@ -117,6 +121,7 @@ class RunRecorder:
         on_error: Callable[[RecorderError], None] | None = None,
         flush_period: float = 0.5,
         sim_seconds: Callable[[], float] | None = None,
+        sensors: Mapping[str, Any] | None = None,
     ) -> None:
         self.writer = Recorder(path, on_error=on_error, flush_period=flush_period)
         self.log_time_base = "wall" if sim_seconds is None else "sim"
@@ -140,6 +145,8 @@ class RunRecorder:
         )
         self.writer.add_metadata("versions", package_versions())
         self.writer.add_metadata("log_time", {"base": self.log_time_base})
+        if sensors is not None:
+            self.writer.add_metadata("sensors", {name: json.dumps(value) for name, value in sorted(sensors.items())})
         self.writer.add_topic(events_topic, EVENT_TYPE, QosProfile(depth=100))
         self.writer.add_topic(TF_TOPIC, TF_TYPE, QosProfile(depth=100))
 

@@ -15,9 +15,11 @@ Topics (names relative to the node; QoS in the README, section "The simulation n
 ~/angular_velocity (Vector3Stamped, body frame), ~/angular_momentum (Vector3Stamped,
 world frame), ~/mass_properties (geometry_msgs/InertiaStamped, transient local, once),
 ~/top_state (rigid_rot_msgs/HeavyTopState, gravity scenes), ~/rejected
-(rigid_rot_msgs/RejectedCommand), ~/imu (sensor_msgs/Imu) and ~/odom (nav_msgs/Odometry)
-when the scene asks for them, /tf (world -> body) and /tf_static (body -> principal
-frame, where it differs from the body frame), /clock (sim time). QoS: rigid_rot_sim.ros.qos.
+(rigid_rot_msgs/RejectedCommand), ~/imu (sensor_msgs/Imu; the gyro's readings when the scene
+has ``sensors.gyro``) and ~/odom (nav_msgs/Odometry) when the scene asks for them,
+~/star_tracker (geometry_msgs/PoseWithCovarianceStamped) with ``sensors.star_tracker``
+(docs/sensors.md), /tf (world -> body) and /tf_static (body -> principal frame, where it
+differs from the body frame), /clock (sim time). QoS: rigid_rot_sim.ros.qos.
 Every header stamp is sim time. Frame names: the ``world_frame`` / ``body_frame``
 parameters (default: the scene's ``frames``, REP 105 ``odom`` / ``base_link``), used by
 every output, /tf and the recording. Torque inputs: the scene's topics (WrenchStamped or
@@ -28,10 +30,14 @@ Services
 ~/compute_inertia, ~/set_state, ~/reset (std_srvs/Trigger), ~/pause (std_srvs/SetBool),
 ~/step (rigid_rot_msgs/Step, while paused; at most ``limits.MAX_STEPS_PER_REQUEST`` steps,
 run in the service callback for at most ``services.STEP_REQUEST_WALL`` s: the reply says how many
-were done), ~/apply_torque. A bad request gets ``success = false`` and the reason; nothing
+were done), ~/apply_torque, ~/step_with_torque (a torque over the next N steps, then the state, in
+one callback). A bad request gets ``success = false`` and the reason; nothing
 raises out of a callback. Where simulation_interfaces is installed, also the standard
 simulator services (:mod:`.simulation_services`), through the same actions
-(``~/step_simulation`` runs ``~/step``'s code, limits included).
+(``~/step_simulation`` runs ``~/step``'s code, limits included) and the SimulateSteps action
+(``~/simulate_steps``, stepped by a timer of its own: :mod:`.simulate_steps`).
+Executor: two threads; the run's callbacks share the node's default (mutually exclusive)
+callback group, ``~/compute_inertia`` has its own, so a huge request is deserialised beside them.
 Every limit is in :mod:`rigid_rot_sim.core.limits` (README, "Limits and failure behaviour").
 
 Pacing
@@ -41,8 +47,8 @@ Pacing
 tick, so commands and services are served in between); r = 0: as fast as possible, in
 batches of at most ``MAX_TICK_WALL`` wall time per tick. The states do not depend on r
 or on the publish rates (see the Simulator's determinism notes). The timer runs on the
-steady clock: the node is the source of sim time (/clock), so ``use_sim_time`` true is
-refused (at start-up and at run time).
+steady clock: the node is the source of sim time (/clock), so ``use_sim_time`` true (a
+launch-wide setting) is accepted with a warning that says so: nothing here reads the ROS clock.
 
 Lockstep (the scene's ``lockstep`` section or the read-only ``lockstep.*`` parameters): the
 run waits at every turn for the controllers' commands stamped with the turn's time
@@ -56,6 +62,7 @@ from __future__ import annotations
 import signal
 import sys
 import threading
+import time
 from collections.abc import Callable
 from typing import TYPE_CHECKING, Any
 
@@ -64,14 +71,16 @@ from rclpy.clock import Clock as SteadyClock
 from rclpy.clock_type import ClockType
 from rclpy.duration import Duration
 from rclpy.exceptions import NameValidationException, ParameterException
-from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
+from rclpy.executors import ExternalShutdownException, MultiThreadedExecutor
 from rclpy.node import Node
 from rclpy.signals import SignalHandlerOptions
 
 from rigid_rot_sim.core import limits
 from rigid_rot_sim.ros import simulation_services
+from rigid_rot_sim.run.sensors import SensorSuite
 from rigid_rot_sim.ros.inputs import Rejections, TorqueInputs
 from rigid_rot_sim.ros.lockstep import NodeLockstep, declare_lockstep_parameters, lockstep_from_parameters, timer_period
+from rigid_rot_sim.ros.wheel_inputs import WheelTorqueInput
 from rigid_rot_sim.ros.outputs import Outputs
 from rigid_rot_sim.ros import parameters as params
 from rigid_rot_sim.ros.parameters import RunParameters, declare_parameters, declare_scene_parameter, read_settings
@@ -87,6 +96,10 @@ if TYPE_CHECKING:  # imported when recording only: the mcap packages are optiona
     from rigid_rot_sim.ros.recording import NodeRecording
 
 NODE_NAME = "rigid_rot_sim"
+#: Executor threads: the run's callbacks (one at a time) and ~/compute_inertia beside them.
+EXECUTOR_THREADS = 2
+#: Most wall time (s) to wait at shutdown for a callback in flight (a slice is at most 0.25 s).
+EXECUTOR_SHUTDOWN_WAIT = 2.0
 
 
 class SceneRun:
@@ -105,12 +118,16 @@ class SceneRun:
         self.sim = sim = Simulator(scene, method=settings[params.INTEGRATOR], dt=settings[params.DT])
         sim.max_torque = settings[params.MAX_TORQUE]
         state_qos = output_qos(OutputQos(settings[params.QOS_RELIABILITY], settings[params.QOS_DEPTH]))
-        self.outputs = Outputs(node, scene, settings.rates(), state_qos, settings[params.GROUND_TRUTH_VARIANCE])
+        has_sensors = scene.sensors.gyro is not None or scene.sensors.star_tracker is not None
+        self.sensors = SensorSuite(scene.sensors) if has_sensors else None
+        self.outputs = Outputs(node, scene, settings.rates(), state_qos, settings[params.GROUND_TRUTH_VARIANCE],
+                               self.sensors)
         schedule = OutputSchedule.from_rates(self.outputs.rates, sim.dt)
         pacer = Pacer(settings[params.REAL_TIME_FACTOR])
         self.driver = RunDriver(sim, schedule, pacer, settings[params.DURATION] or None, observers=[self.outputs])
         rejections = Rejections(node, sim, self.outputs)
         self.inputs = TorqueInputs(node, sim, scene, settings[params.COMMAND_DEPTH], rejections)
+        self.wheel_input = WheelTorqueInput(node, sim, scene, settings[params.COMMAND_DEPTH], rejections)
         self.lockstep: NodeLockstep | None = None
         lockstep = lockstep_from_parameters(node, scene, sim.dt)
         if lockstep is not None:
@@ -152,11 +169,13 @@ class SceneRun:
             missing = (exc.name or "").split(".")[0] or str(exc)
             self.logger.error(f"recording disabled: {missing} is not installed (pip install mcap mcap-ros2-support)")
             return None
-        recording = NodeRecording.start(node, self.sim, self.outputs, self.inputs.subscriptions, path, log_time)
+        subscriptions = self.inputs.subscriptions + self.wheel_input.subscriptions
+        recording = NodeRecording.start(node, self.sim, self.outputs, subscriptions, path, log_time)
         if recording is not None:
             self.sim.add_observer(recording)  # events: commands accepted, torques applied, set_state, ...
             self.outputs.listeners.append(recording)  # every message published, as the bytes published
             self.inputs.listeners.append(recording)  # every torque command as received
+            self.wheel_input.listeners.append(recording)  # every wheel command as received
         return recording
 
     def _start_foxglove(self, node: Node, address: str) -> tuple[FoxgloveLive | None, str]:
@@ -183,9 +202,14 @@ class SceneRun:
             built.insert(0, self.lockstep.describe())
         else:
             left_out.append("lockstep (commands act when they arrive)")
-        for part_built, part_left_out in (self.outputs.describe(), self.inputs.describe()):
+        for part_built, part_left_out in (self.outputs.describe(), self.inputs.describe(), self.wheel_input.describe()):
             built += part_built
             left_out += part_left_out
+        if self.sensors is None:
+            left_out.append("sensor models (~/imu, if asked for, is ideal; no ~/star_tracker)")
+        else:
+            drawn = "" if scene.sensors.seed is not None else ", drawn"
+            built.append(f"sensors {', '.join(self.sensors.names)} (seed {self.sensors.seed}{drawn})")
         if scene.schedules:
             built.append(f"{len(scene.schedules)} torque schedule(s)")
         if scene.gravity is None:
@@ -257,7 +281,7 @@ class RigidRotSimNode(Node):
     def __init__(self, **kwargs: Any) -> None:
         super().__init__(NODE_NAME, **kwargs)
         params.accept_integers_for_doubles(self)  # `ros2 param set ... real_time_factor 2` stores 2.0
-        params.refuse_use_sim_time(self)  # with or without a scene
+        params.explain_use_sim_time(self)  # with or without a scene
         self.inertia_service = InertiaService(self)
         self.run: SceneRun | None = None
         scene_path = declare_scene_parameter(self)
@@ -265,8 +289,6 @@ class RigidRotSimNode(Node):
             self.get_logger().info(
                 "no scene parameter: serving ~/compute_inertia only (rigid-rot run SCENE starts a simulation)")
             return
-        if self.get_parameter("use_sim_time").value is True:
-            raise ValueError(params.USE_SIM_TIME_REFUSAL)
         self.run = SceneRun(self, load_scene(resolve_scene(scene_path)))  # SceneError names the file, key, problem
 
     @property
@@ -298,6 +320,25 @@ def _interrupt(signum: int, frame: Any) -> None:
     raise KeyboardInterrupt
 
 
+def _wait_for_callbacks(node: Node, timeout: float) -> bool:
+    """Wait (at most ``timeout`` s) until no callback of the node's default group runs, and keep it so.
+
+    The run's callbacks (ticks, services, commands) are all in that mutually exclusive group; once
+    it is claimed here none starts again (the executor is shut down), so the node and its recording
+    close with no callback in flight. (rclpy 7.1's ``Executor.shutdown`` does not wait for them.)
+    """
+    group = node.default_callback_group
+    member = next((entity for entity in (ref() for ref in list(group.entities)) if entity is not None), None)
+    if member is None:
+        return True
+    deadline = time.monotonic() + timeout
+    while not group.beginning_execution(member):
+        if time.monotonic() > deadline:
+            return False
+        time.sleep(0.005)
+    return True
+
+
 def init_ros(args: list[str] | None) -> None:
     """``rclpy.init`` without rclpy's signal handlers: while nodes start, Ctrl-C / SIGTERM stop them at once.
 
@@ -321,11 +362,15 @@ def run_until_finished(start: Callable[[list[Node]], RigidRotSimNode], drain: fl
     """
     nodes: list[Node] = []
     stop = threading.Event()
+    executor = None
     try:
         node = start(nodes)
         for signum in (signal.SIGINT, signal.SIGTERM):
             signal.signal(signum, lambda *_: stop.set())
-        executor = SingleThreadedExecutor()
+        # two threads: every callback that touches the run is in the node's default (mutually
+        # exclusive) group, so they never overlap; ~/compute_inertia has a group of its own, so a
+        # huge request is deserialised beside the stepping and publishing (InertiaService)
+        executor = MultiThreadedExecutor(num_threads=EXECUTOR_THREADS)
         for each in nodes:
             executor.add_node(each)
         while rclpy.ok() and not node.finished and not stop.is_set():
@@ -337,7 +382,10 @@ def run_until_finished(start: Callable[[list[Node]], RigidRotSimNode], drain: fl
     except (KeyboardInterrupt, ExternalShutdownException):
         pass
     finally:
+        if executor is not None:
+            executor.shutdown(timeout_sec=0)
         for each in reversed(nodes):
+            _wait_for_callbacks(each, EXECUTOR_SHUTDOWN_WAIT)  # a tick in flight ends before the recording closes
             each.destroy_node()
         rclpy.try_shutdown()
 

@@ -2,7 +2,9 @@
 
 :data:`OUTPUTS` maps each scene output name (``scene.scene.OUTPUT_NAMES``) to its message
 type and the function that builds its message from a
-:class:`~rigid_rot_sim.run.simulator.StateSnapshot`. :class:`Outputs` creates a publisher
+:class:`~rigid_rot_sim.run.simulator.StateSnapshot`; :data:`SENSOR_OUTPUTS` the outputs that
+carry a sensor's reading instead (``~/imu`` with a gyro, ``~/star_tracker``), drawn from the
+run's :class:`~rigid_rot_sim.run.sensors.SensorSuite` once per message. :class:`Outputs` creates a publisher
 for each output the scene asks for (rate > 0), plus ``~/mass_properties`` (latched, once),
 ``~/rejected`` and ``/tf_static`` (the principal-axes frame, where it differs from the body
 frame), all in :attr:`Outputs.publishers`, keyed on those names.
@@ -19,15 +21,15 @@ from __future__ import annotations
 from collections.abc import Mapping
 from typing import Any, Callable, Protocol, Sequence
 
-from geometry_msgs.msg import InertiaStamped, QuaternionStamped, Vector3Stamped
+from geometry_msgs.msg import InertiaStamped, PoseWithCovarianceStamped, QuaternionStamped, Vector3Stamped
 from nav_msgs.msg import Odometry
 from rclpy.node import Node
 from rclpy.publisher import Publisher
 from rclpy.qos import QoSProfile
 from rclpy.serialization import serialize_message
-from rigid_rot_msgs.msg import HeavyTopState, RejectedCommand, RigidBodyState
+from rigid_rot_msgs.msg import HeavyTopState, RejectedCommand, RigidBodyState, TorqueBreakdown
 from rosgraph_msgs.msg import Clock
-from sensor_msgs.msg import Imu
+from sensor_msgs.msg import Imu, JointState
 from tf2_msgs.msg import TFMessage  # built into the venv by `make setup` (vendored), a ROS dependency
 from visualization_msgs.msg import MarkerArray
 
@@ -36,6 +38,7 @@ from rigid_rot_sim.core.inertia import principal_frame_pose
 from rigid_rot_sim.run.body_view import body_view
 from rigid_rot_sim.run.observer import SimulationObserver
 from rigid_rot_sim.scene.scene import OUTPUT_NAMES, Frames, Scene
+from rigid_rot_sim.run.sensors import SensorSuite
 from rigid_rot_sim.run.simulator import StateSnapshot
 from rigid_rot_sim.ros.qos import CLOCK_QOS, LATCHED_QOS, REJECTED_QOS, TF_QOS, TF_STATIC_QOS, describe as describe_qos
 
@@ -60,8 +63,23 @@ OUTPUTS: dict[str, tuple[Any, MessageBuilder]] = {
              lambda s, o: conversions.snapshot_to_odometry(s, o.frames.world, o.frames.body, o.ground_truth_variance)),
     "markers": (MarkerArray,
                 lambda s, o: conversions.body_markers(o.body_view, s, o.frames.world, o.frames.body)),
+    "star_tracker": (PoseWithCovarianceStamped, None),  # a sensor's reading: SENSOR_OUTPUTS
+    "wheels": (JointState, lambda s, o: conversions.snapshot_to_joint_state(s, o.frames.body)),
+    "torque_breakdown": (TorqueBreakdown, lambda s, o: conversions.snapshot_to_torque_breakdown(s, o.frames.body)),
 }
 assert tuple(OUTPUTS) == OUTPUT_NAMES, "one entry per scene output, in the scene's order"
+
+#: A sensor reading's message from the sensors, the state, the frames and the ground-truth variance.
+SensorBuilder = Callable[[SensorSuite, StateSnapshot, Frames, float], Any]
+
+#: Outputs that carry a sensor's reading when the scene has that sensor (``~/imu``: the gyro's,
+#: instead of the ideal rate): output name -> (sensor, builder). Each message is one reading.
+SENSOR_OUTPUTS: dict[str, tuple[str, SensorBuilder]] = {
+    "imu": ("gyro", lambda sensors, s, f, v: conversions.gyro_to_imu(
+        sensors.read_gyro(s), s.t, f.body, sensors.gyro.reading_variance or v)),
+    "star_tracker": ("star_tracker", lambda sensors, s, f, v: conversions.star_tracker_pose(
+        sensors.read_star_tracker(s), s.t, f.world, sensors.star_tracker.covariance)),
+}
 
 
 def output_topic(name: str) -> str:
@@ -84,8 +102,12 @@ class Outputs(SimulationObserver):
     """
 
     def __init__(self, node: Node, scene: Scene, rates: Mapping[str, float], state_qos: QoSProfile,
-                 ground_truth_variance: float) -> None:
+                 ground_truth_variance: float, sensors: SensorSuite | None = None) -> None:
         self.scene = scene
+        self.sensors = sensors
+        #: Output name -> the builder of its sensor reading (the outputs whose sensor the scene has).
+        self.readings = {name: builder for name, (sensor, builder) in SENSOR_OUTPUTS.items()
+                         if sensors is not None and sensor in sensors.names}
         self.frames = scene.frames
         self.ground_truth_variance = ground_truth_variance
         self.body_view = body_view(scene)
@@ -105,8 +127,12 @@ class Outputs(SimulationObserver):
         self.publishers["rejected"] = node.create_publisher(RejectedCommand, "~/rejected", REJECTED_QOS)
 
     def _offered(self) -> list[str]:
-        """The outputs this scene can have (``top_state`` only with gravity)."""
-        return [name for name in OUTPUT_NAMES if name != "top_state" or self.scene.is_top]
+        """The outputs this scene can have (``top_state`` only with gravity, ``wheels`` only with reaction
+        wheels, ``torque_breakdown`` only where a torque acts)."""
+        return [name for name in OUTPUT_NAMES if (name != "top_state" or self.scene.is_top)
+                and (name != "star_tracker" or name in self.readings)
+                and (name != "wheels" or bool(self.scene.spacecraft.wheels))
+                and (name != "torque_breakdown" or self.scene.torque_kind != "none")]
 
     def _static_transforms(self) -> list[Any]:
         """With /tf: body -> principal-axes frame, where the principal axes are not the body axes."""
@@ -157,4 +183,8 @@ class Outputs(SimulationObserver):
 
     def outputs_due(self, step: int, snapshot: StateSnapshot, names: Sequence[str]) -> None:
         for name in names:
-            self.publish(name, OUTPUTS[name][1](snapshot, self))
+            reading = self.readings.get(name)
+            if reading is not None:
+                self.publish(name, reading(self.sensors, snapshot, self.frames, self.ground_truth_variance))
+            else:
+                self.publish(name, OUTPUTS[name][1](snapshot, self))

@@ -67,9 +67,13 @@ from rigid_rot_sim.run.lockstep import Lockstep
 from rigid_rot_sim.run.pacing import RunDriver
 from rigid_rot_sim.scene.scene import MAX_QOS_DEPTH, OUTPUT_NAMES, QOS_RELIABILITIES, Frames, Scene
 
-USE_SIM_TIME_REFUSAL = (
-    "use_sim_time true is refused: this node is the source of sim time (it publishes /clock and "
-    "stamps every output with sim time); its pacing runs on the steady clock"
+#: Logged when ``use_sim_time`` is set true (a launch-wide ``use_sim_time:=true``, as Nav2 and
+#: Gazebo bringups set it): accepted, since nothing in this node reads its ROS clock.
+USE_SIM_TIME_NOTE = (
+    "use_sim_time true accepted, but this node is the clock: it publishes /clock from its own simulation, "
+    "stamps every output with sim time and paces itself on the steady clock, so nothing here changes; "
+    "only its ROS clock now follows the /clock it publishes itself (the other nodes of the launch are "
+    "the ones that need use_sim_time)"
 )
 
 V = TypeVar("V", bool, int, float, str)
@@ -363,12 +367,15 @@ def read_settings(node: Node, scene: Scene, specs: Iterable[ParamSpec[Any]] = PA
 # ---------------------------------------------------------------- run-time changes
 
 
-def refuse_use_sim_time(node: Node) -> None:
-    """Refuse ``use_sim_time`` true at run time, with or without a scene (the node is the time source)."""
+def explain_use_sim_time(node: Node) -> None:
+    """Accept ``use_sim_time`` true at start-up and at run time, with or without a scene, and log
+    :data:`USE_SIM_TIME_NOTE`: the node is the time source, nothing in it reads its ROS clock."""
+    if node.get_parameter("use_sim_time").value is True:
+        node.get_logger().warning(USE_SIM_TIME_NOTE)
 
     def validate(parameters: list[Parameter]) -> SetParametersResult:
         if any(p.name == "use_sim_time" and p.value is True for p in parameters):
-            return SetParametersResult(successful=False, reason=USE_SIM_TIME_REFUSAL)
+            node.get_logger().warning(USE_SIM_TIME_NOTE)
         return SetParametersResult(successful=True)
 
     node.add_on_set_parameters_callback(validate)

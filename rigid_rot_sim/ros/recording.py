@@ -43,7 +43,7 @@ from rigid_rot_sim.run.simulator import Simulator
 #: Topics registered after the scene's outputs, in this order.
 _LATER = ("rejected", "mass_properties", "tf_static")
 #: Outputs whose topic the ``rigid_rot_sim`` metadata names by role (for resim and plot).
-_ROLES = ("state", "clock", "rejected", "mass_properties")
+_ROLES = ("state", "clock", "rejected", "mass_properties", "imu", "star_tracker")
 
 
 class NodeRecording(SimulationObserver):
@@ -84,6 +84,7 @@ class NodeRecording(SimulationObserver):
                 integrator={"method": sim.method, "dt": sim.dt, "options": sim.options},
                 events_topic=node.resolve_topic_name("~/sim_events"), on_error=on_error,
                 sim_seconds=(lambda: sim.t) if log_time == "sim" else None,
+                sensors=None if outputs.sensors is None else {"seed": outputs.sensors.seed},
             )
         except RecorderError as exc:
             log.error(f"{exc}; the simulation runs without recording")
@@ -127,6 +128,16 @@ class NodeRecording(SimulationObserver):
             f"{command.source}: {list(command.torque)} N*m ({command.frame}) from t = {command.effective_time:.9g} s",
             source=command.source, frame=command.frame, torque=tuple(float(v) for v in command.torque),
             effective_time=float(command.effective_time), receipt_time=command.receipt_time, stamp=command.stamp,
+        )
+
+    def wheel_command_accepted(
+        self, step: int, source: str, torques: Sequence[float], effective_time: float, clamped: Sequence[int]
+    ) -> None:
+        said = f"; clamped to max_torque: wheel(s) {list(clamped)}" if clamped else ""
+        self._event(
+            "wheel_torque", step, f"{source}: wheel torques {list(torques)} N*m from t = {effective_time:.9g} s{said}",
+            source=source, torques=tuple(float(v) for v in torques), effective_time=float(effective_time),
+            clamped=list(clamped),
         )
 
     def torque_applied(self, step: int, command: TorqueCommand) -> None:

@@ -10,8 +10,9 @@ from __future__ import annotations
 
 from typing import Any, Callable
 
+from rclpy.callback_groups import MutuallyExclusiveCallbackGroup
 from rclpy.node import Node
-from rigid_rot_msgs.srv import ApplyTorque, ComputeInertia, SetState, Step
+from rigid_rot_msgs.srv import ApplyTorque, ComputeInertia, SetState, Step, StepWithTorque
 from std_srvs.srv import SetBool, Trigger
 
 from rigid_rot_sim import conversions
@@ -20,6 +21,7 @@ from rigid_rot_sim.core.inertia import mass_properties
 from rigid_rot_sim.run.pacing import Progress, RunDriver
 from rigid_rot_sim.scene.scene import Scene
 from rigid_rot_sim.run.simulator import CommandRejected
+from rigid_rot_sim.run.step_requests import torque_for_steps
 from rigid_rot_sim.ros.inputs import REJECT_WARN_PERIOD, Rejections
 
 #: Most wall time (s) one ~/step request spends stepping; the reply says if it stopped short.
@@ -27,11 +29,19 @@ STEP_REQUEST_WALL = 0.25
 
 
 class InertiaService:
-    """``~/compute_inertia``: mass properties of point masses (served with or without a scene)."""
+    """``~/compute_inertia``: mass properties of point masses (served with or without a scene).
+
+    In a callback group of its own: rclpy turns a request into Python objects in the thread
+    that takes it (2.4 s for 1e6 masses, refused only afterwards), so with the node's
+    MultiThreadedExecutor a huge request is taken beside the stepping and publishing, which stay
+    in the node's default group. Thread-safe: it touches nothing but its request and response.
+    """
 
     def __init__(self, node: Node) -> None:
         self.logger = node.get_logger()
-        self.service = node.create_service(ComputeInertia, "~/compute_inertia", self.compute_inertia_callback)
+        self.callback_group = MutuallyExclusiveCallbackGroup()
+        self.service = node.create_service(ComputeInertia, "~/compute_inertia", self.compute_inertia_callback,
+                                           callback_group=self.callback_group)
 
     def compute_inertia_callback(self, request, response):
         count = max(len(request.masses), len(request.positions))
@@ -62,7 +72,7 @@ class InertiaService:
 
 
 class RunServices:
-    """``~/set_state``, ``~/reset``, ``~/pause``, ``~/step``, ``~/apply_torque`` on ``run``.
+    """``~/set_state``, ``~/reset``, ``~/pause``, ``~/step``, ``~/apply_torque``, ``~/step_with_torque`` on ``run``.
 
     ``report`` logs what a slice of stepping came to (a failure, the duration reached).
     """
@@ -77,12 +87,14 @@ class RunServices:
         self.rejections = rejections
         self.report = report
         self.apply_torque_name = node.resolve_service_name("~/apply_torque")
+        self.step_with_torque_name = node.resolve_service_name("~/step_with_torque")
         self.services = [
             node.create_service(SetState, "~/set_state", self.set_state_callback),
             node.create_service(Trigger, "~/reset", self.reset_callback),
             node.create_service(SetBool, "~/pause", self.pause_callback),
             node.create_service(Step, "~/step", self.step_callback),
             node.create_service(ApplyTorque, "~/apply_torque", self.apply_torque_callback),
+            node.create_service(StepWithTorque, "~/step_with_torque", self.step_with_torque_callback),
         ]
 
     # ------------------------------------------------------------------ callbacks
@@ -102,9 +114,23 @@ class RunServices:
             try:
                 return self.step(int(request.steps))
             finally:
-                conversions.fill_rigid_body_state(response.state, self.sim.snapshot(), self.frames.world, self.frames.body)
+                self.fill_state(response.state)
 
         return self.serve(response, "~/step", step)
+
+    def step_with_torque_callback(self, request, response):
+        def step_with_torque() -> str:
+            try:
+                torque = conversions.vector3_to_array(request.torque)
+                return self.step_with_torque(torque, request.frame_id, int(request.steps))
+            finally:
+                self.fill_state(response.state)
+
+        return self.serve(response, "~/step_with_torque", step_with_torque)
+
+    def fill_state(self, message: Any) -> None:
+        """``message`` (RigidBodyState) from the current state."""
+        conversions.fill_rigid_body_state(message, self.sim.snapshot(), self.frames.world, self.frames.body)
 
     def apply_torque_callback(self, request, response):
         def apply() -> str:
@@ -171,14 +197,9 @@ class RunServices:
             self.run.pacer.anchor(sim.t)
         return f"{'paused' if paused else 'running'} at t = {sim.t:.9g} s"
 
-    def step(self, steps: int) -> str:
-        """Advance a paused run by ``steps`` steps (~/step and ~/step_simulation).
-
-        At most ``limits.MAX_STEPS_PER_REQUEST`` steps, run here in the service callback for
-        at most ``STEP_REQUEST_WALL`` s of wall time, so the executor is never held for long.
-        """
-        sim = self.sim
-        if not sim.paused:
+    def check_step(self, steps: int) -> None:
+        """ValueError unless a paused run can be stepped ``steps`` times in one request."""
+        if not self.sim.paused:
             raise ValueError("not paused: call ~/pause with data=true first")
         if steps < 1:
             raise ValueError("steps must be >= 1")
@@ -187,6 +208,32 @@ class RunServices:
                 f"steps = {steps} exceeds the limit of {limits.MAX_STEPS_PER_REQUEST} per request "
                 "(call ~/step again, or resume with ~/pause data=false)"
             )
+
+    def step_with_torque(self, torque: Any, frame_id: str, steps: int) -> str:
+        """Apply ``torque`` over exactly the next ``steps`` steps of a paused run, then step them.
+
+        Atomic: a refused request (not paused, steps out of range, a bad torque or frame) applies
+        nothing and steps nothing; no other callback runs in between (one executor callback).
+        A request that runs out of its wall-time budget (as ``~/step``) keeps its torque scheduled
+        over the remaining steps: ``~/step`` finishes them.
+        """
+        self.check_step(steps)
+        try:
+            command = torque_for_steps(self.sim, torque, frame_id, steps)
+        except CommandRejected as exc:
+            self.rejections.reject(self.step_with_torque_name, exc.reason, frame_id, torque)
+            raise ValueError(exc.reason) from None
+        done = self.step(steps)
+        return f"torque {list(command.torque)} N*m ({command.frame} frame) from step {command.step}; {done}"
+
+    def step(self, steps: int) -> str:
+        """Advance a paused run by ``steps`` steps (~/step and ~/step_simulation).
+
+        At most ``limits.MAX_STEPS_PER_REQUEST`` steps, run here in the service callback for
+        at most ``STEP_REQUEST_WALL`` s of wall time, so the executor is never held for long.
+        """
+        sim = self.sim
+        self.check_step(steps)
         start = sim.step_index
         self.report(self.run.run(start + steps, self.run.clock() + STEP_REQUEST_WALL))
         done = sim.step_index - start

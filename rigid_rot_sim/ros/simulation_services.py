@@ -10,14 +10,17 @@ under names relative to the node, as Gazebo does (``/gzserver/step_simulation``)
 ``~/set_simulation_state``    ``SetSimulationState``                         play, pause, stop (= pause + reset)
 ``~/step_simulation``         ``StepSimulation``                             n steps while paused (as ``~/step``)
 ``~/reset_simulation``        ``ResetSimulation``                            time and state, or state only
+``~/simulate_steps``          ``SimulateSteps`` (action)                     as many steps, feedback per step, cancel
 ==========================  ============================================  ===========================
 
 Every call goes through the action behind the node's own service
 (:class:`~rigid_rot_sim.ros.services.RunServices`: ``step``, ``reset``, ``pause``,
 ``set_initial_state``), so their checks, limits and the recording of what changed apply to both. The outcome is a ``simulation_interfaces/msg/Result``:
-``RESULT_INCORRECT_STATE`` when the call needs another run state (stepping while
-playing), ``RESULT_FEATURE_UNSUPPORTED`` for what this simulator cannot do (a reset of
-time alone, QUITTING), ``RESULT_OPERATION_FAILED`` with the node's reason otherwise.
+``RESULT_FEATURE_UNSUPPORTED`` for what this simulator cannot do (a reset of time alone,
+QUITTING), ``RESULT_OPERATION_FAILED`` with the node's reason otherwise, stepping while
+playing included: StepSimulation.srv and SimulateSteps.action say so ("Calling with
+simulation not paused will return RESULT_OPERATION_FAILED"), and O3DE does the same,
+although Result.msg gives this very case as its example of ``RESULT_INCORRECT_STATE``.
 
 The package is optional: it is imported here only, and :data:`AVAILABLE` is False when
 it is not installed (an apt install without ``ros-jazzy-simulation-interfaces``); the node
@@ -44,6 +47,10 @@ except ImportError:  # pragma: no cover - depends on the installation
     AVAILABLE = False
 else:
     AVAILABLE = True
+try:
+    from simulation_interfaces.action import SimulateSteps
+except ImportError:  # pragma: no cover - an installation without the action's type support
+    SimulateSteps = None
 
 
 def _constant(cls: type, name: str, prefix: str) -> int:
@@ -99,6 +106,11 @@ class SimulationServices:
             node.create_service(StepSimulation, SERVICE_NAMES[3], self.step_callback),
             node.create_service(ResetSimulation, SERVICE_NAMES[4], self.reset_callback),
         ]
+        self.simulate_steps = None
+        if SimulateSteps is not None:
+            from rigid_rot_sim.ros.simulate_steps import SimulateStepsAction
+
+            self.simulate_steps = SimulateStepsAction(node, self, SimulateSteps, OK, OPERATION_FAILED)
 
     # ------------------------------------------------------------------ queries
 
@@ -118,11 +130,13 @@ class SimulationServices:
             SimulatorFeatures.SIMULATION_STATE_PAUSE,
             SimulatorFeatures.STEP_SIMULATION_SINGLE,
             SimulatorFeatures.STEP_SIMULATION_MULTIPLE,
-        ]
+        ] + ([SimulatorFeatures.STEP_SIMULATION_ACTION] if self.simulate_steps is not None else [])
         features.custom_info = (
             "rigid_rot_sim: one rigid body (Euler's equations) driven by torque topics. ResetSimulation scopes: "
             "DEFAULT/ALL or with TIME = time and state, STATE = state only at the current time; nothing is spawned. "
-            f"Also served: {self.node.get_name()}'s ~/step (returns the state), ~/set_state, ~/apply_torque."
+            f"Also served: {self.node.get_name()}'s ~/step (returns the state), ~/set_state, ~/apply_torque, "
+            "~/step_with_torque (a torque over the next N steps, then the state, in one call). "
+            "SimulateSteps: feedback after every step; a cancel is honoured before the next step."
         )
 
     def run_state(self) -> int:
@@ -172,10 +186,14 @@ class SimulationServices:
         run = self.run
         if run.finished or not run.sim.paused:
             state = "stopping (duration reached)" if run.finished else "playing"
-            raise _Refused(INCORRECT_STATE, f"stepping needs a paused simulation, it is {state}: "
+            raise _Refused(OPERATION_FAILED, f"stepping needs a paused simulation, it is {state}: "
                            "pause it first (SetSimulationState PAUSED)")
-        self._stopped = False
+        self.stepping_started()
         self.actions.step(steps)  # ~/step (ValueError: operation failed)
+
+    def stepping_started(self) -> None:
+        """A step request (service or action) was accepted: the run is no longer STOPPED."""
+        self._stopped = False
 
     def reset_callback(self, request, response):
         # the scope field came with the 1.x releases; without it, a reset is a full one

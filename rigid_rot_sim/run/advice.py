@@ -53,6 +53,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from rigid_rot_sim.core import quaternion as quat
+from rigid_rot_sim.core.integrators import METHODS
 
 if TYPE_CHECKING:
     from rigid_rot_sim.core.dynamics import RigidBody
@@ -73,10 +74,20 @@ MIDPOINT_SOLVER_LIMIT = 4.0
 #: exceeds about 3e-4 per step; reported as an accuracy warning, not instability.
 EXPLICIT_ACCURACY_LIMIT = 0.5
 
+
+
+def _methods_with_stability(*kinds: str) -> tuple[str, ...]:
+    """The registered methods whose ``stability`` class is one of ``kinds``, in registry order."""
+    return tuple(name for name, cls in METHODS.items() if cls.stability in kinds)
+
+
 #: Methods bounded for any dt on a free body.
-UNCONDITIONALLY_STABLE = frozenset({"implicit_midpoint", "splitting", "exact", "exact_split"})
-ADAPTIVE = frozenset({"dop853", "taylor"})
-EXPLICIT_FIXED_STEP = frozenset({"euler", "rk4", "lie_rk4"})
+UNCONDITIONALLY_STABLE = _methods_with_stability("unconditional", "exact")
+ADAPTIVE = _methods_with_stability("adaptive")
+EXPLICIT_FIXED_STEP = _methods_with_stability("explicit")
+#: Methods bounded at any dt whose :func:`practical_step_limit` was measured by the stability
+#: suite (implicit_midpoint's Newton solve, splitting's accuracy per rotation).
+MEASURED_STEP_LIMITS = ("implicit_midpoint", "splitting")
 
 TORQUE_KINDS = ("none", "constant", "schedule", "topic", "gravity")
 

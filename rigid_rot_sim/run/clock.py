@@ -2,7 +2,9 @@
 
 The time of step boundary k is computed from the integer counter, never accumulated:
 ``t = t_epoch + (k - k_epoch) * dt``, with ``t_epoch = k_epoch = 0`` until dt changes at
-run time (:meth:`StepClock.change_dt` starts a new epoch at the current boundary).
+run time (:meth:`StepClock.change_dt` starts a new epoch at the current boundary). Which
+boundary a time lands on is :mod:`rigid_rot_sim.core.steps`' rule (re-exported here), the
+one the scene's schedules and the sweep use too.
 
 >>> clock = StepClock(0.1)
 >>> clock.k = 3
@@ -15,13 +17,10 @@ run time (:meth:`StepClock.change_dt` starts a new epoch at the current boundary
 
 from __future__ import annotations
 
-import math
+from rigid_rot_sim.core import steps
+from rigid_rot_sim.core.steps import BOUNDARY_SLACK, step_at_or_after, step_at_or_before, time_of_step
 
-__all__ = ["StepClock", "BOUNDARY_SLACK"]
-
-#: A time within this fraction of a step of a boundary counts as on it (t / dt is rarely an
-#: exact integer in floating point: 0.3 / 0.1 = 2.9999999999999996).
-BOUNDARY_SLACK = 1e-9
+__all__ = ["StepClock", "BOUNDARY_SLACK", "step_at_or_after", "step_at_or_before", "time_of_step"]
 
 
 class StepClock:
@@ -52,13 +51,12 @@ class StepClock:
 
     def time_of_step(self, k: int) -> float:
         """Sim time (s) of step boundary k."""
-        return self.t_epoch + (k - self.k_epoch) * self.dt
+        return steps.time_of_step(k, self.dt, t0=self.t_epoch, k0=self.k_epoch)
 
     def step_at_or_after(self, t: float) -> int:
         """The first step boundary at or after sim time t (s), never before the current one."""
-        k = self.k_epoch + math.ceil((t - self.t_epoch) / self.dt - BOUNDARY_SLACK)
-        return max(k, self.k)
+        return max(steps.step_at_or_after(t, self.dt, t0=self.t_epoch, k0=self.k_epoch), self.k)
 
     def step_at_or_before(self, t: float) -> int:
         """The last step boundary at or before sim time t (s) (may be in the past)."""
-        return self.k_epoch + math.floor((t - self.t_epoch) / self.dt + BOUNDARY_SLACK)
+        return steps.step_at_or_before(t, self.dt, t0=self.t_epoch, k0=self.k_epoch)

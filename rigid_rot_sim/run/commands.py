@@ -44,6 +44,8 @@ Torque = tuple[float, float, float]
 
 #: ``source`` of torques applied through ``apply_torque`` (:meth:`CommandSchedule.apply`).
 APPLY_TORQUE_SOURCE = "apply_torque"
+#: Source name of the scene's wheel-torque schedule (topic wheel commands carry their topic's name).
+WHEEL_SCHEDULE_SOURCE = "wheel_torque_schedule"
 
 #: A command stamped further ahead of sim time than this (s) is rejected: its publisher
 #: almost certainly stamps with wall-clock time instead of the sim time on /clock, and
@@ -92,6 +94,7 @@ class EventKind(enum.Enum):
     APPLY_START = "apply_start"  # an applied torque starts (payload: TorqueCommand)
     APPLY_END = "apply_end"  # an applied torque ends (payload: end time, serial of its start)
     SCHEDULE = "schedule"  # a schedule segment starts (payload: start time, schedule index, torque)
+    WHEELS = "wheels"  # wheel motor torques start (payload: effective time, clamped torques, source)
 
 
 @dataclass
@@ -103,12 +106,31 @@ class _Held:
     serial: int
 
 
+def clamp_wheel_torques(wheels: Any, source: str, torques: Any) -> tuple[tuple[float, ...], tuple[int, ...]]:
+    """Wheel motor torques (N*m, one per wheel of ``wheels``) clamped to each wheel's max_torque, and which were.
+
+    CommandRejected for a scene without wheels, a wrong number of values or a non-finite one.
+    """
+    values = [float(v) for v in np.asarray(torques, dtype=float).reshape(-1)]
+    if not wheels:
+        raise CommandRejected(source, "this scene has no reaction wheels")
+    if len(values) != len(wheels):
+        raise CommandRejected(source, f"{len(values)} torque(s) for {len(wheels)} wheel(s) [{', '.join(w.name for w in wheels)}]")
+    clamped = []
+    for value, wheel in zip(values, wheels):
+        if not math.isfinite(value):
+            raise CommandRejected(source, f"non-finite torque for wheel {wheel.name!r}: {value}")
+        clamped.append(min(max(value, -wheel.max_torque), wheel.max_torque))
+    return tuple(clamped), tuple(i for i, (a, b) in enumerate(zip(values, clamped)) if a != b)
+
+
 class CommandSchedule:
     """The torque inputs of ``scene`` on the step grid of ``clock``; see the module docstring.
 
     ``max_torque`` (N*m): the largest accepted torque norm of a command or apply request
     (0 = no limit). :attr:`body_sum` and :attr:`world_sum` (None when zero) are the torque
-    acting from the current step on, in the user body and world frames.
+    acting from the current step on, in the user body and world frames. :attr:`next_event`
+    is the step of the earliest pending event (None when none is pending).
     """
 
     def __init__(self, scene: Scene, clock: StepClock) -> None:
@@ -117,18 +139,27 @@ class CommandSchedule:
         self.inputs: dict[str, TopicInput] = {spec.topic: spec for spec in scene.topic_inputs}
         self.schedules = scene.schedules
         self.max_torque = float(scene.commands.max_torque)
+        self.spacecraft = scene.spacecraft
         self._serial = itertools.count()
         self.clear()
 
     def clear(self) -> None:
         """Forget every command and applied torque; the schedules start again from their first segment."""
         self._events: list[tuple[int, int, EventKind, Any]] = []
-        self.next_event: float = math.inf
+        self.next_event: int | None = None
         self._held: dict[str, _Held] = {}
         self._applied: dict[int, TorqueCommand] = {}
         self._scheduled: dict[int, Torque] = {}
         self.body_sum: Torque = _ZERO3
         self.world_sum: Torque | None = None
+        self.named_torques: tuple[tuple[str, Torque, str], ...] = ()
+        #: The wheels' motor torques (N*m, clamped, scene order) acting from the current step on.
+        self.wheel_torques: tuple[float, ...] = (0.0,) * len(self.spacecraft.wheels)
+        if self.spacecraft.wheel_schedule is not None:
+            for segment in self.spacecraft.wheel_schedule.segments:
+                torques = clamp_wheel_torques(self.spacecraft.wheels, WHEEL_SCHEDULE_SOURCE, segment.torques)[0]
+                self._push(self.clock.step_at_or_after(segment.start), EventKind.WHEELS,
+                           (segment.start, torques, WHEEL_SCHEDULE_SOURCE))
         for index, schedule in enumerate(self.schedules):
             for segment in schedule.segments:
                 self._push(self.clock.step_at_or_after(segment.start), EventKind.SCHEDULE, (segment.start, index, segment.torque))
@@ -177,6 +208,14 @@ class CommandSchedule:
                     source, f"|torque| = {norm:.6g} N*m exceeds max_torque = {self.max_torque:g} N*m"
                 )
         return values  # type: ignore[return-value]
+
+    def submit_wheels(self, source: str, torques: Any, effective_time: float) -> tuple[int, tuple[float, ...], tuple[int, ...]]:
+        """Hold wheel motor torques (:func:`clamp_wheel_torques`) from ``effective_time`` (s): (step, clamped, which)."""
+        clamped, which = clamp_wheel_torques(self.spacecraft.wheels, source, torques)
+        effective_time = validation.finite_scalar("effective_time", effective_time)
+        step = self.clock.step_at_or_after(effective_time)
+        self._push(step, EventKind.WHEELS, (effective_time, clamped, source))
+        return step, clamped, which
 
     def input_spec(self, source: str) -> TopicInput:
         """The topic input ``source`` (ValueError naming the inputs if there is none)."""
@@ -257,7 +296,7 @@ class CommandSchedule:
     def reschedule(self) -> None:
         """Recompute the step of every pending event from its time (after a dt change)."""
         events, self._events = self._events, []
-        self.next_event = math.inf
+        self.next_event = None
         for _, _, kind, payload in events:
             if kind is EventKind.COMMAND or kind is EventKind.APPLY_START:
                 step = self.clock.step_at_or_after(payload.effective_time)
@@ -268,7 +307,7 @@ class CommandSchedule:
 
     def _push(self, step: int, kind: EventKind, payload: Any) -> None:
         heapq.heappush(self._events, (step, next(self._serial), kind, payload))
-        if step < self.next_event:
+        if self.next_event is None or step < self.next_event:
             self.next_event = step
 
     # ------------------------------------------------------------------ taking effect
@@ -299,16 +338,20 @@ class CommandSchedule:
             elif kind is EventKind.SCHEDULE:
                 _, index, torque = payload
                 self._scheduled[index] = torque
-        self.next_event = events[0][0] if events else math.inf
+            elif kind is EventKind.WHEELS:
+                self.wheel_torques = payload[1]
+        self.next_event = events[0][0] if events else None
         self._sum_torques()
 
     def _sum_torques(self) -> None:
         body = [0.0, 0.0, 0.0]
         world = [0.0, 0.0, 0.0]
-        contributions = [(h.torque, h.frame) for h in self._held.values()]
-        contributions += [(c.torque, c.frame) for c in self._applied.values()]
-        contributions += [(torque, self.schedules[i].frame) for i, torque in self._scheduled.items()]
-        for torque, frame in contributions:
+        named = [(source, h.torque, h.frame) for source, h in self._held.items()]
+        named += [(c.source, c.torque, c.frame) for c in self._applied.values()]
+        named += [(f"schedule[{i}]", torque, self.schedules[i].frame) for i, torque in sorted(self._scheduled.items())]
+        #: The torques acting from the current step on, by source: (name, torque N*m, frame body | world).
+        self.named_torques = tuple(named)
+        for _, torque, frame in named:
             target = body if frame == "body" else world
             for i in range(3):
                 target[i] += torque[i]

@@ -56,6 +56,12 @@ class StateSnapshot:
     euler_zxz: np.ndarray | None = None
     p_phi: float | None = None
     p_psi: float | None = None
+    #: Reaction wheels (scene order): speeds relative to the body (rad/s) and the motor torques acting (N*m).
+    wheel_names: tuple[str, ...] | None = None
+    wheel_speeds: np.ndarray | None = None
+    wheel_torques: np.ndarray | None = None
+    #: Every torque acting on the body at this state, by source, N*m, user body frame (their sum is ``torque_body``).
+    torque_sources: tuple[tuple[str, np.ndarray], ...] | None = None
     #: The run digest up to this step (:mod:`~rigid_rot_sim.run.digest`), an unsigned 64-bit integer.
     digest: int = 0
 

@@ -34,6 +34,12 @@ class SimulationObserver:
     def command_rejected(self, step: int, source: str, reason: str, frame_id: str, torque: Any) -> None:
         """A command on ``source`` was refused for ``reason`` (``torque`` as received, maybe not finite)."""
 
+    def wheel_command_accepted(
+        self, step: int, source: str, torques: Sequence[float], effective_time: float, clamped: Sequence[int]
+    ) -> None:
+        """Wheel motor torques (N*m, clamped, scene order) were scheduled on ``source`` for ``effective_time``
+        (s); ``clamped`` lists the wheels whose command exceeded max_torque."""
+
     def torque_applied(self, step: int, command: "TorqueCommand") -> None:
         """A torque for ``command.duration`` s was scheduled (the ``apply_torque`` request)."""
 

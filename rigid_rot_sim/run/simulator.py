@@ -53,14 +53,14 @@ from rigid_rot_sim.core.dynamics import RigidBody
 from rigid_rot_sim.run.observables import Observables, StateSnapshot
 from rigid_rot_sim.run.observer import SimulationObserver
 from rigid_rot_sim.scene.scene import Scene
-from rigid_rot_sim.run.stepper import Stepper
+from rigid_rot_sim.run.gyrostat_stepper import WheelInputs, make_stepper
 
 # CommandRejected, TorqueCommand, APPLY_TORQUE_SOURCE and StateSnapshot are what the Simulator's
 # methods raise, return and take: part of its API, importable from here.
 __all__ = ["Simulator", "StateSnapshot", "TorqueCommand", "CommandRejected", "APPLY_TORQUE_SOURCE"]
 
 
-class Simulator:
+class Simulator(WheelInputs):
     """Simulate ``scene``; ``method`` / ``dt`` / ``options`` override the scene's integrator.
 
     Parameters
@@ -92,7 +92,7 @@ class Simulator:
         self._paused_by_failure = False
         self.clock = StepClock(validation.positive_scalar("dt", scene.integrator.dt if dt is None else dt))
         self.commands = CommandSchedule(scene, self.clock)
-        self.stepper = Stepper(
+        self.stepper = make_stepper(
             scene, self.body, self.observables, self.clock, self.commands,
             scene.integrator.method if method is None else method,
             dict(scene.integrator.options) if options is None else dict(options),

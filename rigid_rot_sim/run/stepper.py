@@ -14,6 +14,7 @@ stops early, with a reason and the last good state kept, when
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from typing import Any
 
@@ -39,6 +40,15 @@ _ZERO3 = (0.0, 0.0, 0.0)
 #: Largest kinetic energy (J), |L| (kg*m^2/s) and |omega| (rad/s) a state may have: the snapshot's
 #: rotations and drifts of such values stay finite (a NaN compares false: refused too).
 _DERIVED_CEILING = 1e300
+
+
+def command_torques(commands: CommandSchedule, orientation: np.ndarray) -> list[tuple[str, np.ndarray]]:
+    """The commanded torques acting now, by source (N*m, user body frame; world ones rotated at ``orientation``)."""
+    q = tuple(float(v) for v in orientation)
+    return [
+        (name, np.array(quat.rotate_inverse(q, torque) if frame == "world" else torque, dtype=float))
+        for name, torque, frame in commands.named_torques
+    ]
 
 
 class Stepper:
@@ -147,26 +157,34 @@ class Stepper:
         """The integrator's state at the clock's step, as the user sees it (:meth:`Observables.snapshot`)."""
         integrator = self.integrator
         assert integrator is not None
-        return self.observables.snapshot(self.clock.t, self.clock.k, integrator.q, integrator.omega, self.step_torque_body,
-                                         self.digest)
+        snapshot = self.observables.snapshot(self.clock.t, self.clock.k, integrator.q, integrator.omega, self.step_torque_body,
+                                             self.digest)
+        sources = command_torques(self.commands, snapshot.orientation)
+        if self.gravity is not None:
+            gravity = self.body.vector_from_principal(self.gravity(0.0, integrator.q, integrator.omega))
+            sources.append(("gravity", np.asarray(gravity, dtype=float)))
+        return dataclasses.replace(snapshot, torque_sources=tuple(sources))
+
 
     def set_command_torque(self) -> None:
         """Give the integrator the commanded torque for the next step (principal frame)."""
         if self.gravity is not None:
             return  # gravity scenes have no command inputs (scene validation)
+        integrator = self.integrator
+        assert integrator is not None
         principal_from_body = self.observables.principal_from_body
         body = self.commands.body_sum
         world = self.commands.world_sum
         if world is not None:
-            q_body = quat.multiply(self.integrator.q, principal_from_body)  # type: ignore[union-attr]
+            q_body = quat.multiply(tuple(integrator.q), principal_from_body)
             world_in_body = quat.rotate_inverse(q_body, world)
             body = (body[0] + world_in_body[0], body[1] + world_in_body[1], body[2] + world_in_body[2])
         self.step_torque_body = body
         if not any(body):
             torque = None
         else:
-            torque = ConstantTorque(quat.rotate(principal_from_body, body))
-        self.integrator.torque = torque  # type: ignore[union-attr]
+            torque = ConstantTorque(np.array(quat.rotate(principal_from_body, body)))
+        integrator.torque = torque
 
     # ------------------------------------------------------------------ stepping
 
@@ -182,18 +200,21 @@ class Stepper:
         end = clock.k + int(n)
         done = 0
         while clock.k < end:
-            due = clock.k >= commands.next_event
+            due = commands.next_event is not None and clock.k >= commands.next_event
             if due:
                 commands.process_due()
             if due or commands.world_sum is not None:  # a world torque: re-expressed at every boundary
                 self.set_command_torque()
-            stop = clock.k + 1 if commands.world_sum is not None else min(end, commands.next_event)
+            if commands.world_sum is not None:
+                stop = clock.k + 1
+            else:
+                stop = end if commands.next_event is None else min(end, commands.next_event)
             chunk = stop - clock.k
             reason = self.rotation_failure(clock.dt)
             if reason is not None:
                 return done, f"rotation limit: {reason}"
             chunk = min(chunk, self._steps_within_rotation_limit())
-            start = (integrator.t, integrator.q, integrator.omega, integrator.n_steps)
+            start = self._saved_state()
             try:
                 # every step's state, for the digest (advance_saving equals advance, step for step)
                 q_steps, omega_steps = integrator.advance_saving(chunk, 1)
@@ -208,20 +229,29 @@ class Stepper:
                     self.digest = fold_steps(self.digest, np.array([clock.t]), integrator.q[None, :],
                                              integrator.omega[None, :])
                 else:
-                    integrator.set_state(*start[:3])
-                    integrator.n_steps = start[3]
+                    self._restore(start)
                 name = "NonFiniteStateError" if isinstance(exc, NonFiniteStateError) else type(exc).__name__
                 return done, f"{name}: {exc}"
             reason = self._derived_failure()
             if reason is not None:  # a finite state whose energy or momentum overflows
-                integrator.set_state(*start[:3])
-                integrator.n_steps = start[3]
+                self._restore(start)
                 return done, f"NonFiniteStateError: {reason}"
             times = clock.t_epoch + (np.arange(clock.k + 1, clock.k + chunk + 1) - clock.k_epoch) * clock.dt
             self.digest = fold_steps(self.digest, times, q_steps, omega_steps)
             clock.k += chunk
             done += chunk
         return done, None
+
+    def _saved_state(self) -> tuple:
+        """What :meth:`_restore` puts back: (t, q, omega, steps taken)."""
+        integrator = self.integrator
+        assert integrator is not None
+        return (integrator.t, integrator.q, integrator.omega, integrator.n_steps)
+
+    def _restore(self, saved: tuple) -> None:
+        assert self.integrator is not None
+        self.integrator.set_state(*saved[:3])
+        self.integrator.n_steps = saved[3]
 
     # ------------------------------------------------------------------ limits
 

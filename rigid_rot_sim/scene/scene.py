@@ -43,7 +43,11 @@ from rigid_rot_sim.scene.bounded_yaml import load_input, read_input
 from rigid_rot_sim.core.quaternion import zxz_to_quaternion
 from rigid_rot_sim.core.inertia import inertia_about_center_of_mass, mass_properties
 from rigid_rot_sim.core.integrators import get_method
+from rigid_rot_sim.core.integrators.gyrostat import get_gyrostat_method
+from rigid_rot_sim.core.sensors import GyroModel, StarTrackerModel
+from rigid_rot_sim.core.steps import step_at_or_after
 from rigid_rot_sim.scene.schema import validated
+from rigid_rot_sim.scene.spacecraft import Spacecraft, parse_spacecraft
 from rigid_rot_sim.scene.scene_schema import (
     DEFAULT_BODY_FRAME,
     DEFAULT_EPOCH,
@@ -70,6 +74,7 @@ __all__ = [
     "OutputQos",
     "CommandSettings",
     "LockstepSpec",
+    "Sensors",
     "Scene",
     "load_scene",
     "parse_scene",
@@ -183,16 +188,29 @@ class ScheduleSegment:
 
 @dataclass(frozen=True)
 class TorqueSchedule:
-    """Piecewise-constant torque written in the scene, expressed in ``frame`` (body or world)."""
+    """Piecewise-constant torque written in the scene, expressed in ``frame`` (body or world).
+
+    On a grid of fixed steps ``dt`` (s) from t = 0, a segment takes effect on the first
+    step boundary at or after its start (:func:`rigid_rot_sim.core.steps.step_at_or_after`,
+    the run engine's rule) and acts until the next segment takes over; of segments landing
+    on the same boundary the last one acts.
+    """
 
     frame: str
     segments: tuple[ScheduleSegment, ...]
 
-    def torque_at(self, t: float) -> Vector3:
-        """The scheduled torque (N*m) at sim time t (s); zero before the first segment."""
+    def change_steps(self, dt: float) -> tuple[int, ...]:
+        """The step boundary where each segment takes effect at step ``dt`` (s), in segment order."""
+        return tuple(step_at_or_after(segment.start, dt) for segment in self.segments)
+
+    def torque_at_step(self, k: int, dt: float) -> Vector3:
+        """The scheduled torque (N*m) acting over step k (from boundary k to k + 1) at step ``dt`` (s).
+
+        Zero before the first segment takes effect.
+        """
         value: Vector3 = (0.0, 0.0, 0.0)
-        for segment in self.segments:
-            if segment.start <= t:
+        for segment, step in zip(self.segments, self.change_steps(dt)):
+            if step <= k:
                 value = segment.torque
         return value
 
@@ -302,6 +320,19 @@ class LockstepSpec:
 
 
 @dataclass(frozen=True)
+class Sensors:
+    """The scene's sensor models (:mod:`rigid_rot_sim.core.sensors`) and the seed of their noise.
+
+    ``seed`` None: the run draws one at start and records it. ``gyro``: ~/imu carries its
+    readings (at ``gyro.rate``); ``star_tracker``: ~/star_tracker at its rate.
+    """
+
+    seed: int | None = None
+    gyro: GyroModel | None = None
+    star_tracker: StarTrackerModel | None = None
+
+
+@dataclass(frozen=True)
 class Scene:
     """A validated scene. ``source`` is the file it came from, ``text`` the YAML as given."""
 
@@ -321,6 +352,8 @@ class Scene:
     foxglove: str | None = None  # [HOST:]PORT of a Foxglove live server (a node setting; see ros/foxglove_live)
     commands: CommandSettings = CommandSettings()
     lockstep: LockstepSpec | None = None
+    spacecraft: Spacecraft = Spacecraft()
+    sensors: Sensors = Sensors()
     description: str = ""
     #: UTC date and time of sim time 0 (ISO 8601; see :data:`scene_schema.DEFAULT_EPOCH`).
     epoch: str = DEFAULT_EPOCH
@@ -334,9 +367,12 @@ class Scene:
 
     @property
     def torque_kind(self) -> str:
-        """What drives the body besides its inertia: none, gravity, topic or schedule."""
+        """What drives the body besides its inertia: none, gravity, spacecraft (wheels or gravity gradient,
+        besides any torque inputs), topic or schedule."""
         if self.gravity is not None:
             return "gravity"
+        if self.spacecraft:
+            return "spacecraft"
         if self.topic_inputs:
             return "topic"
         if self.schedules:
@@ -411,11 +447,16 @@ def _scene(spec: Mapping[str, Any], source: str, text: str) -> Scene:
     if gravity is not None and (topics or schedules):
         # the integrators expand gravity or a piecewise-constant torque exactly, not their sum
         raise ValueError("torque_inputs: not supported in a gravity (heavy top) scene; drop gravity or the inputs")
+    spacecraft = parse_spacecraft(spec.get("actuators"), spec.get("environment"), body.inertia_array)
+    if gravity is not None and spacecraft:
+        raise ValueError("actuators / environment: not supported in a gravity (heavy top) scene; drop gravity")
     duration = spec.get("duration")
     qos = spec.get("qos") or {}
     commands = spec.get("commands") or {}
     recording = spec.get("recording")
     foxglove = spec.get("foxglove")
+    sensors = _sensors(spec.get("sensors") or {})
+    outputs = spec.get("outputs") or {}
     return Scene(
         name=spec.get("name", default_name).strip(),
         description=(spec.get("description") or "").strip(),
@@ -426,10 +467,12 @@ def _scene(spec: Mapping[str, Any], source: str, text: str) -> Scene:
         topic_inputs=topics,
         schedules=schedules,
         gravity=gravity,
-        integrator=_integrator(spec.get("integrator") or {}),
+        integrator=_integrator(spec.get("integrator") or {}, bool(spacecraft)),
+        spacecraft=spacecraft,
         duration=None if duration is None else float(duration),
         real_time_factor=float(spec.get("real_time_factor", 1.0)),
-        outputs=OutputRates(spec.get("outputs") or {}),
+        outputs=OutputRates(_sensor_rates(sensors, {name: float(rate) for name, rate in outputs.items()})),
+        sensors=sensors,
         qos=OutputQos(reliability=qos.get("reliability", OutputQos.reliability), depth=qos.get("depth", OutputQos.depth)),
         recording=None if recording is None else recording.strip(),
         foxglove=None if foxglove is None else str(foxglove).strip(),
@@ -578,14 +621,44 @@ def _schedule(spec: Mapping[str, Any], key: str) -> TorqueSchedule:
     return TorqueSchedule(frame=spec.get("frame", "body"), segments=tuple(segments))
 
 
-def _integrator(spec: Mapping[str, Any]) -> IntegratorSpec:
-    """A method name from the integrator registry (or auto)."""
+def _integrator(spec: Mapping[str, Any], spacecraft: bool = False) -> IntegratorSpec:
+    """A method name from the integrator registry (the gyrostat methods' for wheels or gravity gradient), or auto."""
     method = spec.get("method", IntegratorSpec.method).strip()
     if method != "auto":
-        _at("integrator.method", get_method, method)
+        _at("integrator.method", get_gyrostat_method if spacecraft else get_method, method)
     options = spec.get("options") or {}
     return IntegratorSpec(
         method=method,
         dt=float(spec.get("dt", IntegratorSpec.dt)),
         options=tuple(sorted((str(name), value) for name, value in options.items())),
     )
+
+
+def _sensors(spec: Mapping[str, Any]) -> Sensors:
+    gyro = spec.get("gyro")
+    star_tracker = spec.get("star_tracker")
+    return Sensors(
+        seed=spec.get("seed"),
+        gyro=None if gyro is None else GyroModel(**{
+            name: _floats(value) if isinstance(value, list) else float(value) for name, value in gyro.items()
+        }),
+        star_tracker=None if star_tracker is None else StarTrackerModel(
+            rate=float(star_tracker.get("rate", StarTrackerModel.rate)),
+            noise_equivalent_angle=_floats(star_tracker["noise_equivalent_angle"]),  # type: ignore[arg-type]
+        ),
+    )
+
+
+def _sensor_rates(sensors: Sensors, rates: dict[str, float]) -> dict[str, float]:
+    """The output rates with ~/imu at the gyro's rate and ~/star_tracker at the star tracker's."""
+    for output, sensor, key in (("imu", sensors.gyro, "sensors.gyro.rate"),
+                                ("star_tracker", sensors.star_tracker, "sensors.star_tracker.rate")):
+        if sensor is None:
+            if output == "star_tracker" and rates.get(output, 0.0) > 0.0:
+                raise ValueError("outputs.star_tracker: needs a sensors.star_tracker section (its noise)")
+            continue
+        if output in rates and rates[output] != sensor.rate:
+            raise ValueError(f"outputs.{output}: {rates[output]:g} Hz differs from {key} {sensor.rate:g} Hz "
+                             f"(give the rate once, in {key})")
+        rates[output] = sensor.rate
+    return rates

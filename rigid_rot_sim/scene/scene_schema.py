@@ -29,6 +29,7 @@ from rigid_rot_sim.scene.schema import (
     text,
     vector,
 )
+from rigid_rot_sim.scene.spacecraft_schema import ACTUATORS, ENVIRONMENT
 
 __all__ = [
     "SCENE_SCHEMA",
@@ -81,10 +82,17 @@ OUTPUTS: dict[str, OutputSpec] = {
     "tf": OutputSpec(50.0, "world -> body transform on /tf (where tf2_msgs is installed)"),
     "clock": OutputSpec(100.0, "sim time on /clock"),
     # sensor_msgs/Imu and nav_msgs/Odometry: built only when the scene asks
-    "imu": OutputSpec(0.0, "sensor_msgs/Imu on ~/imu (0: not built, the default)"),
+    "imu": OutputSpec(0.0, "sensor_msgs/Imu on ~/imu: ideal, or the gyro's readings (set by sensors.gyro.rate); "
+                           "0: not built, the default"),
     "odom": OutputSpec(0.0, "nav_msgs/Odometry on ~/odom (0: not built, the default)"),
     "markers": OutputSpec(0.0, "visualization_msgs/MarkerArray on ~/markers: the inertia box (body frame), omega "
                                "(body) and L (world) arrows (0: not built, the default)"),
+    "star_tracker": OutputSpec(0.0, "geometry_msgs/PoseWithCovarianceStamped on ~/star_tracker "
+                                    "(set by sensors.star_tracker.rate; 0: not built)"),
+    "wheels": OutputSpec(100.0, "sensor_msgs/JointState on ~/wheels (scenes with reaction wheels only)"),
+    "torque_breakdown": OutputSpec(
+        100.0, "rigid_rot_msgs/TorqueBreakdown on ~/torque_breakdown (N*m, body frame; every torque by source: scenes where a torque acts)"
+    ),
 }
 
 _DURATION_MAX = limits.DURATION_RANGE[1]
@@ -245,6 +253,50 @@ _LOCKSTEP = nullable(mapping(
     required=["period", "inputs"],
 ))
 
+#: Largest sensor noise seed + 1 (Philox's 64-bit key word).
+SEED_LIMIT = 1 << 64
+
+_GYRO = mapping(
+    "A three-axis rate gyro along the body axes; ~/imu publishes its readings (docs/sensors.md).",
+    {
+        "rate": number("Samples per second, Hz of sim time (the ~/imu rate).", exclusive_minimum=0.0,
+                       maximum=limits.RATE_RANGE[1], default=100.0),
+        "angle_random_walk": number("Angle random walk N, rad/sqrt(s) (white rate noise of density N).",
+                                    minimum=0.0, default=0.0),
+        "bias_instability": number("Bias instability B, rad/s: the Allan deviation floor is 0.664 B "
+                                   "(a Gauss-Markov bias).", minimum=0.0, default=0.0),
+        "bias_correlation_time": number("Correlation time T_c of the Gauss-Markov bias, s (the Allan "
+                                        "floor lies at 1.89 T_c).", exclusive_minimum=0.0, default=100.0),
+        "turn_on_bias": vector("Constant bias [x, y, z], rad/s, body axes.", 3),
+        "turn_on_bias_sigma": number("1-sigma of a constant bias per axis drawn once from the seed, rad/s.",
+                                     minimum=0.0, default=0.0),
+        "scale_factor": vector("Scale factor error [x, y, z], fraction (100 ppm = 1e-4).", 3),
+        "saturation": number("Largest |reading| per axis, rad/s; 0 = none.", minimum=0.0, default=0.0),
+        "quantization": number("Resolution, rad/s per LSB; 0 = none.", minimum=0.0, default=0.0),
+    },
+)
+
+_STAR_TRACKER = mapping(
+    "A star tracker along the body axes: ~/star_tracker (geometry_msgs/PoseWithCovarianceStamped).",
+    {
+        "rate": number("Attitude solutions per second, Hz of sim time.", exclusive_minimum=0.0,
+                       maximum=limits.RATE_RANGE[1], default=10.0),
+        "noise_equivalent_angle": vector("Noise equivalent angle [x, y, z], rad (1 sigma) about each body axis.",
+                                         3, item=number("rad", minimum=0.0)),
+    },
+    required=["noise_equivalent_angle"],
+)
+
+_SENSORS = nullable(mapping(
+    "Sensor models with seeded noise; ground-truth topics stay exact (docs/sensors.md).",
+    {
+        "seed": integer("Seed of every sensor noise; omitted: drawn at start and recorded.",
+                        minimum=0, maximum=SEED_LIMIT - 1),
+        "gyro": nullable(_GYRO),
+        "star_tracker": nullable(_STAR_TRACKER),
+    },
+))
+
 SCENE_SCHEMA: dict[str, Any] = {
     "$schema": DIALECT,
     "title": "rigid_rot_sim scene",
@@ -267,6 +319,8 @@ SCENE_SCHEMA: dict[str, Any] = {
             "initial": _INITIAL,
             "torque_inputs": _TORQUE_INPUTS,
             "gravity": _GRAVITY,
+            "actuators": ACTUATORS,
+            "environment": ENVIRONMENT,
             "integrator": _INTEGRATOR,
             "duration": nullable(number("Sim time to run, s; null runs unbounded.", exclusive_minimum=0.0,
                                         maximum=_DURATION_MAX)),
@@ -296,6 +350,7 @@ SCENE_SCHEMA: dict[str, Any] = {
                                "loopback); needs foxglove-sdk (pip install rigid_rot_sim[viewer]).",
                 "type": ["string", "integer"], "pattern": r"^(\S+:)?[0-9]{1,5}$", "minimum": 0, "maximum": 65535,
             }),
+            "sensors": _SENSORS,
             "commands": nullable(mapping(
                 "Settings of the torque command inputs.",
                 {

@@ -16,7 +16,7 @@ import pyarrow.parquet as pq
 import pytest
 
 from rigid_rot_sim.analysis.sweep import COLUMNS
-from rigid_rot_sim.analysis.engine import run_local, run_sweep
+from rigid_rot_sim.analysis.cluster import run_local, run_sweep
 from rigid_rot_sim.analysis.sweep_spec import load_sweep_spec
 from rigid_rot_sim.cli import main
 

@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import math
 import re
+import typing
 
 import numpy as np
 import pytest
@@ -18,10 +19,11 @@ from scipy.spatial.transform import Rotation
 from rigid_rot_sim.core import dynamics
 from rigid_rot_sim.core.exact import torque_free_solution
 from rigid_rot_sim.core.integrators import METHODS, NonFiniteStateError, get_method
+from rigid_rot_sim.core.integrators.base import Stability
 from rigid_rot_sim.core.torque import ConstantTorque, GravityTorque
 
 # Methods with an ``order`` option: every order is a variant of its own.
-ORDER_OPTIONS = {"splitting": (2, 4, 6), "exact_split": (2, 4)}
+ORDER_OPTIONS = {name: cls.orders for name, cls in METHODS.items() if len(cls.orders) > 1}
 OWN_METHODS = ("euler", "rk4", "dop853", "implicit_midpoint", "lie_rk4", "splitting")
 
 
@@ -50,7 +52,7 @@ def refuses_torque(name, options, torque):
 
 
 def nominal_order(name, options):
-    return options.get("order", get_method(name).order)
+    return options.get("order", get_method(name).orders[0])
 
 
 def attitude_error(q, q_ref):
@@ -69,6 +71,20 @@ def test_registry_names_match_classes():
         assert cls.name == name
         assert get_method(name) is cls
     assert set(OWN_METHODS) <= set(METHODS)
+
+
+def test_every_method_states_its_orders_and_stability_class():
+    for name, cls in METHODS.items():
+        assert cls.stability in typing.get_args(Stability), name
+        assert cls.orders and all(isinstance(order, int) and order >= 0 for order in cls.orders), name
+        assert make(name, {}, MOMENTS, 0.01).order == cls.orders[0]
+        assert (cls.stability == "exact") == (cls.orders == (0,)), name
+    for name, orders in ORDER_OPTIONS.items():
+        for order in orders:
+            assert make(name, {"order": order}, MOMENTS, 0.01).order == order
+        with pytest.raises(ValueError, match="order must be one of"):
+            make(name, {"order": max(orders) + 1}, MOMENTS, 0.01)
+    assert ORDER_OPTIONS == {"splitting": (2, 4, 6), "exact_split": (2, 4)}
 
 
 def test_unknown_method_lists_valid_names():

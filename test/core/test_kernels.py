@@ -31,8 +31,8 @@ def variants():
     for name in METHODS:
         if name == "dop853":  # scipy's adaptive solver: stepped one at a time by the simulator
             continue
-        orders = {"splitting": (2, 4, 6), "exact_split": (2, 4)}.get(name)
-        for options in [{"order": o} for o in orders] if orders else [{}]:
+        orders = METHODS[name].orders
+        for options in [{"order": o} for o in orders] if len(orders) > 1 else [{}]:
             yield name, options
 
 

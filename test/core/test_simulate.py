@@ -91,9 +91,9 @@ def test_samples_land_on_the_grid_and_on_t_end(t_end, save_every, expected_t):
 @pytest.mark.parametrize("method", sorted(METHODS))
 def test_last_partial_step_reaches_t_end(method):
     """t_end = 1.234 with dt = 0.1: 12 steps and one of 0.034 s; the state is the exact one at t_end."""
-    traj = simulate(MOMENTS, OMEGA0, 1.234, 0.1 if METHODS[method].order >= 4 or not METHODS[method].fixed_step else 0.001, method, q0=Q0)
+    traj = simulate(MOMENTS, OMEGA0, 1.234, 0.1 if METHODS[method].orders[0] >= 4 or not METHODS[method].fixed_step else 0.001, method, q0=Q0)
     exact = torque_free_solution(MOMENTS, OMEGA0, Q0)
-    tol = {1: 1e-2, 2: 1e-5}.get(METHODS[method].order, 1e-6)
+    tol = {1: 1e-2, 2: 1e-5}.get(METHODS[method].orders[0], 1e-6)
     assert traj.t[-1] == 1.234
     assert np.max(np.abs(traj.omega[-1] - exact.omega(1.234))) < tol
     assert same_attitudes(traj.q[-1], exact.quaternion(1.234), tol)
@@ -221,3 +221,38 @@ def test_docstring_examples_run(module_name):
 
     result = doctest.testmod(importlib.import_module(module_name))
     assert result.attempted > 0 and result.failed == 0
+
+
+# --- fixed cost: what simulate caches and computes on demand ---------------------------------
+
+
+@pytest.mark.parametrize("inertia", [MOMENTS, TENSOR], ids=["principal", "tensor"])
+def test_invariants_on_demand_are_those_of_the_returned_states(inertia):
+    traj = simulate(inertia, OMEGA0, t_end=1.0, dt=0.1, method="rk4", q0=Q0, torque=(0.1, 0.0, -0.2))
+    tensor = np.diag(MOMENTS) if np.ndim(inertia) == 1 else TENSOR
+    l_body = traj.omega @ tensor.T
+    np.testing.assert_allclose(traj.energy, 0.5 * np.sum(traj.omega * l_body, axis=1), rtol=1e-14)
+    np.testing.assert_allclose(traj.L_world, Rotation.from_quat(traj.q).apply(l_body), rtol=1e-13, atol=1e-15)
+    assert traj.energy is traj.energy  # computed once
+
+
+def test_cached_body_is_shared_read_only_and_keyed_by_value():
+    from rigid_rot_sim.core.simulate import rigid_body
+
+    body, principal = rigid_body([2.0, 3.0, 4.0])
+    again, _ = rigid_body(np.array([2.0, 3.0, 4.0]))
+    assert again is body and principal
+    with pytest.raises(ValueError):
+        body.principal_moments[0] = 1.0
+    other, _ = rigid_body((2.0, 3.0, 4.5))
+    assert other is not body and other.principal_moments[2] == 4.5
+    tensor_body, tensor_principal = rigid_body(TENSOR)
+    assert not tensor_principal and np.allclose(np.sort(tensor_body.principal_moments), [2.0, 3.0, 4.5])
+
+
+def test_repeated_calls_give_the_same_bits():
+    first = simulate(TENSOR, OMEGA0, t_end=2.0, dt=0.5, method="taylor", q0=Q0, torque=(0.1, 0.0, -0.2))
+    second = simulate(TENSOR.tolist(), list(OMEGA0), t_end=2.0, dt=0.5, method="taylor", q0=list(Q0),
+                      torque=[0.1, 0.0, -0.2])
+    for a, b in ((first.q, second.q), (first.omega, second.omega), (first.L_world, second.L_world)):
+        assert np.array_equal(a, b)

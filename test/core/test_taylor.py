@@ -110,6 +110,38 @@ def test_in_place_recurrence_matches_reference_form():
     np.testing.assert_allclose(x, expected, rtol=0, atol=1e-15)
 
 
+@pytest.mark.parametrize(
+    "torque",
+    [None, ConstantTorque([0.1, -0.05, 0.02]), PolynomialTorque([[0.1, -0.05, 0.02], [0.3, 0.0, -0.1]])],
+    ids=["free", "constant", "polynomial"],
+)
+def test_written_out_recurrence_matches_reference_form(torque):
+    """Without gravity the recurrence is written out (rigid_body_series): the same series as the
+    reference contraction of derivative_map's C, to rounding."""
+    integrator = Taylor(MOMENTS, 1.0, torque, tol=1e-12)
+    assert integrator._pairs.shape[0] == 0  # the written-out path, not the tables
+    x0 = np.concatenate([OMEGA0, Q0])
+    c, _ = derivative_map(MOMENTS, None)
+    scaled = integrator._forcing(0.4)
+    forcing = scaled * np.arange(1, len(scaled) + 1)[:, None]
+    h, _, x = integrator._substep(0.4, x0, 0.3, 0.3)
+    coeffs = taylor_coefficients(x0, integrator.series_order, c, forcing if len(forcing) else None)
+    np.testing.assert_allclose(integrator._coeffs, coeffs, rtol=1e-13, atol=1e-15)
+    expected = np.polynomial.polynomial.polyval(h, coeffs)
+    expected[3:] /= np.linalg.norm(expected[3:])
+    np.testing.assert_allclose(x, expected, rtol=0, atol=1e-15)
+
+
+def test_recurrence_tables_are_shared_and_read_only():
+    first = Taylor(MOMENTS, 1.0, GravityTorque(lever_arm=[0.0, 0.0, 0.4], weight=5.0))
+    second = Taylor(MOMENTS.tolist(), 1.0, GravityTorque(lever_arm=[0.0, 0.0, 0.4], weight=5.0))
+    assert first._terms is second._terms and first._pairs.shape[0] > 0
+    with pytest.raises(ValueError):
+        first._term_values[0] = 1.0
+    other = Taylor(MOMENTS, 1.0, GravityTorque(lever_arm=[0.0, 0.0, 0.5], weight=5.0))
+    assert not np.array_equal(other._term_values, first._term_values)
+
+
 def test_order_from_tolerance():
     assert order_for_tolerance(1e-2) == 10
     assert order_for_tolerance(1e-10) == math.ceil(10 * math.log(10))
@@ -395,7 +427,7 @@ def test_simulate_with_a_full_inertia_tensor_matches_dop853():
 
 
 def test_class_order_is_the_default_series_order():
-    assert Taylor.order == Taylor(MOMENTS, 1.0).series_order == order_for_tolerance(1e-12)
+    assert Taylor.orders[0] == Taylor(MOMENTS, 1.0).series_order == order_for_tolerance(1e-12)
     assert Taylor.fixed_step is False
 
 

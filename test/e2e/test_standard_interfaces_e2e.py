@@ -85,7 +85,8 @@ def test_simulation_interfaces_services_refuse_bad_requests_and_serve_good_ones(
     # step: bad (while playing, zero steps) then good
     assert set_state(SimulationState.STATE_PLAYING).result == Result.RESULT_OK
     playing = call(StepSimulation, "step_simulation", StepSimulation.Request(steps=5)).result
-    assert playing.result == Result.RESULT_INCORRECT_STATE and "paused" in playing.error_message
+    # StepSimulation.srv: "Calling with simulation not paused will return RESULT_OPERATION_FAILED"
+    assert playing.result == Result.RESULT_OPERATION_FAILED and "paused" in playing.error_message
     assert set_state(SimulationState.STATE_PAUSED).result == Result.RESULT_OK
     zero = call(StepSimulation, "step_simulation", StepSimulation.Request(steps=0)).result
     assert zero.result == Result.RESULT_OPERATION_FAILED and "steps must be >= 1" in zero.error_message

@@ -112,20 +112,26 @@ def test_step_requests_are_bounded_and_other_services_keep_answering(harness):
     assert h.node.run.sim.paused and h.node.run.sim.step_index == k + done  # no racing while paused
 
 
-def test_use_sim_time_is_refused_and_the_timer_is_steady(context, harness):
+def test_use_sim_time_is_accepted_with_a_warning_and_the_timer_stays_steady(context, harness, capfd):
     h = harness("free_tumble", real_time_factor=1.0)
     assert h.node.run.timer.clock.clock_type == ClockType.STEADY_TIME
-    # before: use_sim_time true froze the node (its timer waited for the /clock it publishes)
+    # a launch-wide use_sim_time:=true (Nav2 / Gazebo bringups) must not stop the node that is the clock
     result = h.node.set_parameters([Parameter("use_sim_time", value=True)])[0]
-    assert not result.successful and "source of sim time" in result.reason
-    assert h.node.get_parameter("use_sim_time").value is False
+    assert result.successful
+    assert h.node.get_parameter("use_sim_time").value is True
     k = h.node.run.sim.step_index
-    assert h.spin_until(lambda: h.node.run.sim.step_index > k + 20)
-    with pytest.raises(ValueError, match="use_sim_time true is refused"):
-        RigidRotSimNode(
-            context=context,
-            parameter_overrides=[Parameter("scene", value=str(SCENES / "free_tumble.yaml")), Parameter("use_sim_time", value=True)],
-        )
+    assert h.spin_until(lambda: h.node.run.sim.step_index > k + 20)  # the steady-clock timer still paces the run
+    node = RigidRotSimNode(
+        context=context,
+        parameter_overrides=[Parameter("scene", value=str(SCENES / "free_tumble.yaml")), Parameter("use_sim_time", value=True)],
+    )
+    try:
+        assert node.get_parameter("use_sim_time").value is True
+        assert node.run.timer.clock.clock_type == ClockType.STEADY_TIME
+    finally:
+        node.destroy_node()
+    logged = capfd.readouterr().err
+    assert logged.count("use_sim_time true accepted, but this node is the clock") == 2  # run time, start-up
 
 
 def test_max_torque_and_long_frame_ids_are_rejected_on_the_rejected_topic(harness):

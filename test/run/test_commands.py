@@ -44,7 +44,7 @@ def run_to(commands: CommandSchedule, k: int) -> list:
     """Step the clock to boundary k as a Simulator does; the (body, world) torque over each step."""
     sums = []
     while commands.clock.k < k:
-        if commands.clock.k >= commands.next_event:
+        if commands.next_event is not None and commands.clock.k >= commands.next_event:
             commands.process_due()
         sums.append((commands.body_sum, commands.world_sum))
         commands.clock.k += 1
@@ -174,7 +174,7 @@ def test_refused_commands_name_the_reason_and_change_nothing(call, reason):
     with pytest.raises(CommandRejected) as info:
         call(commands)
     assert reason in info.value.reason
-    assert commands.next_event == math.inf and commands.held_torques() == {}
+    assert commands.next_event is None and commands.held_torques() == {}
 
 
 def test_submit_checks_what_resim_feeds_it():

@@ -32,7 +32,9 @@ def all_finite(snapshot) -> bool:
     values = []
     for field in dataclasses.fields(snapshot):
         value = getattr(snapshot, field.name)
-        if value is not None:
+        if field.name == "torque_sources":  # (name, vector) pairs
+            value = [vector for _, vector in value or ()]
+        if value is not None and field.name != "wheel_names":
             values.extend(np.ravel(np.asarray(value, dtype=float)).tolist())
     return all(math.isfinite(v) for v in values)
 

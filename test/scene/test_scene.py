@@ -18,6 +18,8 @@ SHIPPED = {
     "sleeping_top": "gravity",
     "thin_rod": "none",
     "from_point_masses": "none",
+    "wheel_slew": "spacecraft",
+    "gravity_gradient_satellite": "spacecraft",
     "closed_loop_lockstep": "topic",
 }
 
@@ -212,12 +214,28 @@ def test_topic_inputs_schedules_and_options_are_kept():
     assert (second.topic, second.message_type, second.frame, second.timeout) == ("~/torque", "WrenchStamped", "body", None)
     (schedule,) = scene.schedules
     assert schedule.frame == "world"
-    assert schedule.torque_at(0.4) == (0.0, 0.0, 0.0)
-    assert schedule.torque_at(0.5) == (1.0, 0.0, 0.0)
-    assert schedule.torque_at(5.0) == (0.0, 0.0, 0.0)
+    assert schedule.change_steps(0.002) == (250, 1000)
+    assert schedule.torque_at_step(249, 0.002) == (0.0, 0.0, 0.0)
+    assert schedule.torque_at_step(250, 0.002) == (1.0, 0.0, 0.0)
+    assert schedule.torque_at_step(999, 0.002) == (1.0, 0.0, 0.0)
+    assert schedule.torque_at_step(2500, 0.002) == (0.0, 0.0, 0.0)
     assert scene.integrator.method == "taylor" and scene.integrator.dt == 0.002
     assert dict(scene.integrator.options) == {"tol": 1e-10}
     assert scene.torque_kind == "topic"
+
+
+def test_a_schedule_switches_on_the_engines_boundary_not_a_step_late():
+    # 30 * 0.03 = 0.8999999999999999 < 0.9, yet 0.9 s counts as on boundary 30 (as the engine's clock says)
+    scene = parse(
+        "body: {principal_moments: [1, 2, 3]}\n"
+        "torque_inputs:\n"
+        "  - schedule: {segments: [{start: 0, torque: [1, 0, 0]}, {start: 0.9, torque: [0, 0, 0]}]}\n"
+    )
+    (schedule,) = scene.schedules
+    assert schedule.change_steps(0.03) == (0, 30)
+    assert schedule.torque_at_step(29, 0.03) == (1.0, 0.0, 0.0)
+    assert schedule.torque_at_step(30, 0.03) == (0.0, 0.0, 0.0)
+    assert schedule.change_steps(0.009) == (0, 100)
 
 
 def test_mass_properties_about_com_undo_the_pivot_shift_of_a_gravity_scene():

@@ -1,8 +1,8 @@
 """The integrator registry: every method by name, all with the step API of ``base.py``.
 
 >>> from rigid_rot_sim.core.integrators import get_method
->>> get_method("rk4").order
-4
+>>> get_method("rk4").orders, get_method("splitting").orders, get_method("splitting").stability
+((4,), (2, 4, 6), 'unconditional')
 """
 
 from __future__ import annotations

@@ -40,7 +40,8 @@ class DOP853Integrator(Integrator):
     """
 
     name = "dop853"
-    order = 8
+    orders = (8,)
+    stability = "adaptive"
     fixed_step = False
 
     def __init__(

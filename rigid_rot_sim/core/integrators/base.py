@@ -3,8 +3,10 @@
 Rules for whoever implements a method:
 
 * Subclass :class:`Integrator`, set the class attributes ``name`` (the registry key),
-  ``order`` (nominal order of accuracy) and ``fixed_step`` (False for adaptive methods,
-  which still land exactly on every multiple of ``dt``).
+  ``orders`` (the nominal orders of accuracy it can be built with, its default first; a
+  method with several takes an ``order`` option and sets ``self._order``), ``stability``
+  (:data:`Stability`) and ``fixed_step`` (False for adaptive methods, which still land
+  exactly on every multiple of ``dt``). An instance's :attr:`~Integrator.order` is its own.
 * Implement one of two things. Either ``_step_impl(self) -> None``: advance ``self.t``,
   ``self.q`` and ``self.omega`` by ``self.dt`` (the base class's :meth:`advance` loops
   it, counts the steps in ``n_steps``, checks each new state and restores the last good
@@ -34,7 +36,7 @@ from __future__ import annotations
 
 import functools
 import math
-from typing import Any, Callable, ClassVar
+from typing import Any, Callable, ClassVar, Literal
 
 import numpy as np
 
@@ -76,6 +78,12 @@ def _failing_as_non_finite(method: Callable) -> Callable:
 _STEPPING_METHODS = ("step", "advance", "advance_saving")
 
 
+#: How a method's step is bounded on a free body: ``explicit`` (stable only below a limit of
+#: the gyroscopic frequency times dt), ``unconditional`` (bounded at any dt), ``adaptive``
+#: (error control picks its own substeps within dt), ``exact`` (the exact flow).
+Stability = Literal["explicit", "unconditional", "adaptive", "exact"]
+
+
 class Integrator:
     """Advance the attitude and angular velocity of a rigid body by steps of ``dt``.
 
@@ -96,8 +104,17 @@ class Integrator:
     """
 
     name: ClassVar[str] = ""
-    order: ClassVar[int] = 0
+    #: Nominal orders of accuracy the method can be built with, the default first (0: exact).
+    orders: ClassVar[tuple[int, ...]] = (0,)
+    stability: ClassVar[Stability]
     fixed_step: ClassVar[bool] = True
+    #: This instance's order when the method takes an ``order`` option (else ``orders[0]``).
+    _order: int | None = None
+
+    @property
+    def order(self) -> int:
+        """Nominal order of accuracy of this instance (0: no truncation error)."""
+        return self.orders[0] if self._order is None else self._order
 
     def __init_subclass__(cls, **kwargs: Any) -> None:
         super().__init_subclass__(**kwargs)
@@ -131,16 +148,17 @@ class Integrator:
         """Replace the state (q is normalised; a zero or non-finite q is a ValueError)."""
         q = np.asarray(q, dtype=float).reshape(4)
         omega = np.asarray(omega, dtype=float).reshape(3)
-        norm = float(np.linalg.norm(q))
-        if not (math.isfinite(norm) and norm > 0.0):
+        x, y, z, w = q.tolist()
+        norm_squared = x * x + y * y + z * z + w * w  # |q|^2 as quat.normalize forms it
+        if not (math.isfinite(norm_squared) and norm_squared > 0.0):
             raise ValueError(f"q must be a finite non-zero quaternion, got {q}")
-        if not np.all(np.isfinite(omega)):
+        if not all(map(math.isfinite, omega.tolist())):
             raise ValueError(f"omega must be finite, got {omega}")
         if not math.isfinite(t):
             raise ValueError(f"t must be finite, got {t}")
         self.t = float(t)
         # the kernels' normalisation (the batch core normalises its bodies the same way)
-        self.q = np.array(quat.normalize(q.tolist()))
+        self.q = np.array(quat.normalize((x, y, z, w)))
         self.omega = omega
         self._on_state_change()
 

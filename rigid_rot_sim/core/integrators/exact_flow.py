@@ -51,7 +51,8 @@ class ExactFlow(Integrator):
     """The exact torque-free flow (Jacobi elliptic functions and Carlson's R_J); no options."""
 
     name = "exact"
-    order = 0  # no truncation error: exact up to rounding at any dt
+    orders = (0,)  # no truncation error: exact up to rounding at any dt
+    stability = "exact"
     fixed_step = True
 
     def __init__(self, moments: Any, dt: float, torque: Any = None, **kwargs: Any) -> None:
@@ -152,12 +153,13 @@ class ExactSplit(FixedStepIntegrator):
     """
 
     name = "exact_split"
-    order = 2
+    orders = EXACT_SPLIT_ORDERS
+    stability = "unconditional"
     error_types = {KICK_FAILED: (NonFiniteStateError, KICK_ERROR)}
 
     def __init__(self, *args: Any, order: int = 2, **kwargs: Any) -> None:
-        if order not in EXACT_SPLIT_ORDERS:
-            raise ValueError(f"exact_split: order must be one of {list(EXACT_SPLIT_ORDERS)}, got {order!r}")
-        self.order = order
+        if order not in self.orders:
+            raise ValueError(f"exact_split: order must be one of {list(self.orders)}, got {order!r}")
+        self._order = order
         self.kernel_name = f"exact_split{order}"
         super().__init__(*args, **kwargs)

@@ -115,7 +115,8 @@ class Euler(FixedStepIntegrator):
     """Explicit Euler (order 1): the baseline still in common use; not for production runs."""
 
     name = "euler"
-    order = 1
+    orders = (1,)
+    stability = "explicit"
     kernel_name = "euler"
 
 
@@ -123,5 +124,6 @@ class RK4(FixedStepIntegrator):
     """Classical fourth-order Runge-Kutta with the attitude in exponential coordinates."""
 
     name = "rk4"
-    order = 4
+    orders = (4,)
+    stability = "explicit"
     kernel_name = "rk4"

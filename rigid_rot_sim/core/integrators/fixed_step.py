@@ -74,7 +74,7 @@ class FixedStepIntegrator(Integrator):
     ``integrators.kernels.KERNEL_IDS``) and, optionally, ``error_types`` mapping a kernel
     status to (exception class, message)."""
 
-    kernel_name: ClassVar[str]
+    kernel_name: str  # per class, or per instance for methods with an ``order`` option
     error_types: ClassVar[dict[int, tuple[type, str]]] = {}
 
     def _on_state_change(self) -> None:

@@ -165,6 +165,7 @@ class ImplicitMidpoint(FixedStepIntegrator):
     """Implicit midpoint rule with the Cayley attitude update (order 2, A-stable, conservative)."""
 
     name = "implicit_midpoint"
-    order = 2
+    orders = (2,)
+    stability = "unconditional"
     kernel_name = "implicit_midpoint"
     error_types = {NEWTON_FAILED: (NewtonConvergenceError, "Newton's method did not converge")}

@@ -97,5 +97,6 @@ class LieRK4(FixedStepIntegrator):
     """Commutator-free Lie group method of order 4 (Celledoni-Marthinsen-Owren CF4)."""
 
     name = "lie_rk4"
-    order = 4
+    orders = (4,)
+    stability = "explicit"
     kernel_name = "lie_rk4"

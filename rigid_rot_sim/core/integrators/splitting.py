@@ -164,12 +164,13 @@ class Splitting(FixedStepIntegrator):
     """
 
     name = "splitting"
-    order = 2
+    orders = tuple(COMPOSITIONS)
+    stability = "unconditional"
     error_types = {KICK_FAILED: (NonFiniteStateError, KICK_ERROR)}
 
     def __init__(self, *args: Any, order: int = 2, **kwargs: Any) -> None:
-        if order not in COMPOSITIONS:
-            raise ValueError(f"splitting: order must be one of {sorted(COMPOSITIONS)}, got {order!r}")
-        self.order = order  # instance attribute: the nominal order of this instance
+        if order not in self.orders:
+            raise ValueError(f"splitting: order must be one of {sorted(self.orders)}, got {order!r}")
+        self._order = order
         self.kernel_name = f"splitting{order}"
         super().__init__(*args, **kwargs)

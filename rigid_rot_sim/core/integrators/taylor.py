@@ -14,9 +14,13 @@ coefficient of a product is the Cauchy product ``(x_i x_j)_k = sum_m X_m,i X_k-m
 
     X_{k+1} = ( C : (X_0..k)^T (X_k..0)  +  b_k ) / (k + 1),
 
-one contraction per order. Only the Cauchy products that C uses are formed (fifteen for
-the free body, up to ten more with gravity), from the list of its non-zero entries built
-when the body or the gravity term changes; the recurrence, the step control and the dense
+one contraction per order. Only the Cauchy products that C uses are formed. Without gravity
+(the common case: free body, constant or polynomial torque) the recurrence is written out
+(:func:`rigid_body_series`): the fifteen products of Euler's equations and the kinematics
+share one pass over the coefficients with seven independent accumulators, about 2.5x faster
+than running them through tables. With gravity (up to ten more products) it runs the list
+of C's non-zero entries (:func:`general_series`), built once per body and gravity term and
+cached (:func:`recurrence_tables`); the recurrence, the step control and the dense
 output are compiled numba kernels (``register_jitable``, run by one cached loop over API
 steps), so an internal step costs a few microseconds and a 1 kHz node step that ends
 inside the last series one polynomial evaluation.
@@ -60,6 +64,7 @@ freezing it over a step would silently drop the method to first order.
 
 from __future__ import annotations
 
+import functools
 import math
 from typing import Any, ClassVar
 
@@ -90,6 +95,49 @@ def order_for_tolerance(tol: float) -> int:
     return int(min(MAX_AUTO_ORDER, max(MIN_AUTO_ORDER, math.ceil(-math.log(tol)))))
 
 
+def euler_coefficients(i1: float, i2: float, i3: float) -> tuple[float, float, float]:
+    """``((I2 - I3) / I1, (I3 - I1) / I2, (I1 - I2) / I3)``: Euler's equations as ``w1' = c1 w2 w3 + N1 / I1``
+    (cyclic), the coefficients of the recurrence's quadratic terms (moments in kg*m^2)."""
+    return (i2 - i3) / i1, (i3 - i1) / i2, (i1 - i2) / i3
+
+
+@functools.lru_cache(maxsize=256)
+def recurrence_tables(key: tuple) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """(pairs, terms, term_values, b) for the compiled recurrence, cached per body (and gravity).
+
+    ``key`` is ``(I1, I2, I3)`` or ``(I1, I2, I3, lever_arm, weight)`` with gravity. Without gravity
+    the recurrence is :func:`rigid_body_series` (no tables: ``pairs`` is empty and ``term_values``
+    holds Euler's three coefficients); with gravity :func:`general_series` runs the non-zero
+    entries of :func:`derivative_map`'s C: the pairs (i, j) of the Cauchy products it needs, each
+    once, and the terms (output, pair) with their values. The arrays are read-only (shared).
+    """
+    moments = np.array(key[:3], dtype=float)
+    if len(key) == 3:
+        pairs = np.zeros((0, 2), dtype=np.int64)
+        terms = np.zeros((0, 2), dtype=np.int64)
+        values = np.array(euler_coefficients(*key))
+        b = np.zeros(_STATE_SIZE)
+    else:
+        c, b = derivative_map(moments, GravityTorque(np.array(key[3]), key[4]))
+        entries = np.argwhere(c != 0.0)
+        pair_list = sorted({(int(i), int(j)) for _, i, j in entries})
+        index = {pair: k for k, pair in enumerate(pair_list)}
+        pairs = np.array(pair_list, dtype=np.int64).reshape(-1, 2)
+        terms = np.array([[o, index[(i, j)]] for o, i, j in entries], dtype=np.int64).reshape(-1, 2)
+        values = np.array([c[o, i, j] for o, i, j in entries], dtype=float)
+    for array in (pairs, terms, values, b):
+        array.setflags(write=False)
+    return pairs, terms, values, b
+
+
+@functools.lru_cache(maxsize=None)
+def _inverse_orders(p: int) -> np.ndarray:
+    """1 / (1, 2, ..., p), read-only (shared by every instance of order p)."""
+    inverse = 1.0 / np.arange(1, p + 1, dtype=float)
+    inverse.setflags(write=False)
+    return inverse
+
+
 def derivative_map(moments: np.ndarray, gravity: GravityTorque | None = None) -> tuple[np.ndarray, np.ndarray]:
     """The quadratic form ``C`` (7, 7, 7) and constant ``b`` (7,) with ``x' = C:x x + b``.
 
@@ -111,9 +159,7 @@ def derivative_map(moments: np.ndarray, gravity: GravityTorque | None = None) ->
     c = np.zeros((_STATE_SIZE, _STATE_SIZE, _STATE_SIZE))
     b = np.zeros(_STATE_SIZE)
     # Euler's equations, principal frame.
-    c[_W1, _W2, _W3] = (i2 - i3) / i1
-    c[_W2, _W3, _W1] = (i3 - i1) / i2
-    c[_W3, _W1, _W2] = (i1 - i2) / i3
+    c[_W1, _W2, _W3], c[_W2, _W3, _W1], c[_W3, _W1, _W2] = euler_coefficients(i1, i2, i3)
     # q' = 1/2 q (x) (omega, 0), Hamilton product, scalar-last.
     c[_QX, _QW, _W1], c[_QX, _QY, _W3], c[_QX, _QZ, _W2] = 0.5, 0.5, -0.5
     c[_QY, _QW, _W2], c[_QY, _QZ, _W1], c[_QY, _QX, _W3] = 0.5, 0.5, -0.5
@@ -174,7 +220,8 @@ class Taylor(Integrator):
     """
 
     name: ClassVar[str] = "taylor"
-    order: ClassVar[int] = 28  # the series order at the default tol; per instance: series_order
+    orders: ClassVar[tuple[int, ...]] = (28,)  # the series order at the default tol; per instance: series_order
+    stability = "adaptive"
     fixed_step: ClassVar[bool] = False
 
     def __init__(
@@ -207,11 +254,11 @@ class Taylor(Integrator):
         self._rho: float | None = None
         self.n_substeps = 0  # internal Taylor steps taken so far (for reports and tests)
         super().__init__(moments, dt, torque, **kwargs)
-        if not np.all(np.isfinite(self.moments)) or np.any(self.moments <= 0.0):
+        if not all(math.isfinite(v) and v > 0.0 for v in self.moments.tolist()):
             raise ValueError(f"taylor: moments must be finite and > 0, got {self.moments}")
         p = self.series_order
         self._coeffs = np.zeros((p + 1, _STATE_SIZE))
-        self._inverse_orders = 1.0 / np.arange(1, p + 1, dtype=float)
+        self._inverse_orders = _inverse_orders(p)
         self._forcing_buffer = np.zeros((p, _STATE_SIZE))
         self._x_end = np.zeros(_STATE_SIZE)
         self._series_buffer = np.zeros(4)
@@ -237,22 +284,16 @@ class Taylor(Integrator):
         if self._maps_gravity is _NOT_BUILT or gravity is not self._maps_gravity:
             # Commands replace a ConstantTorque every few steps: the map depends only on
             # the body and gravity, so it is rebuilt only when gravity changes.
-            c, b = derivative_map(self.moments, gravity)
-            # the non-zero entries of C: (output, pair) with the pairs (i, j) of the
-            # Cauchy products they need, each pair once
-            entries = np.argwhere(c != 0.0)
-            pairs = sorted({(int(i), int(j)) for _, i, j in entries})
-            index = {pair: k for k, pair in enumerate(pairs)}
-            self._pairs = np.array(pairs, dtype=np.int64).reshape(-1, 2)
-            self._terms = np.array([[o, index[(i, j)]] for o, i, j in entries], dtype=np.int64).reshape(-1, 2)
-            self._term_values = np.array([c[o, i, j] for o, i, j in entries], dtype=float)
-            self._gravity_forcing = b
+            key = tuple(self.moments.tolist())
+            if gravity is not None:
+                key += (tuple(np.asarray(gravity.lever_arm, dtype=float).tolist()), float(gravity.weight))
+            self._pairs, self._terms, self._term_values, self._gravity_forcing = recurrence_tables(key)
             self._maps_gravity = gravity
         b = self._gravity_forcing
         self._const_forcing = b.copy()
         poly = np.zeros((0, 3))
         if isinstance(torque, ConstantTorque):
-            self._const_forcing = b + np.concatenate([torque.value / self.moments, np.zeros(4)])
+            self._const_forcing[:3] += torque.value / self.moments
         elif isinstance(torque, PolynomialTorque):
             poly = torque.coefficients / self.moments
         n = poly.shape[0]
@@ -418,6 +459,64 @@ def taylor_substep(t0, x0, h_cap, h_fallback, controlled, tol, series_order, rho
     for c in range(_STATE_SIZE):
         coeffs[0, c] = x0[c]
     n_forced = min(taylor_forcing(t0, binom, poly, const_forcing, inverse_orders, series_order, forcing), p)
+    if pairs.shape[0] == 0:
+        rigid_body_series(coeffs, p, term_values, forcing, n_forced, inverse_orders)
+    else:
+        general_series(coeffs, p, pairs, terms, term_values, forcing, n_forced, inverse_orders)
+    return _step_from_series(h_cap, h_fallback, controlled, tol, series_order, p, omega_scale, rho_box, coeffs, x_end)
+
+
+@register_jitable
+def rigid_body_series(coeffs, p, euler, forcing, n_forced, inverse_orders):
+    """coeffs[1..p] from coeffs[0] for Euler's equations and q' = 1/2 q (x) (omega, 0), written out.
+
+    ``euler = ((I2 - I3) / I1, (I3 - I1) / I2, (I1 - I2) / I3)``; ``forcing`` (torque / I, pre-divided
+    by k + 1) acts on omega only. The fifteen Cauchy products share one pass over m, with one
+    accumulator per state component: seven independent chains the CPU overlaps (the generic form
+    below runs fifteen dependent chains, one after another, through index tables).
+    """
+    a1, a2, a3 = euler[0], euler[1], euler[2]
+    for k in range(p):
+        e1 = 0.0  # (w2 w3)_k
+        e2 = 0.0  # (w3 w1)_k
+        e3 = 0.0  # (w1 w2)_k
+        dx = 0.0  # (qw w1 + qy w3 - qz w2)_k
+        dy = 0.0  # (qw w2 + qz w1 - qx w3)_k
+        dz = 0.0  # (qw w3 + qx w2 - qy w1)_k
+        dw = 0.0  # (qx w1 + qy w2 + qz w3)_k
+        for m in range(k + 1):
+            n = k - m
+            u1 = coeffs[n, 0]
+            u2 = coeffs[n, 1]
+            u3 = coeffs[n, 2]
+            qx = coeffs[m, 3]
+            qy = coeffs[m, 4]
+            qz = coeffs[m, 5]
+            qw = coeffs[m, 6]
+            e1 += coeffs[m, 1] * u3
+            e2 += coeffs[m, 2] * u1
+            e3 += coeffs[m, 0] * u2
+            dx += qw * u1 + qy * u3 - qz * u2
+            dy += qw * u2 + qz * u1 - qx * u3
+            dz += qw * u3 + qx * u2 - qy * u1
+            dw += qx * u1 + qy * u2 + qz * u3
+        scale = inverse_orders[k]
+        half = 0.5 * scale
+        coeffs[k + 1, 0] = (a1 * scale) * e1
+        coeffs[k + 1, 1] = (a2 * scale) * e2
+        coeffs[k + 1, 2] = (a3 * scale) * e3
+        coeffs[k + 1, 3] = half * dx
+        coeffs[k + 1, 4] = half * dy
+        coeffs[k + 1, 5] = half * dz
+        coeffs[k + 1, 6] = -half * dw
+        if k < n_forced:
+            for c in range(3):
+                coeffs[k + 1, c] += forcing[k, c]
+
+
+@register_jitable
+def general_series(coeffs, p, pairs, terms, term_values, forcing, n_forced, inverse_orders):
+    """coeffs[1..p] from coeffs[0] for any ``x' = C:x x + b`` given by its non-zero entries (gravity)."""
     n_pairs = pairs.shape[0]
     products = np.empty(n_pairs)
     for k in range(p):
@@ -437,6 +536,10 @@ def taylor_substep(t0, x0, h_cap, h_fallback, controlled, tol, series_order, rho
             for c in range(_STATE_SIZE):
                 coeffs[k + 1, c] += forcing[k, c]
 
+
+@register_jitable
+def _step_from_series(h_cap, h_fallback, controlled, tol, series_order, p, omega_scale, rho_box, coeffs, x_end):
+    """The step from the series' last two terms (see the module docstring); x(t0 + h) into x_end."""
     h = h_cap
     if controlled:
         # omega relative to max(1 rad/s, |omega|), the unit quaternion absolutely

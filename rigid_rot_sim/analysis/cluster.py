@@ -1,4 +1,4 @@
-"""dask.distributed as the engine of sweeps, the work-precision report and the stability suite.
+"""The cluster that runs sweeps, the work-precision report and the stability suite: dask.distributed.
 
 No engine of our own: work is cut into tasks submitted to a ``distributed.Client``, on
 a local cluster by default or an existing one. For a sweep every chunk is one task
@@ -146,10 +146,12 @@ def map_tasks(
 
     Results come back in the order of ``calls``. ``client`` None runs the calls here,
     one after the other. ``on_done(index, result)`` is called in this thread as each
-    finishes (for a progress bar).
+    finishes (for a progress bar). An argument may be a future of ``client`` (a task
+    that several calls depend on). When interrupted (Ctrl-C) or when a call fails, the
+    calls still pending are cancelled: nothing is left running on a shared cluster.
     """
+    results: list[Any] = []
     if client is None:
-        results = []
         for index, (function, args) in enumerate(calls):
             results.append(function(*args))
             if on_done is not None:
@@ -162,13 +164,18 @@ def map_tasks(
         client.submit(function, *args, key=f"rigid-rot-{getattr(function, '__name__', 'task')}-{token}-{index}", pure=False): index
         for index, (function, args) in enumerate(calls)
     }
-    results: list[Any] = [None] * len(calls)
-    for future in as_completed(list(futures)):
-        index = futures[future]
-        results[index] = future.result()
-        future.release()
-        if on_done is not None:
-            on_done(index, results[index])
+    results = [None] * len(calls)
+    try:
+        for future in as_completed(list(futures)):
+            index = futures[future]
+            results[index] = future.result()
+            future.release()
+            if on_done is not None:
+                on_done(index, results[index])
+    except BaseException:
+        with contextlib.suppress(Exception):
+            client.cancel(list(futures), force=True)
+        raise
     return results
 
 
@@ -228,8 +235,6 @@ def run_sweep(
     in this thread as chunks finish. ``client``: an open ``distributed.Client`` to use
     instead of opening one from ``scheduler`` / ``workers``.
     """
-    from distributed import as_completed
-
     start = time.perf_counter()
     local = client is None and scheduler_address(scheduler) is None
     with contextlib.ExitStack() as stack:
@@ -240,36 +245,29 @@ def run_sweep(
         if chunk_size is None:
             chunk_size, figures = choose_chunk_size(spec, n_workers)
         chunks = plan_chunks(spec, chunk_size)
-        token = uuid.uuid4().hex[:12]
         nominals = {}
         if spec.nominal_method is not None:
-            # one nominal run per spin rate, shared by the chunks of that spin rate
+            # one nominal run per spin rate, a dependency of the chunks of that spin rate
+            token = uuid.uuid4().hex[:12]
             for spin in dict.fromkeys(s for _, _, s in spec.grid):
                 nominals[spin] = client.submit(run_nominal, spec, spin, key=f"rigid-rot-nominal-{token}-{spin}", pure=False)
-        futures = {
-            client.submit(
-                run_chunk, spec, chunk, nominals.get(spec.grid[chunk.grid_point][2]),
-                key=f"rigid-rot-sweep-{token}-{k}", pure=False,
-            ): (k, chunk)
-            for k, chunk in enumerate(chunks)
-        }
-        parts: list[dict[str, Any] | None] = [None] * len(chunks)
+        calls = [(run_chunk, (spec, chunk, nominals.get(spec.grid[chunk.grid_point][2]))) for chunk in chunks]
         try:
             with tqdm(total=spec.n_runs, desc=f"sweep {spec.name}", unit="run", disable=not progress) as bar:
-                for done, future in enumerate(as_completed(list(futures)), start=1):
-                    index, chunk = futures[future]
-                    parts[index] = future.result()
-                    future.release()
-                    bar.update(chunk.size)
+                finished = 0
+
+                def chunk_done(index: int, _: Any) -> None:
+                    nonlocal finished
+                    finished += 1
+                    bar.update(chunks[index].size)
                     if on_chunk_done is not None:
-                        on_chunk_done(done, len(chunks))
-        except BaseException:
-            # interrupted (Ctrl-C) or failed: leave nothing running on a shared cluster
+                        on_chunk_done(finished, len(chunks))
+
+                parts = map_tasks(client, calls, on_done=chunk_done)
+        finally:
+            # done, interrupted (Ctrl-C) or failed: leave nothing running on a shared cluster
             with contextlib.suppress(Exception):
-                client.cancel([*futures, *nominals.values()], force=True)
-            raise
-        for future in nominals.values():
-            future.release()
+                client.cancel(list(nominals.values()), force=True)
         engine = {
             "scheduler": client.scheduler.address,
             "local_cluster": local,
@@ -279,7 +277,7 @@ def run_sweep(
             **figures,
         }
     engine["elapsed_seconds"] = time.perf_counter() - start
-    return SweepResult(spec=spec, columns=_assemble([p for p in parts if p is not None]), quick=quick, engine=engine)
+    return SweepResult(spec=spec, columns=_assemble(parts), quick=quick, engine=engine)
 
 
 def run_local(spec: SweepSpec, chunks: list[Chunk] | None = None, chunk_size: int = 64) -> dict[str, Any]:

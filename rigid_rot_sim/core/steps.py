@@ -1,0 +1,46 @@
+"""Which fixed step a sim time lands on: the one rule for every change on a step grid.
+
+A grid of fixed steps ``dt`` (s) has its boundary ``k0`` at time ``t0`` (s), so boundary
+k is at ``t0 + (k - k0) * dt``, computed from the count, never accumulated. A change at
+time t (a schedule segment, a command, a timeout) takes effect on the first boundary at
+or after t; a time within :data:`BOUNDARY_SLACK` of a step of a boundary counts as on it,
+since t / dt is rarely an exact integer in floating point.
+
+The run engine's clock (:class:`rigid_rot_sim.run.clock.StepClock`), the scene's torque
+schedules (:meth:`rigid_rot_sim.scene.scene.TorqueSchedule.change_steps`) and the sweep
+all place changes with these functions, so they agree to the step.
+
+>>> 30 * 0.03  # boundary 30 of a 0.03 s grid is not at 0.9 s, but 0.9 s lands on it
+0.8999999999999999
+>>> step_at_or_after(0.9, 0.03), step_at_or_after(0.3, 0.1)  # 0.3 / 0.1 = 2.9999999999999996
+(30, 3)
+>>> step_at_or_after(0.91, 0.03), step_at_or_before(0.91, 0.03)
+(31, 30)
+>>> time_of_step(5, 0.25, t0=0.3, k0=3)
+0.8
+"""
+
+from __future__ import annotations
+
+import math
+
+__all__ = ["BOUNDARY_SLACK", "step_at_or_after", "step_at_or_before", "time_of_step"]
+
+#: A time within this fraction of a step of a boundary counts as on it (t / dt is rarely an
+#: exact integer in floating point: 0.3 / 0.1 = 2.9999999999999996).
+BOUNDARY_SLACK = 1e-9
+
+
+def step_at_or_after(t: float, dt: float, *, t0: float = 0.0, k0: int = 0) -> int:
+    """The first boundary at or after sim time ``t`` (s) on the grid of step ``dt`` (s), boundary ``k0`` at ``t0``."""
+    return k0 + math.ceil((t - t0) / dt - BOUNDARY_SLACK)
+
+
+def step_at_or_before(t: float, dt: float, *, t0: float = 0.0, k0: int = 0) -> int:
+    """The last boundary at or before sim time ``t`` (s) on the grid of step ``dt`` (s), boundary ``k0`` at ``t0``."""
+    return k0 + math.floor((t - t0) / dt + BOUNDARY_SLACK)
+
+
+def time_of_step(k: int, dt: float, *, t0: float = 0.0, k0: int = 0) -> float:
+    """Sim time (s) of boundary ``k`` on the grid of step ``dt`` (s) with boundary ``k0`` at ``t0``."""
+    return t0 + (k - k0) * dt

@@ -1,0 +1,156 @@
+"""A scene's spacecraft parts, validated: reaction wheels, their torque schedule, the gravity gradient.
+
+The schema is :mod:`rigid_rot_sim.scene.spacecraft_schema`; the equations are in
+:mod:`rigid_rot_sim.core.wheels`. A scene with either part is run by the gyrostat
+integrators (:mod:`rigid_rot_sim.core.integrators.gyrostat`).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Any, Mapping
+
+import numpy as np
+
+from rigid_rot_sim.core.wheels import DEFAULT_STICTION_SPEED, OrbitModel, WheelModel, orbit_model, wheel_model
+
+__all__ = ["ReactionWheel", "WheelSegment", "WheelTorqueSchedule", "GravityGradient", "Spacecraft", "parse_spacecraft"]
+
+Vector3 = tuple[float, float, float]
+
+
+@dataclass(frozen=True)
+class ReactionWheel:
+    """One wheel: ``axis`` (unit, body frame), spin ``inertia`` (kg*m^2), ``max_torque`` (N*m),
+    ``max_speed`` and ``initial_speed`` (rad/s, relative to the body), friction ``coulomb`` (N*m),
+    ``viscous`` (N*m*s/rad) and ``stiction_speed`` (rad/s)."""
+
+    name: str
+    axis: Vector3
+    inertia: float
+    max_torque: float
+    max_speed: float
+    initial_speed: float = 0.0
+    coulomb: float = 0.0
+    viscous: float = 0.0
+    stiction_speed: float = DEFAULT_STICTION_SPEED
+
+
+@dataclass(frozen=True)
+class WheelSegment:
+    """Motor torques (N*m, one per wheel, scene order) acting from ``start`` (s) until the next segment."""
+
+    start: float
+    torques: tuple[float, ...]
+
+
+@dataclass(frozen=True)
+class WheelTorqueSchedule:
+    segments: tuple[WheelSegment, ...]
+
+
+@dataclass(frozen=True)
+class GravityGradient:
+    """Gravity gradient of a planet of parameter ``mu`` (m^3/s^2) on a circular orbit (``radius`` m,
+    ``inclination`` rad) in the world frame (:mod:`rigid_rot_sim.core.wheels` defines its geometry)."""
+
+    mu: float
+    radius: float
+    inclination: float = 0.0
+
+    def model(self) -> OrbitModel:
+        return orbit_model(self.mu, self.radius, self.inclination)
+
+
+@dataclass(frozen=True)
+class Spacecraft:
+    """The spacecraft parts of a scene (all empty for a plain rigid body)."""
+
+    wheels: tuple[ReactionWheel, ...] = ()
+    wheel_schedule: WheelTorqueSchedule | None = None
+    gravity_gradient: GravityGradient | None = None
+
+    def __bool__(self) -> bool:
+        return bool(self.wheels) or self.gravity_gradient is not None
+
+    @property
+    def wheel_names(self) -> tuple[str, ...]:
+        return tuple(w.name for w in self.wheels)
+
+    def wheel_model(self, inertia: Any) -> WheelModel | None:
+        """The wheels as a :class:`WheelModel` in the user body frame (None without wheels)."""
+        if not self.wheels:
+            return None
+        return wheel_model(
+            inertia, self.wheel_names, [w.axis for w in self.wheels], [w.inertia for w in self.wheels],
+            [w.max_torque for w in self.wheels], [w.max_speed for w in self.wheels],
+            [w.coulomb for w in self.wheels], [w.viscous for w in self.wheels], [w.stiction_speed for w in self.wheels],
+        )
+
+    def summary(self) -> str:
+        """What the scene's spacecraft has, for the node's start-up line ('' for none)."""
+        parts = []
+        if self.wheels:
+            parts.append(f"{len(self.wheels)} reaction wheel(s) [{', '.join(self.wheel_names)}]")
+        if self.wheel_schedule is not None:
+            parts.append(f"a wheel-torque schedule of {len(self.wheel_schedule.segments)} segment(s)")
+        if self.gravity_gradient is not None:
+            parts.append(f"gravity gradient (orbit radius {self.gravity_gradient.radius:g} m)")
+        return ", ".join(parts)
+
+
+def parse_spacecraft(actuators: Mapping[str, Any] | None, environment: Mapping[str, Any] | None, inertia: Any) -> Spacecraft:
+    """The validated spacecraft parts of a scene whose data passed the schema; ValueError naming the key."""
+    actuators = actuators or {}
+    environment = environment or {}
+    wheels = []
+    seen: set[str] = set()
+    for i, spec in enumerate(actuators.get("reaction_wheels") or ()):
+        key = f"actuators.reaction_wheels[{i}]"
+        name = spec["name"].strip()
+        if name in seen:
+            raise ValueError(f"{key}.name: {name!r} is listed twice")
+        seen.add(name)
+        axis = np.array(spec["axis"], dtype=float)
+        norm = float(np.linalg.norm(axis))
+        if not (math.isfinite(norm) and norm > 0.0):
+            raise ValueError(f"{key}.axis: must be a non-zero vector, got {spec['axis']}")
+        friction = spec.get("friction") or {}
+        wheel = ReactionWheel(
+            name=name, axis=tuple(float(v) for v in axis / norm), inertia=float(spec["inertia"]),  # type: ignore[arg-type]
+            max_torque=float(spec["max_torque"]), max_speed=float(spec["max_speed"]),
+            initial_speed=float(spec.get("initial_speed", 0.0)), coulomb=float(friction.get("coulomb", 0.0)),
+            viscous=float(friction.get("viscous", 0.0)),
+            stiction_speed=float(friction.get("stiction_speed", DEFAULT_STICTION_SPEED)),
+        )
+        if abs(wheel.initial_speed) > wheel.max_speed:
+            raise ValueError(f"{key}.initial_speed: |{wheel.initial_speed:g}| rad/s exceeds max_speed {wheel.max_speed:g} rad/s")
+        wheels.append(wheel)
+    schedule = None
+    schedule_spec = actuators.get("wheel_torque_schedule")
+    if schedule_spec:
+        if not wheels:
+            raise ValueError("actuators.wheel_torque_schedule: the scene has no reaction_wheels")
+        segments = []
+        for i, segment in enumerate(schedule_spec["segments"]):
+            key = f"actuators.wheel_torque_schedule.segments[{i}]"
+            torques = tuple(float(v) for v in segment["torques"])
+            if len(torques) != len(wheels):
+                raise ValueError(f"{key}.torques: {len(torques)} values for {len(wheels)} wheel(s)")
+            start = float(segment["start"])
+            if segments and start <= segments[-1].start:
+                raise ValueError(f"{key}.start: {start:g} s must be later than the previous segment's {segments[-1].start:g} s")
+            segments.append(WheelSegment(start, torques))
+        schedule = WheelTorqueSchedule(tuple(segments))
+    gravity_gradient = None
+    gg = environment.get("gravity_gradient")
+    if gg:
+        gravity_gradient = GravityGradient(float(gg.get("mu", 3.986004418e14)), float(gg["orbit"]["radius"]),
+                                           float(gg["orbit"].get("inclination", 0.0)))
+    spacecraft = Spacecraft(tuple(wheels), schedule, gravity_gradient)
+    try:
+        spacecraft.wheel_model(inertia)
+    except ValueError as exc:
+        raise ValueError(f"actuators.reaction_wheels: {exc}") from None
+    return spacecraft
