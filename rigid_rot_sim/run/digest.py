@@ -18,6 +18,8 @@ and integrator changes are part of it, as the recorded event log replays them.
 
 from __future__ import annotations
 
+from typing import Any
+
 import numpy as np
 
 __all__ = ["DIGEST_SEED", "FNV_PRIME", "fold_steps", "format_digest"]
@@ -29,7 +31,7 @@ FNV_PRIME = 0x100000001B3
 _MASK = (1 << 64) - 1
 
 
-def fold_steps(digest: int, t: np.ndarray, q: np.ndarray, omega: np.ndarray) -> int:
+def fold_steps(digest: int, t: Any, q: Any, omega: Any) -> int:
     """``digest`` with the steps (t[i], q[i], omega[i]) folded in, in order.
 
     ``t`` (n,) s; ``q`` (n, 4) x, y, z, w; ``omega`` (n, 3) rad/s; float64.

@@ -216,8 +216,7 @@ class Stepper:
             chunk = min(chunk, self._steps_within_rotation_limit())
             start = self._saved_state()
             try:
-                # every step's state, for the digest (advance_saving equals advance, step for step)
-                q_steps, omega_steps = integrator.advance_saving(chunk, 1)
+                q_steps, omega_steps = integrator.advance_saving(chunk, 1)  # = advance(chunk), each step kept
             except (ArithmeticError, ValueError) as exc:
                 # NonFiniteStateError, or a math error on the way to it (sin(inf), overflow)
                 good = integrator.n_steps - start[3]
@@ -225,9 +224,7 @@ class Stepper:
                 if kept and self._derived_failure() is None:
                     clock.k += good  # the method stopped at its last good step (energy and momentum finite)
                     done += good
-                    # the steps before it are not handed back: the kept state folds in once
-                    self.digest = fold_steps(self.digest, np.array([clock.t]), integrator.q[None, :],
-                                             integrator.omega[None, :])
+                    self.digest = fold_steps(self.digest, [clock.t], [integrator.q], [integrator.omega])  # once
                 else:
                     self._restore(start)
                 name = "NonFiniteStateError" if isinstance(exc, NonFiniteStateError) else type(exc).__name__
@@ -236,8 +233,7 @@ class Stepper:
             if reason is not None:  # a finite state whose energy or momentum overflows
                 self._restore(start)
                 return done, f"NonFiniteStateError: {reason}"
-            times = clock.t_epoch + (np.arange(clock.k + 1, clock.k + chunk + 1) - clock.k_epoch) * clock.dt
-            self.digest = fold_steps(self.digest, times, q_steps, omega_steps)
+            self.digest = fold_steps(self.digest, clock.times_of_next_steps(chunk), q_steps, omega_steps)
             clock.k += chunk
             done += chunk
         return done, None
