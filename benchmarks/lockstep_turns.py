@@ -35,8 +35,9 @@ os.environ.setdefault("ROS_AUTOMATIC_DISCOVERY_RANGE", "LOCALHOST")
 import rclpy  # noqa: E402
 from geometry_msgs.msg import WrenchStamped  # noqa: E402
 from rclpy.qos import QoSProfile, ReliabilityPolicy  # noqa: E402
-from rigid_rot_msgs.msg import RigidBodyState  # noqa: E402
 from std_srvs.srv import SetBool  # noqa: E402
+
+from rigid_rot_msgs.msg import RigidBodyState  # noqa: E402
 
 QOS = QoSProfile(depth=10, reliability=ReliabilityPolicy.RELIABLE)
 PERIOD = 0.02  # s of sim time per turn in closed_loop_lockstep

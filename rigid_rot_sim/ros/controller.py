@@ -38,7 +38,8 @@ import math
 import signal
 import sys
 import threading
-from typing import Any, Sequence
+from collections.abc import Sequence
+from typing import Any
 
 import rclpy
 from geometry_msgs.msg import WrenchStamped
@@ -47,8 +48,8 @@ from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
 from rclpy.node import Node
 from rclpy.qos import QoSProfile, ReliabilityPolicy
 from rclpy.signals import SignalHandlerOptions
-from rigid_rot_msgs.msg import RigidBodyState
 
+from rigid_rot_msgs.msg import RigidBodyState
 from rigid_rot_sim.core import quaternion as quat
 from rigid_rot_sim.share import ensure_ament_prefix_path
 
@@ -62,7 +63,7 @@ def attitude_torque(q: Sequence[float], omega: Sequence[float], target: Sequence
     """The quaternion-feedback torque (N*m, body frame) for attitude ``q`` and rate ``omega`` (rad/s, body)."""
     ex, ey, ez, ew = quat.multiply(quat.conjugate(target), q)
     sign = -1.0 if ew < 0.0 else 1.0
-    torque = tuple(-kp * sign * e - kd * w for e, w in zip((ex, ey, ez), omega))
+    torque = tuple(-kp * sign * e - kd * w for e, w in zip((ex, ey, ez), omega, strict=True))
     norm = math.hypot(*torque)
     if max_torque > 0.0 and norm > max_torque:
         torque = tuple(v * (max_torque / norm) for v in torque)
@@ -94,12 +95,14 @@ class AttitudeController(Node):
         self.subscription = self.create_subscription(RigidBodyState, state_topic, self.state_callback, CONTROL_QOS)
         self.get_logger().info(
             f"attitude controller: {state_topic} -> {torque_topic}, target {list(self.target)}, kp {self.kp:g}, "
-            f"kd {self.kd:g}, max_torque {self.max_torque:g}, {'every state' if self.rate <= 0 else f'{self.rate:g} Hz'}"
+            f"kd {self.kd:g}, max_torque {self.max_torque:g}, "
+            f"{'every state' if self.rate <= 0 else f'{self.rate:g} Hz'}"
         )
 
     def state_callback(self, msg: RigidBodyState) -> None:
         stamp_ns = msg.header.stamp.sec * 1_000_000_000 + msg.header.stamp.nanosec
-        if self.rate > 0.0 and self.last_answered_ns is not None and stamp_ns - self.last_answered_ns < 1e9 / self.rate - 1:
+        last = self.last_answered_ns
+        if self.rate > 0.0 and last is not None and stamp_ns - last < 1e9 / self.rate - 1:
             return
         o, w = msg.orientation, msg.angular_velocity_body
         torque = attitude_torque((o.x, o.y, o.z, o.w), (w.x, w.y, w.z), self.target, self.kp, self.kd, self.max_torque)

@@ -14,7 +14,8 @@ The turns themselves (state machine, stamp matching, timeout decision) are
 
 from __future__ import annotations
 
-from typing import Any, Callable
+from collections.abc import Callable
+from typing import Any
 
 from rcl_interfaces.msg import FloatingPointRange, ParameterDescriptor
 from rclpy.node import Node
@@ -51,7 +52,8 @@ def declare_lockstep_parameters(node: Node, scene: Scene) -> None:
             extra["floating_point_range"] = [FloatingPointRange(from_value=ranges[name][0], to_value=ranges[name][1])]
         if name == "lockstep.on_timeout":
             extra["additional_constraints"] = " | ".join(LOCKSTEP_ON_TIMEOUT)
-        node.declare_parameter(name, defaults[name], ParameterDescriptor(description=description, read_only=True, **extra))
+        descriptor = ParameterDescriptor(description=description, read_only=True, **extra)
+        node.declare_parameter(name, defaults[name], descriptor)
 
 
 def lockstep_from_parameters(node: Node, scene: Scene, dt: float) -> LockstepSpec | None:

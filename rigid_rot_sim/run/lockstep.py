@@ -41,7 +41,8 @@ from __future__ import annotations
 import enum
 import math
 import time
-from typing import TYPE_CHECKING, Any, Callable
+from collections.abc import Callable
+from typing import TYPE_CHECKING, Any
 
 from rigid_rot_sim.run.commands import CommandRejected
 from rigid_rot_sim.run.observer import SimulationObserver
@@ -95,7 +96,7 @@ class Lockstep(SimulationObserver):
     :meth:`admit`.
     """
 
-    def __init__(self, spec: Any, sim: "Simulator", clock: Callable[[], float] = time.monotonic) -> None:
+    def __init__(self, spec: Any, sim: Simulator, clock: Callable[[], float] = time.monotonic) -> None:
         self.sim = sim
         self.spec = spec
         self.period_steps = period_steps(spec.period, sim.dt)
@@ -118,7 +119,9 @@ class Lockstep(SimulationObserver):
     def summary(self) -> str:
         """Turns done and their pace since the first was released (for the log at the end of a run)."""
         wall = self.clock() - self.first_released
-        pace = f", {self.turns / wall:.0f} turns/s, {self.turns * self.spec.period / wall:.1f}x real time" if wall > 0 else ""
+        pace = ""
+        if wall > 0:
+            pace = f", {self.turns / wall:.0f} turns/s, {self.turns * self.spec.period / wall:.1f}x real time"
         return (f"lockstep: {self.turns} turns in {wall:.3f} s of wall time since the first{pace}; "
                 f"{self.timeouts} timed out, {self.resends} states sent again")
 
@@ -190,7 +193,7 @@ class Lockstep(SimulationObserver):
         self.open_step = None
         self.answered = set()
 
-    def tick(self, run: "RunDriver") -> Progress:
+    def tick(self, run: RunDriver) -> Progress:
         """One tick of a lockstep run (the node's timer, or as soon as a turn is answered).
 
         Opens the turn the run stands on, decides an open one (:meth:`decide`), and steps a

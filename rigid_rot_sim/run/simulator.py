@@ -43,7 +43,8 @@ and :meth:`Simulator.set_state` clear the failure and resume a run that the fail
 
 from __future__ import annotations
 
-from typing import Any, Callable
+from typing import Any
+from collections.abc import Callable
 
 from rigid_rot_sim.core import validation
 from rigid_rot_sim.run import advice

@@ -14,17 +14,15 @@ import subprocess
 import sys
 import time
 
-import pytest
 from geometry_msgs.msg import WrenchStamped
 from rclpy.qos import QoSProfile, ReliabilityPolicy
 from rclpy.serialization import serialize_message
-from rigid_rot_msgs.msg import RejectedCommand, RigidBodyState
 from std_srvs.srv import SetBool
 
+from rigid_rot_msgs.msg import RejectedCommand, RigidBodyState
 from rigid_rot_sim.recording.reader import BagReader, info
 from rigid_rot_sim.recording.resim import resimulate
 from rigid_rot_sim.run.digest import format_digest
-
 
 STATE = "/rigid_rot_sim/state"
 TORQUE = "/rigid_rot_sim/torque"

@@ -59,7 +59,7 @@ def test_the_period_must_be_whole_steps_and_the_inputs_topic_inputs():
     with pytest.raises(SceneError, match="not a topic of torque_inputs"):
         parse_scene_text((SCENE % "pause").replace("inputs: [~/torque]", "inputs: [/other]"))
     with pytest.raises(SceneError):
-        parse_scene_text((SCENE % "sometimes"))
+        parse_scene_text(SCENE % "sometimes")
 
 
 def test_a_turn_waits_for_its_command_and_the_command_acts_from_t_k():
