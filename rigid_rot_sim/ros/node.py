@@ -146,8 +146,8 @@ class SceneRun:
             sim.pause(settings[params.START_PAUSED])
             self.driver.pacer.anchor(sim.t)
             # steady clock: the pacing never depends on /clock, which this node itself publishes
-            lockstep = self.lockstep is not None
-            period = timer_period(self.driver, sim.dt) if lockstep else self.driver.pacer.tick_period(sim.dt)
+            in_lockstep = self.lockstep is not None
+            period = timer_period(self.driver, sim.dt) if in_lockstep else self.driver.pacer.tick_period(sim.dt)
             self.timer = node.create_timer(period, self.tick,
                                            clock=SteadyClock(clock_type=ClockType.STEADY_TIME))
             self.parameters = RunParameters(node, self.driver, self.timer)

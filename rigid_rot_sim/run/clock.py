@@ -57,7 +57,8 @@ class StepClock:
 
     def times_of_next_steps(self, n: int) -> np.ndarray:
         """Sim times (s) of the boundaries k + 1 .. k + n, each exactly :meth:`time_of_step`."""
-        return steps.time_of_step(np.arange(self.k + 1, self.k + n + 1), self.dt, t0=self.t_epoch, k0=self.k_epoch)
+        # steps.time_of_step's formula, t0 + (k - k0) * dt, over an array of k
+        return self.t_epoch + (np.arange(self.k + 1, self.k + n + 1) - self.k_epoch) * self.dt
 
     def step_at_or_after(self, t: float) -> int:
         """The first step boundary at or after sim time t (s), never before the current one."""
