@@ -3,7 +3,8 @@
     .venv/bin/python benchmarks/lockstep_turns.py               # ~20 s
     .venv/bin/python benchmarks/lockstep_turns.py --turns 2000
 
-Part 1, the floor, measured in this run: a bare rclpy publish/subscribe round trip between
+Part 1, the floor, measured in this run before and after part 2 (their mean is the floor):
+a bare rclpy publish/subscribe round trip between
 this process and an echo process (a second Python process with one subscription that
 publishes a WrenchStamped back for every RigidBodyState it gets), reliable, depth 10, one
 message in flight. Round trips per second over ``--turns`` trips.
@@ -139,14 +140,17 @@ def main() -> int:
     rclpy.init()
     node = rclpy.create_node("bench_lockstep")
     try:
-        floor = bare_round_trips(node, args.turns)
+        before = bare_round_trips(node, args.turns)
         rate, timed = lockstep_turns(node, args.turns)
+        after = bare_round_trips(node, args.turns)  # the load of a shared machine drifts: the floor around it
+        floor = (before + after) / 2
     finally:
         node.destroy_node()
         rclpy.try_shutdown()
     with open("/proc/loadavg") as f:
         load = f.read().split()[:3]
-    print(f"bare rclpy round trip (this process <-> echo process): {floor:8.0f} round trips/s (the floor)")
+    print(f"bare rclpy round trip (this process <-> echo process): {floor:8.0f} round trips/s (the floor; "
+          f"{before:.0f} before, {after:.0f} after)")
     print(f"lockstep, node + rigid-rot-controller over DDS:       {rate:8.0f} turns/s over {timed} turns")
     print(f"  real-time multiple of a 50 Hz controller:            {rate * PERIOD:8.1f}x")
     print(f"  ratio to the bare round trip:                        {rate / floor:8.2f} (aim >= 0.5)")
