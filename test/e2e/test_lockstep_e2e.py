@@ -24,8 +24,12 @@ from rigid_rot_sim.recording.reader import BagReader, info
 from rigid_rot_sim.recording.resim import resimulate
 from rigid_rot_sim.run.digest import format_digest
 
-STATE = "/rigid_rot_sim/state"
-TORQUE = "/rigid_rot_sim/torque"
+# a namespace of its own: other tests of the session may leave nodes named rigid_rot_sim on this domain
+NAMESPACE = "/lockstep_e2e"
+NODE = f"{NAMESPACE}/rigid_rot_sim"
+STATE = f"{NODE}/state"
+TORQUE = f"{NODE}/torque"
+NS_ARGS = ("-r", f"__ns:={NAMESPACE}")
 DURATION = 2.0  # s of sim time: 100 turns of 0.02 s
 QOS = QoSProfile(depth=1000, reliability=ReliabilityPolicy.RELIABLE)
 TARGET = "[0.0, 0.0, 0.5, 0.8660254037844386]"
@@ -34,9 +38,10 @@ TIMEOUT = 120.0
 
 def _closed_loop(launch_node, collector, record=None):
     """One lockstep run of closed_loop_lockstep with the shipped controller: {stamp_ns: state bytes}."""
-    controller = launch_node("--ros-args", "-p", f"target:={TARGET}", name="controller",
+    controller = launch_node("--ros-args", "-p", f"target:={TARGET}", "-p", f"state_topic:={STATE}",
+                             "-p", f"torque_topic:={TORQUE}", name="controller",
                              module="rigid_rot_sim.ros.controller")
-    args = ["--ros-args", "-p", "scene:=closed_loop_lockstep", "-p", f"duration:={DURATION}",
+    args = ["--ros-args", *NS_ARGS, "-p", "scene:=closed_loop_lockstep", "-p", f"duration:={DURATION}",
             "-p", "start_paused:=true"]
     if record:
         args += ["-p", f"record_path:={record}"]
@@ -53,7 +58,7 @@ def _closed_loop(launch_node, collector, record=None):
                          and collector.node.count_subscribers(STATE) >= 2
                          and collector.node.count_subscribers(TORQUE) >= 1
                          and collector.node.count_publishers(TORQUE) >= 1, TIMEOUT, node, "the loop's graph")
-    reply = collector.call(SetBool, "pause", SetBool.Request(data=False), process=node, idempotent=True)
+    reply = collector.call(SetBool, f"{NODE}/pause", SetBool.Request(data=False), process=node, idempotent=True)
     assert reply.success, reply.message
     last = round(DURATION * 1e9)
     collector.spin_until(lambda: last in states, TIMEOUT, node, "the last state")
@@ -115,14 +120,14 @@ def _answer(collector, publisher, stamp, torque_z=0.001):
 
 
 def _manual_loop(launch_node, collector, *overrides):
-    node = launch_node("--ros-args", "-p", "scene:=closed_loop_lockstep", "-p", "duration:=0.0",
+    node = launch_node("--ros-args", *NS_ARGS, "-p", "scene:=closed_loop_lockstep", "-p", "duration:=0.0",
                        "-p", "lockstep.timeout:=1.0", "-p", "start_paused:=true", *overrides, name="sim")
     states = collector.subscribe(RigidBodyState, STATE, QOS)
-    rejected = collector.subscribe(RejectedCommand, "/rigid_rot_sim/rejected", QOS)
+    rejected = collector.subscribe(RejectedCommand, f"{NODE}/rejected", QOS)
     publisher = collector.node.create_publisher(WrenchStamped, TORQUE, QoSProfile(depth=10))
     # paused at turn 0, whose state is sent again until answered: this process gets it once matched
     collector.spin_until(lambda: collector.node.count_subscribers(TORQUE) >= 1 and states, TIMEOUT, node, "turn 0")
-    reply = collector.call(SetBool, "pause", SetBool.Request(data=False), process=node, idempotent=True)
+    reply = collector.call(SetBool, f"{NODE}/pause", SetBool.Request(data=False), process=node, idempotent=True)
     assert reply.success, reply.message
     return node, states, rejected, publisher
 
