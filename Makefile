@@ -148,6 +148,22 @@ $(STAMPS)/workspace: $(STAMPS)/package tools/install_workspace.py $(VENV)/bin/ac
 # recording is summarised, re-simulated bit for bit without DDS, and plotted.
 DEMO_SCENE := free_tumble
 DEMO_BAG := out/demo_$(DEMO_SCENE).mcap
+# The closed loop of `make demo`: the shipped controller and the node in lockstep (config/scenes).
+LOOP_SCENE := closed_loop_lockstep
+LOOP_SECONDS := 8
+LOOP_TARGET := [0.0, 0.0, 0.5, 0.8660254037844386]
+define LOOP_DIGESTS
+import sys
+from rigid_rot_sim.recording.reader import BagReader
+digests = [BagReader(path).metadata.get("digest", {}).get("digest") for path in sys.argv[1:]]
+for path, digest in zip(sys.argv[1:], digests):
+    print(f"{path}: run digest {digest}")
+same = len(set(digests)) == 1 and digests[0] is not None
+print("the two closed-loop runs are bit-identical: digests EQUAL" if same else "digests DIFFER")
+sys.exit(0 if same else 1)
+endef
+export LOOP_DIGESTS
+
 demo: setup
 	@mkdir -p out && rm -f $(DEMO_BAG)
 	@echo "== rigid-rot run $(DEMO_SCENE): the node over DDS, recorded to $(DEMO_BAG) =="
@@ -162,6 +178,20 @@ demo: setup
 	@echo
 	@echo "== rigid-rot plot $(DEMO_BAG) =="
 	@"$(VENV)/bin/rigid-rot" plot $(DEMO_BAG) --out out/demo_plots
+	@echo
+	@echo "== closed loop in lockstep: rigid-rot-controller slews the body 60 deg, twice, as fast as it answers =="
+	@export ROS_DOMAIN_ID=$$(( ($$$$ % 100) + 101 )) ROS_AUTOMATIC_DISCOVERY_RANGE=LOCALHOST; \
+	for run in 1 2; do \
+		rm -f out/demo_loop_$$run.mcap; \
+		"$(VENV)/bin/rigid-rot-controller" --ros-args --log-level warn -p target:="$(LOOP_TARGET)" & controller=$$!; \
+		start=$$EPOCHREALTIME; \
+		"$(VENV)/bin/rigid-rot" run $(LOOP_SCENE) --record out/demo_loop_$$run.mcap 2>&1 | grep -E "LOCKSTEP|lockstep:|WARN|ERROR" | sed -E 's/^\[[A-Z]+\] \[[0-9.]+\] \[rigid_rot_sim\]: //; s/; built: (LOCKSTEP[^;]*);.*/: \1/'; \
+		end=$$EPOCHREALTIME; \
+		kill -INT $$controller; wait $$controller || true; \
+		echo "run $$run: $(LOOP_SECONDS) s of sim time in $$(awk "BEGIN { printf \"%.2f\", $$end - $$start }") s of wall time (start-up included)"; \
+	done
+	@"$(VPY)" -c "$$LOOP_DIGESTS" out/demo_loop_1.mcap out/demo_loop_2.mcap
+	@"$(VENV)/bin/rigid-rot" resim out/demo_loop_2.mcap | tail -2
 	@echo
 	@echo "recorded: $(CURDIR)/$(DEMO_BAG)"
 	@echo "inspect:  .venv/bin/rigid-rot bag info|plot|resim|replay $(DEMO_BAG); ros2 bag info/play and Foxglove open it as is"

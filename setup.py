@@ -43,6 +43,7 @@ setup(
         "console_scripts": [
             "rigid-rot = rigid_rot_sim.console_scripts:rigid_rot",
             "rigid_rot_sim_node = rigid_rot_sim.console_scripts:rigid_rot_sim_node",
+            "rigid-rot-controller = rigid_rot_sim.console_scripts:rigid_rot_controller",
         ],
     },
 )
