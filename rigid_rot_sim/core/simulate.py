@@ -14,6 +14,9 @@ Example
 >>> traj = simulate((1.0, 2.0, 3.0), (1.0, 0.1, 0.5), t_end=1.0, dt=0.01, method="rk4")
 >>> float(traj.t[-1]), traj.q.shape
 (1.0, (101, 4))
+
+Reaction wheels and the gravity gradient (``wheels=``, ``orbit=``) are run by the gyrostat
+methods (:mod:`rigid_rot_sim.core.simulate_wheels`); the trajectory then carries the wheel speeds.
 """
 
 from __future__ import annotations
@@ -50,9 +53,13 @@ class Trajectory:
     method : str
         Integrator name.
     energy : ndarray, shape (n,)
-        Rotational kinetic energy T = 1/2 omega . L, J (computed on first access).
+        Rotational kinetic energy T = 1/2 omega . L, J (computed on first access); with wheels,
+        body and wheels (eq. (6) of :mod:`rigid_rot_sim.core.wheels`).
     L_world : ndarray, shape (n, 3)
-        Angular momentum in the world frame, kg*m^2/s (computed on first access).
+        Angular momentum in the world frame, kg*m^2/s (computed on first access); with wheels,
+        the total ``R(q) (I omega + sum J Omega g)`` (eq. (1) of :mod:`rigid_rot_sim.core.wheels`).
+    wheel_speeds : ndarray, shape (n, n_wheels), or None
+        Wheel speeds Omega, rad/s relative to the body, in the order of the wheels (None without wheels).
     """
 
     t: np.ndarray
@@ -64,15 +71,29 @@ class Trajectory:
     principal_moments: np.ndarray = field(repr=False, compare=False)
     q_principal: np.ndarray = field(repr=False, compare=False)
     omega_principal: np.ndarray = field(repr=False, compare=False)
+    wheel_speeds: np.ndarray | None = None
+    # the wheels (a core.wheels.WheelModel, axes in the principal frame) the invariants include
+    wheels_principal: Any = field(default=None, repr=False, compare=False)
 
     @functools.cached_property
     def energy(self) -> np.ndarray:
-        """Rotational kinetic energy T = 1/2 omega . L, J, shape (n,)."""
+        """Kinetic energy (J), shape (n,): 1/2 omega . L, plus the wheels' (eq. (6) of core.wheels) if any."""
+        if self.wheels_principal is not None:
+            from rigid_rot_sim.core.wheels import gyrostat_energy
+
+            return gyrostat_energy(self.principal_moments, self.wheels_principal, self.omega_principal, self.wheel_speeds)
         return kinetic_energy(self.principal_moments, self.omega_principal)
 
     @functools.cached_property
     def L_world(self) -> np.ndarray:
-        """Angular momentum in the world frame, kg*m^2/s, shape (n, 3)."""
+        """Angular momentum in the world frame, kg*m^2/s, shape (n, 3): body + wheels if any."""
+        if self.wheels_principal is not None:
+            from rigid_rot_sim.core.dynamics import body_to_world
+            from rigid_rot_sim.core.wheels import total_momentum_body
+
+            momentum = total_momentum_body(self.principal_moments, self.wheels_principal, self.omega_principal,
+                                           self.wheel_speeds)
+            return body_to_world(self.q_principal, momentum)
         return angular_momentum_world(self.principal_moments, self.q_principal, self.omega_principal)
 
 
@@ -130,6 +151,10 @@ def simulate(
     torque: Any = None,
     *,
     save_every: int = 1,
+    wheels: Any = None,
+    wheel_speeds0: Any = None,
+    wheel_torque: Any = None,
+    orbit: Any = None,
     **options: Any,
 ) -> Trajectory:
     """Integrate a rigid body's rotation from t = 0 to ``t_end``.
@@ -153,6 +178,19 @@ def simulate(
         ``torque(t, q, omega) -> (3,)`` in N*m with q, omega and the result in the body frame.
     save_every : int
         Keep every ``save_every``-th step (>= 1).
+    wheels : WheelModel, optional
+        Reaction wheels (:func:`rigid_rot_sim.core.wheels.wheel_model`, axes in the body frame; the
+        inertia includes them). Only the gyrostat methods (``rk4``, ``dopri5``) run them; ``torque``
+        is then None or constant.
+    wheel_speeds0 : array_like, shape (n_wheels,), optional
+        Initial wheel speeds, rad/s relative to the body (default 0).
+    wheel_torque : array_like (n_wheels,) or a schedule, optional
+        Motor torques on the wheels (N*m, clamped to each wheel's max_torque as the run engine
+        does): constant, or a schedule of ``(start_s, torques)`` pairs (or segments with ``start``
+        and ``torques``, e.g. a scene's ``wheel_torque_schedule.segments``), each acting from the
+        first step boundary at or after its start; zero before the first.
+    orbit : OrbitModel, optional
+        The circular orbit of the gravity-gradient torque (:func:`rigid_rot_sim.core.wheels.orbit_model`).
     **options
         Method options (e.g. ``order`` for ``splitting``, ``rtol``/``atol`` for ``dop853``).
 
@@ -164,14 +202,19 @@ def simulate(
     NonFiniteStateError
         A step produced a non-finite state (names the step and the time).
     """
+    if wheels is not None or orbit is not None or wheel_speeds0 is not None or wheel_torque is not None:
+        from rigid_rot_sim.core.simulate_wheels import simulate_gyrostat
+
+        return simulate_gyrostat(
+            inertia, omega0, t_end, dt, method, q0, torque, save_every=save_every, wheels=wheels,
+            wheel_speeds0=wheel_speeds0, wheel_torque=wheel_torque, orbit=orbit, **options,
+        )
     body, is_principal = rigid_body(inertia)
     omega0 = validation.finite_vector("omega0", omega0)
-    q0 = _attitude(q0)
+    q0 = attitude(q0)
     t_end = validation.nonnegative_scalar("t_end", t_end)
     dt = validation.positive_scalar("dt", dt)
-    if isinstance(save_every, bool) or not isinstance(save_every, (int, np.integer)) or save_every < 1:
-        raise ValueError(f"save_every must be an integer >= 1, got {save_every!r}")
-    save_every = int(save_every)
+    save_every = checked_save_every(save_every)
     integrator_class = get_method(method)
 
     if is_principal:  # nothing to rotate (and no Rotation objects to build)
@@ -218,6 +261,13 @@ def simulate(
     )
 
 
+def checked_save_every(save_every: Any) -> int:
+    """``save_every`` as an int >= 1 (ValueError otherwise)."""
+    if isinstance(save_every, bool) or not isinstance(save_every, (int, np.integer)) or save_every < 1:
+        raise ValueError(f"save_every must be an integer >= 1, got {save_every!r}")
+    return int(save_every)
+
+
 def rigid_body(inertia: Any) -> tuple[RigidBody, bool]:
     """``(RigidBody.from_inertia(inertia), body.is_principal)``, cached per inertia value (arrays read-only)."""
     try:
@@ -241,7 +291,7 @@ def _cached_body(shape: tuple[int, ...], data: bytes) -> tuple[RigidBody, bool]:
 _IDENTITY_ATTITUDE = (0.0, 0.0, 0.0, 1.0)
 
 
-def _attitude(q0: Any) -> np.ndarray:
+def attitude(q0: Any) -> np.ndarray:
     """``validation.quaternion("q0", q0)``, with the identity (the default) looked up."""
     if type(q0) is tuple and q0 == _IDENTITY_ATTITUDE:
         return np.array(_IDENTITY_ATTITUDE)
