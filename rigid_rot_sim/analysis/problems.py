@@ -129,13 +129,17 @@ class Problem:
         return np.asarray(traj.q[-1]), np.asarray(traj.omega[-1])
 
 
-_REFERENCES: dict[str, Reference] = {}
+_REFERENCES: dict[tuple, Reference] = {}
 
 
 def _cached_reference(problem: Problem) -> Reference:
-    if problem.key not in _REFERENCES:
-        _REFERENCES[problem.key] = problem.reference_factory(problem)
-    return _REFERENCES[problem.key]
+    # keyed by the initial value problem, not the key alone: the stability suite's quick and full
+    # cases share a key but not a horizon, and one process may build both
+    cache_key = (problem.key, problem.t_end, problem.principal_moments, problem.omega0, problem.q0,
+                 problem.wheel_speeds0)
+    if cache_key not in _REFERENCES:
+        _REFERENCES[cache_key] = problem.reference_factory(problem)
+    return _REFERENCES[cache_key]
 
 
 def scipy_rhs(problem: Problem) -> Callable[[float, np.ndarray], np.ndarray]:
