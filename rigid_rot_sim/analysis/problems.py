@@ -43,7 +43,6 @@ from rigid_rot_sim.core.heavy_top import (
     separatrix_state,
 )
 from rigid_rot_sim.core.simulate import simulate
-from rigid_rot_sim.core.integrators.gyrostat import get_gyrostat_method
 from rigid_rot_sim.core.torque import ConstantTorque
 from rigid_rot_sim.core.wheels import NO_ORBIT, WheelModel, gyrostat_rhs, hub_inertia, wheel_model
 
@@ -117,15 +116,12 @@ class Problem:
         """
         n_steps = max(1, round(self.t_end / dt))
         if self.wheels is not None:  # only the gyrostat methods carry the wheels (ValueError: refused)
-            gyrostat = get_gyrostat_method(method)(
-                self.moments, self.t_end / n_steps, wheels=self.wheels, q0=self.q0, omega0=self.omega0,
-                wheel_speeds0=self.wheel_speeds0, **options,
+            traj = simulate(self.moments, self.omega0, self.t_end, self.t_end / n_steps, method, self.q0, self.torque,
+                            save_every=n_steps, wheels=self.wheels, wheel_speeds0=self.wheel_speeds0, **options)
+        else:
+            traj = simulate(
+                self.moments, self.omega0, self.t_end, dt, method, self.q0, self.torque, save_every=n_steps, **options
             )
-            gyrostat.advance(n_steps)
-            return gyrostat.q, gyrostat.omega
-        traj = simulate(
-            self.moments, self.omega0, self.t_end, dt, method, self.q0, self.torque, save_every=n_steps, **options
-        )
         return np.asarray(traj.q[-1]), np.asarray(traj.omega[-1])
 
 

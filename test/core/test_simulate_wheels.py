@@ -170,3 +170,14 @@ def test_wheels_that_leave_no_body_for_this_inertia_are_refused():
     wheels = wheel_model(np.diag(MOMENTS), ["big"], [[1, 0, 0]], [9.0], [0.1], [100.0])
     with pytest.raises(ValueError, match="positive definite"):
         simulate((5.0, 12.0, 15.0), (0.1, 0.2, 0.3), 1.0, 0.1, "rk4", wheels=wheels)
+
+
+def test_the_documented_examples_run():
+    """The module's docstring example and docs/spacecraft.md's `simulate()` section, as written."""
+    import doctest
+    import importlib
+
+    module = doctest.testmod(importlib.import_module("rigid_rot_sim.core.simulate_wheels"))
+    docs = doctest.testfile(str(Path(__file__).resolve().parents[2] / "docs" / "spacecraft.md"), module_relative=False)
+    assert module.attempted > 0 and module.failed == 0
+    assert docs.attempted >= 10 and docs.failed == 0
