@@ -19,7 +19,7 @@ import pytest
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 from test_node_e2e import SCENES, stamp  # noqa: E402 (collector: a conftest fixture)
-from test_vendored_interfaces import UPSTREAM_HASHES  # noqa: E402
+from test_vendored_interfaces import UPSTREAM_1_5_1_ACTION  # noqa: E402
 
 ACTION = "/rigid_rot_sim/simulate_steps"
 SUCCEEDED, CANCELED, ABORTED = 4, 5, 6  # action_msgs/msg/GoalStatus
@@ -98,7 +98,7 @@ def test_simulate_steps_goal_feedback_cancel_and_refusals(sim_node, collector):
     # the feedback topic is the standard type, with the upstream hash
     infos = collector.node.get_publishers_info_by_topic(f"{ACTION}/_action/feedback")  # (and earlier tests' nodes)
     assert infos and {str(info.topic_type_hash) for info in infos} == {
-        "RIHS01_" + UPSTREAM_HASHES["simulation_interfaces/action/SimulateSteps_FeedbackMessage"]}
+        UPSTREAM_1_5_1_ACTION["action/SimulateSteps_FeedbackMessage"]}
 
     # cancel a long goal once its feedback arrives; a second goal meanwhile is rejected
     feedback.clear()
