@@ -60,7 +60,8 @@ class Trajectory:
         Angular momentum in the world frame, kg*m^2/s (computed on first access); with wheels,
         the total ``R(q) (I omega + sum J Omega g)`` (eq. (1) of :mod:`rigid_rot_sim.core.wheels`).
     wheel_speeds : ndarray, shape (n, n_wheels), or None
-        Wheel speeds Omega, rad/s relative to the body, in the order of the wheels (None without wheels).
+        Wheel speeds Omega, rad/s relative to the body, in the order of the wheels (None without wheels;
+        with wheels the trajectory is a :class:`GyrostatTrajectory`).
     """
 
     t: np.ndarray
@@ -72,31 +73,47 @@ class Trajectory:
     principal_moments: np.ndarray = field(repr=False, compare=False)
     q_principal: np.ndarray = field(repr=False, compare=False)
     omega_principal: np.ndarray = field(repr=False, compare=False)
-    wheel_speeds: np.ndarray | None = None
+    # not a field: a plain trajectory pays nothing for it (GyrostatTrajectory's is one)
+    wheel_speeds = None
+
+    @functools.cached_property
+    def energy(self) -> np.ndarray:
+        """Rotational kinetic energy T = 1/2 omega . L, J, shape (n,)."""
+        return kinetic_energy(self.principal_moments, self.omega_principal)
+
+    @functools.cached_property
+    def L_world(self) -> np.ndarray:
+        """Angular momentum in the world frame, kg*m^2/s, shape (n, 3)."""
+        return angular_momentum_world(self.principal_moments, self.q_principal, self.omega_principal)
+
+
+@dataclass(frozen=True)
+class GyrostatTrajectory(Trajectory):
+    """A :class:`Trajectory` with reaction wheels: their speeds, and invariants of body + wheels.
+
+    ``wheel_speeds`` (n, n_wheels): rad/s relative to the body, in the order of the wheels.
+    """
+
+    wheel_speeds: np.ndarray = field(default_factory=lambda: np.zeros((0, 0)))  # type: ignore[assignment]
     # the wheels (a core.wheels.WheelModel, axes in the principal frame) the invariants include
     wheels_principal: Any = field(default=None, repr=False, compare=False)
 
     @functools.cached_property
     def energy(self) -> np.ndarray:
-        """Kinetic energy (J), shape (n,): 1/2 omega . L, plus the wheels' (eq. (6) of core.wheels) if any."""
-        if self.wheels_principal is not None:
-            from rigid_rot_sim.core.wheels import gyrostat_energy
+        """Kinetic energy of body and wheels (eq. (6) of :mod:`rigid_rot_sim.core.wheels`), J, shape (n,)."""
+        from rigid_rot_sim.core.wheels import gyrostat_energy
 
-            return gyrostat_energy(self.principal_moments, self.wheels_principal, self.omega_principal,
-                                   self.wheel_speeds)
-        return kinetic_energy(self.principal_moments, self.omega_principal)
+        return gyrostat_energy(self.principal_moments, self.wheels_principal, self.omega_principal, self.wheel_speeds)
 
     @functools.cached_property
     def L_world(self) -> np.ndarray:
-        """Angular momentum in the world frame, kg*m^2/s, shape (n, 3): body + wheels if any."""
-        if self.wheels_principal is not None:
-            from rigid_rot_sim.core.dynamics import body_to_world
-            from rigid_rot_sim.core.wheels import total_momentum_body
+        """Total angular momentum ``R(q) (I omega + sum J Omega g)`` (eq. (1) of core.wheels), world, kg*m^2/s."""
+        from rigid_rot_sim.core.dynamics import body_to_world
+        from rigid_rot_sim.core.wheels import total_momentum_body
 
-            momentum = total_momentum_body(self.principal_moments, self.wheels_principal, self.omega_principal,
-                                           self.wheel_speeds)
-            return body_to_world(self.q_principal, momentum)
-        return angular_momentum_world(self.principal_moments, self.q_principal, self.omega_principal)
+        momentum = total_momentum_body(self.principal_moments, self.wheels_principal, self.omega_principal,
+                                       self.wheel_speeds)
+        return body_to_world(self.q_principal, momentum)
 
 
 def step_grid(t_end: float, dt: float) -> tuple[int, float]:
@@ -214,7 +231,8 @@ def simulate(
     q0 = attitude(q0)
     t_end = validation.nonnegative_scalar("t_end", t_end)
     dt = validation.positive_scalar("dt", dt)
-    save_every = checked_save_every(save_every)
+    if type(save_every) is not int or save_every < 1:  # the common case skips the call
+        save_every = checked_save_every(save_every)
     integrator_class = get_method(method)
 
     if is_principal:  # nothing to rotate (and no Rotation objects to build)
@@ -355,9 +373,12 @@ def simulate_gyrostat(
     else:
         q_body = body.attitude_from_principal(q_p)
         omega_body = body.vector_from_principal(omega_p)
-    return Trajectory(
+    if wheels_p is None:  # gravity gradient only: a rigid body's trajectory
+        return Trajectory(t=t, q=q_body, omega=omega_body, method=method, principal_moments=moments,
+                          q_principal=q_p, omega_principal=omega_p)
+    return GyrostatTrajectory(
         t=t, q=q_body, omega=omega_body, method=method, principal_moments=moments, q_principal=q_p,
-        omega_principal=omega_p, wheel_speeds=speeds if wheels is not None else None, wheels_principal=wheels_p,
+        omega_principal=omega_p, wheel_speeds=speeds, wheels_principal=wheels_p,
     )
 
 
