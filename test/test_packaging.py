@@ -44,7 +44,7 @@ PIP_ONLY = {"dask": "dask[distributed]", "distributed": "dask[distributed]", "ps
 ROS_PACKAGES = {
     "rclpy", "rcl_interfaces", "builtin_interfaces", "geometry_msgs", "std_msgs", "std_srvs", "sensor_msgs",
     "nav_msgs", "rosgraph_msgs", "tf2_msgs", "simulation_interfaces", "diagnostic_msgs", "rigid_rot_msgs",
-    "rosidl_generator_type_description", "ament_index_python", "launch", "launch_ros",
+    "rosidl_generator_type_description", "ament_index_python", "launch", "launch_ros", "visualization_msgs",
 }
 #: Needed at run time without an import: diagnostic_msgs' .msg is read from share/ (recording/events.py).
 DATA_DEPENDENCIES = {"diagnostic_msgs"}

@@ -71,8 +71,11 @@ UPSTREAM_1_5_1_ACTION = {
     "action/SimulateSteps_SendGoal_Response": "RIHS01_755f44a68d1e8d116f50dfed7ab30a140137fb71ad59eca4851d55abe2b3d4c2",
     "action/SimulateSteps_GetResult": "RIHS01_a1dae0516ab5c70d6d797e1bcd55c9448dfbb1966643f1ebd3e3f153d8169ae0",
     "action/SimulateSteps_GetResult_Request": "RIHS01_4591b0bfbcb881003bbd46a2acebcaddceb977e5352905218688ce5ed051fdeb",
-    "action/SimulateSteps_GetResult_Response": "RIHS01_5658172e771cb145a986a8ef4c2b80b5407b741038453b8539e35bed5ff23207",
+    "action/SimulateSteps_GetResult_Response":
+        "RIHS01_5658172e771cb145a986a8ef4c2b80b5407b741038453b8539e35bed5ff23207",
 }
+#: The event types of the action's two services: built from the verbatim upstream file, not pinned.
+ACTION_SERVICE_EVENTS = {"action/SimulateSteps_SendGoal_Event", "action/SimulateSteps_GetResult_Event"}
 TF2_MSGS = {"msg/TFMessage": "RIHS01_e369d0f05a23ae52508854b66f6aa0437f3449d652e8cbf22d5abe85d020f087"}
 
 
@@ -92,7 +95,8 @@ def built_hashes(package: str) -> dict[str, str]:
 def test_simulation_interfaces_has_the_23_upstream_types_and_the_action():
     pinned = UPSTREAM_1_5_1 | UPSTREAM_1_5_1_PARTS
     assert len(pinned) == 23
-    assert set(built_hashes("simulation_interfaces")) == set(pinned) | set(UPSTREAM_1_5_1_ACTION)
+    expected = set(pinned) | set(UPSTREAM_1_5_1_ACTION) | ACTION_SERVICE_EVENTS
+    assert set(built_hashes("simulation_interfaces")) == expected
 
 
 @pytest.mark.parametrize(("type_name", "expected"),
@@ -115,7 +119,8 @@ def test_the_built_definitions_are_the_vendored_ones(package):
     ensure_ament_prefix_path()
     share = Path(get_package_share_directory(package))
     source = VENDOR / package
-    vendored = sorted(p.relative_to(source) for pattern in ("msg/*.msg", "srv/*.srv", "action/*.action") for p in source.glob(pattern))
+    patterns = ("msg/*.msg", "srv/*.srv", "action/*.action")
+    vendored = sorted(p.relative_to(source) for pattern in patterns for p in source.glob(pattern))
     assert vendored
     if not str(share).startswith(str(ROOT)):
         return  # a real installation (apt) is used; the hashes above still had to match
