@@ -5,8 +5,11 @@ with a method of :data:`~rigid_rot_sim.core.integrators.gyrostat.GYROSTAT_METHOD
 turns its wheel arguments into what the integrator takes. Wheel motor torques change only at step
 boundaries, as in the run engine: a segment starting at ``s`` seconds acts from step
 ``k = step_at_or_after(s, dt)`` on (the rule of :mod:`rigid_rot_sim.core.steps`), each value clamped
-to its wheel's max_torque. With the same wheels, schedule, method and dt, ``simulate`` gives the
-states of the run engine's :class:`~rigid_rot_sim.run.simulator.Simulator` on the scene, bit for bit.
+to its wheel's max_torque. With the same wheels, schedule, method and dt, ``simulate`` integrates
+the states of the run engine's :class:`~rigid_rot_sim.run.simulator.Simulator` on the scene bit for
+bit (principal frame); its body-frame samples are the integrator's quaternion as is, where the
+Simulator's snapshot reports the one with w >= 0, and for a non-principal inertia the rotation to
+the body frame may round differently in the last bit.
 """
 
 from __future__ import annotations
