@@ -43,9 +43,9 @@ SWEEP_PINS := dask==2026.8.0 distributed==2026.8.0 pyarrow==26.0.1
 VIEWER_PINS := foxglove-sdk==0.30.3
 # websockets: the tests' Foxglove ws-protocol client. The gates' tools (test/test_lint.py, test/test_mypy.py;
 # configured in pyproject.toml): scipy-stubs 1.17.1.x are the stubs of scipy 1.17.1 and work with numpy 2.4
-# (they pull in optype and numpy-typing-compat).
+# (they pull in optype and numpy-typing-compat). mpmath: the 40-digit reference of test/core/test_exact_ulps.py.
 TEST_PINS := pytest==9.2.0 hypothesis==6.170.15 rosbags==0.11.9 websockets==15.0.1 \
-	ruff==0.17.6 mypy==2.4.1 types-PyYAML==6.0.12.20261113 scipy-stubs==1.17.1.5
+	ruff==0.17.6 mypy==2.4.1 types-PyYAML==6.0.12.20261113 scipy-stubs==1.17.1.5 mpmath==1.3.0
 
 # The compiled kernels are built from these (rigid_rot_sim/core/jit.py keys their cache on them).
 CORE_SOURCES := $(shell find rigid_rot_sim/core -name '*.py' 2>/dev/null)
