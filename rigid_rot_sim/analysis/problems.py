@@ -42,7 +42,6 @@ from rigid_rot_sim.core.heavy_top import (
     separatrix_solution,
     separatrix_state,
 )
-from rigid_rot_sim.core.integrators.gyrostat import get_gyrostat_method
 from rigid_rot_sim.core.simulate import simulate
 from rigid_rot_sim.core.torque import ConstantTorque
 from rigid_rot_sim.core.wheels import NO_ORBIT, WheelModel, gyrostat_rhs, hub_inertia, wheel_model
@@ -117,25 +116,26 @@ class Problem:
         """
         n_steps = max(1, round(self.t_end / dt))
         if self.wheels is not None:  # only the gyrostat methods carry the wheels (ValueError: refused)
-            gyrostat = get_gyrostat_method(method)(
-                self.moments, self.t_end / n_steps, wheels=self.wheels, q0=self.q0, omega0=self.omega0,
-                wheel_speeds0=self.wheel_speeds0, **options,
+            traj = simulate(self.moments, self.omega0, self.t_end, self.t_end / n_steps, method, self.q0, self.torque,
+                            save_every=n_steps, wheels=self.wheels, wheel_speeds0=self.wheel_speeds0, **options)
+        else:
+            traj = simulate(
+                self.moments, self.omega0, self.t_end, dt, method, self.q0, self.torque, save_every=n_steps, **options
             )
-            gyrostat.advance(n_steps)
-            return gyrostat.q, gyrostat.omega
-        traj = simulate(
-            self.moments, self.omega0, self.t_end, dt, method, self.q0, self.torque, save_every=n_steps, **options
-        )
         return np.asarray(traj.q[-1]), np.asarray(traj.omega[-1])
 
 
-_REFERENCES: dict[str, Reference] = {}
+_REFERENCES: dict[tuple, Reference] = {}
 
 
 def _cached_reference(problem: Problem) -> Reference:
-    if problem.key not in _REFERENCES:
-        _REFERENCES[problem.key] = problem.reference_factory(problem)
-    return _REFERENCES[problem.key]
+    # keyed by the initial value problem, not the key alone: the stability suite's quick and full
+    # cases share a key but not a horizon, and one process may build both
+    cache_key = (problem.key, problem.t_end, problem.principal_moments, problem.omega0, problem.q0,
+                 problem.wheel_speeds0)
+    if cache_key not in _REFERENCES:
+        _REFERENCES[cache_key] = problem.reference_factory(problem)
+    return _REFERENCES[cache_key]
 
 
 def scipy_rhs(problem: Problem) -> Callable[[float, np.ndarray], np.ndarray]:

@@ -40,7 +40,7 @@ import numpy as np
 from rigid_rot_sim.analysis.cluster import map_tasks, open_client, wants_cluster
 from rigid_rot_sim.analysis.metrics import attitude_error_angle, omega_error, relative_change
 from rigid_rot_sim.analysis.problems import P1, Problem
-from rigid_rot_sim.core.integrators.gyrostat import get_gyrostat_method
+from rigid_rot_sim.core.integrators.gyrostat import GYROSTAT_METHODS, get_gyrostat_method
 from rigid_rot_sim.core.wheels import gyrostat_energy, total_momentum_body
 from rigid_rot_sim.analysis.stability_cases import Case, Criterion, case_named
 from rigid_rot_sim.run import advice
@@ -113,6 +113,8 @@ def _integrator(method: str, case: Case, dt: float, torque: Any) -> Any:
     if problem.wheels is not None:  # a gyrostat: only the gyrostat methods carry the wheels (ValueError: refused)
         return get_gyrostat_method(method)(problem.moments, dt, torque, q0=problem.q0, omega0=problem.omega0,
                                            wheels=problem.wheels, wheel_speeds0=problem.wheel_speeds0, **options)
+    if method not in METHODS and method in GYROSTAT_METHODS:
+        raise ValueError(f"{method} runs gyrostats only (reaction wheels, gravity gradient): this case has no wheels")
     return get_method(method)(problem.moments, dt, torque, q0=problem.q0, omega0=problem.omega0, **options)
 
 
@@ -226,10 +228,10 @@ def _is_stable(case: Case, method: str, dt: float, steps: int) -> bool:
     problem = case.problem
     try:
         integrator = _integrator(method, case, dt, problem.torque)
-        e0, m0, _ = _invariants(problem, integrator.q, integrator.omega)
+        e0, m0, _ = _invariants(problem, integrator.q, integrator.omega, getattr(integrator, "wheel_speeds", None))
         for _ in range(10):
             integrator.advance(steps // 10)
-            e, m, _ = _invariants(problem, integrator.q, integrator.omega)
+            e, m, _ = _invariants(problem, integrator.q, integrator.omega, getattr(integrator, "wheel_speeds", None))
             if e > e0 * (1 + BISECTION_GROWTH) or m > m0 * (1 + BISECTION_GROWTH):
                 return False
     except (NonFiniteStateError, ArithmeticError):
@@ -360,8 +362,9 @@ def long_horizon_task(method: str | MethodVariant, steps: int) -> dict[str, Any]
 
 
 def method_labels() -> list[str]:
-    """The columns of the suite: every registered method with its default options."""
-    return list(METHODS)
+    """The columns of the suite: every registered method with its default options, then the methods that
+    run gyrostats only (``dopri5``: refused on the cases without wheels)."""
+    return list(METHODS) + [name for name in GYROSTAT_METHODS if name not in METHODS]
 
 
 # ---------------------------------------------------------------- the whole suite, here or on a cluster

@@ -14,6 +14,10 @@ Example
 >>> traj = simulate((1.0, 2.0, 3.0), (1.0, 0.1, 0.5), t_end=1.0, dt=0.01, method="rk4")
 >>> float(traj.t[-1]), traj.q.shape
 (1.0, (101, 4))
+
+Reaction wheels and the gravity gradient (``wheels=``, ``orbit=``) are run by the gyrostat
+methods (:func:`simulate_gyrostat`, inputs checked by :mod:`rigid_rot_sim.core.simulate_wheels`); the
+trajectory then carries the wheel speeds. Example: ``docs/spacecraft.md``.
 """
 
 from __future__ import annotations
@@ -50,9 +54,14 @@ class Trajectory:
     method : str
         Integrator name.
     energy : ndarray, shape (n,)
-        Rotational kinetic energy T = 1/2 omega . L, J (computed on first access).
+        Rotational kinetic energy T = 1/2 omega . L, J (computed on first access); with wheels,
+        body and wheels (eq. (6) of :mod:`rigid_rot_sim.core.wheels`).
     L_world : ndarray, shape (n, 3)
-        Angular momentum in the world frame, kg*m^2/s (computed on first access).
+        Angular momentum in the world frame, kg*m^2/s (computed on first access); with wheels,
+        the total ``R(q) (I omega + sum J Omega g)`` (eq. (1) of :mod:`rigid_rot_sim.core.wheels`).
+    wheel_speeds : ndarray, shape (n, n_wheels), or None
+        Wheel speeds Omega, rad/s relative to the body, in the order of the wheels (None without wheels;
+        with wheels the trajectory is a :class:`GyrostatTrajectory`).
     """
 
     t: np.ndarray
@@ -64,6 +73,8 @@ class Trajectory:
     principal_moments: np.ndarray = field(repr=False, compare=False)
     q_principal: np.ndarray = field(repr=False, compare=False)
     omega_principal: np.ndarray = field(repr=False, compare=False)
+    # not a field: a plain trajectory pays nothing for it (GyrostatTrajectory's is one)
+    wheel_speeds = None
 
     @functools.cached_property
     def energy(self) -> np.ndarray:
@@ -74,6 +85,35 @@ class Trajectory:
     def L_world(self) -> np.ndarray:
         """Angular momentum in the world frame, kg*m^2/s, shape (n, 3)."""
         return angular_momentum_world(self.principal_moments, self.q_principal, self.omega_principal)
+
+
+@dataclass(frozen=True)
+class GyrostatTrajectory(Trajectory):
+    """A :class:`Trajectory` with reaction wheels: their speeds, and invariants of body + wheels.
+
+    ``wheel_speeds`` (n, n_wheels): rad/s relative to the body, in the order of the wheels.
+    """
+
+    wheel_speeds: np.ndarray = field(default_factory=lambda: np.zeros((0, 0)))  # type: ignore[assignment]
+    # the wheels (a core.wheels.WheelModel, axes in the principal frame) the invariants include
+    wheels_principal: Any = field(default=None, repr=False, compare=False)
+
+    @functools.cached_property
+    def energy(self) -> np.ndarray:
+        """Kinetic energy of body and wheels (eq. (6) of :mod:`rigid_rot_sim.core.wheels`), J, shape (n,)."""
+        from rigid_rot_sim.core.wheels import gyrostat_energy
+
+        return gyrostat_energy(self.principal_moments, self.wheels_principal, self.omega_principal, self.wheel_speeds)
+
+    @functools.cached_property
+    def L_world(self) -> np.ndarray:
+        """Total angular momentum ``R(q) (I omega + sum J Omega g)`` (eq. (1) of core.wheels), world, kg*m^2/s."""
+        from rigid_rot_sim.core.dynamics import body_to_world
+        from rigid_rot_sim.core.wheels import total_momentum_body
+
+        momentum = total_momentum_body(self.principal_moments, self.wheels_principal, self.omega_principal,
+                                       self.wheel_speeds)
+        return body_to_world(self.q_principal, momentum)
 
 
 def step_grid(t_end: float, dt: float) -> tuple[int, float]:
@@ -130,6 +170,10 @@ def simulate(
     torque: Any = None,
     *,
     save_every: int = 1,
+    wheels: Any = None,
+    wheel_speeds0: Any = None,
+    wheel_torque: Any = None,
+    orbit: Any = None,
     **options: Any,
 ) -> Trajectory:
     """Integrate a rigid body's rotation from t = 0 to ``t_end``.
@@ -153,6 +197,19 @@ def simulate(
         ``torque(t, q, omega) -> (3,)`` in N*m with q, omega and the result in the body frame.
     save_every : int
         Keep every ``save_every``-th step (>= 1).
+    wheels : WheelModel, optional
+        Reaction wheels (:func:`rigid_rot_sim.core.wheels.wheel_model`, axes in the body frame; the
+        inertia includes them). Only the gyrostat methods (``rk4``, ``dopri5``) run them; ``torque``
+        is then None or constant.
+    wheel_speeds0 : array_like, shape (n_wheels,), optional
+        Initial wheel speeds, rad/s relative to the body (default 0).
+    wheel_torque : array_like (n_wheels,) or a schedule, optional
+        Motor torques on the wheels (N*m, clamped to each wheel's max_torque as the run engine
+        does): constant, or a schedule of ``(start_s, torques)`` pairs (or segments with ``start``
+        and ``torques``, e.g. a scene's ``wheel_torque_schedule.segments``), each acting from the
+        first step boundary at or after its start; zero before the first.
+    orbit : OrbitModel, optional
+        The circular orbit of the gravity-gradient torque (:func:`rigid_rot_sim.core.wheels.orbit_model`).
     **options
         Method options (e.g. ``order`` for ``splitting``, ``rtol``/``atol`` for ``dop853``).
 
@@ -164,14 +221,18 @@ def simulate(
     NonFiniteStateError
         A step produced a non-finite state (names the step and the time).
     """
+    if wheels is not None or orbit is not None or wheel_speeds0 is not None or wheel_torque is not None:
+        return simulate_gyrostat(
+            inertia, omega0, t_end, dt, method, q0, torque, save_every=save_every, wheels=wheels,
+            wheel_speeds0=wheel_speeds0, wheel_torque=wheel_torque, orbit=orbit, **options,
+        )
     body, is_principal = rigid_body(inertia)
     omega0 = validation.finite_vector("omega0", omega0)
-    q0 = _attitude(q0)
+    q0 = attitude(q0)
     t_end = validation.nonnegative_scalar("t_end", t_end)
     dt = validation.positive_scalar("dt", dt)
-    if isinstance(save_every, bool) or not isinstance(save_every, (int, np.integer)) or save_every < 1:
-        raise ValueError(f"save_every must be an integer >= 1, got {save_every!r}")
-    save_every = int(save_every)
+    if type(save_every) is not int or save_every < 1:  # the common case skips the call
+        save_every = checked_save_every(save_every)
     integrator_class = get_method(method)
 
     if is_principal:  # nothing to rotate (and no Rotation objects to build)
@@ -218,6 +279,116 @@ def simulate(
     )
 
 
+def simulate_gyrostat(
+    inertia: Any, omega0: Any, t_end: float, dt: float, method: str, q0: Any = (0.0, 0.0, 0.0, 1.0),
+    torque: Any = None, *, save_every: int = 1, wheels: Any = None, wheel_speeds0: Any = None,
+    wheel_torque: Any = None, orbit: Any = None, **options: Any,
+) -> Trajectory:
+    """:func:`~rigid_rot_sim.core.simulate.simulate` with reaction wheels and the gravity gradient.
+
+    Parameters as :func:`~rigid_rot_sim.core.simulate.simulate`'s; ``method`` is ``rk4`` or
+    ``dopri5`` (ValueError naming them otherwise), ``torque`` None or a constant body-frame
+    vector (N*m). ``wheel_speeds0`` or ``wheel_torque`` need ``wheels``; a wheel speed beyond its
+    max_speed is refused. Time grid and sampling as ``simulate``'s.
+
+    Example: a wheel on the body's z axis driven by 0.05 N*m for 10 s; body and wheel trade momentum.
+
+    >>> from rigid_rot_sim.core.wheels import wheel_model
+    >>> rw = wheel_model(np.diag([10.0, 12.0, 15.0]), ["rw_z"], [[0, 0, 1]], [0.5], [0.1], [1000.0])
+    >>> traj = simulate((10.0, 12.0, 15.0), (0.0, 0.0, 0.2), 10.0, 0.01, "rk4", wheels=rw,
+    ...                 wheel_speeds0=[10.0], wheel_torque=[0.05])
+    >>> traj.wheel_speeds.shape, round(float(traj.omega[-1, 2]), 9)    # (I3 - J) dw/dt = -u
+    ((1001, 1), 0.165517241)
+    >>> bool(np.allclose(traj.L_world, [0.0, 0.0, 15.0 * 0.2 + 0.5 * 10.0], rtol=0, atol=1e-12))
+    True
+    """
+    # imported here: a caller of the plain path does not pay the gyrostat kernels' import (~20 ms)
+    from rigid_rot_sim.core.integrators.gyrostat import get_gyrostat_method
+    from rigid_rot_sim.core.simulate_wheels import checked_wheel_speeds, checked_wheels, wheel_torque_events
+    from rigid_rot_sim.core.wheels import NO_ORBIT, OrbitModel
+
+    body, is_principal = rigid_body(inertia)
+    omega0 = validation.finite_vector("omega0", omega0)
+    q0 = attitude(q0)
+    t_end = validation.nonnegative_scalar("t_end", t_end)
+    dt = validation.positive_scalar("dt", dt)
+    save_every = checked_save_every(save_every)
+    integrator_class = get_gyrostat_method(method)
+    if orbit is not None and not isinstance(orbit, OrbitModel):
+        raise ValueError(
+            f"orbit must be an OrbitModel (rigid_rot_sim.core.wheels.orbit_model), got {type(orbit).__name__}"
+        )
+    if wheels is None and (wheel_speeds0 is not None or wheel_torque is not None):
+        raise ValueError("wheel_speeds0 and wheel_torque need wheels")
+    moments = body.principal_moments
+    wheels_p = checked_wheels(wheels, moments, body)
+    n_wheels = 0 if wheels is None else wheels.count
+    speeds0 = checked_wheel_speeds(wheels, wheel_speeds0)
+    events = [] if wheels is None else wheel_torque_events(wheels, wheel_torque, dt)
+
+    if is_principal:
+        q0_p, omega0_p = q0, omega0
+    else:
+        q0_p = body.attitude_to_principal(q0)
+        omega0_p = body.vector_to_principal(omega0)
+    integrator = integrator_class(
+        moments, dt, principal_torque(body, torque, is_principal), wheels=wheels_p,
+        orbit=NO_ORBIT if orbit is None else orbit, q0=q0_p, omega0=omega0_p, wheel_speeds0=speeds0, **options,
+    )
+
+    n_full, last = step_grid(t_end, dt)
+    n_saves = n_full // save_every
+    tail = n_full > n_saves * save_every or last > 0.0
+    n_rows = n_saves + 1 + tail
+    t = np.arange(n_rows) * (save_every * dt)
+    q_p = np.empty((n_rows, 4))
+    omega_p = np.empty((n_rows, 3))
+    speeds = np.empty((n_rows, n_wheels))
+    q_p[0], omega_p[0], speeds[0] = q0_p, omega0_p, speeds0
+
+    k, row, pending = 0, 1, 0
+    while True:
+        while pending < len(events) and events[pending][0] <= k:  # the commands due at this boundary
+            integrator.set_wheel_commands(events[pending][1])
+            pending += 1
+        if k >= n_full:
+            break
+        stop = min(n_full, row * save_every if row <= n_saves else n_full,
+                   events[pending][0] if pending < len(events) else n_full)
+        integrator.advance(stop - k)
+        k = stop
+        if row <= n_saves and k == row * save_every:
+            q_p[row], omega_p[row], speeds[row] = integrator.q, integrator.omega, integrator.wheel_speeds
+            row += 1
+    if last > 0.0:
+        integrator.dt = last
+        integrator.advance(1)
+    if tail:
+        q_p[-1], omega_p[-1], speeds[-1] = integrator.q, integrator.omega, integrator.wheel_speeds
+    if n_full or tail:
+        t[-1] = t_end
+
+    if is_principal:
+        q_body, omega_body = q_p, omega_p
+    else:
+        q_body = body.attitude_from_principal(q_p)
+        omega_body = body.vector_from_principal(omega_p)
+    if wheels_p is None:  # gravity gradient only: a rigid body's trajectory
+        return Trajectory(t=t, q=q_body, omega=omega_body, method=method, principal_moments=moments,
+                          q_principal=q_p, omega_principal=omega_p)
+    return GyrostatTrajectory(
+        t=t, q=q_body, omega=omega_body, method=method, principal_moments=moments, q_principal=q_p,
+        omega_principal=omega_p, wheel_speeds=speeds, wheels_principal=wheels_p,
+    )
+
+
+def checked_save_every(save_every: Any) -> int:
+    """``save_every`` as an int >= 1 (ValueError otherwise)."""
+    if isinstance(save_every, bool) or not isinstance(save_every, (int, np.integer)) or save_every < 1:
+        raise ValueError(f"save_every must be an integer >= 1, got {save_every!r}")
+    return int(save_every)
+
+
 def rigid_body(inertia: Any) -> tuple[RigidBody, bool]:
     """``(RigidBody.from_inertia(inertia), body.is_principal)``, cached per inertia value (arrays read-only)."""
     try:
@@ -241,7 +412,7 @@ def _cached_body(shape: tuple[int, ...], data: bytes) -> tuple[RigidBody, bool]:
 _IDENTITY_ATTITUDE = (0.0, 0.0, 0.0, 1.0)
 
 
-def _attitude(q0: Any) -> np.ndarray:
+def attitude(q0: Any) -> np.ndarray:
     """``validation.quaternion("q0", q0)``, with the identity (the default) looked up."""
     if type(q0) is tuple and q0 == _IDENTITY_ATTITUDE:
         return np.array(_IDENTITY_ATTITUDE)

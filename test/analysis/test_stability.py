@@ -1,5 +1,6 @@
 """The stability suite: its quick mode end to end, and its findings against theory."""
 
+import dataclasses
 import json
 import math
 
@@ -7,7 +8,7 @@ import numpy as np
 import pytest
 
 from rigid_rot_sim.analysis import stability as S
-from rigid_rot_sim.analysis.stability_cases import catalogue
+from rigid_rot_sim.analysis.stability_cases import catalogue, nutation_rate
 from rigid_rot_sim.analysis.stability_report import run_suite
 from rigid_rot_sim.cli import main
 from rigid_rot_sim.run import advice
@@ -32,14 +33,14 @@ def test_outputs_exist(suite):
     assert (out / "stability.png").read_bytes()[:4] == b"\x89PNG"
     text = (out / "stability.md").read_text()
     assert "## Pass / fail overview" in text and "## Largest stable step" in text and "## Long horizon" in text
-    assert data["methods"] == list(METHODS)
+    assert data["methods"] == S.method_labels() == list(METHODS) + ["dopri5"]
 
 
 def test_every_run_is_classified_and_never_nan_silently(suite):
     _, data, _ = suite
     assert len(data["cases"]) == len(catalogue(quick=True))
     for case in data["cases"]:
-        assert set(case["runs"]) == set(METHODS)
+        assert set(case["runs"]) == set(S.method_labels())
         for method, run in case["runs"].items():
             assert run["status"] in ("stable", "unstable", "refused"), (case["name"], method)
             if run["status"] == "stable":
@@ -92,6 +93,39 @@ def test_bisected_rk4_step_matches_linear_theory(suite):
     for row in rows:
         # the theory bound is for the worst axis at |omega0|: never optimistic, and close
         assert 0.9 <= row["ratio"] <= 1.5, row
+
+
+def test_fast_wheel_case_is_run_by_the_gyrostat_methods_within_rk4_theory(suite):
+    """Stable and passing for rk4 and dopri5, refused by the others; rk4's omega error is the nutation phase
+    error its linear theory predicts (the limit), not far below it: the limit is not slack."""
+    _, _, cases = suite
+    case = cases["fast wheel, slow body"]
+    limit = next(c for c in catalogue(quick=True) if c.name == "fast wheel, slow body").criterion.omega_error
+    for method, run in case["runs"].items():
+        if method in ("rk4", "dopri5"):
+            assert run["status"] == "stable" and run["passed"], (method, run)
+            assert run["energy_drift"] < 1e-8 and run["momentum_drift"] < 1e-8
+        else:
+            assert run["status"] == "refused" and "valid methods: dopri5, rk4" in run["message"], method
+    assert 0.5 * limit < case["runs"]["rk4"]["omega_error"] <= limit
+    assert case["runs"]["dopri5"]["omega_error"] < 1e-4 * limit  # order 5 at rtol 1e-10
+    for name, other in cases.items():
+        if name != "fast wheel, slow body":
+            assert other["runs"]["dopri5"]["status"] == "refused" and "gyrostats only" in other["runs"]["dopri5"]["message"]
+
+
+def test_fast_wheel_case_is_stiff_rk4_stability_is_set_by_the_nutation():
+    """RK4 is stable on the imaginary axis up to |lambda dt| = 2 sqrt(2): on this case the largest stable step is
+    2 sqrt(2) / lambda with lambda the wheel's nutation rate, not anything the slow body's rate (0.02 rad/s) sets;
+    past it the run blows up and the suite says so."""
+    case = next(c for c in catalogue(quick=True) if c.name == "fast wheel, slow body")
+    rate = nutation_rate(case.problem.moments, case.problem.wheels, case.problem.wheel_speeds0)
+    assert rate == pytest.approx(24.85, rel=1e-3)
+    theory = 2 * math.sqrt(2) / rate
+    assert S.largest_stable_step(case, "rk4", steps=200) == pytest.approx(theory, rel=0.02)
+    unstable = dataclasses.replace(case, dt=1.1 * theory)
+    run = S.run_case(unstable, "rk4")
+    assert run.status == "unstable" and not run.passed
 
 
 def test_bisection_agrees_with_advice_warning_threshold():
