@@ -119,7 +119,7 @@ def _draw(rng: np.random.Generator, dispersion: Dispersion) -> np.ndarray:
     if dispersion.distribution == "uniform":
         return rng.uniform(-1.0, 1.0, 3) * size
     z = rng.standard_normal(3)
-    while np.any(np.abs(z) > NORMAL_CUT_SIGMAS):
+    while (np.abs(z) > NORMAL_CUT_SIGMAS).any():
         bad = np.abs(z) > NORMAL_CUT_SIGMAS
         z[bad] = rng.standard_normal(int(bad.sum()))
     return z * size
@@ -133,21 +133,24 @@ def sample_inputs(spec: SweepSpec, sample: int) -> dict[str, np.ndarray]:
     body), ``torque_scale`` (relative, per body axis), ``noise`` ((intervals, 3) N*m, body).
     """
     d = spec.dispersions
-    rngs = {
-        name: np.random.Generator(np.random.PCG64(np.random.SeedSequence(spec.seed, spawn_key=(sample, k))))
-        for k, name in enumerate(_STREAMS)
-    }
+
+    def rng(name: str) -> np.random.Generator:
+        # a stream's generator is built only when its dispersion is on (building one costs
+        # more than a short run's physics); each stream's draws are its own either way
+        key = (sample, _STREAMS.index(name))
+        return np.random.Generator(np.random.PCG64(np.random.SeedSequence(spec.seed, spawn_key=key)))
+
     zero = np.zeros(3)
     out = {
-        "moments": _draw(rngs["principal_moments"], d.principal_moments) if d.principal_moments else zero,
-        "misalignment": _draw(rngs["axis_misalignment"], d.axis_misalignment) if d.axis_misalignment else zero,
-        "omega": _draw(rngs["initial_omega"], d.initial_omega) if d.initial_omega else zero,
-        "attitude": _draw(rngs["initial_attitude"], d.initial_attitude) if d.initial_attitude else zero,
-        "torque_scale": _draw(rngs["torque_scale"], d.torque_scale) if d.torque_scale else zero,
+        "moments": _draw(rng("principal_moments"), d.principal_moments) if d.principal_moments else zero,
+        "misalignment": _draw(rng("axis_misalignment"), d.axis_misalignment) if d.axis_misalignment else zero,
+        "omega": _draw(rng("initial_omega"), d.initial_omega) if d.initial_omega else zero,
+        "attitude": _draw(rng("initial_attitude"), d.initial_attitude) if d.initial_attitude else zero,
+        "torque_scale": _draw(rng("torque_scale"), d.torque_scale) if d.torque_scale else zero,
     }
     if d.torque_noise_sigma is not None:
         intervals = math.ceil(spec.duration / d.torque_noise_interval)
-        out["noise"] = rngs["torque_noise"].standard_normal((intervals, 3)) * np.asarray(d.torque_noise_sigma)
+        out["noise"] = rng("torque_noise").standard_normal((intervals, 3)) * np.asarray(d.torque_noise_sigma)
     else:
         out["noise"] = np.zeros((0, 3))
     return out
@@ -366,18 +369,20 @@ def _simulate(spec: SweepSpec, bodies: _Bodies, method: str, dt: float) -> _Outc
         step = last if partial else dt
         if not alive.any():
             break
-        q_body = _rows(quat.multiply, q[alive], principal_from_body[alive]) if world_frame else None
-        torque_body = _body_torque(spec, _subset(bodies, alive), a, dt, q_body)
-        impulse[alive] += np.linalg.norm(torque_body, axis=1) * step * (b - a)
-        torque_p = _rows(quat.rotate, principal_from_body[alive], torque_body)
+        everyone = len(errors) == 0  # no body has failed yet: no subsets to copy
+        live = slice(None) if everyone else alive
+        q_body = _rows(quat.multiply, q[live], principal_from_body[live]) if world_frame else None
+        torque_body = _body_torque(spec, bodies if everyone else _subset(bodies, alive), a, dt, q_body)
+        impulse[live] += np.linalg.norm(torque_body, axis=1) * step * (b - a)
+        torque_p = _rows(quat.rotate, principal_from_body[live], torque_body)
         # the first call normalises q as an integrator's set_state does; later ones continue from it
         q_new, omega_new, failed = _advance_isolated(
-            method, moments[alive], q[alive], omega[alive], step, b - a, torque_p, normalize_q=a == 0
+            method, moments[live], q[live], omega[live], step, b - a, torque_p, normalize_q=a == 0
         )
         index = np.flatnonzero(alive)
         for i, message in failed.items():
             errors[int(index[i])] = f"{message} (segment from t = {t_a:.9g} s, dt = {step:.9g} s)"
-        q[alive], omega[alive] = q_new, omega_new
+        q[live], omega[live] = q_new, omega_new
         for i in failed:
             alive[index[i]] = False
         if b in checkpoint_set or partial:
@@ -477,20 +482,15 @@ def run_chunk(spec: SweepSpec, chunk: Chunk, nominal: _Outcome | None = None) ->
     omega_error = np.linalg.norm(outcome.omega_body - nominal.omega_body[0], axis=1)
     torque_free = _torque_free(spec)
     tolerance = spec.energy_tolerance
-    verdict, error = [], []
-    for i in range(n):
-        message = outcome.errors.get(i)
-        if message is not None:
-            verdict.append("unstable")
-        elif torque_free and max(outcome.energy_drift[i], outcome.momentum_drift[i]) > tolerance:
-            verdict.append("drifting")
-        elif not torque_free and outcome.max_omega[i] > outcome.omega_bound[i] * (1.0 + tolerance):
-            verdict.append("drifting")
-        else:
-            verdict.append("stable")
-        if message is None and nominal.errors:
-            message = f"nominal run failed: {nominal.errors[0]}"
-        error.append(message)
+    if torque_free:
+        drifting = np.maximum(outcome.energy_drift, outcome.momentum_drift) > tolerance
+    else:
+        drifting = outcome.max_omega > outcome.omega_bound * (1.0 + tolerance)
+    verdicts = np.where(drifting, "drifting", "stable").astype(object)
+    error: list[str | None] = [f"nominal run failed: {nominal.errors[0]}" if nominal.errors else None] * n
+    for i, message in outcome.errors.items():
+        verdicts[i], error[i] = "unstable", message
+    verdict = verdicts.tolist()
     nan = np.full(n, np.nan)
     grid_point = chunk.grid_point
     return {
