@@ -36,6 +36,7 @@ from typing import Any
 import numpy as np
 from scipy.spatial.transform import Rotation
 
+from rigid_rot_sim.analysis.streams import StreamDraws
 from rigid_rot_sim.analysis.sweep_spec import NORMAL_CUT_SIGMAS, Dispersion, SweepSpec
 from rigid_rot_sim.core import quaternion as quat
 from rigid_rot_sim.core.batch import advance_batch
@@ -132,27 +133,40 @@ def sample_inputs(spec: SweepSpec, sample: int) -> dict[str, np.ndarray]:
     rad, principal frame), ``omega`` (rad/s, body), ``attitude`` (rotation vector, rad,
     body), ``torque_scale`` (relative, per body axis), ``noise`` ((intervals, 3) N*m, body).
     """
+    return {key: value[0] for key, value in _sample_draws(spec, np.array([sample])).items()}
+
+
+def _sample_draws(spec: SweepSpec, samples: np.ndarray) -> dict[str, np.ndarray]:
+    """:func:`sample_inputs` of many samples, stacked: (N, 3) per key, noise (N, intervals, 3).
+
+    Stream ``k`` of sample ``s`` is ``PCG64(SeedSequence(seed, spawn_key=(s, k)))``, built for
+    all the samples at once (:mod:`~rigid_rot_sim.analysis.streams`); only the dispersed
+    streams are built, and each one's draws are its own either way.
+    """
     d = spec.dispersions
+    n = len(samples)
+    draws = StreamDraws()
 
-    def rng(name: str) -> np.random.Generator:
-        # a stream's generator is built only when its dispersion is on (building one costs
-        # more than a short run's physics); each stream's draws are its own either way
-        key = (sample, _STREAMS.index(name))
-        return np.random.Generator(np.random.PCG64(np.random.SeedSequence(spec.seed, spawn_key=key)))
+    def stream(name: str, dispersion: Dispersion | None) -> np.ndarray:
+        if not dispersion:
+            return np.zeros((n, 3))
+        generators = draws.each(spec.seed, samples, _STREAMS.index(name))
+        return np.array([_draw(rng, dispersion) for rng in generators]).reshape(n, 3)
 
-    zero = np.zeros(3)
     out = {
-        "moments": _draw(rng("principal_moments"), d.principal_moments) if d.principal_moments else zero,
-        "misalignment": _draw(rng("axis_misalignment"), d.axis_misalignment) if d.axis_misalignment else zero,
-        "omega": _draw(rng("initial_omega"), d.initial_omega) if d.initial_omega else zero,
-        "attitude": _draw(rng("initial_attitude"), d.initial_attitude) if d.initial_attitude else zero,
-        "torque_scale": _draw(rng("torque_scale"), d.torque_scale) if d.torque_scale else zero,
+        "moments": stream("principal_moments", d.principal_moments),
+        "misalignment": stream("axis_misalignment", d.axis_misalignment),
+        "omega": stream("initial_omega", d.initial_omega),
+        "attitude": stream("initial_attitude", d.initial_attitude),
+        "torque_scale": stream("torque_scale", d.torque_scale),
     }
     if d.torque_noise_sigma is not None:
         intervals = math.ceil(spec.duration / d.torque_noise_interval)
-        out["noise"] = rng("torque_noise").standard_normal((intervals, 3)) * np.asarray(d.torque_noise_sigma)
+        sigma = np.asarray(d.torque_noise_sigma)
+        generators = draws.each(spec.seed, samples, _STREAMS.index("torque_noise"))
+        out["noise"] = np.array([rng.standard_normal((intervals, 3)) * sigma for rng in generators]).reshape(n, intervals, 3)
     else:
-        out["noise"] = np.zeros((0, 3))
+        out["noise"] = np.zeros((n, 0, 3))
     return out
 
 
@@ -180,12 +194,12 @@ def _nominal_omega0(spec: SweepSpec, spin_rate: float | None) -> np.ndarray:
 def _bodies(spec: SweepSpec, spin_rate: float | None, samples: range | None) -> _Bodies:
     """The dispersed bodies of ``samples``, or the nominal body (``samples`` None)."""
     body = RigidBody.from_inertia(spec.scene.body.inertia_array, "body.inertia")
-    draws = [sample_inputs(spec, s) for s in samples] if samples is not None else [None]
-    n = len(draws)
+    draws = _sample_draws(spec, np.arange(samples.start, samples.stop)) if samples is not None else None
+    n = len(samples) if samples is not None else 1
     zeros = np.zeros((n, 3))
 
     def stack(key: str) -> np.ndarray:
-        return np.array([d[key] for d in draws]) if samples is not None else zeros
+        return draws[key] if draws is not None else zeros
 
     misalignment = stack("misalignment")
     attitude = stack("attitude")
@@ -194,7 +208,7 @@ def _bodies(spec: SweepSpec, spin_rate: float | None, samples: range | None) -> 
     q0 = (Rotation.from_quat(np.broadcast_to(spec.scene.initial.orientation, (n, 4))) * Rotation.from_rotvec(attitude)).as_quat()
     d = spec.dispersions
     intervals = math.ceil(spec.duration / d.torque_noise_interval) if d.torque_noise_sigma is not None else 0
-    noise = np.array([d["noise"] for d in draws]) if samples is not None else np.zeros((1, intervals, 3))
+    noise = draws["noise"] if draws is not None else np.zeros((1, intervals, 3))
     return _Bodies(
         moments=moments,
         body_from_principal=body_from_principal,

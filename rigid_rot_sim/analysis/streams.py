@@ -1,0 +1,126 @@
+"""numpy's per-sample random streams, ``PCG64(SeedSequence(seed, spawn_key=(sample, stream)))``, for many samples at once.
+
+Building one such generator costs numpy 10-30 µs (a SeedSequence, then a PCG64 seeded from
+it), more than a short run's physics in the batch core. The same generator states are
+computed here for a whole chunk of samples: numpy's SeedSequence hash (its ``mix_entropy``
+and ``generate_state``, 32-bit words) vectorised over the samples, then PCG64's seeding
+(``pcg_setseq_128_srandom_r``) in Python integers. :class:`StreamDraws` loads each state into
+one generator in turn, so every draw is numpy's own, bit for bit
+(``test/analysis/test_streams.py`` compares the states and draws with numpy's).
+"""
+
+from __future__ import annotations
+
+from typing import Iterator
+
+import numpy as np
+
+__all__ = ["pcg64_states", "StreamDraws"]
+
+_M32 = 0xFFFF_FFFF
+_M128 = (1 << 128) - 1
+# numpy/random/bit_generator.pyx
+_POOL_SIZE = 4
+_INIT_A, _MULT_A = 0x43B0D7E5, 0x931E8875
+_INIT_B, _MULT_B = 0x8B51F9DD, 0x58F38DED
+_MIX_MULT_L, _MIX_MULT_R = 0xCA01F9DD, 0x4973F715
+_XSHIFT = 16
+# numpy/random/src/pcg64/pcg64.h: PCG_DEFAULT_MULTIPLIER_128
+_PCG_MULT = (2549297995355413924 << 64) + 4865540595714422341
+
+
+def _words(value: int) -> list[int]:
+    """A non-negative int as little-endian 32-bit words (0 is one word), as SeedSequence coerces it."""
+    if value < 0:
+        raise ValueError(f"seeds and spawn keys must be >= 0, got {value}")
+    words = [value & _M32]
+    value >>= 32
+    while value:
+        words.append(value & _M32)
+        value >>= 32
+    return words
+
+
+def _pool(entropy: list[np.ndarray]) -> list[np.ndarray]:
+    """SeedSequence.mix_entropy on columns of 32-bit words (uint64 arrays, values < 2**32).
+
+    Array arithmetic wraps modulo 2**64 without warnings; masking keeps the low 32 bits,
+    which is numpy's uint32 arithmetic.
+    """
+    hash_const = _INIT_A
+    zero = np.zeros_like(entropy[0])
+
+    def hashmix(value: np.ndarray) -> np.ndarray:
+        nonlocal hash_const
+        value = value ^ np.uint64(hash_const)
+        hash_const = (hash_const * _MULT_A) & _M32
+        value = (value * np.uint64(hash_const)) & np.uint64(_M32)
+        return value ^ (value >> np.uint64(_XSHIFT))
+
+    def mix(x: np.ndarray, y: np.ndarray) -> np.ndarray:
+        result = (np.uint64(_MIX_MULT_L) * x - np.uint64(_MIX_MULT_R) * y) & np.uint64(_M32)
+        return result ^ (result >> np.uint64(_XSHIFT))
+
+    pool = [hashmix(entropy[i] if i < len(entropy) else zero) for i in range(_POOL_SIZE)]
+    for src in range(_POOL_SIZE):
+        for dst in range(_POOL_SIZE):
+            if src != dst:
+                pool[dst] = mix(pool[dst], hashmix(pool[src]))
+    for src in range(_POOL_SIZE, len(entropy)):
+        for dst in range(_POOL_SIZE):
+            pool[dst] = mix(pool[dst], hashmix(entropy[src]))
+    return pool
+
+
+def _seed_words(pool: list[np.ndarray]) -> list[np.ndarray]:
+    """SeedSequence.generate_state(4, np.uint64) from the pools: four uint64 columns."""
+    hash_const = _INIT_B
+    state = []
+    for i in range(8):
+        value = pool[i % _POOL_SIZE] ^ np.uint64(hash_const)
+        hash_const = (hash_const * _MULT_B) & _M32
+        value = (value * np.uint64(hash_const)) & np.uint64(_M32)
+        state.append(value ^ (value >> np.uint64(_XSHIFT)))
+    return [state[2 * i] | (state[2 * i + 1] << np.uint64(32)) for i in range(4)]
+
+
+def pcg64_states(seed: int, samples: np.ndarray, stream: int) -> list[tuple[int, int]]:
+    """``(state, inc)`` of ``PCG64(SeedSequence(seed, spawn_key=(s, stream)))`` for each s of ``samples``."""
+    samples = np.asarray(samples, dtype=np.int64)
+    if samples.size and samples.min() < 0:
+        raise ValueError("sample indices must be >= 0")
+    run = _words(int(seed))
+    run += [0] * (_POOL_SIZE - len(run))  # SeedSequence pads the run entropy when there is a spawn key
+    key = _words(int(stream))
+    out: list[tuple[int, int]] = [(0, 0)] * samples.size
+    # SeedSequence coerces each sample index to as many words as it needs: group by that count
+    n_words = np.where(samples >> 32 == 0, 1, 2)
+    for count in np.unique(n_words):
+        where = np.flatnonzero(n_words == count)
+        s = samples[where].astype(np.uint64)
+        columns = [(s >> np.uint64(32 * j)) & np.uint64(_M32) for j in range(int(count))]
+        entropy = [np.full(s.size, word, dtype=np.uint64) for word in run] + columns
+        entropy += [np.full(s.size, word, dtype=np.uint64) for word in key]
+        w0, w1, w2, w3 = (w.tolist() for w in _seed_words(_pool(entropy)))
+        for i, a, b, c, d in zip(where.tolist(), w0, w1, w2, w3):
+            init_state, init_seq = (a << 64) | b, (c << 64) | d
+            inc = ((init_seq << 1) | 1) & _M128
+            state = ((inc + init_state) * _PCG_MULT + inc) & _M128  # srandom_r: step from 0, add, step
+            out[i] = (state, inc)
+    return out
+
+
+class StreamDraws:
+    """One numpy Generator that takes on, in turn, the stream ``(sample, stream)`` of each sample."""
+
+    def __init__(self) -> None:
+        self._bits = np.random.PCG64()
+        self.generator = np.random.Generator(self._bits)
+
+    def each(self, seed: int, samples: np.ndarray, stream: int) -> Iterator[np.random.Generator]:
+        """The generator, set to each sample's fresh stream in order of ``samples``."""
+        for state, inc in pcg64_states(seed, samples, stream):
+            self._bits.state = {
+                "bit_generator": "PCG64", "state": {"state": state, "inc": inc}, "has_uint32": 0, "uinteger": 0,
+            }
+            yield self.generator
