@@ -4,16 +4,17 @@ For each problem of :mod:`rigid_rot_sim.analysis.problems`, every integrator in
 :data:`rigid_rot_sim.core.integrators.METHODS` (the splittings once per order) and
 scipy's ``solve_ivp`` (RK45, DOP853, Radau, LSODA) run over a sweep:
 
-* fixed-step methods: the step count from a first step of about 0.5 rad of rotation,
-  then twice (four times in quick mode) that;
+* fixed-step methods: step counts from a first step of about 0.5 rad of rotation, by
+  factors of 2 (4 in quick mode), ``max_step_points`` of them at most (the step range);
 * adaptive methods (ours and scipy's): the tolerance from 1e-3, falling by 10x
   (by 1000x in quick mode), with ``rtol = atol``;
 * ``exact``: one step of length t_end (torque-free problems only).
 
 Points are chosen by error target, not swept to a time budget: once two stable points
 show the observed order p (omega error ~ value**p), the next point is the one predicted
-to reach half the largest target of TARGETS not met yet (for a tolerance sweep, the
-coarsest tolerance of the list predicted to). A line stops once a point meets
+to reach half the largest target of TARGETS not met yet, within the step range above
+(tolerance sweeps walk their list: scipy's error does not follow a power of the tolerance
+closely enough to skip decades fairly). A line stops once a point meets
 min(TARGETS) (or the reference's own certified error, if larger), when a point takes
 longer than the per-point time budget or the next one is predicted to take twice that,
 or after two refusals.
@@ -248,10 +249,10 @@ def measure_point(problem: Problem, line: DiagramLine, value: float, repeats: in
 
 
 def sweep_values(problem: Problem, line: DiagramLine, settings: Settings) -> list[float]:
-    """The first sweep parameter values of a line, coarse to fine (an upper bound on its points).
+    """A line's sweep values, coarse to fine: its range, and an upper bound on its points.
 
-    :func:`run_line` starts here and, once two stable points show how the error falls,
-    jumps to the values :func:`next_value` predicts for the targets.
+    :func:`run_line` starts with the first and, once two stable points show how the error
+    falls, jumps between them to the values :func:`next_value` predicts for the targets.
     """
     if line.sweep == "single":
         return [problem.t_end]
@@ -274,25 +275,24 @@ def next_value(
 ) -> float | None:
     """The next sweep value of a line after ``points`` (coarse to fine), or None to stop.
 
-    Until two stable points give an :func:`observed_order`, the next of ``values`` (a finer
-    step or tolerance). Then the value predicted to bring the omega error to TARGET_MARGIN
-    times the largest target it has not met yet (``goal``: the last one): for a step sweep
-    the step count ``n * (error / aim)**(1/p)`` (at least ``values``' ratio of 2 finer),
-    for a tolerance sweep the coarsest of ``values`` predicted to meet it.
+    A tolerance sweep, and a step sweep until two stable points give an
+    :func:`observed_order`, takes the next of ``values``. Then a step sweep jumps to the step
+    count predicted to bring the omega error to TARGET_MARGIN times the largest target it has
+    not met yet (``goal``: the last one), ``n * (error / aim)**(1/p)``: at least twice the
+    last count, and no finer than the finest of ``values`` (the sweep's range).
     """
     last = points[-1]
     finer = [v for v in values if v < last.value * (1.0 - 1e-9)]
+    if not finer:
+        return None
     ok = [p for p in points if p.status == "ok"]
-    order = observed_order(ok[-2], ok[-1]) if len(ok) >= 2 and ok[-1] is last else None
+    order = observed_order(ok[-2], ok[-1]) if line.sweep == "step" and len(ok) >= 2 and ok[-1] is last else None
     if order is None:
-        return finer[0] if finer else None
-    aim = TARGET_MARGIN * max([t for t in TARGETS if t < last.omega_error and t >= goal] or [goal])
+        return finer[0]
+    aim = TARGET_MARGIN * max([t for t in TARGETS if goal <= t < last.omega_error] or [goal])
     shrink = (last.omega_error / aim) ** (1.0 / max(order, MIN_ORDER))
-    if line.sweep == "tol":
-        meeting = [v for v in finer if v <= last.value / shrink]
-        return meeting[0] if meeting else (finer[-1] if finer else None)
     n_steps = max(1, round(t_end / last.value))
-    return t_end / max(2 * n_steps, math.ceil(n_steps * shrink))
+    return max(t_end / max(2 * n_steps, math.ceil(n_steps * shrink)), finer[-1])
 
 
 def run_problem(problem: Problem, settings: Settings, progress: Any = None) -> ProblemResult:
@@ -316,7 +316,7 @@ def run_line(problem: Problem, line: DiagramLine, settings: Settings, progress: 
     A line stops once a point meets min(TARGETS) (or the error floor, when the reference
     is less accurate), when a point takes longer than the time budget or the next one is
     predicted to take twice as long (fixed-step runs cost in proportion to their steps), after two refusals,
-    or after ``max_step_points`` points (the tolerance list, for tolerance sweeps).
+    or at the end of its range (:func:`sweep_values`).
 
     ``baseline``: time every point together with the scipy baseline (see measure_point).
     """
@@ -325,7 +325,7 @@ def run_line(problem: Problem, line: DiagramLine, settings: Settings, progress: 
     points: list[SweepPoint] = []
     refusals = 0
     value: float | None = values[0]
-    while value is not None and len(points) < len(values):
+    while value is not None:
         if progress is not None:
             progress.set_postfix_str(f"{problem.key} {line.label}", refresh=False)
         point = measure_point(problem, line, value, settings.repeats, baseline)
@@ -341,7 +341,7 @@ def run_line(problem: Problem, line: DiagramLine, settings: Settings, progress: 
             if predicted > 2.0 * settings.budget_seconds:
                 break
     if progress is not None:
-        progress.update(len(values) - len(points))
+        progress.update(max(0, len(values) - len(points)))
     return points
 
 
