@@ -11,6 +11,7 @@ one generator in turn, so every draw is numpy's own, bit for bit
 
 from __future__ import annotations
 
+import ctypes
 from typing import Iterator
 
 import numpy as np
@@ -111,16 +112,52 @@ def pcg64_states(seed: int, samples: np.ndarray, stream: int) -> list[tuple[int,
 
 
 class StreamDraws:
-    """One numpy Generator that takes on, in turn, the stream ``(sample, stream)`` of each sample."""
+    """One numpy Generator that takes on, in turn, the stream ``(sample, stream)`` of each sample.
+
+    A state is loaded by writing the PCG64 state words in place (through the bit generator's
+    documented ``ctypes`` interface: ~0.3 µs, where the ``state`` property takes ~3 µs) when
+    a check at construction shows that this numpy lays them out as expected (128-bit state
+    and increment, low word first, then ``has_uint32`` and ``uinteger``); else through the
+    ``state`` property.
+    """
 
     def __init__(self) -> None:
         self._bits = np.random.PCG64()
         self.generator = np.random.Generator(self._bits)
+        self._words: np.ndarray | None = None
+        self._flags: np.ndarray | None = None
+        try:
+            address = self._bits.ctypes.state_address  # struct {pcg64_random_t *; int has_uint32; uint32 uinteger}
+            flags = np.ctypeslib.as_array(ctypes.cast(address, ctypes.POINTER(ctypes.c_uint32)), shape=(4,))
+            inner = ctypes.cast(address, ctypes.POINTER(ctypes.c_void_p))[0]
+            words = np.ctypeslib.as_array(ctypes.cast(inner, ctypes.POINTER(ctypes.c_uint64)), shape=(4,))
+        except (AttributeError, TypeError, ValueError):
+            return
+        state, inc = (0x0123456789ABCDEF << 64) | 0xFEDCBA9876543210, (0x1111222233334444 << 64) | 0x5555666677778889
+        words[:] = _split_words([(state, inc)])[0]
+        flags[2:] = 1, 7
+        if self._bits.state == {
+            "bit_generator": "PCG64", "state": {"state": state, "inc": inc}, "has_uint32": 1, "uinteger": 7,
+        }:
+            self._words, self._flags = words, flags
 
     def each(self, seed: int, samples: np.ndarray, stream: int) -> Iterator[np.random.Generator]:
         """The generator, set to each sample's fresh stream in order of ``samples``."""
-        for state, inc in pcg64_states(seed, samples, stream):
+        states = pcg64_states(seed, samples, stream)
+        if self._words is not None and self._flags is not None:
+            for row in _split_words(states):
+                self._words[:] = row
+                self._flags[2:] = 0
+                yield self.generator
+            return
+        for state, inc in states:
             self._bits.state = {
                 "bit_generator": "PCG64", "state": {"state": state, "inc": inc}, "has_uint32": 0, "uinteger": 0,
             }
             yield self.generator
+
+
+def _split_words(states: list[tuple[int, int]]) -> np.ndarray:
+    """(n, 4) uint64: each state's and increment's low and high 64-bit words."""
+    m64 = (1 << 64) - 1
+    return np.array([(s & m64, s >> 64, i & m64, i >> 64) for s, i in states], dtype=np.uint64).reshape(-1, 4)
