@@ -3,8 +3,8 @@
 Building one such generator costs numpy 10-30 µs (a SeedSequence, then a PCG64 seeded from
 it), more than a short run's physics in the batch core. The same generator states are
 computed here for a whole chunk of samples: numpy's SeedSequence hash (its ``mix_entropy``
-and ``generate_state``, 32-bit words) vectorised over the samples, then PCG64's seeding
-(``pcg_setseq_128_srandom_r``) in Python integers. :class:`StreamDraws` loads each state into
+and ``generate_state``, 32-bit words) and PCG64's seeding (``pcg_setseq_128_srandom_r``,
+128-bit arithmetic on 32-bit limbs), vectorised over the samples. :class:`StreamDraws` loads each state into
 one generator in turn, so every draw is numpy's own, bit for bit
 (``test/analysis/test_streams.py`` compares the states and draws with numpy's).
 """
@@ -16,10 +16,10 @@ from typing import Iterator
 
 import numpy as np
 
-__all__ = ["pcg64_states", "StreamDraws"]
+__all__ = ["pcg64_state_words", "pcg64_states", "StreamDraws"]
 
 _M32 = 0xFFFF_FFFF
-_M128 = (1 << 128) - 1
+_M64 = (1 << 64) - 1
 # numpy/random/bit_generator.pyx
 _POOL_SIZE = 4
 _INIT_A, _MULT_A = 0x43B0D7E5, 0x931E8875
@@ -85,15 +85,52 @@ def _seed_words(pool: list[np.ndarray]) -> list[np.ndarray]:
     return [state[2 * i] | (state[2 * i + 1] << np.uint64(32)) for i in range(4)]
 
 
-def pcg64_states(seed: int, samples: np.ndarray, stream: int) -> list[tuple[int, int]]:
-    """``(state, inc)`` of ``PCG64(SeedSequence(seed, spawn_key=(s, stream)))`` for each s of ``samples``."""
+def _limbs(high: np.ndarray, low: np.ndarray) -> list[np.ndarray]:
+    """A 128-bit number from its two 64-bit words, as four 32-bit limbs (uint64 arrays), low first."""
+    m32 = np.uint64(_M32)
+    return [low & m32, low >> np.uint64(32), high & m32, high >> np.uint64(32)]
+
+
+def _normalised(limbs: list[np.ndarray]) -> list[np.ndarray]:
+    """Carry each limb's excess over 32 bits into the next (mod 2**128)."""
+    out = []
+    carry = np.uint64(0)
+    for limb in limbs:
+        total = limb + carry
+        out.append(total & np.uint64(_M32))
+        carry = total >> np.uint64(32)
+    return out
+
+
+def _add(a: list[np.ndarray], b: list[np.ndarray]) -> list[np.ndarray]:
+    return _normalised([x + y for x, y in zip(a, b)])
+
+
+def _times_multiplier(a: list[np.ndarray]) -> list[np.ndarray]:
+    """``a * PCG_DEFAULT_MULTIPLIER_128 mod 2**128`` on limbs: partial products split into 32-bit halves."""
+    m = [(_PCG_MULT >> (32 * j)) & _M32 for j in range(4)]
+    acc = [np.zeros_like(a[0]) for _ in range(4)]
+    for i in range(4):
+        for j in range(4 - i):
+            product = a[i] * np.uint64(m[j])  # < 2**64
+            acc[i + j] += product & np.uint64(_M32)
+            if i + j + 1 < 4:
+                acc[i + j + 1] += product >> np.uint64(32)
+    return _normalised(acc)
+
+
+def pcg64_state_words(seed: int, samples: np.ndarray, stream: int) -> np.ndarray:
+    """The states of ``PCG64(SeedSequence(seed, spawn_key=(s, stream)))`` for each s of ``samples``.
+
+    (N, 4) uint64: the 128-bit state's low and high words, then the increment's.
+    """
     samples = np.asarray(samples, dtype=np.int64)
     if samples.size and samples.min() < 0:
         raise ValueError("sample indices must be >= 0")
     run = _words(int(seed))
     run += [0] * (_POOL_SIZE - len(run))  # SeedSequence pads the run entropy when there is a spawn key
     key = _words(int(stream))
-    out: list[tuple[int, int]] = [(0, 0)] * samples.size
+    out = np.zeros((samples.size, 4), dtype=np.uint64)
     # SeedSequence coerces each sample index to as many words as it needs: group by that count
     n_words = np.where(samples >> 32 == 0, 1, 2)
     for count in np.unique(n_words):
@@ -102,13 +139,21 @@ def pcg64_states(seed: int, samples: np.ndarray, stream: int) -> list[tuple[int,
         columns = [(s >> np.uint64(32 * j)) & np.uint64(_M32) for j in range(int(count))]
         entropy = [np.full(s.size, word, dtype=np.uint64) for word in run] + columns
         entropy += [np.full(s.size, word, dtype=np.uint64) for word in key]
-        w0, w1, w2, w3 = (w.tolist() for w in _seed_words(_pool(entropy)))
-        for i, a, b, c, d in zip(where.tolist(), w0, w1, w2, w3):
-            init_state, init_seq = (a << 64) | b, (c << 64) | d
-            inc = ((init_seq << 1) | 1) & _M128
-            state = ((inc + init_state) * _PCG_MULT + inc) & _M128  # srandom_r: step from 0, add, step
-            out[i] = (state, inc)
+        w0, w1, w2, w3 = _seed_words(_pool(entropy))
+        # pcg64_set_seed: initstate = (w0, w1), initseq = (w2, w3) as (high, low) words;
+        # srandom_r: inc = initseq << 1 | 1; state = 0; step; state += initstate; step
+        init_state, init_seq = _limbs(w0, w1), _limbs(w2, w3)
+        inc = [(limb << np.uint64(1)) & np.uint64(_M32) for limb in init_seq]
+        inc = [inc[0] | np.uint64(1)] + [inc[k] | (init_seq[k - 1] >> np.uint64(31)) for k in range(1, 4)]
+        state = _add(_times_multiplier(_add(inc, init_state)), inc)
+        for column, limbs in ((0, state[:2]), (1, state[2:]), (2, inc[:2]), (3, inc[2:])):
+            out[where, column] = limbs[0] | (limbs[1] << np.uint64(32))
     return out
+
+
+def pcg64_states(seed: int, samples: np.ndarray, stream: int) -> list[tuple[int, int]]:
+    """``(state, inc)`` of ``PCG64(SeedSequence(seed, spawn_key=(s, stream)))`` for each s, as integers."""
+    return [(lo | hi << 64, ilo | ihi << 64) for lo, hi, ilo, ihi in pcg64_state_words(seed, samples, stream).tolist()]
 
 
 class StreamDraws:
@@ -134,7 +179,7 @@ class StreamDraws:
         except (AttributeError, TypeError, ValueError):
             return
         state, inc = (0x0123456789ABCDEF << 64) | 0xFEDCBA9876543210, (0x1111222233334444 << 64) | 0x5555666677778889
-        words[:] = _split_words([(state, inc)])[0]
+        words[:] = state & _M64, state >> 64, inc & _M64, inc >> 64
         flags[2:] = 1, 7
         if self._bits.state == {
             "bit_generator": "PCG64", "state": {"state": state, "inc": inc}, "has_uint32": 1, "uinteger": 7,
@@ -143,21 +188,14 @@ class StreamDraws:
 
     def each(self, seed: int, samples: np.ndarray, stream: int) -> Iterator[np.random.Generator]:
         """The generator, set to each sample's fresh stream in order of ``samples``."""
-        states = pcg64_states(seed, samples, stream)
         if self._words is not None and self._flags is not None:
-            for row in _split_words(states):
+            for row in pcg64_state_words(seed, samples, stream):
                 self._words[:] = row
                 self._flags[2:] = 0
                 yield self.generator
             return
-        for state, inc in states:
+        for state, inc in pcg64_states(seed, samples, stream):
             self._bits.state = {
                 "bit_generator": "PCG64", "state": {"state": state, "inc": inc}, "has_uint32": 0, "uinteger": 0,
             }
             yield self.generator
-
-
-def _split_words(states: list[tuple[int, int]]) -> np.ndarray:
-    """(n, 4) uint64: each state's and increment's low and high 64-bit words."""
-    m64 = (1 << 64) - 1
-    return np.array([(s & m64, s >> 64, i & m64, i >> 64) for s, i in states], dtype=np.uint64).reshape(-1, 4)

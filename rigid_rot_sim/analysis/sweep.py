@@ -151,11 +151,13 @@ def _sample_draws(spec: SweepSpec, samples: np.ndarray) -> dict[str, np.ndarray]
         if not dispersion:
             return np.zeros((n, 3))
         k = _STREAMS.index(name)
-        z = np.empty((n, 3))
         # _draw's first three numbers for every sample; the rare sample with one beyond the
         # cut runs _draw from its stream's start again (the same first draw, then redraws)
-        for row, rng in zip(z, draws.each(spec.seed, samples, k)):
-            row[:] = rng.uniform(-1.0, 1.0, 3) if dispersion.distribution == "uniform" else rng.standard_normal(3)
+        generators = draws.each(spec.seed, samples, k)
+        if dispersion.distribution == "uniform":
+            z = np.array([rng.uniform(-1.0, 1.0, 3) for rng in generators]).reshape(n, 3)
+        else:
+            z = np.array([rng.standard_normal(3) for rng in generators]).reshape(n, 3)
         beyond = np.flatnonzero(
             (np.abs(z) > NORMAL_CUT_SIGMAS).any(axis=1) if dispersion.distribution != "uniform" else np.zeros(n, bool)
         )
