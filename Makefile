@@ -41,8 +41,11 @@ PY_PINS := \
 SWEEP_PINS := dask==2026.8.0 distributed==2026.8.0 pyarrow==26.0.1
 # The viewer extra (pip install rigid_rot_sim[viewer]): Foxglove's SDK, a live WebSocket server without ROS.
 VIEWER_PINS := foxglove-sdk==0.30.3
-# websockets: the tests' Foxglove ws-protocol client.
-TEST_PINS := pytest==9.2.0 hypothesis==6.170.15 rosbags==0.11.9 websockets==15.0.1
+# websockets: the tests' Foxglove ws-protocol client. The gates' tools (test/test_lint.py, test/test_mypy.py;
+# configured in pyproject.toml): scipy-stubs 1.17.1.x are the stubs of scipy 1.17.1 and work with numpy 2.4
+# (they pull in optype and numpy-typing-compat).
+TEST_PINS := pytest==9.2.0 hypothesis==6.170.15 rosbags==0.11.9 websockets==15.0.1 \
+	ruff==0.17.6 mypy==2.4.1 types-PyYAML==6.0.12.20261113 scipy-stubs==1.17.1.5
 
 # The compiled kernels are built from these (rigid_rot_sim/core/jit.py keys their cache on them).
 CORE_SOURCES := $(shell find rigid_rot_sim/core -name '*.py' 2>/dev/null)
@@ -50,92 +53,11 @@ CORE_SOURCES := $(shell find rigid_rot_sim/core -name '*.py' 2>/dev/null)
 MSGS_SOURCES := $(wildcard rigid_rot_msgs/CMakeLists.txt rigid_rot_msgs/package.xml \
 	rigid_rot_msgs/msg/*.msg rigid_rot_msgs/srv/*.srv)
 
-# The ROS wheels were built in a manylinux image; their exported CMake targets name that
-# image's Python and numpy include directories. Point them at this interpreter's instead.
-# Idempotent: a second run finds nothing to rewrite.
-define FIX_CMAKE_INCLUDES
-import glob, re, sys, sysconfig
-import numpy
-py_inc = sysconfig.get_paths()["include"]
-np_inc = numpy.get_include()
-patterns = [
-    (re.compile(r"/opt/python/cp\d+-cp\d+/lib/python3\.\d+/site-packages/numpy/_core/include"), np_inc),
-    (re.compile(r"/opt/python/cp\d+-cp\d+/include/python3\.\d+"), py_inc),
-]
-changed = 0
-for path in glob.glob(sys.prefix + "/share/*/cmake/*.cmake"):
-    with open(path, encoding="utf-8") as f:
-        text = f.read()
-    new = text
-    for pattern, replacement in patterns:
-        new = pattern.sub(lambda m: replacement, new)
-    if new != text:
-        with open(path, "w", encoding="utf-8") as f:
-            f.write(new)
-        changed += 1
-print(f"setup: include paths fixed in {changed} CMake file(s) -> {py_inc}, {np_inc}")
-endef
-export FIX_CMAKE_INCLUDES
-
-# The venv as a ROS workspace. (1) The share directory and the ament index marker that
-# `colcon build` installs from setup.py's data_files (an editable pip install skips data_files):
-# relative symlinks to the checkout, so the share directory stays in step with the sources as
-# the editable install does (like `colcon build --symlink-install`), and the links move with
-# the checkout that holds .venv. (2) bin/activate exports AMENT_PREFIX_PATH and
-# CMAKE_PREFIX_PATH (the venv prepended), ROS_VERSION, ROS_PYTHON_VERSION and ROS_DISTRO, as
-# a sourced setup.bash does, and `deactivate` restores the previous values. Idempotent: the
-# block between the markers is replaced, never appended twice.
-define INSTALL_WORKSPACE
-import os, re, sys
-checkout, prefix = sys.argv[1], sys.prefix
-share = os.path.join(prefix, "share", "rigid_rot_sim")
-index = os.path.join(prefix, "share", "ament_index", "resource_index", "packages")
-def link(target, path):
-    os.makedirs(os.path.dirname(path), exist_ok=True)
-    relative = os.path.relpath(target, os.path.dirname(path))
-    if os.path.islink(path) and os.readlink(path) == relative:
-        return
-    if os.path.islink(path) or os.path.isfile(path):
-        os.remove(path)
-    elif os.path.isdir(path):
-        import shutil; shutil.rmtree(path)
-    os.symlink(relative, path)
-for name in ("package.xml", "config", "launch"):
-    link(os.path.join(checkout, name), os.path.join(share, name))
-link(os.path.join(checkout, "resource", "rigid_rot_sim"), os.path.join(index, "rigid_rot_sim"))
-variables = [("AMENT_PREFIX_PATH", "prepend"), ("CMAKE_PREFIX_PATH", "prepend"),
-             ("ROS_VERSION", "2"), ("ROS_PYTHON_VERSION", "3"), ("ROS_DISTRO", "jazzy")]
-begin, end = "# >>> rigid_rot_sim workspace (make setup) >>>", "# <<< rigid_rot_sim workspace <<<"
-restore = [f"    {begin}"]
-apply = [begin]
-for name, value in variables:
-    old = f"_RIGID_ROT_OLD_{name}"
-    restore += [f'    if [ -n "$${{{old}+x}}" ] ; then',
-                f'        if [ "$${old}" = "@unset@" ] ; then unset {name} ; else {name}="$${old}" ; export {name} ; fi',
-                f"        unset {old}", "    fi"]
-    apply.append(f'{old}="$${{{name}-@unset@}}"')
-    if value == "prepend":
-        apply += [f'case ":$${{{name}:-}}:" in',
-                  f'    *":$$VIRTUAL_ENV:"*) ;;',
-                  f'    *) {name}="$$VIRTUAL_ENV$${{{name}:+:$${name}}}" ; export {name} ;;',
-                  "esac"]
-    else:
-        apply.append(f"{name}={value} ; export {name}")
-restore.append(f"    {end}")
-apply.append(end)
-path = os.path.join(prefix, "bin", "activate")
-with open(path, encoding="utf-8") as f:
-    text = f.read()
-text = re.sub(r"\n[ \t]*" + re.escape(begin) + r".*?" + re.escape(end), "", text, flags=re.S)
-head = "deactivate () {\n"
-if head not in text:
-    sys.exit(f"setup: {path}: no 'deactivate () {{' to extend (not a venv activate script?)")
-text = text.replace(head, head + "\n".join(restore) + "\n", 1).rstrip("\n") + "\n\n" + "\n".join(apply) + "\n"
-with open(path, "w", encoding="utf-8") as f:
-    f.write(text)
-print(f"setup: {share} and the ament index entry link to {checkout}; {path} sets AMENT_PREFIX_PATH & co.")
-endef
-export INSTALL_WORKSPACE
+# The set-up helpers (tools/, linted and tested like the package): the ROS wheels' exported CMake
+# files name the include directories of the image that built them (fix_cmake_includes.py points them
+# at this interpreter's); the venv as a ROS workspace (install_workspace.py: share directory, ament
+# index entry, bin/activate). Both idempotent.
+TOOLS := $(CURDIR)/tools
 
 .PHONY: setup demo test clean check-tools FORCE
 
@@ -163,8 +85,8 @@ $(STAMPS)/pip: $(STAMPS)/requirements.txt
 	"$(VPY)" -m pip install --disable-pip-version-check -r $<
 	touch $@
 
-$(STAMPS)/cmake-includes: $(STAMPS)/pip
-	"$(VPY)" -c "$$FIX_CMAKE_INCLUDES"
+$(STAMPS)/cmake-includes: $(STAMPS)/pip tools/fix_cmake_includes.py
+	"$(VPY)" "$(TOOLS)/fix_cmake_includes.py"
 	touch $@
 
 $(STAMPS)/msgs: $(STAMPS)/cmake-includes $(MSGS_SOURCES)
@@ -216,8 +138,8 @@ $(STAMPS)/kernels: $(STAMPS)/package $(CORE_SOURCES)
 	touch $@
 
 # After the package: the ament index must list rigid_rot_sim only once it imports.
-$(STAMPS)/workspace: $(STAMPS)/package Makefile $(VENV)/bin/activate
-	"$(VPY)" -c "$$INSTALL_WORKSPACE" "$(CURDIR)"
+$(STAMPS)/workspace: $(STAMPS)/package tools/install_workspace.py $(VENV)/bin/activate
+	"$(VPY)" "$(TOOLS)/install_workspace.py" "$(CURDIR)"
 	env -u AMENT_PREFIX_PATH "$(VPY)" -c "from rigid_rot_sim.share import share_directory as s; import sys; sys.exit(0 if (s() / 'config' / 'scenes').is_dir() and str(s()).startswith(sys.prefix) else 'setup: the ament index does not find rigid_rot_sim in ' + sys.prefix)"
 	touch $@
 

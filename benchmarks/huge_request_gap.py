@@ -34,8 +34,8 @@ os.environ["PYTHONUNBUFFERED"] = "1"
 
 import rclpy  # noqa: E402
 from rclpy.executors import SingleThreadedExecutor  # noqa: E402
-from rigid_rot_msgs.msg import RigidBodyState  # noqa: E402
 
+from rigid_rot_msgs.msg import RigidBodyState  # noqa: E402
 from rigid_rot_sim.ros.qos import STATE_QOS  # noqa: E402
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -89,7 +89,7 @@ def peak_rss_mib(pid: int) -> float:
 
 def largest_gap(times: list[float], start: float, end: float) -> float:
     inside = [t for t in times if start <= t <= end]
-    return max((b - a for a, b in zip(inside, inside[1:])), default=float("inf"))
+    return max((b - a for a, b in zip(inside, inside[1:], strict=False)), default=float("inf"))
 
 
 def measure(label: str, node_command: list[str], masses: int, requests: int, quiet: float) -> None:

@@ -25,12 +25,12 @@ import math
 import os
 import platform
 import time
-from typing import Callable
+from collections.abc import Callable
 
 import numpy as np
 from scipy.integrate import solve_ivp
-
 from taylor_vs_scipy import scipy_rhs  # this directory is on sys.path when run as a script
+
 from rigid_rot_sim.core.simulate import simulate
 
 MOMENTS = (1.0, 2.0, 3.0)

@@ -22,8 +22,8 @@ from __future__ import annotations
 import importlib.util
 import os
 import sys
+from collections.abc import Mapping
 from pathlib import Path
-from typing import Mapping
 
 #: Set to ``sys.prefix`` on the re-executed process, so that it never loops.
 REEXEC_GUARD = "_RIGID_ROT_LIBRARY_PREFIX"
@@ -35,9 +35,10 @@ def library_dirs(prefix: str = sys.prefix) -> list[str]:
     Empty when ``prefix`` is not a ROS-from-PyPI venv (no ``ros_wheels_bootstrapper`` in it).
     """
     spec = importlib.util.find_spec("ros_wheels_bootstrapper")
-    if spec is None or not (spec.origin or "").startswith(os.path.join(prefix, "")):
+    origin = spec.origin if spec is not None else None
+    if origin is None or not origin.startswith(os.path.join(prefix, "")):
         return []
-    site_packages = Path(spec.origin).resolve().parents[1]
+    site_packages = Path(origin).resolve().parents[1]
     dirs = [os.path.join(prefix, "lib")]
     dirs += sorted(str(p.resolve()) for p in site_packages.glob("ros_*.libs") if p.is_dir())
     return dirs
@@ -45,7 +46,7 @@ def library_dirs(prefix: str = sys.prefix) -> list[str]:
 
 def missing_library_dirs(environ: Mapping[str, str], prefix: str = sys.prefix) -> list[str]:
     """This venv's library folders that ``environ``'s ``LD_LIBRARY_PATH`` lacks."""
-    present = set()
+    present: set[str] = set()
     for part in environ.get("LD_LIBRARY_PATH", "").split(os.pathsep):
         if part:
             present.update((part.rstrip("/"), os.path.realpath(part)))

@@ -33,7 +33,7 @@ def _console_scripts() -> list[str]:
     tree = ast.parse((ROOT / "setup.py").read_text())
     for node in ast.walk(tree):
         if isinstance(node, ast.Dict):
-            for key, value in zip(node.keys, node.values):
+            for key, value in zip(node.keys, node.values, strict=True):
                 if isinstance(key, ast.Constant) and key.value == "console_scripts":
                     return [element.value for element in value.elts]
     raise AssertionError("setup.py declares no console_scripts")

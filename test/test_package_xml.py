@@ -2,7 +2,7 @@
 
 ``rosdep install --from-paths ... --ignore-src`` stops at the first key it cannot resolve, so
 each key of both package.xml files must be in ``test/data/rosdep_keys.yaml`` (resolvable keys,
-with where rosdistro defines them), or be skipped by the README's rosdep recipe, which then
+with where rosdistro defines them), or be skipped by the rosdep recipe of docs/install.md, which then
 pip-installs it. The skip list must name exactly the unresolvable keys: no more, no fewer.
 """
 
@@ -26,8 +26,12 @@ def declared_keys(manifest: Path) -> set[str]:
     return {element.text.strip() for tag in DEPEND_TAGS for element in root.findall(tag)}
 
 
+#: Where the colcon workspace recipe (rosdep install, colcon build) is documented.
+RECIPE = ROOT / "docs" / "install.md"
+
+
 def readme_rosdep_commands() -> list[str]:
-    text = (ROOT / "README.md").read_text()
+    text = RECIPE.read_text()
     return [line.strip() for line in text.splitlines() if line.strip().startswith("rosdep install")]
 
 
@@ -44,7 +48,7 @@ def test_every_key_resolves_or_is_skipped_exactly_by_the_readme_recipe():
     unresolvable = keys - resolvable
     (command,) = readme_rosdep_commands()
     assert skipped_keys(command) == unresolvable, (
-        f"README's `{command}` must skip exactly {sorted(unresolvable)}"
+        f"{RECIPE.relative_to(ROOT)}: `{command}` must skip exactly {sorted(unresolvable)}"
     )
     # both packages are found by rosdep (rigid_rot_msgs sits inside the ament_python package)
     assert "--from-paths src src/rigid_rot_sim/rigid_rot_msgs" in command and "--ignore-src" in command

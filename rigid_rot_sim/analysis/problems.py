@@ -42,8 +42,8 @@ from rigid_rot_sim.core.heavy_top import (
     separatrix_solution,
     separatrix_state,
 )
-from rigid_rot_sim.core.simulate import simulate
 from rigid_rot_sim.core.integrators.gyrostat import get_gyrostat_method
+from rigid_rot_sim.core.simulate import simulate
 from rigid_rot_sim.core.torque import ConstantTorque
 from rigid_rot_sim.core.wheels import NO_ORBIT, WheelModel, gyrostat_rhs, hub_inertia, wheel_model
 

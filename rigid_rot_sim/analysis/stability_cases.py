@@ -17,9 +17,9 @@ from scipy.integrate import solve_ivp
 
 from rigid_rot_sim.analysis.problems import (
     P2,
-    P5,
     P3,
     P3B,
+    P5,
     TOP,
     Problem,
     Reference,

@@ -28,6 +28,7 @@ from scipy.spatial.transform import Rotation
 from rigid_rot_sim.core import quaternion as quat
 from rigid_rot_sim.core import validation
 from rigid_rot_sim.core.inertia import principal_frame, principal_orientation
+from rigid_rot_sim.core.validation import FloatArray
 
 
 @register_jitable
@@ -85,15 +86,18 @@ def euler_rhs(moments: Any, omega: Any, torque: Any = None) -> np.ndarray:
     return np.stack(alpha, axis=-1)
 
 
-def angular_momentum_body(moments: Any, omega: Any) -> np.ndarray:
+def angular_momentum_body(moments: Any, omega: Any) -> FloatArray:
     """Body-frame angular momentum ``L = I omega``, kg*m^2/s (principal frame; shape (..., 3))."""
-    return np.asarray(moments, dtype=float) * np.asarray(omega, dtype=float)
+    moments_array: FloatArray = np.asarray(moments, dtype=float)
+    omega_array: FloatArray = np.asarray(omega, dtype=float)
+    return moments_array * omega_array
 
 
-def kinetic_energy(moments: Any, omega: Any) -> np.ndarray | float:
+def kinetic_energy(moments: Any, omega: Any) -> FloatArray | float:
     """Rotational kinetic energy ``T = 1/2 omega . L``, J (principal frame; shape (...))."""
-    omega = np.asarray(omega, dtype=float)
-    return 0.5 * np.sum(omega * angular_momentum_body(moments, omega), axis=-1)
+    omega_array: FloatArray = np.asarray(omega, dtype=float)
+    energy: FloatArray | float = 0.5 * np.sum(omega_array * angular_momentum_body(moments, omega_array), axis=-1)
+    return energy
 
 
 def body_to_world(q: Any, v_body: Any) -> np.ndarray:

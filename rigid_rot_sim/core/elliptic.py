@@ -17,13 +17,15 @@ import math
 import numpy as np
 from numba.extending import register_jitable
 
+from rigid_rot_sim.core.validation import FloatArray
+
 _EPS = 2.220446049250313e-16
 #: Most AGM levels kept (the AGM converges quadratically: 40 is never reached for m < 1).
 AGM_LEVELS = 40
 
 
 @register_jitable
-def carlson_rf(x, y, z):
+def carlson_rf(x: float, y: float, z: float) -> float:
     """R_F(x, y, z) for x, y, z >= 0, at most one of them zero (NaN for a non-finite argument)."""
     if not math.isfinite(x + y + z):
         return math.nan  # the duplication below would never converge
@@ -42,7 +44,7 @@ def carlson_rf(x, y, z):
 
 
 @register_jitable
-def carlson_rc(x, y):
+def carlson_rc(x: float, y: float) -> float:
     """R_C(x, y) for x >= 0, y > 0 (NaN for a non-finite argument)."""
     if not math.isfinite(x + y):
         return math.nan  # the duplication below would never converge
@@ -58,7 +60,7 @@ def carlson_rc(x, y):
 
 
 @register_jitable
-def carlson_rj(x, y, z, p):
+def carlson_rj(x: float, y: float, z: float, p: float) -> float:
     """R_J(x, y, z, p) for x, y, z >= 0 (at most one zero) and p > 0 (NaN for a non-finite argument)."""
     if not math.isfinite(x + y + z + p):
         return math.nan  # the duplication below would never converge
@@ -91,7 +93,7 @@ def carlson_rj(x, y, z, p):
 
 
 @register_jitable
-def agm_tables(m, m1, a, c):
+def agm_tables(m: float, m1: float, a: FloatArray, c: FloatArray) -> int:
     """Fill a[0..L], c[0..L] with the descending AGM of (1, sqrt(1 - m)); returns L.
 
     ``m1`` = 1 - m is passed exactly; ``c_{i+1} = c_i^2 / (4 a_{i+1})`` avoids the
@@ -111,7 +113,7 @@ def agm_tables(m, m1, a, c):
 
 
 @register_jitable
-def jacobi(r, a, c, levels, m1):
+def jacobi(r: float, a: FloatArray, c: FloatArray, levels: int, m1: float) -> tuple[float, float, float]:
     """sn, cn, dn of r (|r| <= K) from the AGM tables (Abramowitz & Stegun 16.4)."""
     phi = (2.0**levels * a[levels]) * r
     for i in range(levels, 0, -1):
@@ -121,6 +123,6 @@ def jacobi(r, a, c, levels, m1):
     return sn, cn, math.sqrt(cn * cn + m1 * sn * sn)
 
 
-def agm_buffers() -> tuple[np.ndarray, np.ndarray]:
+def agm_buffers() -> tuple[FloatArray, FloatArray]:
     """Zeroed (a, c) arrays for :func:`agm_tables`."""
     return np.zeros(AGM_LEVELS), np.zeros(AGM_LEVELS)

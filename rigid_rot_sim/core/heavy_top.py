@@ -58,6 +58,7 @@ from rigid_rot_sim.core.quaternion import quaternion_to_zxz, zxz_to_quaternion
 from rigid_rot_sim.core.inertia import parallel_axis_shift
 from rigid_rot_sim.core.simulate import simulate
 from rigid_rot_sim.core.torque import GravityTorque
+from rigid_rot_sim.core.validation import FloatArray
 
 _E_Z = np.array([0.0, 0.0, 1.0])
 
@@ -233,7 +234,8 @@ class HeavyTopReference:
 
     def theta(self, t: Any) -> np.ndarray:
         """Nutation angle theta(t), rad."""
-        return np.arccos(np.clip(self.cos_theta(t), -1.0, 1.0))
+        theta: FloatArray = np.arccos(np.clip(self.cos_theta(t), -1.0, 1.0))
+        return theta
 
     def _rates(self, s: float) -> tuple[float, float]:
         i1, _, i3 = self.top.pivot_moments
@@ -249,10 +251,9 @@ class HeavyTopReference:
         rest = t - periods * period
 
         def integrate(a: float, b: float) -> tuple[float, float]:
-            kw = dict(epsabs=1e-14, epsrel=1e-13, limit=200)
             return (
-                quad(lambda s: self._rates(s)[0], a, b, **kw)[0],
-                quad(lambda s: self._rates(s)[1], a, b, **kw)[0],
+                quad(lambda s: self._rates(s)[0], a, b, epsabs=1e-14, epsrel=1e-13, limit=200)[0],
+                quad(lambda s: self._rates(s)[1], a, b, epsabs=1e-14, epsrel=1e-13, limit=200)[0],
             )
 
         one = integrate(0.0, period) if periods else (0.0, 0.0)

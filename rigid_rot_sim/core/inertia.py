@@ -26,6 +26,7 @@ import numpy as np
 from scipy.spatial.transform import Rotation
 
 from rigid_rot_sim.core import limits, validation
+from rigid_rot_sim.core.validation import FloatArray
 
 #: Symmetry labels, from the most to the least degenerate.
 SYMMETRY_LABELS = ("point", "linear", "spherical", "symmetric", "asymmetric")
@@ -111,15 +112,15 @@ def validate_point_masses(masses: Any, positions: Any) -> tuple[np.ndarray, np.n
     return mass_array, position_array
 
 
-def _point_mass_inertia(masses: np.ndarray, offsets: np.ndarray) -> np.ndarray:
+def _point_mass_inertia(masses: FloatArray, offsets: FloatArray) -> FloatArray:
     """Inertia tensor (kg*m^2) of point masses at ``offsets`` (n, 3) from the reference point."""
     weighted = offsets * masses[:, None]
     second_moment = offsets.T @ weighted  # sum_i m_i d_i d_i^T
-    tensor = np.trace(second_moment) * np.eye(3) - second_moment
+    tensor: FloatArray = np.trace(second_moment) * np.eye(3) - second_moment
     return 0.5 * (tensor + tensor.T)
 
 
-def parallel_axis_shift(inertia_com: Any, mass: float, offset: Any) -> np.ndarray:
+def parallel_axis_shift(inertia_com: Any, mass: float, offset: Any) -> FloatArray:
     """Inertia tensor about a point displaced by ``offset`` from the centre of mass.
 
     ``I_p = I_com + mass * (|s|^2 E - s s^T)`` with ``s = offset`` (m, from the centre of mass
@@ -133,7 +134,7 @@ def parallel_axis_shift(inertia_com: Any, mass: float, offset: Any) -> np.ndarra
 
 
 
-def inertia_about_center_of_mass(inertia: Any, mass: float, offset: Any) -> np.ndarray:
+def inertia_about_center_of_mass(inertia: Any, mass: float, offset: Any) -> FloatArray:
     """Inertia tensor about the centre of mass from the one about a point ``offset`` from it.
 
     The inverse of :func:`parallel_axis_shift`: ``I_com = I_p - mass * (|s|^2 E - s s^T)``
@@ -145,7 +146,7 @@ def inertia_about_center_of_mass(inertia: Any, mass: float, offset: Any) -> np.n
            [0., 1., 0.],
            [0., 0., 1.]])
     """
-    tensor = np.asarray(inertia, dtype=float)
+    tensor: FloatArray = np.asarray(inertia, dtype=float)
     return tensor - parallel_axis_shift(tensor * 0.0, mass, offset)
 
 

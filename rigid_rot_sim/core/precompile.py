@@ -13,12 +13,13 @@ from __future__ import annotations
 
 import sys
 import time
+from typing import Any
 
 import numpy as np
 
 
-def entry_points() -> dict[str, object]:
-    """The compiled entry points of the core, by name."""
+def entry_points() -> dict[str, Any]:
+    """The compiled entry points of the core (numba dispatchers, which numba does not type), by name."""
     from rigid_rot_sim.core import batch, exact
     from rigid_rot_sim.core.integrators import gyrostat, kernels, taylor
 
@@ -74,12 +75,12 @@ def exercise() -> None:
     torque_free_flow(moments, (0.0, 0.0, 0.0, 1.0), (1.0, 0.1, 0.5), 0.1)
     rng = np.random.default_rng(0)
     for method in BATCH_METHODS + FREE_BODY_METHODS:
-        torque = None if method in FREE_BODY_METHODS else np.ones(3) * 1e-3
+        batch_torque = None if method in FREE_BODY_METHODS else np.ones(3) * 1e-3
         for n, steps in ((1, 2), (2, 100_000)):  # serial, then parallel
-            advance_batch(method, moments, rng.normal(size=(n, 4)), rng.normal(size=(n, 3)), 1e-4, steps, torque)
+            advance_batch(method, moments, rng.normal(size=(n, 4)), rng.normal(size=(n, 3)), 1e-4, steps, batch_torque)
             if method == "rk4":
-                advance_batch(method, moments, rng.normal(size=(n, 4)), rng.normal(size=(n, 3)), 1e-4, steps, torque,
-                              layout="per_body")
+                advance_batch(method, moments, rng.normal(size=(n, 4)), rng.normal(size=(n, 3)), 1e-4, steps,
+                              batch_torque, layout="per_body")
 
 
 def main() -> int:

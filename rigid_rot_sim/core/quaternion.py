@@ -19,13 +19,19 @@ The z-x-z Euler angles of scenes and of the heavy top (:func:`zxz_to_quaternion`
 from __future__ import annotations
 
 import math
-from typing import Any, Sequence
+from collections.abc import Sequence
+from typing import Any
 
 import numpy as np
+import numpy.typing as npt
 from numba.extending import register_jitable
 
 Quaternion = tuple[float, float, float, float]
 Vector = tuple[float, float, float]
+#: What the helpers receive: tuples inside the kernels, tuples or float arrays from Python callers.
+Floats = Sequence[float] | npt.NDArray[np.floating[Any]]
+#: An angle, or an array of angles (the z-x-z helpers are vectorised from Python).
+Angles = float | npt.NDArray[np.floating[Any]]
 
 IDENTITY: Quaternion = (0.0, 0.0, 0.0, 1.0)
 
@@ -35,7 +41,7 @@ SMALL_ANGLE = 1e-8
 
 
 @register_jitable
-def multiply(p: Sequence[float], q: Sequence[float]) -> Quaternion:
+def multiply(p: Floats, q: Floats) -> Quaternion:
     """Hamilton product ``p (x) q`` of two quaternions (x, y, z, w)."""
     px, py, pz, pw = p
     qx, qy, qz, qw = q
@@ -48,14 +54,14 @@ def multiply(p: Sequence[float], q: Sequence[float]) -> Quaternion:
 
 
 @register_jitable
-def conjugate(q: Sequence[float]) -> Quaternion:
+def conjugate(q: Floats) -> Quaternion:
     """Conjugate (the inverse rotation for a unit quaternion)."""
     x, y, z, w = q
     return (-x, -y, -z, w)
 
 
 @register_jitable
-def normalize(q: Sequence[float]) -> Quaternion:
+def normalize(q: Floats) -> Quaternion:
     """``q / |q|`` (q must be non-zero)."""
     x, y, z, w = q
     inv = 1.0 / math.sqrt(x * x + y * y + z * z + w * w)
@@ -63,7 +69,7 @@ def normalize(q: Sequence[float]) -> Quaternion:
 
 
 @register_jitable
-def exp_rotation_vector(v: Sequence[float]) -> Quaternion:
+def exp_rotation_vector(v: Floats) -> Quaternion:
     """Unit quaternion of the rotation by the angle |v| (rad) about the axis v.
 
     This is the exponential map of so(3) written for quaternions:
@@ -85,7 +91,7 @@ def exp_rotation_vector(v: Sequence[float]) -> Quaternion:
 
 
 @register_jitable
-def cayley(v: Sequence[float]) -> Quaternion:
+def cayley(v: Floats) -> Quaternion:
     """Unit quaternion of the Cayley transform ``(1 - v^/2)^-1 (1 + v^/2)`` of so(3).
 
     The rotation by the angle ``2 atan(|v|/2)`` about v: it agrees with
@@ -99,7 +105,7 @@ def cayley(v: Sequence[float]) -> Quaternion:
 
 
 @register_jitable
-def rotate(q: Sequence[float], v: Sequence[float]) -> Vector:
+def rotate(q: Floats, v: Floats) -> Vector:
     """Rotate the vector v by the unit quaternion q: body -> world coordinates, ``R(q) v``."""
     x, y, z, w = q
     vx, vy, vz = v
@@ -115,7 +121,7 @@ def rotate(q: Sequence[float], v: Sequence[float]) -> Vector:
 
 
 @register_jitable
-def rotate_inverse(q: Sequence[float], v: Sequence[float]) -> Vector:
+def rotate_inverse(q: Floats, v: Floats) -> Vector:
     """Rotate v by the inverse of the unit quaternion q: world -> body, ``R(q)^T v``."""
     x, y, z, w = q
     return rotate((-x, -y, -z, w), v)
@@ -125,7 +131,7 @@ def rotate_inverse(q: Sequence[float], v: Sequence[float]) -> Vector:
 
 
 @register_jitable
-def from_zxz(phi, theta, psi):
+def from_zxz(phi: Angles, theta: Angles, psi: Angles) -> tuple[Angles, Angles, Angles, Angles]:
     """Quaternion (x, y, z, w) of ``Rz(phi) Rx(theta) Rz(psi)`` (rad; floats, or arrays from Python)."""
     half_sum = 0.5 * (phi + psi)
     half_diff = 0.5 * (phi - psi)

@@ -16,14 +16,17 @@ callable is :data:`TORQUE_CALLABLE` and runs the kernels' interpreted (slower) p
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from dataclasses import dataclass, field
-from typing import Any, Callable, NamedTuple, Protocol
+from typing import Any, NamedTuple, Protocol
 
 import numpy as np
 from numba.core.extending import overload
 from numba.extending import register_jitable
 
+from rigid_rot_sim.core.quaternion import Floats, Vector
 from rigid_rot_sim.core.quaternion import rotate_inverse as _rotate_inverse
+from rigid_rot_sim.core.validation import FloatArray
 
 
 class TorqueModel(Protocol):
@@ -98,7 +101,7 @@ class PolynomialTorque:
         object.__setattr__(self, "coefficients", coefficients)
 
     def __call__(self, t: float, q: np.ndarray, omega: np.ndarray) -> np.ndarray:
-        value = self.coefficients[-1].copy()
+        value: FloatArray = self.coefficients[-1].copy()
         for c in self.coefficients[-2::-1]:
             value = value * t + c
         return value
@@ -152,7 +155,9 @@ def torque_data(torque: Any) -> TorqueData:
 
 
 @register_jitable
-def evaluate_torque_data(kind, polynomial, gravity, t, q, w):
+def evaluate_torque_data(
+    kind: int, polynomial: np.ndarray, gravity: np.ndarray, t: float, q: Floats, w: Floats
+) -> Vector:
     """The torque (N1, N2, N3) of data-kind torques at time t, attitude q (tuple) and omega.
 
     Horner's rule on the polynomial rows (highest power first), plus
@@ -177,22 +182,22 @@ def evaluate_torque_data(kind, polynomial, gravity, t, q, w):
 
 # -- the torque as the kernels see it: data (compiled) or a Python callable (interpreted) ----
 
-FloatTorque = Callable[[float, tuple, tuple], tuple]
+FloatTorque = Callable[[float, Floats, Floats], Vector]
 
 
 @register_jitable
-def has_torque(torque):
+def has_torque(torque: TorqueData) -> bool:
     """False for a free body (no torque, or an all-zero constant); ``torque`` a TorqueData tuple."""
     return torque[0] != TORQUE_NONE
 
 
 @register_jitable
-def attitude_dependent(torque):
+def attitude_dependent(torque: TorqueData) -> bool:
     """True when the torque may depend on the attitude (gravity, or any callable)."""
     return torque[0] >= TORQUE_GRAVITY
 
 
-def torque_at(torque: Any, t: float, q: tuple, w: tuple) -> tuple[float, float, float]:
+def torque_at(torque: Any, t: float, q: Floats, w: Floats) -> Vector:
     """The torque (N1, N2, N3) at (t, q, omega) for a kernel: data, or a Python callable.
 
     Compiled kernels get the data-only version below (numba ``overload``).
@@ -204,8 +209,9 @@ def torque_at(torque: Any, t: float, q: tuple, w: tuple) -> tuple[float, float, 
 
 
 @overload(torque_at)
-def _torque_at_compiled(torque, t, q, w):
-    def impl(torque, t, q, w):
+def _torque_at_compiled(torque: Any, t: Any, q: Any, w: Any) -> Callable[..., Vector]:
+    # numba requires the implementation's parameters, annotations included, to equal the typing function's.
+    def impl(torque: Any, t: Any, q: Any, w: Any) -> Vector:
         return evaluate_torque_data(torque[0], torque[1], torque[2], t, q, w)
 
     return impl
@@ -223,7 +229,7 @@ def float_torque(torque: Any) -> tuple[FloatTorque | None, bool]:
     if data.kind == TORQUE_NONE:
         return None, False
 
-    def f(t: float, q: tuple, w: tuple) -> tuple:
+    def f(t: float, q: Floats, w: Floats) -> Vector:
         return torque_at(data, t, tuple(q), tuple(w))
 
     return f, data.kind >= TORQUE_GRAVITY

@@ -11,12 +11,16 @@ import math
 from typing import Any
 
 import numpy as np
+import numpy.typing as npt
 
 # Moments from an eigen-decomposition or a CAD export satisfy the triangle inequality
 # only up to rounding (a thin plate has I3 = I1 + I2 exactly in theory).
 TRIANGLE_RTOL = 1e-12
 # Relative asymmetry tolerated in a user-supplied inertia tensor.
 SYMMETRY_RTOL = 1e-9
+
+#: A float64 array: what every check below returns (numpy's typing keeps arithmetic on it float64).
+FloatArray = npt.NDArray[np.float64]
 
 
 def finite_scalar(name: str, value: Any) -> float:
@@ -46,7 +50,7 @@ def nonnegative_scalar(name: str, value: Any) -> float:
     return x
 
 
-def finite_array(name: str, value: Any, shape: tuple[int, ...]) -> np.ndarray:
+def finite_array(name: str, value: Any, shape: tuple[int, ...]) -> FloatArray:
     """Return ``value`` as a float array of the given shape with every entry finite."""
     try:
         a = np.array(value, dtype=float)
@@ -64,12 +68,12 @@ def finite_array(name: str, value: Any, shape: tuple[int, ...]) -> np.ndarray:
     return a
 
 
-def finite_vector(name: str, value: Any, size: int = 3) -> np.ndarray:
+def finite_vector(name: str, value: Any, size: int = 3) -> FloatArray:
     """Return a finite float vector of length ``size``."""
     return finite_array(name, value, (size,))
 
 
-def quaternion(name: str, value: Any) -> np.ndarray:
+def quaternion(name: str, value: Any) -> FloatArray:
     """Return the finite, non-zero quaternion (x, y, z, w) normalised to unit length."""
     q = finite_vector(name, value, 4)
     scale = float(np.max(np.abs(q)))  # first to O(1): |q| of components near 1e308 overflows
@@ -79,7 +83,7 @@ def quaternion(name: str, value: Any) -> np.ndarray:
     return q / float(np.linalg.norm(q))
 
 
-def principal_moments(name: str, value: Any) -> np.ndarray:
+def principal_moments(name: str, value: Any) -> FloatArray:
     """Return principal moments (I1, I2, I3), kg*m^2: finite, > 0, and a physical body.
 
     A rigid body's moments satisfy ``Ii + Ij >= Ik`` for every permutation (equality
@@ -100,7 +104,7 @@ def principal_moments(name: str, value: Any) -> np.ndarray:
     return moments
 
 
-def inertia_tensor(name: str, value: Any) -> np.ndarray:
+def inertia_tensor(name: str, value: Any) -> FloatArray:
     """Return a finite, symmetric 3x3 inertia tensor (kg*m^2), symmetrised exactly.
 
     Positivity and the triangle inequality are checked on its eigenvalues by

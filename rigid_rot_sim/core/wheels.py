@@ -135,7 +135,7 @@ class WheelModel:
     def count(self) -> int:
         return len(self.names)
 
-    def in_frame(self, rotation: np.ndarray) -> "WheelModel":
+    def in_frame(self, rotation: np.ndarray) -> WheelModel:
         """The same wheels with axes ``rotation @ g`` (rotation: (3, 3), e.g. user body -> principal)."""
         axes = np.ascontiguousarray(self.axes @ np.asarray(rotation, dtype=float).T)
         return WheelModel(self.names, axes, self.spin_inertia, self.max_torque, self.max_speed, self.coulomb,
@@ -272,7 +272,10 @@ def gravity_gradient_torque(orbit, moments, q, t):
 
 @register_jitable
 def friction_torque(coulomb, viscous, stiction_speed, speed):
-    """Friction torque (N*m) opposing a relative wheel speed (rad/s): Coulomb (linear below stiction_speed) + viscous."""
+    """Friction torque (N*m) opposing a relative wheel speed (rad/s).
+
+    Coulomb (linear below stiction_speed) + viscous.
+    """
     if speed > stiction_speed:
         s = 1.0
     elif speed < -stiction_speed:
@@ -350,7 +353,8 @@ def gyrostat_rhs(t, y, moments, wheels, hub_inverse, external, orbit, commands, 
 
 def hub_inertia(moments: Any, wheels: WheelModel) -> np.ndarray:
     """``I - sum J g g^T`` (3, 3), kg*m^2, with ``moments`` the principal moments of the wheels' frame."""
-    return np.diag(np.asarray(moments, dtype=float)) - np.einsum("i,ij,ik->jk", wheels.spin_inertia, wheels.axes, wheels.axes)
+    spin = np.einsum("i,ij,ik->jk", wheels.spin_inertia, wheels.axes, wheels.axes)
+    return np.diag(np.asarray(moments, dtype=float)) - spin
 
 
 def total_momentum_body(moments: Any, wheels: WheelModel, omega: Any, speeds: Any) -> np.ndarray:
@@ -366,4 +370,5 @@ def gyrostat_energy(moments: Any, wheels: WheelModel, omega: Any, speeds: Any) -
     speeds = np.asarray(speeds, dtype=float)
     hub = hub_inertia(moments, wheels)
     axial = omega @ wheels.axes.T + speeds
-    return 0.5 * np.einsum("...j,jk,...k->...", omega, hub, omega) + 0.5 * np.sum(wheels.spin_inertia * axial**2, axis=-1)
+    body = 0.5 * np.einsum("...j,jk,...k->...", omega, hub, omega)
+    return body + 0.5 * np.sum(wheels.spin_inertia * axial**2, axis=-1)

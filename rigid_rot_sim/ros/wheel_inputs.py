@@ -14,8 +14,8 @@ from typing import Any
 
 from rclpy.node import Node
 from rclpy.qos import QoSProfile
-from rigid_rot_msgs.msg import WheelTorques
 
+from rigid_rot_msgs.msg import WheelTorques
 from rigid_rot_sim import conversions
 from rigid_rot_sim.ros.inputs import Rejections
 from rigid_rot_sim.ros.qos import COMMAND_QOS
@@ -44,7 +44,10 @@ class WheelTorqueInput:
             self.subscriptions.append(node.create_subscription(WheelTorques, WHEEL_TORQUE_TOPIC, self.callback, qos))
 
     def describe(self) -> tuple[list[str], list[str]]:
-        """For the start-up line: (what was built, what was left out and why): wheels, their schedule, gravity gradient."""
+        """For the start-up line: (what was built, what was left out and why).
+
+        Wheels, their schedule, gravity gradient.
+        """
         built: list[str] = []
         left_out: list[str] = []
         if self.names:
@@ -56,7 +59,8 @@ class WheelTorqueInput:
             built.append(f"a wheel-torque schedule of {len(self.spacecraft.wheel_schedule.segments)} segment(s)")
         gg = self.spacecraft.gravity_gradient
         if gg is not None:
-            built.append(f"gravity gradient (circular orbit, radius {gg.radius:g} m, inclination {gg.inclination:g} rad)")
+            built.append(f"gravity gradient (circular orbit, radius {gg.radius:g} m, "
+                         f"inclination {gg.inclination:g} rad)")
         return built, left_out
 
     def callback(self, msg: Any) -> None:

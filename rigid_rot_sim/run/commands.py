@@ -156,10 +156,10 @@ class CommandSchedule:
         #: The wheels' motor torques (N*m, clamped, scene order) acting from the current step on.
         self.wheel_torques: tuple[float, ...] = (0.0,) * len(self.spacecraft.wheels)
         if self.spacecraft.wheel_schedule is not None:
-            for segment in self.spacecraft.wheel_schedule.segments:
-                torques = clamp_wheel_torques(self.spacecraft.wheels, WHEEL_SCHEDULE_SOURCE, segment.torques)[0]
-                self._push(self.clock.step_at_or_after(segment.start), EventKind.WHEELS,
-                           (segment.start, torques, WHEEL_SCHEDULE_SOURCE))
+            for wheel_segment in self.spacecraft.wheel_schedule.segments:
+                torques = clamp_wheel_torques(self.spacecraft.wheels, WHEEL_SCHEDULE_SOURCE, wheel_segment.torques)[0]
+                self._push(self.clock.step_at_or_after(wheel_segment.start), EventKind.WHEELS,
+                           (wheel_segment.start, torques, WHEEL_SCHEDULE_SOURCE))
         for index, schedule in enumerate(self.schedules):
             for segment in schedule.segments:
                 self._push(self.clock.step_at_or_after(segment.start), EventKind.SCHEDULE, (segment.start, index, segment.torque))

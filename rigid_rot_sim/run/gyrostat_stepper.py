@@ -40,7 +40,8 @@ AUTO_METHOD = "dopri5"
 class GyrostatStepper(Stepper):
     """A :class:`Stepper` for scenes with reaction wheels or gravity gradient."""
 
-    def configure(self, method: str, dt: float, options: dict[str, Any], *, first: bool = False, dry_run: bool = False) -> None:
+    def configure(self, method: str, dt: float, options: dict[str, Any], *, first: bool = False,
+                  dry_run: bool = False) -> None:
         dt = validation.positive_scalar("dt", dt)
         method = AUTO_METHOD if method == "auto" else method
         cls = get_gyrostat_method(method)
@@ -127,11 +128,13 @@ class GyrostatStepper(Stepper):
             energy = float(gyrostat_energy(moments, principal_wheels, integrator.omega, speeds))
             net = np.array([
                 u - friction_torque(c, b, s, w)
-                for u, c, b, s, w in zip(applied, wheels.coulomb, wheels.viscous, wheels.stiction_speed, speeds)
+                for u, c, b, s, w in zip(applied, wheels.coulomb, wheels.viscous, wheels.stiction_speed, speeds,
+                                         strict=True)
             ])
             sources.append(("reaction_wheels", -(net @ wheels.axes)))
         if self._orbit.enabled:
-            gg = gravity_gradient_torque(self._orbit.compiled(), self.body.principal_moments, tuple(integrator.q), integrator.t)
+            gg = gravity_gradient_torque(self._orbit.compiled(), self.body.principal_moments, tuple(integrator.q),
+                                         integrator.t)
             sources.append(("gravity_gradient", np.array(quat.rotate(body_from_principal, gg))))
         total = np.sum([v for _, v in sources], axis=0) if sources else np.zeros(3)
         momentum_world = np.array(quat.rotate(q, momentum_body))

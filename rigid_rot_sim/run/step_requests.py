@@ -25,7 +25,7 @@ if TYPE_CHECKING:  # annotations only
 __all__ = ["torque_for_steps"]
 
 
-def torque_for_steps(sim: "Simulator", torque: Any, frame_id: str, steps: int) -> "TorqueCommand":
+def torque_for_steps(sim: Simulator, torque: Any, frame_id: str, steps: int) -> TorqueCommand:
     """Apply ``torque`` (N*m, in ``frame_id``; empty = the body frame) from the current step boundary k
     for exactly ``steps`` steps: it acts over steps k .. k + steps - 1 and ends on boundary k + steps.
 

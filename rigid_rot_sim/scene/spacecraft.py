@@ -8,8 +8,9 @@ integrators (:mod:`rigid_rot_sim.core.integrators.gyrostat`).
 from __future__ import annotations
 
 import math
+from collections.abc import Mapping
 from dataclasses import dataclass
-from typing import Any, Mapping
+from typing import Any
 
 import numpy as np
 
@@ -100,7 +101,8 @@ class Spacecraft:
         return ", ".join(parts)
 
 
-def parse_spacecraft(actuators: Mapping[str, Any] | None, environment: Mapping[str, Any] | None, inertia: Any) -> Spacecraft:
+def parse_spacecraft(actuators: Mapping[str, Any] | None, environment: Mapping[str, Any] | None,
+                     inertia: Any) -> Spacecraft:
     """The validated spacecraft parts of a scene whose data passed the schema; ValueError naming the key."""
     actuators = actuators or {}
     environment = environment or {}
@@ -125,14 +127,15 @@ def parse_spacecraft(actuators: Mapping[str, Any] | None, environment: Mapping[s
             stiction_speed=float(friction.get("stiction_speed", DEFAULT_STICTION_SPEED)),
         )
         if abs(wheel.initial_speed) > wheel.max_speed:
-            raise ValueError(f"{key}.initial_speed: |{wheel.initial_speed:g}| rad/s exceeds max_speed {wheel.max_speed:g} rad/s")
+            raise ValueError(f"{key}.initial_speed: |{wheel.initial_speed:g}| rad/s exceeds "
+                             f"max_speed {wheel.max_speed:g} rad/s")
         wheels.append(wheel)
     schedule = None
     schedule_spec = actuators.get("wheel_torque_schedule")
     if schedule_spec:
         if not wheels:
             raise ValueError("actuators.wheel_torque_schedule: the scene has no reaction_wheels")
-        segments = []
+        segments: list[WheelSegment] = []
         for i, segment in enumerate(schedule_spec["segments"]):
             key = f"actuators.wheel_torque_schedule.segments[{i}]"
             torques = tuple(float(v) for v in segment["torques"])
@@ -140,7 +143,8 @@ def parse_spacecraft(actuators: Mapping[str, Any] | None, environment: Mapping[s
                 raise ValueError(f"{key}.torques: {len(torques)} values for {len(wheels)} wheel(s)")
             start = float(segment["start"])
             if segments and start <= segments[-1].start:
-                raise ValueError(f"{key}.start: {start:g} s must be later than the previous segment's {segments[-1].start:g} s")
+                raise ValueError(f"{key}.start: {start:g} s must be later than the previous segment's "
+                                 f"{segments[-1].start:g} s")
             segments.append(WheelSegment(start, torques))
         schedule = WheelTorqueSchedule(tuple(segments))
     gravity_gradient = None

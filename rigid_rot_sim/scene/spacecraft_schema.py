@@ -47,7 +47,8 @@ _WHEEL = mapping(
 _WHEEL_SEGMENT = mapping(
     "Motor torques that act from their start until the next segment's start.",
     {
-        "start": number("Start, s of sim time (later than the previous segment's).", minimum=0.0, maximum=_DURATION_MAX),
+        "start": number("Start, s of sim time (later than the previous segment's).", minimum=0.0,
+                        maximum=_DURATION_MAX),
         "torques": array("Motor torque of each wheel, N*m, in the order of reaction_wheels.", number("N*m."),
                          min_items=1, max_items=MAX_WHEELS),
     },

@@ -47,7 +47,7 @@ def test_rk4_conserves_world_momentum_and_energy_to_fourth_order():
     """Frictionless wheels, no motor or external torque: R(q) H and T are invariants; RK4's error falls as dt^4."""
     coarse = drift(GyrostatRK4, 0.1)
     fine = drift(GyrostatRK4, 0.05)
-    for a, b in zip(coarse, fine):
+    for a, b in zip(coarse, fine, strict=True):
         assert a > 1e-11  # measurable, so that the ratio means something
         # halving dt divides the drift by 2^4 or more (the energy's leading error term is O(dt^5) here)
         assert 0.85 * 2**4 < a / b < 1.3 * 2**5, (a, b)
@@ -109,7 +109,8 @@ def test_coulomb_and_viscous_friction_as_documented(cls):
     spin, c, b, stiction = 0.5, 0.05, 0.002, 0.01
     i3 = MOMENTS[2]
     gain = i3 / (spin * (i3 - spin))
-    wheels = wheel_model(np.diag(MOMENTS), ["z"], [[0, 0, 1]], [spin], [0.1], [1000.0], coulomb=[c], stiction_speed=[stiction])
+    wheels = wheel_model(np.diag(MOMENTS), ["z"], [[0, 0, 1]], [spin], [0.1], [1000.0], coulomb=[c],
+                         stiction_speed=[stiction])
     g = cls(MOMENTS, 0.01, wheels=wheels, wheel_speeds0=(10.0,))
     g.advance(100)
     assert g.wheel_speeds[0] == pytest.approx(10.0 - c * gain * g.t, rel=1e-10)

@@ -27,7 +27,7 @@ from rigid_rot_sim.run.body_view import body_view  # noqa: E402
 from rigid_rot_sim.scene.scene import load_scene  # noqa: E402
 from rigid_rot_sim.share import resolve_scene  # noqa: E402
 
-pytest.importorskip("foxglove", reason="the viewer extra (make setup installs it)")
+import foxglove  # noqa: E402,F401  (the viewer extra: make setup installs it, so these tests always run)
 
 STATE_TYPE = "rigid_rot_msgs/msg/RigidBodyState"
 PORT = re.compile(r"Foxglove live server ws://127\.0\.0\.1:(\d+)")

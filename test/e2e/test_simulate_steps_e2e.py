@@ -19,7 +19,7 @@ import pytest
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 from test_node_e2e import SCENES, stamp  # noqa: E402 (collector: a conftest fixture)
-from test_vendored_interfaces import UPSTREAM_HASHES  # noqa: E402
+from test_vendored_interfaces import UPSTREAM_1_5_1_ACTION  # noqa: E402
 
 ACTION = "/rigid_rot_sim/simulate_steps"
 SUCCEEDED, CANCELED, ABORTED = 4, 5, 6  # action_msgs/msg/GoalStatus
@@ -53,11 +53,11 @@ def _reply(collector, request, process, what: str, resend: float = 5.0, timeout:
 
 def test_simulate_steps_goal_feedback_cancel_and_refusals(sim_node, collector):
     from rclpy.action import ActionClient
-    from rigid_rot_msgs.msg import RigidBodyState
     from simulation_interfaces.action import SimulateSteps
     from simulation_interfaces.msg import Result, SimulationState
     from simulation_interfaces.srv import GetSimulationState, SetSimulationState
 
+    from rigid_rot_msgs.msg import RigidBodyState
     from rigid_rot_sim.ros.qos import STATE_QOS
 
     states = collector.subscribe(RigidBodyState, "/rigid_rot_sim/state", STATE_QOS)
@@ -89,7 +89,7 @@ def test_simulate_steps_goal_feedback_cancel_and_refusals(sim_node, collector):
     collector.spin_until(lambda: states[count:] and stamp(states[-1]) >= 0.5 - 1e-9, 30.0, sim_node,
                          "the state at the goal's end")
     stamps = [stamp(msg) for msg in states[count:]]
-    assert all(a < b for a, b in zip(stamps, stamps[1:]))
+    assert all(a < b for a, b in zip(stamps, stamps[1:], strict=False))
     assert all(abs(t * 100 - round(t * 100)) < 1e-6 for t in stamps)  # due every 10th step (100 Hz at dt 1 ms)
     state = collector.call(GetSimulationState, "get_simulation_state", GetSimulationState.Request(),
                            process=sim_node, idempotent=True)
@@ -98,7 +98,7 @@ def test_simulate_steps_goal_feedback_cancel_and_refusals(sim_node, collector):
     # the feedback topic is the standard type, with the upstream hash
     infos = collector.node.get_publishers_info_by_topic(f"{ACTION}/_action/feedback")  # (and earlier tests' nodes)
     assert infos and {str(info.topic_type_hash) for info in infos} == {
-        "RIHS01_" + UPSTREAM_HASHES["simulation_interfaces/action/SimulateSteps_FeedbackMessage"]}
+        UPSTREAM_1_5_1_ACTION["action/SimulateSteps_FeedbackMessage"]}
 
     # cancel a long goal once its feedback arrives; a second goal meanwhile is rejected
     feedback.clear()
@@ -106,7 +106,7 @@ def test_simulate_steps_goal_feedback_cancel_and_refusals(sim_node, collector):
     assert long_goal.accepted
     collector.spin_until(lambda: len(feedback) >= 3, 30.0, sim_node, "feedback")
     received = [(f.feedback.completed_steps, f.feedback.remaining_steps) for f in feedback]
-    assert all(a[0] < b[0] and a[0] + a[1] == 10**9 for a, b in zip(received, received[1:]))
+    assert all(a[0] < b[0] and a[0] + a[1] == 10**9 for a, b in zip(received, received[1:], strict=False))
     assert not send(5).accepted
     cancel = _reply(collector, long_goal.cancel_goal_async, sim_node, "the cancel")
     assert len(cancel.goals_canceling) == 1
@@ -125,6 +125,7 @@ def test_simulate_steps_goal_feedback_cancel_and_refusals(sim_node, collector):
 
 def test_step_with_torque_replies_with_the_state_after_its_steps(sim_node, collector):
     from geometry_msgs.msg import Vector3
+
     from rigid_rot_msgs.srv import Step, StepWithTorque
 
     # a refused request changes nothing, so it may be resent until answered (a fresh server: see _reply)

@@ -9,20 +9,18 @@ import math
 import struct
 
 import pytest
-
-import rclpy  # noqa: E402 (test/conftest.py set the domain)
 from geometry_msgs.msg import Vector3, WrenchStamped  # noqa: E402
 from rclpy.action import ActionClient  # noqa: E402
-from rigid_rot_msgs.msg import RejectedCommand  # noqa: E402
-from rigid_rot_msgs.srv import Step, StepWithTorque  # noqa: E402
 from simulation_interfaces.action import SimulateSteps  # noqa: E402
 from simulation_interfaces.msg import Result, SimulatorFeatures  # noqa: E402
 from simulation_interfaces.srv import GetSimulatorFeatures  # noqa: E402
 from std_srvs.srv import SetBool  # noqa: E402
+from test_node import Harness, context  # noqa: E402,F401 (the fixture)
 
+from rigid_rot_msgs.msg import RejectedCommand  # noqa: E402
+from rigid_rot_msgs.srv import Step, StepWithTorque  # noqa: E402
 from rigid_rot_sim.ros.qos import COMMAND_QOS, REJECTED_QOS  # noqa: E402
 from rigid_rot_sim.run.observer import SimulationObserver  # noqa: E402
-from test_node import Harness, context  # noqa: E402,F401 (the fixture)
 
 
 def _complete(h, response, start: int, steps: int):
@@ -126,7 +124,8 @@ def test_step_with_torque_refusals_apply_and_step_nothing(harness):
     ]:
         response = h.call(StepWithTorque, "step_with_torque", request)
         assert not response.success and reason in response.message, response.message
-    assert h.node.run.sim.step_index == k and h.node.run.sim.snapshot().angular_velocity_body.tolist() == [0.0, 0.0, 0.0]
+    sim = h.node.run.sim
+    assert sim.step_index == k and sim.snapshot().angular_velocity_body.tolist() == [0.0, 0.0, 0.0]
     assert h.spin_until(lambda: len(rejected) >= 3)  # the torque refusals are published with their reason
     assert {r.source for r in rejected} == {"/rigid_rot_sim/step_with_torque"}
     h.call(Step, "step", Step.Request(steps=5))
@@ -173,7 +172,7 @@ def test_simulate_steps_action_feedback_per_step_cancel_and_refusal(harness, mon
     assert goal.accepted
     assert h.spin_until(lambda: len(feedback) >= 3, timeout=30.0)
     received = [(f.feedback.completed_steps, f.feedback.remaining_steps) for f in feedback]
-    assert all(a[0] < b[0] and a[0] + a[1] == 10**9 for a, b in zip(received, received[1:]))
+    assert all(a[0] < b[0] and a[0] + a[1] == 10**9 for a, b in zip(received, received[1:], strict=False))
     cancel = goal.cancel_goal_async()
     h.executor.spin_until_future_complete(cancel, timeout_sec=10.0)
     assert len(cancel.result().goals_canceling) == 1

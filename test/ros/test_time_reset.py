@@ -4,10 +4,9 @@ docs/sim_time.md says what tf2 listeners and RViz do with it; they can only act 
 that actually goes back, so that is what is pinned here (over DDS, in-process).
 """
 
-from rosgraph_msgs.msg import Clock
 from rclpy.qos import QoSProfile, ReliabilityPolicy
+from rosgraph_msgs.msg import Clock
 from std_srvs.srv import SetBool, Trigger
-
 from test_node import Harness, context  # noqa: F401 (the fixture)
 
 

@@ -18,12 +18,13 @@ from numba.extending import register_jitable
 from rigid_rot_sim.core import quaternion as quat
 from rigid_rot_sim.core.dynamics import euler_rhs_components
 from rigid_rot_sim.core.integrators.fixed_step import FixedStepIntegrator
-from rigid_rot_sim.core.integrators.status import OK
-from rigid_rot_sim.core.torque import attitude_dependent, has_torque, torque_at
+from rigid_rot_sim.core.integrators.status import OK, State, StepResult
+from rigid_rot_sim.core.quaternion import Floats, Vector
+from rigid_rot_sim.core.torque import TorqueData, attitude_dependent, has_torque, torque_at
 
 
 @register_jitable
-def euler_step(t, state, h, moments, torque):
+def euler_step(t: float, state: State, h: float, moments: Floats, torque: TorqueData) -> StepResult:
     """Explicit Euler on omega; attitude ``q (x) exp(h omega_n)``. Order 1."""
     qx, qy, qz, qw, w1, w2, w3 = state
     i1, i2, i3 = moments
@@ -36,7 +37,7 @@ def euler_step(t, state, h, moments, torque):
 
 
 @register_jitable
-def _dexpinv(u1, u2, u3, w1, w2, w3):
+def _dexpinv(u1: float, u2: float, u3: float, w1: float, w2: float, w3: float) -> Vector:
     """``omega + 1/2 u x omega + 1/12 u x (u x omega)``: du/ds for q = q_n (x) exp(u)."""
     c1 = u2 * w3 - u3 * w2
     c2 = u3 * w1 - u1 * w3
@@ -49,7 +50,7 @@ def _dexpinv(u1, u2, u3, w1, w2, w3):
 
 
 @register_jitable
-def rk4_step(t, state, h, moments, torque):
+def rk4_step(t: float, state: State, h: float, moments: Floats, torque: TorqueData) -> StepResult:
     """Classical RK4 in exponential coordinates of the attitude (RKMK4). Order 4."""
     qx, qy, qz, qw, w1, w2, w3 = state
     i1, i2, i3 = moments

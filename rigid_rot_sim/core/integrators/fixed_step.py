@@ -51,8 +51,8 @@ class KernelLoop:
     """
 
     ids: dict[str, int]
-    compiled: Callable[..., tuple]
-    interpreted: Callable[..., tuple]
+    compiled: Callable[..., tuple[Any, ...]]
+    interpreted: Callable[..., tuple[Any, ...]]
 
 
 _LOOP: list[KernelLoop] = []

@@ -146,7 +146,8 @@ def dopri5_advance(
                     for r in range(s):
                         acc += _A[s, r] * ks[r, i]
                     stage[i] = y_int[i] + h * acc
-                gyrostat_rhs(t + _C[s] * h, stage, moments, wheels, hub_inverse, external, orbit, commands, ks[s], applied)
+                gyrostat_rhs(t + _C[s] * h, stage, moments, wheels, hub_inverse, external, orbit, commands, ks[s],
+                             applied)
             for i in range(m):
                 acc = 0.0
                 for r in range(6):
@@ -187,7 +188,8 @@ def dopri5_advance(
             for i in range(m):
                 acc = 0.0
                 for r in range(7):
-                    acc += stages[r, i] * theta * (_P[r, 0] + theta * (_P[r, 1] + theta * (_P[r, 2] + theta * _P[r, 3])))
+                    horner = _P[r, 0] + theta * (_P[r, 1] + theta * (_P[r, 2] + theta * _P[r, 3]))
+                    acc += stages[r, i] * theta * horner
                 stage[i] = y_old[i] + h_old * acc
         norm = math.sqrt(stage[0] ** 2 + stage[1] ** 2 + stage[2] ** 2 + stage[3] ** 2)
         ok = math.isfinite(norm) and norm > 0.0
@@ -272,7 +274,7 @@ class GyrostatIntegrator(Integrator):
         ramp = self._wheel_data[3]
         return np.array([
             applied_motor_torque(float(u), float(w), float(limit), float(r))
-            for u, w, limit, r in zip(self.wheel_commands, self.wheel_speeds, self.wheels.max_speed, ramp)
+            for u, w, limit, r in zip(self.wheel_commands, self.wheel_speeds, self.wheels.max_speed, ramp, strict=True)
         ])
 
     def _external(self) -> np.ndarray:
@@ -387,5 +389,6 @@ def get_gyrostat_method(name: str) -> type[GyrostatIntegrator]:
         return GYROSTAT_METHODS[name]
     except (KeyError, TypeError):
         raise ValueError(
-            f"integrator {name!r} cannot run wheels or gravity gradient; valid methods: {', '.join(sorted(GYROSTAT_METHODS))}"
+            f"integrator {name!r} cannot run wheels or gravity gradient; "
+            f"valid methods: {', '.join(sorted(GYROSTAT_METHODS))}"
         ) from None

@@ -32,8 +32,9 @@ from rigid_rot_sim.core import quaternion as quat
 from rigid_rot_sim.core.dynamics import euler_rhs_components
 from rigid_rot_sim.core.integrators.base import NonFiniteStateError
 from rigid_rot_sim.core.integrators.fixed_step import FixedStepIntegrator
-from rigid_rot_sim.core.integrators.status import NEWTON_FAILED, OK
-from rigid_rot_sim.core.torque import attitude_dependent, has_torque, torque_at
+from rigid_rot_sim.core.integrators.status import NEWTON_FAILED, OK, State, StepResult
+from rigid_rot_sim.core.quaternion import Floats, Quaternion
+from rigid_rot_sim.core.torque import TorqueData, attitude_dependent, has_torque, torque_at
 
 _EPS = 2.220446049250313e-16
 _MAX_ITERATIONS = 60
@@ -45,14 +46,17 @@ class NewtonConvergenceError(NonFiniteStateError):
 
 
 @register_jitable
-def _half_cayley(qn, h, W1, W2, W3):
+def _half_cayley(qn: Floats, h: float, W1: float, W2: float, W3: float) -> Quaternion:
     """Midpoint attitude ``q_n (x) sqrt(cay(h W))``: the normalised mean of q_n and q_{n+1}."""
     c = quat.cayley((h * W1, h * W2, h * W3))
     return quat.multiply(qn, quat.normalize((c[0], c[1], c[2], c[3] + 1.0)))
 
 
 @register_jitable
-def _newton(t, qn, w1, w2, w3, h, moments, torque, W1, W2, W3):
+def _newton(
+    t: float, qn: Quaternion, w1: float, w2: float, w3: float, h: float, moments: Floats, torque: TorqueData,
+    W1: float, W2: float, W3: float,
+) -> tuple[float, float, float, bool]:
     """Solve ``2 (W - omega_n) = h alpha(t + h/2, q_mid, W)`` from W; returns (W1, W2, W3, converged)."""
     i1, i2, i3 = moments
     tm = t + 0.5 * h
@@ -131,7 +135,7 @@ def _newton(t, qn, w1, w2, w3, h, moments, torque, W1, W2, W3):
 
 
 @register_jitable
-def implicit_midpoint_step(t, state, h, moments, torque):
+def implicit_midpoint_step(t: float, state: State, h: float, moments: Floats, torque: TorqueData) -> StepResult:
     qx, qy, qz, qw, w1, w2, w3 = state
     i1, i2, i3 = moments
     qn = (qx, qy, qz, qw)

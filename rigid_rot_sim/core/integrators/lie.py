@@ -20,12 +20,13 @@ from numba.extending import register_jitable
 from rigid_rot_sim.core import quaternion as quat
 from rigid_rot_sim.core.dynamics import euler_rhs_components
 from rigid_rot_sim.core.integrators.fixed_step import FixedStepIntegrator
-from rigid_rot_sim.core.integrators.status import OK
-from rigid_rot_sim.core.torque import attitude_dependent, has_torque, torque_at
+from rigid_rot_sim.core.integrators.status import OK, State, StepResult
+from rigid_rot_sim.core.quaternion import Floats
+from rigid_rot_sim.core.torque import TorqueData, attitude_dependent, has_torque, torque_at
 
 
 @register_jitable
-def cf4_step(t, state, h, moments, torque):
+def cf4_step(t: float, state: State, h: float, moments: Floats, torque: TorqueData) -> StepResult:
     """One step of the commutator-free order-4 method on (q, omega)."""
     qx, qy, qz, qw, w1, w2, w3 = state
     i1, i2, i3 = moments

@@ -7,9 +7,11 @@ world) and reports :data:`OK` or the code of the failure it detected. The compil
 
 from __future__ import annotations
 
-__all__ = ["State", "OK", "NON_FINITE", "NEWTON_FAILED", "KICK_FAILED"]
+__all__ = ["State", "StepResult", "OK", "NON_FINITE", "NEWTON_FAILED", "KICK_FAILED"]
 
 State = tuple[float, float, float, float, float, float, float]
+#: What a kernel returns: the new state and a status code.
+StepResult = tuple[State, int]
 
 #: Kernel status codes.
 OK, NON_FINITE, NEWTON_FAILED, KICK_FAILED = 0, 1, 2, 3

@@ -130,7 +130,7 @@ def recurrence_tables(key: tuple) -> tuple[np.ndarray, np.ndarray, np.ndarray, n
     return pairs, terms, values, b
 
 
-@functools.lru_cache(maxsize=None)
+@functools.cache
 def _inverse_orders(p: int) -> np.ndarray:
     """1 / (1, 2, ..., p), read-only (shared by every instance of order p)."""
     inverse = 1.0 / np.arange(1, p + 1, dtype=float)

@@ -1,0 +1,61 @@
+"""Style gate: ``ruff check`` is clean with the rules of pyproject.toml, and its ratchet only shrinks.
+
+pyproject.toml's ``[tool.ruff.lint.per-file-ignores]`` lists, per file, the rules that file broke when the
+gate was introduced (too many engineers were editing the package to reformat it at once). A file that now
+passes a listed rule fails ``test_the_ratchet_only_shrinks`` until the entry is removed, so each fix is
+kept. New files get no entry: they follow the rules from the start.
+"""
+
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+from pathlib import Path
+
+import tomllib
+
+ROOT = Path(__file__).resolve().parents[1]
+RUFF = Path(sys.executable).with_name("ruff")
+
+
+def ruff(*args: str) -> subprocess.CompletedProcess[str]:
+    assert RUFF.is_file(), f"{RUFF} is missing: `make setup` installs ruff (the Makefile's TEST_PINS)"
+    return subprocess.run(
+        [str(RUFF), "check", "--no-cache", *args, "."], cwd=ROOT, capture_output=True, text=True, timeout=300
+    )
+
+
+def ratchet() -> dict[str, list[str]]:
+    config = tomllib.loads((ROOT / "pyproject.toml").read_text(encoding="utf-8"))
+    return config["tool"]["ruff"]["lint"].get("per-file-ignores", {})
+
+
+def test_ruff_is_clean():
+    result = ruff("--output-format", "concise")
+    assert result.returncode == 0, (
+        "ruff finds style errors (rules and line length 120 in pyproject.toml). Fix them; "
+        f"`.venv/bin/ruff check --fix PATH` does the safe ones:\n{result.stdout}{result.stderr}"
+    )
+
+
+def test_the_ratchet_only_shrinks():
+    """Every per-file ignore is still needed: the file exists and still breaks each rule listed for it."""
+    result = ruff("--output-format", "json", "--exit-zero", "--config", "lint.per-file-ignores = {}")
+    assert result.returncode == 0, result.stderr
+    broken: dict[str, set[str]] = {}
+    for error in json.loads(result.stdout):
+        path = Path(error["filename"]).resolve().relative_to(ROOT).as_posix()
+        broken.setdefault(path, set()).add(error["code"])
+    stale = []
+    for path, codes in ratchet().items():
+        if not (ROOT / path).is_file():
+            stale.append(f"{path}: no such file (moved or deleted): remove its entry")
+            continue
+        fixed = sorted(set(codes) - broken.get(path, set()))
+        if fixed:
+            stale.append(f"{path}: passes {', '.join(fixed)} now: remove them from its entry")
+    assert not stale, (
+        "pyproject.toml [tool.ruff.lint.per-file-ignores] is a ratchet; these entries are no longer needed:\n"
+        + "\n".join(stale)
+    )
