@@ -1,4 +1,4 @@
-"""numpy's per-sample random streams, ``PCG64(SeedSequence(seed, spawn_key=(sample, stream)))``, for many samples at once.
+"""numpy's per-sample streams ``PCG64(SeedSequence(seed, spawn_key=(sample, stream)))``, many samples at once.
 
 Building one such generator costs numpy 10-30 µs (a SeedSequence, then a PCG64 seeded from
 it), more than a short run's physics in the batch core. The same generator states are
@@ -12,7 +12,7 @@ one generator in turn, so every draw is numpy's own, bit for bit
 from __future__ import annotations
 
 import ctypes
-from typing import Iterator
+from collections.abc import Iterator
 
 import numpy as np
 
@@ -59,7 +59,8 @@ def _pool(entropy: list[np.ndarray]) -> list[np.ndarray]:
         return value ^ (value >> np.uint64(_XSHIFT))
 
     def mix(x: np.ndarray, y: np.ndarray) -> np.ndarray:
-        result = (np.uint64(_MIX_MULT_L) * x - np.uint64(_MIX_MULT_R) * y) & np.uint64(_M32)
+        difference = np.asarray(x * np.uint64(_MIX_MULT_L) - y * np.uint64(_MIX_MULT_R), dtype=np.uint64)
+        result = difference & np.uint64(_M32)
         return result ^ (result >> np.uint64(_XSHIFT))
 
     pool = [hashmix(entropy[i] if i < len(entropy) else zero) for i in range(_POOL_SIZE)]
@@ -94,7 +95,7 @@ def _limbs(high: np.ndarray, low: np.ndarray) -> list[np.ndarray]:
 def _normalised(limbs: list[np.ndarray]) -> list[np.ndarray]:
     """Carry each limb's excess over 32 bits into the next (mod 2**128)."""
     out = []
-    carry = np.uint64(0)
+    carry: np.ndarray | np.uint64 = np.uint64(0)
     for limb in limbs:
         total = limb + carry
         out.append(total & np.uint64(_M32))
@@ -103,7 +104,7 @@ def _normalised(limbs: list[np.ndarray]) -> list[np.ndarray]:
 
 
 def _add(a: list[np.ndarray], b: list[np.ndarray]) -> list[np.ndarray]:
-    return _normalised([x + y for x, y in zip(a, b)])
+    return _normalised([x + y for x, y in zip(a, b, strict=True)])
 
 
 def _times_multiplier(a: list[np.ndarray]) -> list[np.ndarray]:

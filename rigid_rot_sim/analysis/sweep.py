@@ -162,7 +162,7 @@ def _sample_draws(spec: SweepSpec, samples: np.ndarray) -> dict[str, np.ndarray]
             (np.abs(z) > NORMAL_CUT_SIGMAS).any(axis=1) if dispersion.distribution != "uniform" else np.zeros(n, bool)
         )
         z *= np.asarray(dispersion.size)
-        for i, rng in zip(beyond, draws.each(spec.seed, samples[beyond], k)):
+        for i, rng in zip(beyond, draws.each(spec.seed, samples[beyond], k), strict=True):
             z[i] = _draw(rng, dispersion)
         return z
 
