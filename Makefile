@@ -43,9 +43,9 @@ SWEEP_PINS := dask==2026.8.0 distributed==2026.8.0 pyarrow==26.0.1
 VIEWER_PINS := foxglove-sdk==0.30.3
 # websockets: the tests' Foxglove ws-protocol client. The gates' tools (test/test_lint.py, test/test_mypy.py;
 # configured in pyproject.toml): scipy-stubs 1.17.1.x are the stubs of scipy 1.17.1 and work with numpy 2.4
-# (they pull in optype and numpy-typing-compat).
+# (they pull in optype and numpy-typing-compat). mpmath: the 40-digit reference of test/core/test_exact_ulps.py.
 TEST_PINS := pytest==9.2.0 hypothesis==6.170.15 rosbags==0.11.9 websockets==15.0.1 \
-	ruff==0.17.6 mypy==2.4.1 types-PyYAML==6.0.12.20261113 scipy-stubs==1.17.1.5
+	ruff==0.17.6 mypy==2.4.1 types-PyYAML==6.0.12.20261113 scipy-stubs==1.17.1.5 mpmath==1.3.0
 
 # The compiled kernels are built from these (rigid_rot_sim/core/jit.py keys their cache on them).
 CORE_SOURCES := $(shell find rigid_rot_sim/core -name '*.py' 2>/dev/null)
@@ -148,6 +148,22 @@ $(STAMPS)/workspace: $(STAMPS)/package tools/install_workspace.py $(VENV)/bin/ac
 # recording is summarised, re-simulated bit for bit without DDS, and plotted.
 DEMO_SCENE := free_tumble
 DEMO_BAG := out/demo_$(DEMO_SCENE).mcap
+# The closed loop of `make demo`: the shipped controller and the node in lockstep (config/scenes).
+LOOP_SCENE := closed_loop_lockstep
+LOOP_SECONDS := 8
+LOOP_TARGET := [0.0, 0.0, 0.5, 0.8660254037844386]
+define LOOP_DIGESTS
+import sys
+from rigid_rot_sim.recording.reader import BagReader
+digests = [BagReader(path).metadata.get("digest", {}).get("digest") for path in sys.argv[1:]]
+for path, digest in zip(sys.argv[1:], digests):
+    print(f"{path}: run digest {digest}")
+same = len(set(digests)) == 1 and digests[0] is not None
+print("the two closed-loop runs are bit-identical: digests EQUAL" if same else "digests DIFFER")
+sys.exit(0 if same else 1)
+endef
+export LOOP_DIGESTS
+
 demo: setup
 	@mkdir -p out && rm -f $(DEMO_BAG)
 	@echo "== rigid-rot run $(DEMO_SCENE): the node over DDS, recorded to $(DEMO_BAG) =="
@@ -162,6 +178,20 @@ demo: setup
 	@echo
 	@echo "== rigid-rot plot $(DEMO_BAG) =="
 	@"$(VENV)/bin/rigid-rot" plot $(DEMO_BAG) --out out/demo_plots
+	@echo
+	@echo "== closed loop in lockstep: rigid-rot-controller slews the body 60 deg, twice, as fast as it answers =="
+	@export ROS_DOMAIN_ID=$$(( ($$$$ % 100) + 101 )) ROS_AUTOMATIC_DISCOVERY_RANGE=LOCALHOST; \
+	for run in 1 2; do \
+		rm -f out/demo_loop_$$run.mcap; \
+		"$(VENV)/bin/rigid-rot-controller" --ros-args --log-level warn -p target:="$(LOOP_TARGET)" & controller=$$!; \
+		start=$$EPOCHREALTIME; \
+		"$(VENV)/bin/rigid-rot" run $(LOOP_SCENE) --record out/demo_loop_$$run.mcap 2>&1 | grep -E "LOCKSTEP|lockstep:|WARN|ERROR" | sed -E 's/^\[[A-Z]+\] \[[0-9.]+\] \[rigid_rot_sim\]: //; s/; built: (LOCKSTEP[^;]*);.*/: \1/'; \
+		end=$$EPOCHREALTIME; \
+		kill -INT $$controller; wait $$controller || true; \
+		echo "run $$run: $(LOOP_SECONDS) s of sim time in $$(awk "BEGIN { printf \"%.2f\", $$end - $$start }") s of wall time (start-up included)"; \
+	done
+	@"$(VPY)" -c "$$LOOP_DIGESTS" out/demo_loop_1.mcap out/demo_loop_2.mcap
+	@"$(VENV)/bin/rigid-rot" resim out/demo_loop_2.mcap | tail -2
 	@echo
 	@echo "recorded: $(CURDIR)/$(DEMO_BAG)"
 	@echo "inspect:  .venv/bin/rigid-rot bag info|plot|resim|replay $(DEMO_BAG); ros2 bag info/play and Foxglove open it as is"

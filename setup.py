@@ -38,11 +38,12 @@ setup(
     maintainer_email="maintainers@rigid-rot-sim.org",
     description="Rigid-body rotation simulator for ROS 2 with a pure numerical core.",
     license="Apache-2.0",
-    tests_require=["pytest", "hypothesis", "rosbags"],
+    tests_require=["pytest", "hypothesis", "rosbags", "mpmath"],
     entry_points={
         "console_scripts": [
             "rigid-rot = rigid_rot_sim.console_scripts:rigid_rot",
             "rigid_rot_sim_node = rigid_rot_sim.console_scripts:rigid_rot_sim_node",
+            "rigid-rot-controller = rigid_rot_sim.console_scripts:rigid_rot_controller",
         ],
     },
 )

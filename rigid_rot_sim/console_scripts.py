@@ -84,3 +84,11 @@ def rigid_rot_sim_node() -> int:
     from rigid_rot_sim.ros.node import main
 
     return main()
+
+
+def rigid_rot_controller() -> int:
+    """``rigid-rot-controller``: :func:`rigid_rot_sim.ros.controller.main`."""
+    ensure_library_path()
+    from rigid_rot_sim.ros.controller import main
+
+    return main()

@@ -197,6 +197,7 @@ def fill_rigid_body_state(msg: RigidBodyState, snapshot: StateSnapshot, world_fr
     msg.potential_energy = float(snapshot.potential_energy)
     msg.energy_drift = float(snapshot.energy_drift)
     msg.angular_momentum_drift = float(snapshot.angular_momentum_drift)
+    msg.digest = snapshot.digest
     return msg
 
 

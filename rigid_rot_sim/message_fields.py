@@ -41,4 +41,5 @@ def state_to_arrays(msg: Any) -> dict[str, np.ndarray | float]:
         "potential_energy": float(msg.potential_energy),
         "energy_drift": float(msg.energy_drift),
         "angular_momentum_drift": float(msg.angular_momentum_drift),
+        "digest": int(getattr(msg, "digest", 0)),  # absent from recordings made before the digest
     }

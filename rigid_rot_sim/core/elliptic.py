@@ -22,6 +22,146 @@ from rigid_rot_sim.core.validation import FloatArray
 _EPS = 2.220446049250313e-16
 #: Most AGM levels kept (the AGM converges quadratically: 40 is never reached for m < 1).
 AGM_LEVELS = 40
+#: pi and 2 pi as double-doubles (hi + lo, |lo| <= ulp(hi) / 2).
+PI_DD = (3.141592653589793, 1.2246467991473532e-16)
+TWO_PI_DD = (6.283185307179586, 2.4492935982947064e-16)
+FOUR_PI_DD = (12.566370614359172, 4.898587196589413e-16)
+
+
+# -- error-free transformations and double-double arithmetic -------------------------------
+# A double-double (hi, lo) stands for the unevaluated sum hi + lo with |lo| <= ulp(hi) / 2:
+# about 106 bits. Used where a phase or an angle grows with time (rate * t over many
+# periods) and for the constants it is made of; numba without fastmath keeps IEEE order, so
+# the compensations below are not reassociated away. Dekker (1971), Knuth TAOCP 4.2.2.
+
+
+@register_jitable
+def two_sum(a: float, b: float) -> tuple[float, float]:
+    """a + b = s + e exactly (Knuth; any magnitudes)."""
+    s = a + b
+    bv = s - a
+    return s, (a - (s - bv)) + (b - bv)
+
+
+@register_jitable
+def fast_two_sum(a: float, b: float) -> tuple[float, float]:
+    """a + b = s + e exactly, for |a| >= |b| (or a = 0)."""
+    s = a + b
+    return s, b - (s - a)
+
+
+@register_jitable
+def two_product(a: float, b: float) -> tuple[float, float]:
+    """a b = p + e exactly (Dekker's splitting; no FMA needed)."""
+    p = a * b
+    split = 134217729.0  # 2^27 + 1
+    t = split * a
+    ah = t - (t - a)
+    al = a - ah
+    t = split * b
+    bh = t - (t - b)
+    bl = b - bh
+    return p, ((ah * bh - p) + ah * bl + al * bh) + al * bl
+
+
+@register_jitable
+def dd_add(ah: float, al: float, bh: float, bl: float) -> tuple[float, float]:
+    """(ah + al) + (bh + bl) as a double-double."""
+    s, e = two_sum(ah, bh)
+    t, f = two_sum(al, bl)
+    s, e = fast_two_sum(s, e + t)
+    return fast_two_sum(s, e + f)
+
+
+@register_jitable
+def dd_add_d(ah: float, al: float, b: float) -> tuple[float, float]:
+    """(ah + al) + b (a double) as a double-double."""
+    s, e = two_sum(ah, b)
+    return fast_two_sum(s, e + al)
+
+
+@register_jitable
+def dd_mul(ah: float, al: float, bh: float, bl: float) -> tuple[float, float]:
+    """(ah + al) (bh + bl) as a double-double."""
+    p, e = two_product(ah, bh)
+    return fast_two_sum(p, e + (ah * bl + al * bh))
+
+
+@register_jitable
+def dd_div(ah: float, al: float, bh: float, bl: float) -> tuple[float, float]:
+    """(ah + al) / (bh + bl) as a double-double."""
+    q1 = ah / bh
+    ph, pl = dd_mul(q1, 0.0, bh, bl)
+    rh, rl = dd_add(ah, al, -ph, -pl)
+    q2 = rh / bh
+    ph, pl = dd_mul(q2, 0.0, bh, bl)
+    rh, rl = dd_add(rh, rl, -ph, -pl)
+    q1, q2 = fast_two_sum(q1, q2)
+    return dd_add(q1, q2, rh / bh, 0.0)
+
+
+@register_jitable
+def dd_sqrt(ah: float, al: float) -> tuple[float, float]:
+    """sqrt(ah + al) as a double-double (ah + al >= 0)."""
+    if ah <= 0.0:
+        return 0.0, 0.0
+    s = math.sqrt(ah)
+    p, e = two_product(s, s)
+    return fast_two_sum(s, ((ah - p) - e + al) / (2.0 * s))
+
+
+@register_jitable
+def dd_sin_cos(h: float, lo: float) -> tuple[float, float]:
+    """sin and cos of the angle h + lo (rad), |lo| <= ulp(h): first order in lo is exact to rounding."""
+    s, c = math.sin(h), math.cos(h)
+    return s + c * lo, c - s * lo
+
+
+@register_jitable
+def dd_reduce(h: float, lo: float, period_h: float, period_l: float) -> tuple[float, float]:
+    """(h + lo) - k period, k the nearest integer to (h + lo) / period: a double-double in
+    [-period / 2, period / 2] (period > 0 a double-double)."""
+    k = math.floor(h * (1.0 / period_h) + 0.5)  # k may be off by one at a tie: either is a reduction
+    ph, pl = two_product(k, period_h)
+    s, e = two_sum(h, -ph)
+    return fast_two_sum(s, ((e + lo) - pl) - k * period_l)
+
+
+@register_jitable
+def dd_complete_integrals(m1h: float, m1l: float, nh: float, nl: float) -> tuple[float, float, float, float]:
+    """Double-double K(m) and Pi(n|m) - K(m) for 1 - m = m1h + m1l in (0, 1] and n = nh + nl < 1.
+
+    DLMF 19.8.6 (the AGM of 1 and k' with its companion sequence p_j):
+    ``Pi(n|m) = pi / (4 M) (2 + n / (1 - n) sum_j Q_j)``, so ``Pi - K = pi / (4 M) n / (1 - n)
+    sum_j Q_j`` without a cancellation; every step is +, *, / or sqrt in double-double.
+    """
+    ah, al = 1.0, 0.0
+    gh, gl = dd_sqrt(m1h, m1l)
+    p2h, p2l = dd_add(1.0, 0.0, -nh, -nl)  # p_0^2 = 1 - n
+    ph, pl = dd_sqrt(p2h, p2l)
+    qh, ql = 1.0, 0.0
+    sh, sl = 1.0, 0.0  # sum of Q_j
+    for _ in range(AGM_LEVELS):
+        agh, agl = dd_mul(ah, al, gh, gl)
+        num_h, num_l = dd_add(p2h, p2l, agh, agl)
+        den_h, den_l = dd_add(p2h, p2l, -agh, -agl)
+        eh, el = dd_div(den_h, den_l, num_h, num_l)  # epsilon_j
+        ph, pl = dd_div(num_h, num_l, 2.0 * ph, 2.0 * pl)  # p_{j+1}
+        p2h, p2l = dd_mul(ph, pl, ph, pl)
+        qh, ql = dd_mul(qh, ql, 0.5 * eh, 0.5 * el)
+        sh, sl = dd_add(sh, sl, qh, ql)
+        gap = abs((ah - gh) + (al - gl))
+        sum_h, sum_l = dd_add(ah, al, gh, gl)
+        gh, gl = dd_sqrt(*dd_mul(ah, al, gh, gl))
+        ah, al = 0.5 * sum_h, 0.5 * sum_l
+        # quadratic convergence: once a - g <= 1e-17 a, the new a is within ~1e-35 of M
+        # (and Q_j falls as fast); a tighter test on a - g would wait on rounding
+        if gap <= 1e-17 * ah and abs(qh) <= 1e-33 * abs(sh):
+            break
+    kh, kl = dd_div(PI_DD[0], PI_DD[1], 2.0 * ah, 2.0 * al)
+    rh, rl = dd_div(nh, nl, *dd_add(1.0, 0.0, -nh, -nl))
+    xh, xl = dd_mul(*dd_mul(kh, kl, 0.5 * rh, 0.5 * rl), sh, sl)
+    return kh, kl, xh, xl
 
 
 @register_jitable
@@ -120,6 +260,32 @@ def jacobi(r: float, a: FloatArray, c: FloatArray, levels: int, m1: float) -> tu
         phi = 0.5 * (phi + math.asin(c[i] * math.sin(phi) / a[i]))
     sn = math.sin(phi)
     cn = math.cos(phi)
+    return sn, cn, math.sqrt(cn * cn + m1 * sn * sn)
+
+
+@register_jitable
+def jacobi_amplitude_dd(
+    rh: float, rl: float, a: FloatArray, c: FloatArray, levels: int, top_h: float, top_l: float
+) -> tuple[float, float]:
+    """The amplitude am(r) of r = rh + rl (|r| <= K) as a double-double, from the AGM tables:
+    phi_N = 2^N a_N r from a_N = top_h + top_l (a double-double of the AGM limit), and each
+    descent phi_{i-1} = (phi_i + asin(c_i sin(phi_i) / a_i)) / 2 (A&S 16.4) adds a bounded term
+    to it, so the amplitude keeps the digits of r instead of a few ulps of it."""
+    scale = 2.0**levels
+    ph, pl = dd_mul(top_h, top_l, rh, rl)
+    ph, pl = scale * ph, scale * pl
+    for i in range(levels, 0, -1):
+        ph, pl = dd_add_d(ph, pl, math.asin(c[i] * math.sin(ph) / a[i]))
+        ph, pl = 0.5 * ph, 0.5 * pl
+    return ph, pl
+
+
+@register_jitable
+def jacobi_dd(
+    rh: float, rl: float, a: FloatArray, c: FloatArray, levels: int, m1: float, top_h: float, top_l: float
+) -> tuple[float, float, float]:
+    """sn, cn, dn of r = rh + rl (|r| <= K) as :func:`jacobi`, from :func:`jacobi_amplitude_dd`."""
+    sn, cn = dd_sin_cos(*jacobi_amplitude_dd(rh, rl, a, c, levels, top_h, top_l))
     return sn, cn, math.sqrt(cn * cn + m1 * sn * sn)
 
 

@@ -54,10 +54,18 @@ from the same AGM, so period reduction and evaluation agree.
 D decides the case and sets 1 - m; where its two terms cancel it is evaluated exactly
 from the floats given (error-free products and sums, Dekker and Shewchuk), so the case and the phase next to the
 separatrix are those of the omega0 given (the label 'separatrix' allows 8 ulps, the flow
-does not snap to it). Accuracy (against a long-double Taylor reference, t = 1000 s):
-~3e-14 relative in omega and ~1e-13 in the attitude away from the separatrix; next to it
-the problem itself is ill-conditioned and the error stays below that of a 1-ulp change
-of omega0.
+does not snap to it).
+
+Where the angles grow with time the arithmetic is compensated (double-doubles, ``core/elliptic.py``):
+lam, u0, K, |L| / I1 and the precession per half period 2K (``Pi(n|m) - K`` by the AGM of
+DLMF 19.8.6) are built to ~1e-32 from the floats given, u = lam t + u0 and its reduction by
+2K, the Jacobi amplitude, phi and its reduction by 4 pi are carried in double-double, so the
+phase does not lose a digit per decade of t. Accuracy against a 40-digit mpmath reference
+(test/core/test_exact_ulps.py, 100 rad of rotation): omega within ~2 ulps of the correctly
+rounded value (u0 refined by a Newton step on its amplitude), q within ~16 (in 1e-16
+absolute units near a zero crossing); what is left in
+q is the rounding of the product q_WL (x) q_zxz (x) q_perm. Next to the separatrix the
+problem itself is ill-conditioned and the error stays below that of a 1-ulp change of omega0.
 
 Special cases in closed form: a spherical body (omega constant); a symmetric body
 (I_a = I_b = I_p, distinct axis d): ``q(t) = exp(tau L_world / I_p) q0 exp(tau beta e_d)``
@@ -83,7 +91,27 @@ from scipy.spatial.transform import Rotation
 from rigid_rot_sim.core import quaternion as quat
 from rigid_rot_sim.core import validation
 from rigid_rot_sim.core.dynamics import axes_by_moment
-from rigid_rot_sim.core.elliptic import AGM_LEVELS, agm_tables, carlson_rf, carlson_rj, jacobi
+from rigid_rot_sim.core.elliptic import (
+    AGM_LEVELS,
+    FOUR_PI_DD,
+    PI_DD,
+    TWO_PI_DD,
+    agm_tables,
+    carlson_rf,
+    carlson_rj,
+    dd_add,
+    dd_add_d,
+    dd_complete_integrals,
+    dd_div,
+    dd_mul,
+    dd_reduce,
+    dd_sin_cos,
+    dd_sqrt,
+    jacobi_amplitude_dd,
+    jacobi_dd,
+    two_product,
+    two_sum,
+)
 from rigid_rot_sim.core.jit import compiled
 
 CASES = ("spherical", "symmetric", "below_separatrix", "above_separatrix", "separatrix")
@@ -101,16 +129,19 @@ _EXACT_SEPARATRIX_DISTANCE = 1e-2
 # The flow's parameter vector: the kind, then the fields of each kind.
 _KIND = 0
 _RIGID, _SYMMETRIC_FLOW, _ELLIPTIC = 0.0, 1.0, 2.0
-# rigid rotation: omega (body), q0, omega_world
-_R_OMEGA, _R_Q0, _R_OMEGA_WORLD = 1, 4, 8
+# rigid rotation: omega (body), q0, omega_world, |omega| (a double-double), the unit axis (world)
+_R_OMEGA, _R_Q0, _R_OMEGA_WORLD, _R_RATE, _R_AXIS = 1, 4, 8, 11, 13
 # symmetric: moments, axis, rate_world, beta, l_body, q0
 _S_MOMENTS, _S_AXIS, _S_RATE, _S_BETA, _S_L, _S_Q0 = 1, 4, 5, 8, 9, 12
 # elliptic (relabelled frame): order, axis signs, moments, amplitudes, signs, psi scale,
-# lam, u0, m1 (1 - m), n, |L|, K, 2 (Pi(n|m) - K), j0, g0, q_wl, q_perm, AGM levels
+# lam, u0, m1 (1 - m), n, |L|, K, COEFF = |L| (I3 - I1) / (I1 I3 lam), j0, g0, q_wl, q_perm,
+# AGM levels; lam, u0 and K are double-doubles (hi in the slot named, lo in *_LO); RATE = |L| / I1,
+# TURN (the precession beyond RATE t per half period 2K) and AGM_TOP (the AGM limit) too.
 (_E_ORDER, _E_AXIS_SIGNS, _E_MOMENTS, _E_AMPLITUDE, _E_SIGNS, _E_PSI_SCALE, _E_LAM, _E_U0, _E_M1, _E_N,
- _E_LNORM, _E_K, _E_EXCESS, _E_J0, _E_G0, _E_QWL, _E_QPERM, _E_LEVELS) = (
-    1, 4, 7, 10, 13, 16, 18, 19, 20, 21, 22, 23, 24, 25, 26, 27, 31, 35)
-PARAMS_SIZE = 36
+ _E_LNORM, _E_K, _E_COEFF, _E_J0, _E_G0, _E_QWL, _E_QPERM, _E_LEVELS, _E_LAM_LO, _E_U0_LO, _E_K_LO,
+ _E_RATE, _E_TURN, _E_AGM_TOP) = (
+    1, 4, 7, 10, 13, 16, 18, 19, 20, 21, 22, 23, 24, 25, 26, 27, 31, 35, 36, 37, 38, 39, 41, 43)
+PARAMS_SIZE = 45
 
 
 def _relabelling_table() -> np.ndarray:
@@ -139,20 +170,6 @@ def _sign(x):
 
 
 @register_jitable
-def _two_product(a, b):
-    """a b = p + e exactly (Dekker's splitting; no FMA needed)."""
-    p = a * b
-    split = 134217729.0  # 2^27 + 1
-    t = split * a
-    ah = t - (t - a)
-    al = a - ah
-    t = split * b
-    bh = t - (t - b)
-    bl = b - bh
-    return p, ((ah * bh - p) + ah * bl + al * bh) + al * bl
-
-
-@register_jitable
 def _exact_term(i, d1, d2, w, terms, start):
     """Write 16 floats summing exactly to ``i (d1 - d2) w^2`` into terms[start:start + 16]."""
     s = d1 - d2
@@ -163,7 +180,7 @@ def _exact_term(i, d1, d2, w, terms, start):
     n = 2
     for factor in (i, w, w):
         for k in range(n - 1, -1, -1):
-            p, err = _two_product(parts[k], factor)
+            p, err = two_product(parts[k], factor)
             parts[2 * k], parts[2 * k + 1] = p, err
         n *= 2
     for k in range(16):
@@ -218,19 +235,24 @@ def _separatrix_distance(moments, omega, i_min, i_mid, i_max):
 
 
 @register_jitable
-def _phase(params, agm_a, agm_c, u):
-    """sn, cn, dn at u and the two parts of Pi(n; am u | m) beyond u: (j, g)."""
+def _phase(params, agm_a, agm_c, uh, ul):
+    """sn, cn, dn at u = uh + ul and the two parts of Pi(n; am u | m) beyond u: (j, g),
+    j the number of half periods 2K from 0 to u and g a bounded remainder."""
     n = params[_E_N]
     if params[_E_M1] == 0.0:  # separatrix
+        u = uh + ul
         sn = math.tanh(u)
         e = math.exp(-abs(u))
         cn = 2.0 * e / (1.0 + e * e)
         a = math.sqrt(-n)
         return sn, cn, cn, 0.0, a * math.atan(a * sn)
     k = params[_E_K]
-    j = math.floor((u + k) / (2.0 * k))
-    r = u - 2.0 * k * j
-    sn, cn, dn = jacobi(r, agm_a, agm_c, int(params[_E_LEVELS]), params[_E_M1])
+    j = math.floor((uh + k) / (2.0 * k))
+    # u - 2 K j in double-double: the phase is reduced without the rounding of u or of K j
+    ph, pl = two_product(j, 2.0 * k)
+    rh, rl = dd_add(uh, ul, -ph, -pl - j * 2.0 * params[_E_K_LO])
+    sn, cn, dn = jacobi_dd(rh, rl, agm_a, agm_c, int(params[_E_LEVELS]), params[_E_M1], params[_E_AGM_TOP],
+                           params[_E_AGM_TOP + 1])
     s2 = sn * sn
     g = (n / 3.0) * sn * s2 * carlson_rj(cn * cn, dn * dn, 1.0, 1.0 - n * s2)
     # sn and cn change sign over each half period 2K (dn does not)
@@ -245,14 +267,19 @@ def _elliptic_state(params, agm_a, agm_c, tau):
     lam = params[_E_LAM]
     n = params[_E_N]
     l_norm = params[_E_LNORM]
-    u = lam * tau + params[_E_U0]
-    sn, cn, dn, j, g = _phase(params, agm_a, agm_c, u)
+    # u = lam tau + u0 and the precession angle phi in double-double: both grow with tau
+    uh, ul = two_product(lam, tau)
+    uh, ul = dd_add(uh, ul + params[_E_LAM_LO] * tau, params[_E_U0], params[_E_U0_LO])
+    sn, cn, dn, j, g = _phase(params, agm_a, agm_c, uh, ul)
     j0, g0 = params[_E_J0], params[_E_G0]
-    coeff = l_norm * (i3 - i1) / (i1 * i3 * lam)
+    coeff = params[_E_COEFF]
     if params[_E_M1] == 0.0:
-        phi = l_norm * tau / i3 + coeff * (lam * tau + (g - g0)) / (1.0 - n)
+        phi_h, phi_l = l_norm * tau / i3 + coeff * (lam * tau + (g - g0)) / (1.0 - n), 0.0
     else:
-        phi = l_norm * tau / i1 + coeff * ((j - j0) * params[_E_EXCESS] + (g - g0))
+        phi_h, phi_l = two_product(params[_E_RATE], tau)
+        turn_h, turn_l = two_product(params[_E_TURN], j - j0)
+        phi_h, phi_l = dd_add(phi_h, phi_l + params[_E_RATE + 1] * tau, turn_h,
+                              turn_l + params[_E_TURN + 1] * (j - j0) + coeff * (g - g0))
     w0 = params[_E_SIGNS] * params[_E_AMPLITUDE] * cn
     w1 = params[_E_SIGNS + 1] * params[_E_AMPLITUDE + 1] * sn
     w2 = params[_E_SIGNS + 2] * params[_E_AMPLITUDE + 2] * dn
@@ -261,7 +288,7 @@ def _elliptic_state(params, agm_a, agm_c, tau):
     q_wl = (params[_E_QWL], params[_E_QWL + 1], params[_E_QWL + 2], params[_E_QWL + 3])
     q_perm = (params[_E_QPERM], params[_E_QPERM + 1], params[_E_QPERM + 2], params[_E_QPERM + 3])
     # a product of unit quaternions: normalised against the rounding of the products
-    q = quat.normalize(quat.multiply(quat.multiply(q_wl, quat.from_zxz(phi, theta, psi)), q_perm))
+    q = quat.normalize(quat.multiply(quat.multiply(q_wl, _zxz_dd(phi_h, phi_l, theta, psi)), q_perm))
     omega = np.zeros(3)
     omega[int(params[_E_ORDER])] = params[_E_AXIS_SIGNS] * w0
     omega[int(params[_E_ORDER + 1])] = params[_E_AXIS_SIGNS + 1] * w1
@@ -270,13 +297,34 @@ def _elliptic_state(params, agm_a, agm_c, tau):
 
 
 @register_jitable
+def _zxz_dd(phi_h, phi_l, theta, psi):
+    """Quaternion of Rz(phi) Rx(theta) Rz(psi) with phi = phi_h + phi_l a double-double (rad):
+    phi is reduced by 4 pi (the period of the half angles (phi +- psi) / 2) in double-double,
+    and the half angles keep their low parts into their sine and cosine."""
+    phi_h, phi_l = dd_reduce(phi_h, phi_l, FOUR_PI_DD[0], FOUR_PI_DD[1])  # the half angles' period
+    sum_h, sum_l = two_sum(0.5 * phi_h, 0.5 * psi)
+    diff_h, diff_l = two_sum(0.5 * phi_h, -0.5 * psi)
+    sum_l += 0.5 * phi_l
+    diff_l += 0.5 * phi_l
+    sin_sum, cos_sum = dd_sin_cos(sum_h, sum_l)
+    sin_diff, cos_diff = dd_sin_cos(diff_h, diff_l)
+    ch = math.cos(0.5 * theta)
+    sh = math.sin(0.5 * theta)
+    return (sh * cos_diff, sh * sin_diff, ch * sin_sum, ch * cos_sum)
+
+
+@register_jitable
 def flow_state(params, agm_a, agm_c, tau):
     """``(q, omega)`` as tuples, tau (s) after the anchor of the flow ``params``."""
     kind = params[_KIND]
     if kind == _RIGID:
-        wx, wy, wz = params[_R_OMEGA_WORLD], params[_R_OMEGA_WORLD + 1], params[_R_OMEGA_WORLD + 2]
         q0 = (params[_R_Q0], params[_R_Q0 + 1], params[_R_Q0 + 2], params[_R_Q0 + 3])
-        q = quat.normalize(quat.multiply(quat.exp_rotation_vector((tau * wx, tau * wy, tau * wz)), q0))
+        # the half angle tau |omega| / 2 in double-double, reduced by 2 pi before sin / cos
+        half_h, half_l = two_product(0.5 * params[_R_RATE], tau)
+        half_h, half_l = dd_reduce(half_h, half_l + 0.5 * params[_R_RATE + 1] * tau, TWO_PI_DD[0], TWO_PI_DD[1])
+        s, c = dd_sin_cos(half_h, half_l)
+        spin = (s * params[_R_AXIS], s * params[_R_AXIS + 1], s * params[_R_AXIS + 2], c)
+        q = quat.normalize(quat.multiply(spin, q0))
         return q, (params[_R_OMEGA], params[_R_OMEGA + 1], params[_R_OMEGA + 2])
     if kind == _SYMMETRIC_FLOW:
         axis = int(params[_S_AXIS])
@@ -292,8 +340,24 @@ def flow_state(params, agm_a, agm_c, tau):
 
 
 @register_jitable
-def _elliptic_params(moments, omega, q0, order, d, params, agm_a, agm_c):
-    """Fill params / the AGM tables for the triaxial body; ``d`` = L^2 - 2 E I2 (0: separatrix)."""
+def _dd_ratio_sum(num_a, num_b, den_a, den_b, x, y):
+    """``(num_a num_b) / (den_a den_b) x^2 + y^2`` in double-double (num_b, den_b double-doubles)."""
+    ratio = dd_div(*dd_mul(num_a, 0.0, num_b[0], num_b[1]), *dd_mul(den_a, 0.0, den_b[0], den_b[1]))
+    term = dd_mul(*ratio, *two_product(x, x))
+    return dd_add(*term, *two_product(y, y))
+
+
+@register_jitable
+def _elliptic_params(moments, omega, q0, order, d, params, agm_a, agm_c, long_run):
+    """Fill params / the AGM tables for the triaxial body; ``d`` = L^2 - 2 E I2 (0: separatrix).
+
+    The constants of the phase and of the precession (lam, u0, |L| / I1, and with ``long_run``
+    K and the precession per half period) are double-doubles from the floats given: over many
+    periods their rounding would otherwise grow into the phase (100 rad at 1e-16 relative is
+    1e-14). Without ``long_run`` (a flow evaluated within about a radian of its anchor, as a
+    step of exact_split) K and Pi(n|m) - K come in double from the AGM table and Carlson's R_J,
+    which costs half as much to build and is as accurate there.
+    """
     row = 3 * order[0] + order[1]
     axis_signs = (_RELABELLING[row, 0], _RELABELLING[row, 1], _RELABELLING[row, 2])
     q_perm = (_RELABELLING[row, 3], _RELABELLING[row, 4], _RELABELLING[row, 5], _RELABELLING[row, 6])
@@ -302,21 +366,28 @@ def _elliptic_params(moments, omega, q0, order, d, params, agm_a, agm_c):
     w2 = axis_signs[1] * omega[order[1]]
     w3 = axis_signs[2] * omega[order[2]]
     eps = _sign(i3 - i2)
-    d31, d32, d21 = i3 - i1, i3 - i2, i2 - i1
-    a1 = math.sqrt(w1 * w1 + i2 * d32 / (i1 * d31) * w2 * w2)
-    a2 = math.sqrt(i1 * d31 / (i2 * d32) * w1 * w1 + w2 * w2)
-    a3 = math.sqrt(i2 * d21 / (i3 * d31) * w2 * w2 + w3 * w3)
-    big = i3 * d32 * a3 * a3
+    d31, d32, d21 = two_sum(i3, -i1), two_sum(i3, -i2), two_sum(i2, -i1)
+    a1_sq = _dd_ratio_sum(i2, d32, i1, d31, w2, w1)
+    a2_sq = _dd_ratio_sum(i1, d31, i2, d32, w1, w2)
+    a3_sq = _dd_ratio_sum(i2, d21, i3, d31, w2, w3)
+    a1, a2, a3 = dd_sqrt(*a1_sq)[0], dd_sqrt(*a2_sq)[0], dd_sqrt(*a3_sq)[0]
+    big = dd_mul(*dd_mul(i3, 0.0, *d32), *a3_sq)
+    above = dd_mul(*dd_mul(i3, 0.0, *d32), *two_product(w3, w3))
+    below = dd_mul(*dd_mul(i1, 0.0, *d21), *two_product(w1, w1))
+    m1_dd = dd_div(*dd_add(*above, -below[0], -below[1]), *big)
+    m = dd_div(*dd_mul(*dd_mul(i1, 0.0, *d21), *a1_sq), *big)[0]
+    lam_dd = dd_sqrt(*dd_div(*dd_mul(*dd_mul(*d32, *d31), *a3_sq), *two_product(i1, i2)))
+    n_dd = dd_div(*dd_mul(-i3, 0.0, *d21), *dd_mul(i1, 0.0, *d32))
+    l_dd = dd_sqrt(*dd_add(*dd_add(*_square_dd(i1, w1), *_square_dd(i2, w2)), *_square_dd(i3, w3)))
+    coeff_dd = dd_div(*dd_mul(*l_dd, *d31), *dd_mul(*two_product(i1, i3), *lam_dd))
     separatrix = d == 0.0
-    m1 = d / big
-    m = i1 * d21 * a1 * a1 / big
-    lam = math.sqrt(d32 * d31 * a3 * a3 / (i1 * i2))
-    n = -i3 * d21 / (i1 * d32)
+    m1 = m1_dd[0]
+    n = n_dd[0]
     s3 = _sign(w3)
     s1 = _sign(w1) if separatrix else 1.0
     sigma = eps * s1 * s3
-    alpha1 = 1.0 / math.sqrt(i1 * abs(d31))
-    alpha2 = 1.0 / math.sqrt(i2 * abs(d32))
+    alpha1 = 1.0 / math.sqrt(i1 * abs(d31[0]))
+    alpha2 = 1.0 / math.sqrt(i2 * abs(d32[0]))
     # phase u0 from sn u0 = sigma w2 / A2, cn u0 = s1 w1 / A1 (normalised against rounding)
     if a1 > 0.0:
         sn0, cn0 = sigma * w2 / a2, s1 * w1 / a1
@@ -325,19 +396,41 @@ def _elliptic_params(moments, omega, q0, order, d, params, agm_a, agm_c):
     norm = math.hypot(sn0, cn0)
     sn0, cn0 = sn0 / norm, cn0 / norm
     params[_KIND] = _ELLIPTIC
+    k_dd = (math.inf, 0.0)
+    turn_dd = (0.0, 0.0)
+    u0_dd = (0.0, 0.0)
     if separatrix:
         agm_a[0], agm_c[0] = 1.0, 1.0
         levels = 0
-        k = math.inf
-        excess = 0.0
-        u0 = math.asinh(sn0 / cn0)
+        u0_dd = (math.asinh(sn0 / cn0), 0.0)
         m1 = 0.0
     else:
         levels = agm_tables(m, m1, agm_a, agm_c)
-        k = math.pi / (2.0 * agm_a[levels])
-        excess = (2.0 * n / 3.0) * carlson_rj(0.0, m1, 1.0, 1.0 - n)
+        if long_run:
+            k_h, k_l, excess_h, excess_l = dd_complete_integrals(m1_dd[0], m1_dd[1], n_dd[0], n_dd[1])
+        else:
+            k_h, k_l = math.pi / (2.0 * agm_a[levels]), 0.0
+            excess_h, excess_l = (n / 3.0) * carlson_rj(0.0, m1, 1.0, 1.0 - n), 0.0
+        k_dd = (k_h, k_l)
+        turn_dd = dd_mul(*coeff_dd, 2.0 * excess_h, 2.0 * excess_l)
         f = sn0 * carlson_rf(cn0 * cn0, cn0 * cn0 + m1 * sn0 * sn0, 1.0)
-        u0 = f if cn0 >= 0.0 else math.copysign(2.0 * k, sn0) - f
+        if cn0 >= 0.0:
+            u0_dd = (f, 0.0)
+        else:
+            u0_dd = dd_add(math.copysign(2.0 * k_h, sn0), math.copysign(2.0 * k_l, sn0), -f, 0.0)
+        if long_run and a1 > 0.0:
+            # one Newton step on am(u0) = am0 (d am / du = dn), am0 from
+            # tan am0 = sigma w2 A1 / (w1 A2) with A1 / A2 = sqrt(I2 (I3 - I2) / (I1 (I3 - I1)))
+            ratio = dd_sqrt(*dd_div(*dd_mul(i2, 0.0, *d32), *dd_mul(i1, 0.0, *d31)))[0]
+            am0 = math.atan2(sigma * w2 * ratio, w1)
+            top = dd_div(*PI_DD, 2.0 * k_h, 2.0 * k_l)
+            j = math.floor((u0_dd[0] + k_h) / (2.0 * k_h))
+            ph, pl = two_product(j, 2.0 * k_h)
+            rh, rl = dd_add(u0_dd[0], u0_dd[1], -ph, -pl - j * 2.0 * k_l)
+            am_h, am_l = jacobi_amplitude_dd(rh, rl, agm_a, agm_c, levels, top[0], top[1])
+            sn_u = math.sin(am_h)
+            miss = ((am0 - j * PI_DD[0]) - am_h) - (am_l + j * PI_DD[1])
+            u0_dd = dd_add_d(u0_dd[0], u0_dd[1], miss / math.sqrt(1.0 - m * sn_u * sn_u))
     for idx in range(3):
         params[_E_ORDER + idx] = order[idx]
         params[_E_AXIS_SIGNS + idx] = axis_signs[idx]
@@ -345,10 +438,22 @@ def _elliptic_params(moments, omega, q0, order, d, params, agm_a, agm_c):
     params[_E_AMPLITUDE], params[_E_AMPLITUDE + 1], params[_E_AMPLITUDE + 2] = a1, a2, a3
     params[_E_SIGNS], params[_E_SIGNS + 1], params[_E_SIGNS + 2] = s1, sigma, s3
     params[_E_PSI_SCALE], params[_E_PSI_SCALE + 1] = s1 * i1 * alpha1, sigma * i2 * alpha2
-    params[_E_LAM], params[_E_U0], params[_E_M1], params[_E_N] = lam, u0, m1, n
-    params[_E_LNORM] = math.sqrt((i1 * w1) ** 2 + (i2 * w2) ** 2 + (i3 * w3) ** 2)
-    params[_E_K], params[_E_EXCESS], params[_E_LEVELS] = k, excess, levels
-    _, _, _, j0, g0 = _phase(params, agm_a, agm_c, u0)
+    params[_E_LAM], params[_E_LAM_LO] = lam_dd
+    params[_E_U0], params[_E_U0_LO] = u0_dd
+    params[_E_M1], params[_E_N] = m1, n
+    params[_E_LNORM] = l_dd[0]
+    params[_E_K], params[_E_K_LO] = k_dd
+    params[_E_COEFF] = coeff_dd[0]
+    params[_E_RATE], params[_E_RATE + 1] = dd_div(*l_dd, i1, 0.0)
+    params[_E_TURN], params[_E_TURN + 1] = turn_dd
+    params[_E_LEVELS] = levels
+    # the AGM limit a_N = pi / (2 K) in double-double, for the amplitude in jacobi_dd
+    params[_E_AGM_TOP], params[_E_AGM_TOP + 1] = 0.0, 0.0
+    if not separatrix:
+        params[_E_AGM_TOP] = agm_a[levels]
+        if long_run:
+            params[_E_AGM_TOP], params[_E_AGM_TOP + 1] = dd_div(*PI_DD, 2.0 * k_dd[0], 2.0 * k_dd[1])
+    _, _, _, j0, g0 = _phase(params, agm_a, agm_c, u0_dd[0], u0_dd[1])
     params[_E_J0], params[_E_G0] = j0, g0
     # q_world<-body = q_WL (x) q_zxz(t) (x) q_perm; q_WL from q(t0) = q0, with q_zxz(t0)
     # evaluated by the flow itself so that the two agree to rounding
@@ -363,9 +468,16 @@ def _elliptic_params(moments, omega, q0, order, d, params, agm_a, agm_c):
 
 
 @register_jitable
-def flow_params(moments, omega, q0, params, agm_a, agm_c):
+def _square_dd(i, w):
+    """(i w)^2 in double-double."""
+    return dd_mul(*two_product(i, w), *two_product(i, w))
+
+
+@register_jitable
+def flow_params(moments, omega, q0, params, agm_a, agm_c, long_run):
     """Build the flow from (moments, omega, q0) (tuples) into params / the AGM tables;
-    returns the case (an index of CASES)."""
+    returns the case (an index of CASES). ``long_run``: the flow will be evaluated far from
+    its anchor (see _elliptic_params); a solution object always is."""
     i_min, i_mid, i_max = axes_by_moment(moments[0], moments[1], moments[2])
     tol = _EQUAL_MOMENTS_ULPS * _EPS * moments[i_max]
     low_equal = moments[i_mid] - moments[i_min] <= tol
@@ -401,9 +513,9 @@ def flow_params(moments, omega, q0, params, agm_a, agm_c):
         # at rest, or a stationary spin about the middle axis
         _rigid_params(omega, q0, params)
     elif d < 0.0:
-        _elliptic_params(moments, omega, q0, (i_max, i_mid, i_min), d, params, agm_a, agm_c)
+        _elliptic_params(moments, omega, q0, (i_max, i_mid, i_min), d, params, agm_a, agm_c, long_run)
     else:
-        _elliptic_params(moments, omega, q0, (i_min, i_mid, i_max), d, params, agm_a, agm_c)
+        _elliptic_params(moments, omega, q0, (i_min, i_mid, i_max), d, params, agm_a, agm_c, long_run)
     return case
 
 
@@ -412,9 +524,14 @@ def _rigid_params(omega, q0, params):
     """omega constant in the body; q(t) = exp(tau omega_world) q0."""
     params[_KIND] = _RIGID
     omega_world = quat.rotate(q0, omega)
+    rate = dd_sqrt(*dd_add(*dd_add(*two_product(omega[0], omega[0]), *two_product(omega[1], omega[1])),
+                           *two_product(omega[2], omega[2])))
+    norm_world = math.sqrt(omega_world[0] ** 2 + omega_world[1] ** 2 + omega_world[2] ** 2)
     for idx in range(3):
         params[_R_OMEGA + idx] = omega[idx]
         params[_R_OMEGA_WORLD + idx] = omega_world[idx]
+        params[_R_AXIS + idx] = omega_world[idx] / norm_world if norm_world > 0.0 else 0.0
+    params[_R_RATE], params[_R_RATE + 1] = rate
     for idx in range(4):
         params[_R_Q0 + idx] = q0[idx]
 
@@ -425,13 +542,15 @@ def free_flow(moments, q, omega, tau):
     params = np.zeros(PARAMS_SIZE)
     agm_a = np.zeros(AGM_LEVELS)
     agm_c = np.zeros(AGM_LEVELS)
-    flow_params(moments, omega, q, params, agm_a, agm_c)
+    # beyond about a radian of rotation the phase constants are worth their double-double
+    long_run = abs(tau) * math.sqrt(omega[0] ** 2 + omega[1] ** 2 + omega[2] ** 2) > 1.0
+    flow_params(moments, omega, q, params, agm_a, agm_c, long_run)
     return flow_state(params, agm_a, agm_c, tau)
 
 
 @compiled
 def _build(moments, omega, q0, params, agm_a, agm_c):
-    return flow_params(moments, omega, q0, params, agm_a, agm_c)
+    return flow_params(moments, omega, q0, params, agm_a, agm_c, True)
 
 
 @compiled

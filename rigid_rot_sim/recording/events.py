@@ -21,7 +21,7 @@ from typing import Any, Mapping
 
 EVENT_TYPE = "diagnostic_msgs/msg/DiagnosticStatus"
 EVENT_PREFIX = "rigid_rot_sim/"
-KINDS = ("torque", "apply_torque", "set_state", "reset", "integrator", "wheel_torque")
+KINDS = ("torque", "apply_torque", "set_state", "reset", "integrator", "wheel_torque", "lockstep_timeout")
 
 
 @dataclass(frozen=True)

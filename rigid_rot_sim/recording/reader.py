@@ -338,6 +338,9 @@ def info(path: str | os.PathLike[str]) -> str:
         lines.append(f"Scene:      {scene.get('file', '?')}")
     if integrator:
         lines.append(f"Integrator: {integrator.get('method', '?')}, dt = {integrator.get('dt', '?')} s")
+    digest = reader.metadata.get("digest", {})
+    if digest:
+        lines.append(f"Digest:     {digest.get('digest', '?')} (run digest at the last ~/state, stamp {digest.get('stamp', '?')} s)")
     versions = reader.metadata.get("versions", {})
     if versions:
         lines.append(f"Recorded by rigid_rot_sim {versions.get('rigid_rot_sim', '?')} "

@@ -26,6 +26,7 @@ import numpy as np
 
 from rigid_rot_sim.core import quaternion as quat
 from rigid_rot_sim.scene.scene import parse_scene_text
+from rigid_rot_sim.run.digest import format_digest
 from rigid_rot_sim.run.sensors import SensorSuite
 from rigid_rot_sim.run.simulator import Simulator, StateSnapshot
 from rigid_rot_sim.message_fields import quaternion_to_array, time_to_seconds, vector3_to_array
@@ -69,6 +70,19 @@ class ResimReport:
     identical: bool
     first_difference_t: float | None
     core_changed: bool | None = None
+    #: The run digest (:mod:`rigid_rot_sim.run.digest`) the re-simulation reached at the last compared
+    #: state, and the one recorded there (the state's ``digest`` field); None without states or field.
+    digest: int | None = None
+    recorded_digest: int | None = None
+
+    @property
+    def digest_verdict(self) -> str:
+        """``equal`` or ``different`` (the digests at the last state), or why there is nothing to compare."""
+        if self.digest is None:
+            return "no states to compare"
+        if self.recorded_digest is None:
+            return "not recorded (a recording made before the run digest)"
+        return "equal" if self.digest == self.recorded_digest else "different"
     sensor_readings: int = 0
     sensor_mismatches: int = 0
 
@@ -116,6 +130,9 @@ class ResimReport:
             lines.append(f"  sensor readings         {self.sensor_readings} redrawn, {self.sensor_mismatches} differ")
         if self.first_difference_t is not None:
             lines.append(f"  first difference at t = {self.first_difference_t:.9g} s")
+        if self.digest is not None:
+            recorded = "?" if self.recorded_digest is None else format_digest(self.recorded_digest)
+            lines.append(f"  run digest {format_digest(self.digest)}, recorded {recorded}: {self.digest_verdict}")
         lines.append(f"  verdict: {self.verdict}")
         return "\n".join(lines)
 
@@ -155,6 +172,8 @@ def _apply(sim: Simulator, event: SimEvent, override_method: str | None) -> None
         options = json.loads(event.values.get("options") or "{}")
         method = event.values["method"] if override_method is None else override_method
         sim.set_integrator(method, event.number("dt"), options if override_method is None else {})
+    elif kind == "lockstep_timeout":
+        pass  # a lockstep turn that timed out: the run paused or held, the states do not depend on it
     else:
         raise ValueError(f"unknown event kind {kind!r} at step {event.step}")
 
@@ -193,6 +212,7 @@ def resimulate(path: str | os.PathLike[str], method: str | None = None) -> Resim
     identical = True
     first_difference: float | None = None
     t_first = t_last = None
+    digest = recorded_digest = None
     for message, decoded in reader.decoded(topics):
         if message.topic == events_topic:
             event = decode_event(decoded)
@@ -213,6 +233,11 @@ def resimulate(path: str | os.PathLike[str], method: str | None = None) -> Resim
                     identical, first_difference = False, t
             continue
         differs, errors = _compare(decoded, snapshot)
+        recorded_digest = getattr(decoded, "digest", None)  # absent before the digest field existed
+        if recorded_digest is not None:
+            recorded_digest = int(recorded_digest)
+            differs = differs or recorded_digest != snapshot.digest
+        digest = snapshot.digest
         states += 1
         t_first = t if t_first is None else t_first
         t_last = t
@@ -230,6 +255,7 @@ def resimulate(path: str | os.PathLike[str], method: str | None = None) -> Resim
         events=events, duration=0.0 if t_first is None else t_last - t_first,
         max_attitude_error=max_att, max_omega_error=max_omega, max_momentum_error=max_l,
         max_energy_error=max_e, identical=identical and states > 0, first_difference_t=first_difference,
+        digest=digest, recorded_digest=recorded_digest,
         sensor_readings=readings, sensor_mismatches=mismatches,
     )
 

@@ -234,6 +234,11 @@ class RunRecorder:
 
     # -- end -------------------------------------------------------------------------
 
+    def add_metadata(self, name: str, values: dict[str, str]) -> None:
+        """One more MCAP metadata record (strings), e.g. the run digest at the end of the run."""
+        if self.writer.active:
+            self.writer.add_metadata(name, dict(values))
+
     def close(self) -> None:
         """Write the topic roles, the summary and close the file (idempotent)."""
         if self.writer.active:

@@ -49,6 +49,12 @@ batches of at most ``MAX_TICK_WALL`` wall time per tick. The states do not depen
 or on the publish rates (see the Simulator's determinism notes). The timer runs on the
 steady clock: the node is the source of sim time (/clock), so ``use_sim_time`` true (a
 launch-wide setting) is accepted with a warning that says so: nothing here reads the ROS clock.
+
+Lockstep (the scene's ``lockstep`` section or the read-only ``lockstep.*`` parameters): the
+run waits at every turn for the controllers' commands stamped with the turn's time
+(:mod:`rigid_rot_sim.run.lockstep` has the contract, :mod:`.lockstep` the wiring, docs/lockstep.md
+the user's view); the timer then only decides timeouts and pacing, a guard condition wakes the
+run the moment a turn is answered. ``dt`` is fixed in lockstep.
 """
 
 from __future__ import annotations
@@ -73,6 +79,7 @@ from rigid_rot_sim.core import limits
 from rigid_rot_sim.ros import simulation_services
 from rigid_rot_sim.run.sensors import SensorSuite
 from rigid_rot_sim.ros.inputs import Rejections, TorqueInputs
+from rigid_rot_sim.ros.lockstep import NodeLockstep, declare_lockstep_parameters, lockstep_from_parameters, timer_period
 from rigid_rot_sim.ros.wheel_inputs import WheelTorqueInput
 from rigid_rot_sim.ros.outputs import Outputs
 from rigid_rot_sim.ros import parameters as params
@@ -105,6 +112,7 @@ class SceneRun:
     def __init__(self, node: Node, scene: Scene) -> None:
         self.logger = node.get_logger()
         declare_parameters(node, scene)
+        declare_lockstep_parameters(node, scene)
         settings = read_settings(node, scene)
         self.scene = scene = settings.scene  # with the frame parameters' names
         self.sim = sim = Simulator(scene, method=settings[params.INTEGRATOR], dt=settings[params.DT])
@@ -120,6 +128,11 @@ class SceneRun:
         rejections = Rejections(node, sim, self.outputs)
         self.inputs = TorqueInputs(node, sim, scene, settings[params.COMMAND_DEPTH], rejections)
         self.wheel_input = WheelTorqueInput(node, sim, scene, settings[params.COMMAND_DEPTH], rejections)
+        self.lockstep: NodeLockstep | None = None
+        lockstep = lockstep_from_parameters(node, scene, sim.dt)
+        if lockstep is not None:
+            self.lockstep = NodeLockstep(node, lockstep, self.driver, self.tick)
+            self.inputs.listeners.append(self.lockstep)  # wakes the run the moment a turn is answered
         self.services = RunServices(node, self.driver, scene, rejections, self.report_progress)
         self.simulation_services = (simulation_services.SimulationServices(node, self.services)
                                     if simulation_services.AVAILABLE else None)
@@ -133,7 +146,9 @@ class SceneRun:
             sim.pause(settings[params.START_PAUSED])
             self.driver.pacer.anchor(sim.t)
             # steady clock: the pacing never depends on /clock, which this node itself publishes
-            self.timer = node.create_timer(self.driver.pacer.tick_period(sim.dt), self.tick,
+            in_lockstep = self.lockstep is not None
+            period = timer_period(self.driver, sim.dt) if in_lockstep else self.driver.pacer.tick_period(sim.dt)
+            self.timer = node.create_timer(period, self.tick,
                                            clock=SteadyClock(clock_type=ClockType.STEADY_TIME))
             self.parameters = RunParameters(node, self.driver, self.timer)
             self.logger.info(self._startup_line(settings[params.INTEGRATOR] == "auto", settings[params.RECORD_PATH],
@@ -184,6 +199,10 @@ class SceneRun:
         sim, scene, pacer, duration = self.sim, self.scene, self.driver.pacer, self.driver.duration
         built = [f"integrator {sim.method} (dt {sim.dt:g} s{', auto' if auto else ''})"]
         left_out: list[str] = []
+        if self.lockstep is not None:
+            built.insert(0, self.lockstep.describe())
+        else:
+            left_out.append("lockstep (commands act when they arrive)")
         for part_built, part_left_out in (self.outputs.describe(), self.inputs.describe(), self.wheel_input.describe()):
             built += part_built
             left_out += part_left_out
@@ -223,7 +242,11 @@ class SceneRun:
     def tick(self) -> None:
         """The timer callback: advance the run by one slice and publish what is due."""
         try:
-            self.report_progress(self.driver.tick())
+            if self.lockstep is None:
+                self.report_progress(self.driver.tick())
+            else:
+                self.report_progress(self.lockstep.turns.tick(self.driver))
+                self.lockstep.after_tick()
         except Exception as exc:  # never out of a callback: the run pauses with the reason, the node serves on
             self.logger.error(f"simulation paused: internal error {exc!r} (reset or set_state to continue)")
             self.sim.fail(f"internal error: {exc!r}")
@@ -232,10 +255,14 @@ class SceneRun:
         """Log what a slice of the run came to: falling behind, a failure, the duration reached."""
         if progress.falling_behind is not None:
             self.logger.warning(progress.falling_behind, throttle_duration_sec=5.0)
+        if progress.lockstep_timeout is not None:
+            self.logger.warning(progress.lockstep_timeout)
         if progress.failure is not None:
             self.logger.error(f"simulation paused: {progress.failure} (reset or set_state to continue)")
         if progress.finished:
             self.logger.info(f"duration reached: t = {self.sim.t:.9g} s after {self.sim.step_index} steps; stopping")
+            if self.lockstep is not None:
+                self.logger.info(self.lockstep.turns.summary())
 
     def close(self) -> None:
         """Close the recording (summary and indexes: the file is complete) and the live server; idempotent."""

@@ -63,6 +63,7 @@ from rclpy.timer import Timer
 from rigid_rot_sim.core import limits
 from rigid_rot_sim.recording import LOG_TIME_BASES  # the package itself is light (no mcap)
 from rigid_rot_sim.ros.outputs import output_topic
+from rigid_rot_sim.run.lockstep import Lockstep
 from rigid_rot_sim.run.pacing import RunDriver
 from rigid_rot_sim.scene.scene import MAX_QOS_DEPTH, OUTPUT_NAMES, QOS_RELIABILITIES, Frames, Scene
 
@@ -142,6 +143,8 @@ def _check_integrator(run: RunParameters, change: Change) -> None:
     dt = change[DT] if DT in change else run.driver.sim.dt
     if not isinstance(dt, float) or not (math.isfinite(dt) and dt > 0.0):
         raise ValueError(f"dt must be a finite number > 0 s, got {dt!r}")
+    if dt != run.driver.sim.dt and any(isinstance(o, Lockstep) for o in run.driver.sim.observers):
+        raise ValueError("dt is fixed in lockstep (the turns are whole steps of it); restart to change it")
     run.driver.sim.check_integrator(change[INTEGRATOR], dt)
 
 

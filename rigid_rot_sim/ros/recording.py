@@ -36,6 +36,7 @@ from rigid_rot_sim.recording.session import RunRecorder
 from rigid_rot_sim.recording.writer import QosProfile, RecorderError
 from rigid_rot_sim.ros.outputs import Outputs
 from rigid_rot_sim.run.commands import TorqueCommand
+from rigid_rot_sim.run.digest import format_digest
 from rigid_rot_sim.run.observer import SimulationObserver
 from rigid_rot_sim.run.simulator import Simulator
 
@@ -107,6 +108,8 @@ class NodeRecording(SimulationObserver):
         """A message the node published on output ``name``: recorded as the bytes published."""
         if self.active:
             self.file.record_serialized(topic, data)
+            if name == "state":  # the run digest of the last recorded state: the file's `digest` metadata
+                self.last_state_digest = (msg.digest, msg.header.stamp.sec, msg.header.stamp.nanosec)
 
     def received(self, topic: str, msg: Any, received_ns: int) -> None:
         """A torque command message as received (log time: receive time in the run's time base)."""
@@ -160,11 +163,21 @@ class NodeRecording(SimulationObserver):
             method=method, dt=float(dt), options=dict(options),
         )
 
+    def lockstep_timeout(self, step: int, reason: str, action: str) -> None:
+        self._event("lockstep_timeout", step, f"{reason} ({action})", reason=reason, action=action)
+
     # ------------------------------------------------------------------ end
 
     def close(self) -> None:
         """Finish the file (idempotent); logs where it is and how to inspect it."""
         if self.file.error is None and self.file.active:
+            digest = getattr(self, "last_state_digest", None)
+            if digest is not None:
+                self.file.add_metadata("digest", {
+                    "digest": format_digest(digest[0]),
+                    "stamp": f"{digest[1]}.{digest[2]:09d}",
+                    "definition": "rigid_rot_sim.run.digest (FNV-1a 64 over the float64 words of every step's t, q, omega)",
+                })
             self.file.close()
             path = self.file.path
             self.logger.info(

@@ -17,6 +17,8 @@ one the scene's schedules and the sweep use too.
 
 from __future__ import annotations
 
+import numpy as np
+
 from rigid_rot_sim.core import steps
 from rigid_rot_sim.core.steps import BOUNDARY_SLACK, step_at_or_after, step_at_or_before, time_of_step
 
@@ -52,6 +54,11 @@ class StepClock:
     def time_of_step(self, k: int) -> float:
         """Sim time (s) of step boundary k."""
         return steps.time_of_step(k, self.dt, t0=self.t_epoch, k0=self.k_epoch)
+
+    def times_of_next_steps(self, n: int) -> np.ndarray:
+        """Sim times (s) of the boundaries k + 1 .. k + n, each exactly :meth:`time_of_step`."""
+        # steps.time_of_step's formula, t0 + (k - k0) * dt, over an array of k
+        return self.t_epoch + (np.arange(self.k + 1, self.k + n + 1) - self.k_epoch) * self.dt
 
     def step_at_or_after(self, t: float) -> int:
         """The first step boundary at or after sim time t (s), never before the current one."""

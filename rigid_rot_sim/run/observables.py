@@ -62,6 +62,8 @@ class StateSnapshot:
     wheel_torques: np.ndarray | None = None
     #: Every torque acting on the body at this state, by source, N*m, user body frame (their sum is ``torque_body``).
     torque_sources: tuple[tuple[str, np.ndarray], ...] | None = None
+    #: The run digest up to this step (:mod:`~rigid_rot_sim.run.digest`), an unsigned 64-bit integer.
+    digest: int = 0
 
     @property
     def energy(self) -> float:
@@ -105,8 +107,10 @@ class Observables:
         """The largest gravity torque (N*m) on the body: weight times the centre-of-mass distance."""
         return self.weight * float(np.linalg.norm(self.com_body))
 
-    def snapshot(self, t: float, step: int, q_principal: Any, omega_principal: Any, torque_body: Any) -> StateSnapshot:
-        """The snapshot of the principal-frame state (``q``, ``ω``) under ``torque_body`` (N*m, user body frame)."""
+    def snapshot(self, t: float, step: int, q_principal: Any, omega_principal: Any, torque_body: Any,
+                 digest: int = 0) -> StateSnapshot:
+        """The snapshot of the principal-frame state (``q``, ``ω``) under ``torque_body`` (N*m, user body frame);
+        ``digest``: the run digest up to this step."""
         # plain floats and the quaternion helpers: this runs at every publication
         i1, i2, i3 = (float(v) for v in self.body.principal_moments)
         q_principal = tuple(float(v) for v in q_principal)
@@ -146,6 +150,7 @@ class Observables:
             euler_zxz=euler,
             p_phi=p_phi,
             p_psi=p_psi,
+            digest=digest,
         )
 
 

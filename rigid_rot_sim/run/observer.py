@@ -58,6 +58,12 @@ class SimulationObserver:
         ``reason`` is :attr:`Simulator.failure <rigid_rot_sim.run.simulator.Simulator.failure>`.
         """
 
+    def lockstep_timeout(self, step: int, reason: str, action: str) -> None:
+        """A lockstep turn at ``step`` timed out for ``reason``; ``action`` is ``pause`` or ``hold``.
+
+        Told by the lockstep turns (:mod:`~rigid_rot_sim.run.lockstep`); states do not depend on it.
+        """
+
     def outputs_due(self, step: int, snapshot: "StateSnapshot", names: Sequence[str]) -> None:
         """The outputs ``names`` (scene output names) are due at ``step``, with the state there.
 

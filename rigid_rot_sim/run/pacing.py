@@ -180,6 +180,8 @@ class Progress:
     failure: str | None = None
     #: True when the duration was reached in this slice.
     finished: bool = False
+    #: Lockstep: why a turn timed out and what the run did (paused or holding), else None.
+    lockstep_timeout: str | None = None
 
 
 class RunDriver:

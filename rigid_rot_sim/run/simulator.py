@@ -44,6 +44,7 @@ and :meth:`Simulator.set_state` clear the failure and resume a run that the fail
 from __future__ import annotations
 
 from typing import Any
+from collections.abc import Callable
 
 from rigid_rot_sim.core import validation
 from rigid_rot_sim.run import advice
@@ -86,6 +87,8 @@ class Simulator(WheelInputs):
         #: Told what happens to the run, in order (:class:`SimulationObserver`); add with :meth:`add_observer`.
         self.observers: list[SimulationObserver] = []
         self.paused = False
+        #: ``gate(source, stamp)`` raises CommandRejected to refuse a checked topic command (lockstep).
+        self.command_gate: Callable[[str, float | None], None] = lambda source, stamp: None
         self.failure: str | None = None
         self._paused_by_failure = False
         self.clock = StepClock(validation.positive_scalar("dt", scene.integrator.dt if dt is None else dt))
@@ -181,13 +184,13 @@ class Simulator(WheelInputs):
         """Accept a command that arrived now on topic input ``source``, or raise CommandRejected.
 
         ``torque`` (N*m) in ``frame_id`` (resolved with the input's policy); ``stamp`` the
-        header stamp (s; 0 or None = none); ``force`` (N) the force of a WrenchStamped:
-        a rotation-only simulator cannot apply a force, so a non-zero one rejects the
-        command. Effective time: the stamp when non-zero and not in the past, else now.
+        header stamp (s; 0 or None = none); ``force`` (N) the force of a WrenchStamped: a rotation-only
+        simulator rejects a non-zero one. Effective time: the stamp when non-zero and not in the past, else now.
         The observers hear of a rejection (then it is raised) or of the accepted command.
         """
         try:
             values, frame, effective, stamp = self.commands.admit(source, torque, frame_id, stamp, force)
+            self.command_gate(source, stamp)
         except CommandRejected as rejected:
             self._report_rejected(rejected, frame_id, torque)
             raise

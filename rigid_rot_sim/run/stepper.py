@@ -25,6 +25,7 @@ from rigid_rot_sim.run import advice
 from rigid_rot_sim.core import quaternion as quat
 from rigid_rot_sim.run.clock import StepClock
 from rigid_rot_sim.run.commands import CommandSchedule
+from rigid_rot_sim.run.digest import DIGEST_SEED, fold_steps
 from rigid_rot_sim.core.dynamics import RigidBody
 from rigid_rot_sim.core.integrators import get_method
 from rigid_rot_sim.core.integrators.base import Integrator, NonFiniteStateError
@@ -35,11 +36,6 @@ from rigid_rot_sim.core.torque import ConstantTorque
 __all__ = ["Stepper"]
 
 _ZERO3 = (0.0, 0.0, 0.0)
-
-#: Methods whose ``advance(n)`` differs in the last bits from n single steps: dop853 lands
-#: on ``t + n * dt`` (one rounding) instead of n additions. Stepped one at a time so that
-#: states do not depend on how the node chunks the run (publish rates, wall clock).
-_STEPWISE_METHODS = frozenset({"dop853"})
 
 #: Largest kinetic energy (J), |L| (kg*m^2/s) and |omega| (rad/s) a state may have: the snapshot's
 #: rotations and drifts of such values stay finite (a NaN compares false: refused too).
@@ -77,6 +73,8 @@ class Stepper:
         self.method = ""
         self.options: dict[str, Any] = {}
         self.step_torque_body: tuple[float, float, float] = _ZERO3
+        #: The run digest (:mod:`~rigid_rot_sim.run.digest`) of every step taken so far.
+        self.digest = DIGEST_SEED
         self._i_min = float(np.min(body.principal_moments))
         self.configure(method, clock.dt, options, first=True)
 
@@ -159,7 +157,8 @@ class Stepper:
         """The integrator's state at the clock's step, as the user sees it (:meth:`Observables.snapshot`)."""
         integrator = self.integrator
         assert integrator is not None
-        snapshot = self.observables.snapshot(self.clock.t, self.clock.k, integrator.q, integrator.omega, self.step_torque_body)
+        snapshot = self.observables.snapshot(self.clock.t, self.clock.k, integrator.q, integrator.omega, self.step_torque_body,
+                                             self.digest)
         sources = command_torques(self.commands, snapshot.orientation)
         if self.gravity is not None:
             gravity = self.body.vector_from_principal(self.gravity(0.0, integrator.q, integrator.omega))
@@ -217,11 +216,7 @@ class Stepper:
             chunk = min(chunk, self._steps_within_rotation_limit())
             start = self._saved_state()
             try:
-                if integrator.name in _STEPWISE_METHODS:
-                    for _ in range(chunk):
-                        integrator.advance(1)
-                else:
-                    integrator.advance(chunk)
+                q_steps, omega_steps = integrator.advance_saving(chunk, 1)  # = advance(chunk), each step kept
             except (ArithmeticError, ValueError) as exc:
                 # NonFiniteStateError, or a math error on the way to it (sin(inf), overflow)
                 good = integrator.n_steps - start[3]
@@ -229,6 +224,7 @@ class Stepper:
                 if kept and self._derived_failure() is None:
                     clock.k += good  # the method stopped at its last good step (energy and momentum finite)
                     done += good
+                    self.digest = fold_steps(self.digest, [clock.t], [integrator.q], [integrator.omega])  # once
                 else:
                     self._restore(start)
                 name = "NonFiniteStateError" if isinstance(exc, NonFiniteStateError) else type(exc).__name__
@@ -237,6 +233,7 @@ class Stepper:
             if reason is not None:  # a finite state whose energy or momentum overflows
                 self._restore(start)
                 return done, f"NonFiniteStateError: {reason}"
+            self.digest = fold_steps(self.digest, clock.times_of_next_steps(chunk), q_steps, omega_steps)
             clock.k += chunk
             done += chunk
         return done, None

@@ -73,6 +73,7 @@ __all__ = [
     "OutputRates",
     "OutputQos",
     "CommandSettings",
+    "LockstepSpec",
     "Sensors",
     "Scene",
     "load_scene",
@@ -304,6 +305,21 @@ class CommandSettings:
 
 
 @dataclass(frozen=True)
+class LockstepSpec:
+    """Lockstep with controllers (:mod:`rigid_rot_sim.run.lockstep` has the contract).
+
+    ``period``: s of sim time between turns (a whole number of steps); ``inputs``: the topic
+    inputs waited for at every turn; ``timeout``: s of wall time to wait for a turn's
+    commands; ``on_timeout``: ``pause`` or ``hold``.
+    """
+
+    period: float
+    inputs: tuple[str, ...]
+    timeout: float = 5.0
+    on_timeout: str = "pause"
+
+
+@dataclass(frozen=True)
 class Sensors:
     """The scene's sensor models (:mod:`rigid_rot_sim.core.sensors`) and the seed of their noise.
 
@@ -335,6 +351,7 @@ class Scene:
     recording: str | None = None
     foxglove: str | None = None  # [HOST:]PORT of a Foxglove live server (a node setting; see ros/foxglove_live)
     commands: CommandSettings = CommandSettings()
+    lockstep: LockstepSpec | None = None
     spacecraft: Spacecraft = Spacecraft()
     sensors: Sensors = Sensors()
     description: str = ""
@@ -463,9 +480,31 @@ def _scene(spec: Mapping[str, Any], source: str, text: str) -> Scene:
             max_torque=float(commands.get("max_torque", 0.0)),
             qos_depth=commands.get("qos_depth", limits.DEFAULT_COMMAND_DEPTH),
         ),
+        lockstep=lockstep_spec(spec.get("lockstep"), topics, float((spec.get("integrator") or {}).get("dt", 0.001))),
         source=source,
         text=text,
     )
+
+
+def lockstep_spec(spec: Mapping[str, Any] | None, topics: tuple[TopicInput, ...], dt: float) -> LockstepSpec | None:
+    """The lockstep section: its inputs are topic inputs of the scene, its period whole steps of dt."""
+    if spec is None:
+        return None
+    known = [t.topic for t in topics]
+    inputs = []
+    for index, name in enumerate(spec["inputs"]):
+        name = name.strip()
+        if name not in known:
+            raise ValueError(f"lockstep.inputs[{index}]: {name!r} is not a topic of torque_inputs ({known or 'none'})")
+        if name in inputs:
+            raise ValueError(f"lockstep.inputs[{index}]: {name!r} is listed twice")
+        inputs.append(name)
+    period = float(spec["period"])
+    steps = round(period / dt)
+    if steps < 1 or abs(steps * dt - period) > 1e-9 * period:
+        raise ValueError(f"lockstep.period: {period:g} s is not a whole number of steps of integrator.dt {dt:g} s")
+    return LockstepSpec(period=period, inputs=tuple(inputs), timeout=float(spec.get("timeout", LockstepSpec.timeout)),
+                        on_timeout=spec.get("on_timeout", LockstepSpec.on_timeout))
 
 
 def _epoch(text: str) -> str:

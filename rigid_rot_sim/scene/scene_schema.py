@@ -43,6 +43,7 @@ __all__ = [
     "DEFAULT_WORLD_FRAME",
     "DEFAULT_BODY_FRAME",
     "DEFAULT_GRAVITY",
+    "LOCKSTEP_ON_TIMEOUT",
     "DEFAULT_EPOCH",
     "EPOCH_PATTERN",
 ]
@@ -231,6 +232,27 @@ _INTEGRATOR = nullable(mapping(
     },
 ))
 
+LOCKSTEP_ON_TIMEOUT = ("pause", "hold")
+
+_LOCKSTEP = nullable(mapping(
+    "Lockstep with controllers: at every turn (t_k = k * period) the node publishes the state, then waits "
+    "until each listed input has delivered one command stamped t_k; those act from t_k. Absent or null: "
+    "free-running (commands act when they arrive).",
+    {
+        "period": number("Sim time between two controller turns, s; a whole number of physics steps.",
+                         exclusive_minimum=0.0, maximum=_DURATION_MAX),
+        "inputs": array("The torque topic inputs (their topic, as in torque_inputs) the node waits for at "
+                        "every turn.", text("A topic of torque_inputs, e.g. ~/torque."), min_items=1,
+                        max_items=limits.MAX_TORQUE_INPUTS),
+        "timeout": number("Wall time to wait for a turn's commands, s.", exclusive_minimum=0.0,
+                          maximum=_DURATION_MAX, default=5.0),
+        "on_timeout": choice("What a turn that timed out does: pause (the reason on ~/sim_events and the log) "
+                             "or hold (keep each input's last command and go on).", LOCKSTEP_ON_TIMEOUT,
+                             default="pause"),
+    },
+    required=["period", "inputs"],
+))
+
 #: Largest sensor noise seed + 1 (Philox's 64-bit key word).
 SEED_LIMIT = 1 << 64
 
@@ -340,6 +362,7 @@ SCENE_SCHEMA: dict[str, Any] = {
                                          default=limits.DEFAULT_COMMAND_DEPTH),
                 },
             )),
+            "lockstep": _LOCKSTEP,
         },
         required=["body"],
     ),

@@ -82,6 +82,17 @@ def test_same_integrator_reproduces_every_state_bit_for_bit(tmp_path):
     assert "BIT-EXACT" in report.verdict
 
 
+def test_resim_checks_the_run_digest(tmp_path):
+    path = tmp_path / "run.mcap"
+    _, states = record_like_the_node(path, "torque_driven", 600, 10, COMMANDS)
+    report = resimulate(path)
+    assert report.digest == report.recorded_digest == states[-1].digest != 0
+    assert report.digest_verdict == "equal" and "equal" in report.format()
+    other = resimulate(path, method="lie_rk4")  # another integrator: other states, another digest
+    assert other.digest != other.recorded_digest and other.digest_verdict == "different"
+    assert "different" in other.format()
+
+
 def test_another_integrator_reports_a_small_nonzero_difference(tmp_path):
     path = tmp_path / "run.mcap"
     _, states = record_like_the_node(path, "torque_driven", 1200, 10, COMMANDS)

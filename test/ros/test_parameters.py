@@ -10,6 +10,7 @@ from rcl_interfaces.msg import ParameterType  # noqa: E402
 from rclpy.parameter import Parameter  # noqa: E402
 
 from rigid_rot_sim.ros import parameters  # noqa: E402
+from rigid_rot_sim.ros.lockstep import LOCKSTEP_PARAMETERS  # noqa: E402
 from rigid_rot_sim.ros.node import RigidRotSimNode  # noqa: E402
 from rigid_rot_sim.scene.scene import OUTPUT_NAMES, load_scene  # noqa: E402
 from rigid_rot_sim.share import resolve_scene  # noqa: E402
@@ -40,7 +41,11 @@ def test_the_table_is_what_the_node_declares(node):
     assert len(names) == len(set(names))
     assert [spec.name for spec in parameters.RATES.values()] == [f"rates.{name}" for name in OUTPUT_NAMES]
     declared = set(node.list_parameters([], 0).names)
-    assert declared == set(names) | {parameters.SCENE.name, "use_sim_time", "start_type_description_service"}
+    # lockstep.* are one block of their own (ros/lockstep.py): lockstep.inputs is a string array
+    lockstep = set(LOCKSTEP_PARAMETERS)
+    assert declared == set(names) | lockstep | {parameters.SCENE.name, "use_sim_time", "start_type_description_service"}
+    for name in lockstep:
+        assert node.describe_parameter(name).read_only, name
     scene = load_scene(resolve_scene("heavy_top"))
     for spec in parameters.PARAMETERS:
         described = node.describe_parameter(spec.name)

@@ -38,3 +38,11 @@ def test_a_dt_change_starts_an_epoch_and_reset_ends_it():
     assert clock.step_at_or_after(t + 0.75) == 6
     clock.reset()
     assert (clock.k, clock.t, clock.dt) == (0, 0.0, 0.5)
+
+
+def test_times_of_next_steps_are_the_times_of_those_steps():
+    clock = StepClock(0.1)
+    clock.k = 7
+    clock.change_dt(0.03)
+    clock.k = 11
+    assert clock.times_of_next_steps(5).tolist() == [clock.time_of_step(k) for k in range(12, 17)]

@@ -20,6 +20,7 @@ SHIPPED = {
     "from_point_masses": "none",
     "wheel_slew": "spacecraft",
     "gravity_gradient_satellite": "spacecraft",
+    "closed_loop_lockstep": "topic",
 }
 
 MINIMAL = "body: {principal_moments: [1.0, 2.0, 3.0]}\n"
@@ -44,6 +45,25 @@ def test_shipped_scenes_load_with_their_torque_kind(name, kind):
 
 def test_every_scene_file_is_listed():
     assert {p.stem for p in SCENES.glob("*.yaml")} == set(SHIPPED)
+
+
+def test_the_lockstep_section():
+    scene = load_scene(SCENES / "closed_loop_lockstep.yaml")
+    assert (scene.lockstep.period, scene.lockstep.inputs) == (0.02, ("~/torque",))
+    assert (scene.lockstep.timeout, scene.lockstep.on_timeout) == (5.0, "pause")
+    assert parse(MINIMAL).lockstep is None
+    driven = MINIMAL + "torque_inputs: [{topic: ~/torque}]\n"
+    assert parse(driven + "lockstep: {period: 0.01, inputs: [~/torque]}").lockstep.on_timeout == "pause"
+    for section, message in [
+        ("lockstep: {period: 0.0105, inputs: [~/torque]}", "lockstep.period: 0.0105 s is not a whole number of steps"),
+        ("lockstep: {period: 0.01, inputs: [~/cmd]}", "lockstep.inputs[0]: '~/cmd' is not a topic of torque_inputs"),
+        ("lockstep: {period: 0.01, inputs: [~/torque, ~/torque]}", "listed twice"),
+        ("lockstep: {period: 0.01, inputs: []}", "lockstep.inputs"),
+        ("lockstep: {period: 0.01, inputs: [~/torque], on_timeout: wait}", "lockstep.on_timeout"),
+        ("lockstep: {inputs: [~/torque]}", "period"),
+    ]:
+        with pytest.raises(SceneError, match=message.replace("[", r"\[").replace("]", r"\]")):
+            parse(driven + section)
 
 
 def test_defaults_of_a_minimal_scene():
