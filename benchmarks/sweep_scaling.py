@@ -6,7 +6,10 @@
 The workload is a dispersed torque-free sweep (free_tumble, rk4, dt = 0.01 s, inertia,
 misalignment and rate dispersions), the same rows each time. Measured, in one run:
 
-* in this process without Dask (run_local): the baseline rate;
+* the raw batch kernel (``core.batch.advance_batch``, rk4, the same N and steps, one
+  thread): the rate a sweep worker is measured against (target: >= 80 % of it);
+* in this process without Dask (run_local): the baseline rate, and its share of the raw
+  kernel's;
 * on a local cluster of 1 worker, then 2 (single-thread processes): body-steps per second,
   the efficiency ``rate(2) / (2 rate(1))`` and the ratio to the baseline;
 * task overhead: the round trip of 200 no-op tasks on the 2-worker cluster (per task), and
@@ -29,6 +32,7 @@ import numpy as np
 
 from rigid_rot_sim.analysis.cluster import open_client, run_local, run_sweep
 from rigid_rot_sim.analysis.sweep_spec import parse_sweep_text
+from rigid_rot_sim.core.batch import advance_batch
 
 SPEC = """
 name: scaling
@@ -65,6 +69,28 @@ def measure(client, spec, chunk: int) -> tuple[float, float]:
     return seconds, spec.n_runs * (spec.duration / spec.dts[0]) / seconds
 
 
+def raw_kernel_rate(n: int, steps: int) -> float:
+    """Body-steps per second of advance_batch alone (rk4, one thread, N = ``n``, no torque): best of 3."""
+    import numba
+
+    rng = np.random.default_rng(0)
+    moments = np.array([1.0, 2.0, 3.0]) * (1.0 + 0.02 * rng.standard_normal((n, 3)))
+    q = np.tile([0.0, 0.0, 0.0, 1.0], (n, 1))
+    omega = np.array([0.3, 1.0, 0.2]) + 1e-3 * rng.standard_normal((n, 3))
+    threads = numba.get_num_threads()
+    numba.set_num_threads(1)
+    try:
+        advance_batch("rk4", moments, q, omega, 0.01, 1, np.zeros((n, 3)))  # compiled and warm
+        best = np.inf
+        for _ in range(3):
+            start = time.perf_counter()
+            advance_batch("rk4", moments, q, omega, 0.01, steps, np.zeros((n, 3)))
+            best = min(best, time.perf_counter() - start)
+    finally:
+        numba.set_num_threads(threads)
+    return n * steps / best
+
+
 def task_overhead(client, n: int = 200) -> float:
     """Seconds per no-op task, submitted together and gathered (scheduler + comms + worker)."""
     client.gather(client.map(_noop, range(20), pure=False))  # warm up
@@ -83,14 +109,18 @@ def main() -> None:
     spec = parse_sweep_text(SPEC.format(samples=args.samples, duration=args.duration), "scaling.yaml")
     steps = spec.duration / spec.dts[0]
     body_steps = spec.n_runs * steps
-    print(f"machine: {platform.processor() or platform.machine()}, {os.cpu_count()} CPUs, load {os.getloadavg()[0]:.1f}")
+    print(f"machine: {platform.processor() or platform.machine()}, {os.cpu_count()} CPUs, "
+          f"load average {' '.join(f'{x:.2f}' for x in os.getloadavg())}")
     print(f"workload: {spec.n_runs} runs x {steps:.0f} rk4 steps = {body_steps:.3g} body-steps, "
           f"{args.chunk} bodies per task ({-(-spec.n_runs // args.chunk)} tasks)")
 
+    raw = raw_kernel_rate(min(args.chunk, spec.n_runs), round(steps))
+    print(f"raw batch kernel, rk4, N = {min(args.chunk, spec.n_runs)}, {steps:.0f} steps, 1 thread: {raw:.3g} body-steps/s")
+    run_local(parse_sweep_text(SPEC.format(samples=4, duration=0.1), "warm.yaml"), chunk_size=4)
     start = time.perf_counter()
     run_local(spec, chunk_size=args.chunk)
     baseline = body_steps / (time.perf_counter() - start)
-    print(f"in this process, no Dask:  {baseline:.3g} body-steps/s (baseline)")
+    print(f"in this process, no Dask:  {baseline:.3g} body-steps/s (baseline; {baseline / raw:.0%} of the raw kernel)")
 
     rates = {}
     clusters = [(None, 1), (None, 2)] if args.scheduler is None else [(args.scheduler, None)]
@@ -101,7 +131,8 @@ def main() -> None:
                       chunk_size=1, progress=False)  # imports on every worker
             seconds, rate = measure(client, spec, args.chunk)
             rates[n] = rate
-            print(f"{n} worker(s): {rate:.3g} body-steps/s ({seconds:.1f} s; {rate / baseline:.2f}x the baseline"
+            print(f"{n} worker(s): {rate:.3g} body-steps/s ({seconds:.1f} s; {rate / baseline:.2f}x the baseline, "
+                  f"{rate / n / raw:.0%} of the raw kernel per worker"
                   + (f", efficiency {rate / (n * rates[1]):.0%})" if n > 1 and 1 in rates else ")"))
             if n == max(w or n for _, w in clusters):
                 overhead = task_overhead(client)
@@ -111,6 +142,7 @@ def main() -> None:
                 memory = client.run(_rss)
                 print("memory per worker (RSS after the sweep): "
                       + ", ".join(f"{m / 2**20:.0f} MiB" for m in memory.values()))
+    print(f"load average at the end: {' '.join(f'{x:.2f}' for x in os.getloadavg())}")
     # one worker on a core of its own is the per-worker rate a cluster scales out
     per_worker = rates.get(1, max(rates.values()) / max(rates))
     runs = 1e9

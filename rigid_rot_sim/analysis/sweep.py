@@ -36,6 +36,7 @@ from typing import Any
 import numpy as np
 from scipy.spatial.transform import Rotation
 
+from rigid_rot_sim.analysis.streams import StreamDraws
 from rigid_rot_sim.analysis.sweep_spec import NORMAL_CUT_SIGMAS, Dispersion, SweepSpec
 from rigid_rot_sim.core import quaternion as quat
 from rigid_rot_sim.core.batch import advance_batch
@@ -119,7 +120,7 @@ def _draw(rng: np.random.Generator, dispersion: Dispersion) -> np.ndarray:
     if dispersion.distribution == "uniform":
         return rng.uniform(-1.0, 1.0, 3) * size
     z = rng.standard_normal(3)
-    while np.any(np.abs(z) > NORMAL_CUT_SIGMAS):
+    while (np.abs(z) > NORMAL_CUT_SIGMAS).any():
         bad = np.abs(z) > NORMAL_CUT_SIGMAS
         z[bad] = rng.standard_normal(int(bad.sum()))
     return z * size
@@ -132,24 +133,53 @@ def sample_inputs(spec: SweepSpec, sample: int) -> dict[str, np.ndarray]:
     rad, principal frame), ``omega`` (rad/s, body), ``attitude`` (rotation vector, rad,
     body), ``torque_scale`` (relative, per body axis), ``noise`` ((intervals, 3) N*m, body).
     """
+    return {key: value[0] for key, value in _sample_draws(spec, np.array([sample])).items()}
+
+
+def _sample_draws(spec: SweepSpec, samples: np.ndarray) -> dict[str, np.ndarray]:
+    """:func:`sample_inputs` of many samples, stacked: (N, 3) per key, noise (N, intervals, 3).
+
+    Stream ``k`` of sample ``s`` is ``PCG64(SeedSequence(seed, spawn_key=(s, k)))``, built for
+    all the samples at once (:mod:`~rigid_rot_sim.analysis.streams`); only the dispersed
+    streams are built, and each one's draws are its own either way.
+    """
     d = spec.dispersions
-    rngs = {
-        name: np.random.Generator(np.random.PCG64(np.random.SeedSequence(spec.seed, spawn_key=(sample, k))))
-        for k, name in enumerate(_STREAMS)
-    }
-    zero = np.zeros(3)
+    n = len(samples)
+    draws = StreamDraws()
+
+    def stream(name: str, dispersion: Dispersion | None) -> np.ndarray:
+        if not dispersion:
+            return np.zeros((n, 3))
+        k = _STREAMS.index(name)
+        # _draw's first three numbers for every sample; the rare sample with one beyond the
+        # cut runs _draw from its stream's start again (the same first draw, then redraws)
+        generators = draws.each(spec.seed, samples, k)
+        if dispersion.distribution == "uniform":
+            z = np.array([rng.uniform(-1.0, 1.0, 3) for rng in generators]).reshape(n, 3)
+        else:
+            z = np.array([rng.standard_normal(3) for rng in generators]).reshape(n, 3)
+        beyond = np.flatnonzero(
+            (np.abs(z) > NORMAL_CUT_SIGMAS).any(axis=1) if dispersion.distribution != "uniform" else np.zeros(n, bool)
+        )
+        z *= np.asarray(dispersion.size)
+        for i, rng in zip(beyond, draws.each(spec.seed, samples[beyond], k), strict=True):
+            z[i] = _draw(rng, dispersion)
+        return z
+
     out = {
-        "moments": _draw(rngs["principal_moments"], d.principal_moments) if d.principal_moments else zero,
-        "misalignment": _draw(rngs["axis_misalignment"], d.axis_misalignment) if d.axis_misalignment else zero,
-        "omega": _draw(rngs["initial_omega"], d.initial_omega) if d.initial_omega else zero,
-        "attitude": _draw(rngs["initial_attitude"], d.initial_attitude) if d.initial_attitude else zero,
-        "torque_scale": _draw(rngs["torque_scale"], d.torque_scale) if d.torque_scale else zero,
+        "moments": stream("principal_moments", d.principal_moments),
+        "misalignment": stream("axis_misalignment", d.axis_misalignment),
+        "omega": stream("initial_omega", d.initial_omega),
+        "attitude": stream("initial_attitude", d.initial_attitude),
+        "torque_scale": stream("torque_scale", d.torque_scale),
     }
     if d.torque_noise_sigma is not None:
         intervals = math.ceil(spec.duration / d.torque_noise_interval)
-        out["noise"] = rngs["torque_noise"].standard_normal((intervals, 3)) * np.asarray(d.torque_noise_sigma)
+        sigma = np.asarray(d.torque_noise_sigma)
+        generators = draws.each(spec.seed, samples, _STREAMS.index("torque_noise"))
+        out["noise"] = np.array([rng.standard_normal((intervals, 3)) * sigma for rng in generators]).reshape(n, intervals, 3)
     else:
-        out["noise"] = np.zeros((0, 3))
+        out["noise"] = np.zeros((n, 0, 3))
     return out
 
 
@@ -177,12 +207,12 @@ def _nominal_omega0(spec: SweepSpec, spin_rate: float | None) -> np.ndarray:
 def _bodies(spec: SweepSpec, spin_rate: float | None, samples: range | None) -> _Bodies:
     """The dispersed bodies of ``samples``, or the nominal body (``samples`` None)."""
     body = RigidBody.from_inertia(spec.scene.body.inertia_array, "body.inertia")
-    draws = [sample_inputs(spec, s) for s in samples] if samples is not None else [None]
-    n = len(draws)
+    draws = _sample_draws(spec, np.arange(samples.start, samples.stop)) if samples is not None else None
+    n = len(samples) if samples is not None else 1
     zeros = np.zeros((n, 3))
 
     def stack(key: str) -> np.ndarray:
-        return np.array([d[key] for d in draws]) if samples is not None else zeros
+        return draws[key] if draws is not None else zeros
 
     misalignment = stack("misalignment")
     attitude = stack("attitude")
@@ -191,7 +221,7 @@ def _bodies(spec: SweepSpec, spin_rate: float | None, samples: range | None) -> 
     q0 = (Rotation.from_quat(np.broadcast_to(spec.scene.initial.orientation, (n, 4))) * Rotation.from_rotvec(attitude)).as_quat()
     d = spec.dispersions
     intervals = math.ceil(spec.duration / d.torque_noise_interval) if d.torque_noise_sigma is not None else 0
-    noise = np.array([d["noise"] for d in draws]) if samples is not None else np.zeros((1, intervals, 3))
+    noise = draws["noise"] if draws is not None else np.zeros((1, intervals, 3))
     return _Bodies(
         moments=moments,
         body_from_principal=body_from_principal,
@@ -366,18 +396,20 @@ def _simulate(spec: SweepSpec, bodies: _Bodies, method: str, dt: float) -> _Outc
         step = last if partial else dt
         if not alive.any():
             break
-        q_body = _rows(quat.multiply, q[alive], principal_from_body[alive]) if world_frame else None
-        torque_body = _body_torque(spec, _subset(bodies, alive), a, dt, q_body)
-        impulse[alive] += np.linalg.norm(torque_body, axis=1) * step * (b - a)
-        torque_p = _rows(quat.rotate, principal_from_body[alive], torque_body)
+        everyone = len(errors) == 0  # no body has failed yet: no subsets to copy
+        live = slice(None) if everyone else alive
+        q_body = _rows(quat.multiply, q[live], principal_from_body[live]) if world_frame else None
+        torque_body = _body_torque(spec, bodies if everyone else _subset(bodies, alive), a, dt, q_body)
+        impulse[live] += np.linalg.norm(torque_body, axis=1) * step * (b - a)
+        torque_p = _rows(quat.rotate, principal_from_body[live], torque_body)
         # the first call normalises q as an integrator's set_state does; later ones continue from it
         q_new, omega_new, failed = _advance_isolated(
-            method, moments[alive], q[alive], omega[alive], step, b - a, torque_p, normalize_q=a == 0
+            method, moments[live], q[live], omega[live], step, b - a, torque_p, normalize_q=a == 0
         )
         index = np.flatnonzero(alive)
         for i, message in failed.items():
             errors[int(index[i])] = f"{message} (segment from t = {t_a:.9g} s, dt = {step:.9g} s)"
-        q[alive], omega[alive] = q_new, omega_new
+        q[live], omega[live] = q_new, omega_new
         for i in failed:
             alive[index[i]] = False
         if b in checkpoint_set or partial:
@@ -477,20 +509,15 @@ def run_chunk(spec: SweepSpec, chunk: Chunk, nominal: _Outcome | None = None) ->
     omega_error = np.linalg.norm(outcome.omega_body - nominal.omega_body[0], axis=1)
     torque_free = _torque_free(spec)
     tolerance = spec.energy_tolerance
-    verdict, error = [], []
-    for i in range(n):
-        message = outcome.errors.get(i)
-        if message is not None:
-            verdict.append("unstable")
-        elif torque_free and max(outcome.energy_drift[i], outcome.momentum_drift[i]) > tolerance:
-            verdict.append("drifting")
-        elif not torque_free and outcome.max_omega[i] > outcome.omega_bound[i] * (1.0 + tolerance):
-            verdict.append("drifting")
-        else:
-            verdict.append("stable")
-        if message is None and nominal.errors:
-            message = f"nominal run failed: {nominal.errors[0]}"
-        error.append(message)
+    if torque_free:
+        drifting = np.maximum(outcome.energy_drift, outcome.momentum_drift) > tolerance
+    else:
+        drifting = outcome.max_omega > outcome.omega_bound * (1.0 + tolerance)
+    verdicts = np.where(drifting, "drifting", "stable").astype(object)
+    error: list[str | None] = [f"nominal run failed: {nominal.errors[0]}" if nominal.errors else None] * n
+    for i, message in outcome.errors.items():
+        verdicts[i], error[i] = "unstable", message
+    verdict = verdicts.tolist()
     nan = np.full(n, np.nan)
     grid_point = chunk.grid_point
     return {

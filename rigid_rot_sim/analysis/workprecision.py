@@ -4,20 +4,28 @@ For each problem of :mod:`rigid_rot_sim.analysis.problems`, every integrator in
 :data:`rigid_rot_sim.core.integrators.METHODS` (the splittings once per order) and
 scipy's ``solve_ivp`` (RK45, DOP853, Radau, LSODA) run over a sweep:
 
-* fixed-step methods: the number of steps doubles (quadruples in quick mode) from a
-  first step of about 0.5 rad of rotation;
-* adaptive methods (ours and scipy's): the tolerance falls by 10x from 1e-3
+* fixed-step methods: step counts from a first step of about 0.5 rad of rotation, by
+  factors of 2 (4 in quick mode), ``max_step_points`` of them at most (the step range);
+* adaptive methods (ours and scipy's): the tolerance from 1e-3, falling by 10x
   (by 1000x in quick mode), with ``rtol = atol``;
 * ``exact``: one step of length t_end (torque-free problems only).
 
-A sweep stops once a point takes longer than the per-point time budget or its omega
-error is below the error floor (1e-13, or the reference's own certified error).
+Points are chosen by error target, not swept to a time budget: once two stable points
+show the observed order p (omega error ~ value**p), the next point is the one predicted
+to reach half the largest target of TARGETS not met yet, within the step range above
+(tolerance sweeps walk their list: scipy's error does not follow a power of the tolerance
+closely enough to skip decades fairly). A line stops once a point meets
+min(TARGETS) (or the reference's own certified error, if larger), when a point takes
+longer than the per-point time budget or the next one is predicted to take twice that,
+or after two refusals.
 
 Timing: each point is run ``repeats`` times and the best wall-clock time is kept
 (points whose first run takes over 1 s are run twice). The timed call is the whole of
 what a user would run, set-up included: ``simulate(...)`` for ours, and for scipy
 building the right-hand side, ``solve_ivp(...)`` and normalising the final quaternion.
-The garbage collector is off while timing, for every method alike.
+The garbage collector is off while timing, for every method alike (and collects before
+each run; what is alive when a line starts is frozen, ``gc.freeze``, so that collection
+is quick).
 
 Fastest method at a target error: the cheapest measured point whose omega error is at
 or below the target (no interpolation between sweep points, so the figure is an upper
@@ -45,6 +53,12 @@ from rigid_rot_sim.core.integrators.base import NonFiniteStateError
 SCIPY_METHODS = ("RK45", "DOP853", "Radau", "LSODA")
 TARGETS = (1e-6, 1e-10)
 ERROR_FLOOR = 1e-13
+#: A line aims its next point at this fraction of the target it has not met yet (the error
+#: model from two points is asymptotic: the margin lands the point below the target).
+TARGET_MARGIN = 0.5
+#: Observed orders below this are taken as this (a point still far from asymptotic must
+#: not predict an absurd jump).
+MIN_ORDER = 0.5
 #: On a cluster every point is timed together with this scipy run on the same worker, in the
 #: same task; run times are then compared as multiples of it, so that points measured on
 #: different machines stay comparable.
@@ -237,7 +251,11 @@ def measure_point(problem: Problem, line: DiagramLine, value: float, repeats: in
 
 
 def sweep_values(problem: Problem, line: DiagramLine, settings: Settings) -> list[float]:
-    """The sweep parameter values of a line, coarse to fine."""
+    """A line's sweep values, coarse to fine: its range, and an upper bound on its points.
+
+    :func:`run_line` starts with the first and, once two stable points show how the error
+    falls, jumps between them to the values :func:`next_value` predicts for the targets.
+    """
     if line.sweep == "single":
         return [problem.t_end]
     if line.sweep == "tol":
@@ -245,6 +263,38 @@ def sweep_values(problem: Problem, line: DiagramLine, settings: Settings) -> lis
     spin = float(np.linalg.norm(problem.omega0))
     n0 = max(4, math.ceil(problem.t_end * spin / 0.5))
     return [problem.t_end / (n0 * settings.step_factor**k) for k in range(settings.max_step_points)]
+
+
+def observed_order(coarse: SweepPoint, fine: SweepPoint) -> float | None:
+    """The exponent p of ``omega error ~ value**p`` between two stable points, or None if the error did not fall."""
+    if not (coarse.omega_error > fine.omega_error > 0.0 and coarse.value > fine.value):
+        return None
+    return math.log(coarse.omega_error / fine.omega_error) / math.log(coarse.value / fine.value)
+
+
+def next_value(
+    line: DiagramLine, t_end: float, points: list[SweepPoint], values: list[float], goal: float
+) -> float | None:
+    """The next sweep value of a line after ``points`` (coarse to fine), or None to stop.
+
+    A tolerance sweep, and a step sweep until two stable points give an
+    :func:`observed_order`, takes the next of ``values``. Then a step sweep jumps to the step
+    count predicted to bring the omega error to TARGET_MARGIN times the largest target it has
+    not met yet (``goal``: the last one), ``n * (error / aim)**(1/p)``: at least twice the
+    last count, and no finer than the finest of ``values`` (the sweep's range).
+    """
+    last = points[-1]
+    finer = [v for v in values if v < last.value * (1.0 - 1e-9)]
+    if not finer:
+        return None
+    ok = [p for p in points if p.status == "ok"]
+    order = observed_order(ok[-2], ok[-1]) if line.sweep == "step" and len(ok) >= 2 and ok[-1] is last else None
+    if order is None:
+        return finer[0]
+    aim = TARGET_MARGIN * max([t for t in TARGETS if goal <= t < last.omega_error] or [goal])
+    shrink = (last.omega_error / aim) ** (1.0 / max(order, MIN_ORDER))
+    n_steps = max(1, round(t_end / last.value))
+    return max(t_end / max(2 * n_steps, math.ceil(n_steps * shrink)), finer[-1])
 
 
 def run_problem(problem: Problem, settings: Settings, progress: Any = None) -> ProblemResult:
@@ -263,15 +313,35 @@ def problem_lines(problem: Problem, settings: Settings) -> list[DiagramLine]:
 
 
 def run_line(problem: Problem, line: DiagramLine, settings: Settings, progress: Any = None, baseline: bool = False) -> list[SweepPoint]:
-    """One line's sweep, coarse to fine, until a point exceeds the time budget or the error floor.
+    """One line's sweep, coarse to fine, with points chosen by error target (:func:`next_value`).
+
+    A line stops once a point meets min(TARGETS) (or the error floor, when the reference
+    is less accurate), when a point takes longer than the time budget or the next one is
+    predicted to take twice as long (fixed-step runs cost in proportion to their steps), after two refusals,
+    or at the end of its range (:func:`sweep_values`).
 
     ``baseline``: time every point together with the scipy baseline (see measure_point).
     """
-    floor = max(ERROR_FLOOR, problem.reference().certified_to)
+    goal = max(min(TARGETS), ERROR_FLOOR, problem.reference().certified_to)
     values = sweep_values(problem, line, settings)
-    points = []
+    # what is alive now (numba, scipy, the references) is frozen for the line: the collection
+    # before each timed run then scans only the line's own objects (a full one takes ~0.2 s)
+    gc.freeze()
+    try:
+        return _sweep_line(problem, line, settings, values, goal, progress, baseline)
+    finally:
+        gc.unfreeze()
+
+
+def _sweep_line(
+    problem: Problem, line: DiagramLine, settings: Settings, values: list[float], goal: float, progress: Any,
+    baseline: bool,
+) -> list[SweepPoint]:
+    """run_line's loop over the points of one line."""
+    points: list[SweepPoint] = []
     refusals = 0
-    for k, value in enumerate(values):
+    value: float | None = values[0]
+    while value is not None:
         if progress is not None:
             progress.set_postfix_str(f"{problem.key} {line.label}", refresh=False)
         point = measure_point(problem, line, value, settings.repeats, baseline)
@@ -279,21 +349,15 @@ def run_line(problem: Problem, line: DiagramLine, settings: Settings, progress: 
         if progress is not None:
             progress.update(1)
         refusals = refusals + 1 if point.status == "refused" else 0
-        # a fixed-step run costs in proportion to its steps: skip a next point that
-        # would take more than twice the budget
-        predicted = point.seconds * (value / values[k + 1]) if line.sweep == "step" and k + 1 < len(values) else 0.0
-        stop = refusals >= 2 or (
-            point.status == "ok"
-            and (
-                point.seconds > settings.budget_seconds
-                or predicted > 2.0 * settings.budget_seconds
-                or point.omega_error < floor
-            )
-        )
-        if stop:
-            if progress is not None:
-                progress.update(len(values) - k - 1)
+        if refusals >= 2 or point.status == "ok" and (point.omega_error <= goal or point.seconds > settings.budget_seconds):
             break
+        value = next_value(line, problem.t_end, points, values, goal)
+        if value is not None and line.sweep == "step" and point.status == "ok":
+            predicted = point.seconds * point.value / value
+            if predicted > 2.0 * settings.budget_seconds:
+                break
+    if progress is not None:
+        progress.update(max(0, len(values) - len(points)))
     return points
 
 

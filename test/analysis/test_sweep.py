@@ -6,7 +6,7 @@ import numpy as np
 import pyarrow.parquet as pq
 import pytest
 
-from rigid_rot_sim.analysis.sweep import COLUMNS, Chunk, plan_chunks, run_chunk, sample_inputs
+from rigid_rot_sim.analysis.sweep import COLUMNS, Chunk, _sample_draws, plan_chunks, run_chunk, sample_inputs
 from rigid_rot_sim.analysis.cluster import SweepResult, run_local, scheduler_address
 from rigid_rot_sim.analysis.sweep_output import METADATA_KEY, write_outputs
 from rigid_rot_sim.analysis.sweep_spec import parse_sweep_text
@@ -175,3 +175,29 @@ metric: first_flip
     assert slow / fast == pytest.approx(4.0, rel=1e-9)
     # torque-free: energy and |L| conserved to rk4's accuracy at about 0.016 rad per step
     assert np.all(rows["energy_drift"] < 1e-6) and np.all(rows["momentum_drift"] < 1e-6)
+
+
+def _numpy_draw(seed, sample, stream, size):
+    """A normal dispersion's draw from a fresh numpy generator, cut at 4 sigmas as the spec says."""
+    rng = np.random.Generator(np.random.PCG64(np.random.SeedSequence(seed, spawn_key=(sample, stream))))
+    z = rng.standard_normal(3)
+    while np.any(np.abs(z) > 4.0):
+        bad = np.abs(z) > 4.0
+        z[bad] = rng.standard_normal(int(bad.sum()))
+    return z * size
+
+
+def test_batched_draws_are_each_samples_own_stream():
+    """A chunk's draws (built together) are each sample's numpy stream, a draw beyond the cut included."""
+    spec = parse_sweep_text(MIXED.replace("samples: 7", "samples: 6600"), "mixed.yaml")
+    # sample 6578's first initial_omega draw (stream 2) has a component beyond 4 sigmas: it is drawn again
+    first = np.random.Generator(np.random.PCG64(np.random.SeedSequence(11, spawn_key=(6578, 2)))).standard_normal(3)
+    assert np.any(np.abs(first) > 4.0)
+    samples = np.arange(6570, 6590)
+    batch = _sample_draws(spec, samples)
+    for i, sample in enumerate(samples.tolist()):
+        omega = _numpy_draw(11, sample, 2, 1.0e-2)
+        assert np.array_equal(batch["omega"][i], omega), sample
+        assert np.array_equal(sample_inputs(spec, sample)["omega"], omega), sample
+        assert np.all(np.abs(omega) <= 4.0e-2)
+        assert np.array_equal(batch["moments"][i], _numpy_draw(11, sample, 0, 0.02))

@@ -128,3 +128,38 @@ def test_cli_quick_on_one_problem(tmp_path, capsys):
 def test_cli_rejects_unknown_problem(tmp_path, capsys):
     assert main(["report", "--out", str(tmp_path), "--problems", "P9", "--no-progress"]) == 2
     assert "P9" in capsys.readouterr().err
+
+
+def _step_point(t_end, n, error):
+    return wp.SweepPoint("m", "ours", "m", "dt", t_end / n, "ok", seconds=1e-3, omega_error=error, n_steps=n)
+
+
+def test_step_line_jumps_to_the_step_count_its_order_predicts():
+    line = wp.DiagramLine("m", "ours", "m", (), "step")
+    t_end = 10.0
+    values = [t_end / (100 * 2**k) for k in range(14)]
+    # a 4th-order method: 100 -> 200 steps takes the error from 1.6e-3 to 1e-4
+    points = [_step_point(t_end, 100, 1.6e-3), _step_point(t_end, 200, 1e-4)]
+    assert wp.observed_order(points[0], points[1]) == pytest.approx(4.0)
+    goal = min(wp.TARGETS)
+    n_next = round(t_end / wp.next_value(line, t_end, points, values, goal))
+    # aims at half the first target not met (1e-6): (1e-4 / 5e-7) ** (1/4) = 3.76 times the steps
+    assert n_next == math.ceil(200 * (1e-4 / (wp.TARGET_MARGIN * 1e-6)) ** 0.25)
+    points.append(_step_point(t_end, n_next, 4e-7))
+    n_last = round(t_end / wp.next_value(line, t_end, points, values, goal))
+    order = wp.observed_order(points[1], points[2])  # from the last two points
+    assert n_last == math.ceil(n_next * (4e-7 / (wp.TARGET_MARGIN * 1e-10)) ** (1.0 / order))
+    # never finer than the sweep's range, and stops at its end
+    slow = [_step_point(t_end, 100, 1e-1), _step_point(t_end, 200, 9e-2)]  # order 0.15: a huge jump
+    assert wp.next_value(line, t_end, slow, values, goal) == values[-1]
+    assert wp.next_value(line, t_end, [_step_point(t_end, round(t_end / values[-1]), 1e-3)], values, goal) is None
+
+
+def test_tolerance_line_walks_its_list_and_unstable_points_step_on():
+    tol_line = wp.DiagramLine("s", "scipy", "RK45", (), "tol")
+    values = [1e-3, 1e-4, 1e-5]
+    points = [wp.SweepPoint("s", "scipy", "RK45", "tol", v, "ok", seconds=1e-3, omega_error=v * 10) for v in values[:2]]
+    assert wp.next_value(tol_line, 1.0, points, values, 1e-10) == 1e-5
+    step_line = wp.DiagramLine("m", "ours", "m", (), "step")
+    unstable = [wp.SweepPoint("m", "ours", "m", "dt", 0.5, "unstable", message="boom")]
+    assert wp.next_value(step_line, 10.0, unstable, [0.5, 0.25, 0.125], 1e-10) == 0.25
