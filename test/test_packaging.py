@@ -31,6 +31,7 @@ PYTHON_KEYS: dict[str, set[str]] = {
     "hypothesis": {"python3-hypothesis"},
     "rosbags": {"python3-rosbags-pip"},
     "websockets": {"python3-websockets"},
+    "mpmath": {"python3-mpmath"},
     "numba": {"python3-numba"},
     "catkin_pkg": {"python3-catkin-pkg", "python3-catkin-pkg-modules"},
     "setuptools": {"python3-setuptools"},
