@@ -11,7 +11,7 @@ from __future__ import annotations
 
 from typing import Any
 
-from rigid_rot_sim.message_fields import state_to_arrays
+from rigid_rot_sim.message_fields import vector3_to_array
 from rigid_rot_sim.recording.session import type_name_of
 from rigid_rot_sim.run.body_view import BodyView
 from rigid_rot_sim.run.simulator import Simulator
@@ -35,8 +35,8 @@ class FoxgloveLive:
         type_name = self._types.get(kind) or self._types.setdefault(kind, type_name_of(kind))
         self.server.log(topic, type_name, data, t_ns)
         if name == "state":
-            state = state_to_arrays(msg)
-            self.server.log_state(t_ns, state["angular_velocity_body"], state["angular_momentum_world"])
+            self.server.log_state(t_ns, vector3_to_array(msg.angular_velocity_body),
+                                  vector3_to_array(msg.angular_momentum_world))
 
     def close(self) -> None:
         self.server.close()

@@ -141,7 +141,7 @@ class FoxgloveServer:
         self.context = foxglove.Context()
         self.scene = scene
         self.channels: dict[str, Any] = {}
-        self.server = foxglove.start_server(
+        self.server: Any = foxglove.start_server(
             name=name, host=host, port=port, capabilities=[Capability.Time], server_listener=listener,
             context=self.context, playback_time_range=playback_range,
         )
