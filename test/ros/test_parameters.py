@@ -4,12 +4,11 @@ import ast
 from pathlib import Path
 
 import pytest
+import rclpy  # make setup installs it: these tests always run
+from rcl_interfaces.msg import ParameterType
+from rclpy.parameter import Parameter
 
-rclpy = pytest.importorskip("rclpy")
-from rcl_interfaces.msg import ParameterType  # noqa: E402
-from rclpy.parameter import Parameter  # noqa: E402
-
-from rigid_rot_sim.ros import parameters  # noqa: E402
+from rigid_rot_sim.ros import parameters
 from rigid_rot_sim.ros.lockstep import LOCKSTEP_PARAMETERS  # noqa: E402
 from rigid_rot_sim.ros.node import RigidRotSimNode  # noqa: E402
 from rigid_rot_sim.scene.scene import OUTPUT_NAMES, load_scene  # noqa: E402
