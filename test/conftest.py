@@ -63,5 +63,9 @@ _DOMAIN_LOCKS: list = []
 os.environ["ROS_AUTOMATIC_DISCOVERY_RANGE"] = "LOCALHOST"  # before the probe: it listens on localhost only
 ROS_DOMAIN_ID = _claim_domain_id()
 os.environ["ROS_DOMAIN_ID"] = str(ROS_DOMAIN_ID)
+# A second domain of this session for the in-process node tests (test/ros/test_node.py's context):
+# they ask the graph for the node by name, and a node of an e2e test in this session's domain (a
+# subprocess just stopped, whose participant the graph still lists) has that name too.
+os.environ["RIGID_ROT_SIM_IN_PROCESS_DOMAIN_ID"] = str(_claim_domain_id())
 os.environ.setdefault("ROS_LOG_DIR", tempfile.mkdtemp(prefix="rigid_rot_ros_log_"))
 os.environ["PYTHONUNBUFFERED"] = "1"  # a subprocess's prints reach its log even if it is killed

@@ -6,6 +6,7 @@ node in the same executor.
 """
 
 import math
+import os
 import time
 from pathlib import Path
 
@@ -31,7 +32,8 @@ SCENES = ROOT / "config" / "scenes"
 @pytest.fixture
 def context():
     ctx = rclpy.Context()
-    rclpy.init(context=ctx)
+    # the session's second domain: no e2e test's node (same name) is on this graph
+    rclpy.init(context=ctx, domain_id=int(os.environ["RIGID_ROT_SIM_IN_PROCESS_DOMAIN_ID"]))
     yield ctx
     rclpy.shutdown(context=ctx)
 
