@@ -134,6 +134,7 @@ class SceneRun:
             self.lockstep = NodeLockstep(node, lockstep, self.driver, self.tick)
             self.inputs.listeners.append(self.lockstep)  # wakes the run the moment a turn is answered
         self.services = RunServices(node, self.driver, scene, rejections, self.report_progress)
+        self._action_destroyed = False
         self.simulation_services = (simulation_services.SimulationServices(node, self.services)
                                     if simulation_services.AVAILABLE else None)
         self.recording: NodeRecording | None = None
@@ -270,6 +271,12 @@ class SceneRun:
             self.recording.close()
         if self.foxglove is not None:
             self.foxglove.close()
+        action = self.simulation_services.simulate_steps if self.simulation_services is not None else None
+        if action is not None and not self._action_destroyed:
+            # rclpy's destroy_node leaves action servers alone; one left holds the node, which then
+            # stays on the graph after destroy_node
+            action.destroy()
+            self._action_destroyed = True
 
 
 class RigidRotSimNode(Node):
@@ -290,7 +297,11 @@ class RigidRotSimNode(Node):
             self.get_logger().info(
                 "no scene parameter: serving ~/compute_inertia only (rigid-rot run SCENE starts a simulation)")
             return
-        self.run = SceneRun(self, load_scene(resolve_scene(scene_path)))  # SceneError names the file, key, problem
+        try:
+            self.run = SceneRun(self, load_scene(resolve_scene(scene_path)))  # SceneError names the file, key, problem
+        except BaseException:
+            super().destroy_node()  # a node that could not start leaves the graph at once
+            raise
 
     @property
     def finished(self) -> bool:

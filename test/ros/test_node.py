@@ -480,3 +480,17 @@ def test_bad_start_up_parameters_exit_2_with_one_line(override, expected):
                            "-p", override], capture_output=True, text=True, timeout=120)
     output = (done.stdout + done.stderr).strip()
     assert done.returncode == 2 and expected in output and "Traceback" not in output, output
+
+
+def test_a_destroyed_node_leaves_the_graph(harness):
+    """Nothing the node made (its SimulateSteps action server included) keeps it alive after destroy_node."""
+    h = harness("free_tumble", real_time_factor=0.0)
+
+    def ours() -> int:  # a node of an earlier test (same name) may still be listed: count them
+        return h.client.get_node_names_and_namespaces().count(("rigid_rot_sim", "/"))
+
+    assert h.spin_until(lambda: ours() >= 1)
+    before = ours()
+    h.executor.remove_node(h.node)
+    h.node.destroy_node()
+    assert h.spin_until(lambda: ours() == before - 1, timeout=10.0), "the node is still on the graph after destroy_node"
