@@ -19,6 +19,7 @@ interface: the same bits, ~70 ns per sample.
 from __future__ import annotations
 
 import ctypes
+import functools
 from collections.abc import Iterator
 
 import numba
@@ -174,12 +175,21 @@ def pcg64_state_words(seed: int, samples: np.ndarray, stream: int) -> np.ndarray
     samples = np.asarray(samples, dtype=np.int64)
     if samples.size and samples.min() < 0:
         raise ValueError("sample indices must be >= 0")
-    run = _words(int(seed))
-    run += [0] * (_POOL_SIZE - len(run))  # SeedSequence pads the run entropy when there is a spawn key
     key = np.array(_words(int(stream)), dtype=np.uint64)
-    pool, hash_const = _pool([np.full(1, word, dtype=np.uint64) for word in run])
+    pool, hash_const = _run_pool(int(seed))
     out = np.zeros((samples.size, 4), dtype=np.uint64)
-    return _seed_samples(np.array([p[0] for p in pool], dtype=np.uint64), np.uint64(hash_const), samples, key, out)
+    return _seed_samples(pool, np.uint64(hash_const), samples, key, out)
+
+
+@functools.lru_cache(maxsize=64)
+def _run_pool(seed: int) -> tuple[np.ndarray, int]:
+    """mix_entropy's pool and hash constant after the run's words (the same for every sample and stream)."""
+    run = _words(seed)
+    run += [0] * (_POOL_SIZE - len(run))  # SeedSequence pads the run entropy when there is a spawn key
+    pool, hash_const = _pool([np.full(1, word, dtype=np.uint64) for word in run])
+    words = np.array([p[0] for p in pool], dtype=np.uint64)
+    words.flags.writeable = False  # shared by every call with this seed
+    return words, hash_const
 
 
 def pcg64_states(seed: int, samples: np.ndarray, stream: int) -> list[tuple[int, int]]:

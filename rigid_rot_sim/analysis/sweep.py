@@ -365,15 +365,18 @@ def _simulate(spec: SweepSpec, bodies: _Bodies, method: str, dt: float) -> _Outc
         q_new, omega_new, failed = _advance_isolated(
             method, moments[live], q[live], omega[live], step, b - a, torque_p, normalize_q=a == 0
         )
-        index = np.flatnonzero(alive)
-        for i, message in failed.items():
-            errors[int(index[i])] = f"{message} (segment from t = {t_a:.9g} s, dt = {step:.9g} s)"
-        q[live], omega[live] = q_new, omega_new
-        for i in failed:
-            alive[index[i]] = False
+        if everyone:
+            q, omega = q_new, omega_new  # fresh arrays: no copy back
+        else:
+            q[live], omega[live] = q_new, omega_new
+        if failed:
+            index = np.flatnonzero(alive)
+            for i, message in failed.items():
+                errors[int(index[i])] = f"{message} (segment from t = {t_a:.9g} s, dt = {step:.9g} s)"
+                alive[index[i]] = False
         if b in checkpoint_set or partial:
             t_b = spec.duration if partial or b == n_full and last == 0.0 else b * dt
-            track.observe(t_b, np.where(alive[:, None], omega, np.nan))
+            track.observe(t_b, omega if not errors else np.where(alive[:, None], omega, np.nan))
 
     energy, momentum = invariants(omega)
     with np.errstate(divide="ignore", invalid="ignore"):
