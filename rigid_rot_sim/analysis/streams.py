@@ -2,11 +2,11 @@
 
 Building one such generator costs numpy 10-30 µs (a SeedSequence, then a PCG64 seeded from
 it), more than a short run's physics in the batch core. The same generator states are
-computed here for a whole chunk of samples: numpy's SeedSequence hash (its ``mix_entropy``
-and ``generate_state``, 32-bit words) and PCG64's seeding (``pcg_setseq_128_srandom_r``,
-128-bit arithmetic on 32-bit limbs), vectorised over the samples. :class:`StreamDraws` loads each state into
-one generator in turn, so every draw is numpy's own, bit for bit
-(``test/analysis/test_streams.py`` compares the states and draws with numpy's).
+computed here for a whole chunk of samples in one compiled loop (~50 ns a sample): numpy's
+SeedSequence hash (its ``mix_entropy`` and ``generate_state``, 32-bit words in uint64) and
+PCG64's seeding (``pcg_setseq_128_srandom_r``, 128-bit arithmetic on two uint64 words).
+:class:`StreamDraws` loads each state into one generator in turn, so every draw is numpy's
+own, bit for bit (``test/analysis/test_streams.py`` compares the states and draws with numpy's).
 
 A sweep's draws are a few numbers per sample and stream. Drawn from Python, each sample
 costs ~2 µs of calls, as much as the physics of a short run; :meth:`StreamDraws.normals`
@@ -51,44 +51,10 @@ def _words(value: int) -> list[int]:
     return words
 
 
-def _pool(entropy: list[np.ndarray]) -> tuple[list[np.ndarray], int]:
-    """SeedSequence.mix_entropy on columns of 32-bit words (uint64 arrays, values < 2**32).
-
-    Returns the pool and the hash constant it leaves (the next words continue from it).
-
-    Array arithmetic wraps modulo 2**64 without warnings; masking keeps the low 32 bits,
-    which is numpy's uint32 arithmetic.
-    """
-    hash_const = _INIT_A
-    zero = np.zeros_like(entropy[0])
-
-    def hashmix(value: np.ndarray) -> np.ndarray:
-        nonlocal hash_const
-        value = value ^ np.uint64(hash_const)
-        hash_const = (hash_const * _MULT_A) & _M32
-        value = (value * np.uint64(hash_const)) & np.uint64(_M32)
-        return value ^ (value >> np.uint64(_XSHIFT))
-
-    def mix(x: np.ndarray, y: np.ndarray) -> np.ndarray:
-        difference = np.asarray(x * np.uint64(_MIX_MULT_L) - y * np.uint64(_MIX_MULT_R), dtype=np.uint64)
-        result = difference & np.uint64(_M32)
-        return result ^ (result >> np.uint64(_XSHIFT))
-
-    pool = [hashmix(entropy[i] if i < len(entropy) else zero) for i in range(_POOL_SIZE)]
-    for src in range(_POOL_SIZE):
-        for dst in range(_POOL_SIZE):
-            if src != dst:
-                pool[dst] = mix(pool[dst], hashmix(pool[src]))
-    for src in range(_POOL_SIZE, len(entropy)):
-        for dst in range(_POOL_SIZE):
-            pool[dst] = mix(pool[dst], hashmix(entropy[src]))
-    return pool, hash_const
-
-
 # the constants as uint64 for the compiled loop (numba turns mixed int64/uint64 arithmetic into floats)
 _U = np.uint64
 _K_M32, _K_0, _K_1, _K_16, _K_32, _K_63 = _U(_M32), _U(0), _U(1), _U(_XSHIFT), _U(32), _U(63)
-_K_MULT_A, _K_INIT_B, _K_MULT_B = _U(_MULT_A), _U(_INIT_B), _U(_MULT_B)
+_K_INIT_A, _K_MULT_A, _K_INIT_B, _K_MULT_B = _U(_INIT_A), _U(_MULT_A), _U(_INIT_B), _U(_MULT_B)
 _K_MIX_L, _K_MIX_R = _U(_MIX_MULT_L), _U(_MIX_MULT_R)
 _K_PCG_HI, _K_PCG_LO = _U(_PCG_MULT >> 64), _U(_PCG_MULT & _M64)
 
@@ -106,6 +72,34 @@ def _hashmix(value, hash_const):
 def _mix(x, y):
     result = (x * _K_MIX_L - y * _K_MIX_R) & _K_M32
     return result ^ (result >> _K_16)
+
+
+@numba.njit(cache=True)
+def _mix_in(pool, hash_const, words):
+    """mix_entropy's loop over the words past the pool's size: each mixed into every pool entry.
+
+    Returns the hash constant it leaves (the pool is updated in place).
+    """
+    for src in range(words.size):
+        for dst in range(_POOL_SIZE):
+            hashed, hash_const = _hashmix(words[src], hash_const)
+            pool[dst] = _mix(pool[dst], hashed)
+    return hash_const
+
+
+@numba.njit(cache=True)
+def _run_pool_compiled(run):
+    """SeedSequence.mix_entropy of the run's words (>= 4 of them): the pool and the hash constant it leaves."""
+    pool = np.empty(_POOL_SIZE, dtype=np.uint64)
+    hash_const = _K_INIT_A
+    for i in range(_POOL_SIZE):
+        pool[i], hash_const = _hashmix(run[i], hash_const)
+    for src in range(_POOL_SIZE):
+        for dst in range(_POOL_SIZE):
+            if src != dst:
+                hashed, hash_const = _hashmix(pool[src], hash_const)
+                pool[dst] = _mix(pool[dst], hashed)
+    return pool, _mix_in(pool, hash_const, run[_POOL_SIZE:])
 
 
 @numba.njit(cache=True)
@@ -137,11 +131,7 @@ def _seed_samples(pool0, hash_const0, samples, key, out):
         for k in range(key.size):
             entropy[count + k] = key[k]
         pool[:] = pool0
-        hash_const = hash_const0
-        for src in range(count + key.size):
-            for dst in range(4):
-                hashed, hash_const = _hashmix(entropy[src], hash_const)
-                pool[dst] = _mix(pool[dst], hashed)
+        _mix_in(pool, hash_const0, entropy[: count + key.size])
         hash_const = _K_INIT_B
         for k in range(8):
             value = pool[k % 4] ^ hash_const
@@ -168,9 +158,9 @@ def pcg64_state_words(seed: int, samples: np.ndarray, stream: int) -> np.ndarray
     (N, 4) uint64: the 128-bit state's low and high words, then the increment's.
 
     The run's words come first in the entropy, so the pool they give (and the hash
-    constant after them) is the same for every sample: it is computed once, on one
-    column; then each sample's words and the stream's are mixed in and the generator
-    seeded, one sample at a time in a compiled loop (:func:`_seed_samples`).
+    constant after them) is the same for every sample: it is computed once per seed;
+    then each sample's words and the stream's are mixed in and the generator seeded,
+    one sample at a time in a compiled loop (:func:`_seed_samples`).
     """
     samples = np.asarray(samples, dtype=np.int64)
     if samples.size and samples.min() < 0:
@@ -186,10 +176,9 @@ def _run_pool(seed: int) -> tuple[np.ndarray, int]:
     """mix_entropy's pool and hash constant after the run's words (the same for every sample and stream)."""
     run = _words(seed)
     run += [0] * (_POOL_SIZE - len(run))  # SeedSequence pads the run entropy when there is a spawn key
-    pool, hash_const = _pool([np.full(1, word, dtype=np.uint64) for word in run])
-    words = np.array([p[0] for p in pool], dtype=np.uint64)
-    words.flags.writeable = False  # shared by every call with this seed
-    return words, hash_const
+    pool, hash_const = _run_pool_compiled(np.array(run, dtype=np.uint64))
+    pool.flags.writeable = False  # shared by every call with this seed
+    return pool, int(hash_const)
 
 
 def pcg64_states(seed: int, samples: np.ndarray, stream: int) -> list[tuple[int, int]]:
