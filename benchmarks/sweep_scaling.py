@@ -11,7 +11,9 @@ misalignment and rate dispersions), the same rows each time. Measured, in one ru
 * in this process without Dask (run_local): the baseline rate, and its share of the raw
   kernel's;
 * on a local cluster of 1 worker, then 2 (single-thread processes): body-steps per second,
-  the efficiency ``rate(2) / (2 rate(1))`` and the ratio to the baseline;
+  the efficiency ``rate(2) / (2 rate(1))``, the ratio to the baseline, and the share of the
+  workers' wall time spent running tasks (Dask's task stream; the rest is scheduling, moving
+  results and waiting for a core);
 * task overhead: the round trip of 200 no-op tasks on the 2-worker cluster (per task), and
   the share of a sweep task's time that is not simulation;
 * memory per worker: resident set size after the sweep (psutil, on each worker).
@@ -61,12 +63,17 @@ def _rss() -> int:
     return psutil.Process().memory_info().rss
 
 
-def measure(client, spec, chunk: int) -> tuple[float, float]:
-    """(wall seconds, body-steps per second) of the sweep on ``client``."""
-    start = time.perf_counter()
-    run_sweep(spec, client=client, chunk_size=chunk, progress=False)
-    seconds = time.perf_counter() - start
-    return seconds, spec.n_runs * (spec.duration / spec.dts[0]) / seconds
+def measure(client, spec, chunk: int) -> tuple[float, float, float]:
+    """(wall seconds, body-steps per second, share of the workers' wall time spent in the tasks) on ``client``."""
+    from distributed import get_task_stream
+
+    with get_task_stream(client) as stream:
+        start = time.perf_counter()
+        run_sweep(spec, client=client, chunk_size=chunk, progress=False)
+        seconds = time.perf_counter() - start
+    workers = len(client.scheduler_info(n_workers=-1)["workers"])
+    computing = sum(s["stop"] - s["start"] for task in stream.data for s in task["startstops"] if s["action"] == "compute")
+    return seconds, spec.n_runs * (spec.duration / spec.dts[0]) / seconds, computing / (workers * seconds)
 
 
 def raw_kernel_rate(n: int, steps: int) -> float:
@@ -129,11 +136,12 @@ def main() -> None:
             n = len(client.scheduler_info(n_workers=-1)["workers"])
             run_sweep(parse_sweep_text(SPEC.format(samples=n, duration=0.1), "warm.yaml"), client=client,
                       chunk_size=1, progress=False)  # imports on every worker
-            seconds, rate = measure(client, spec, args.chunk)
+            seconds, rate, busy = measure(client, spec, args.chunk)
             rates[n] = rate
             print(f"{n} worker(s): {rate:.3g} body-steps/s ({seconds:.1f} s; {rate / baseline:.2f}x the baseline, "
                   f"{rate / n / raw:.0%} of the raw kernel per worker"
-                  + (f", efficiency {rate / (n * rates[1]):.0%})" if n > 1 and 1 in rates else ")"))
+                  + (f", efficiency {rate / (n * rates[1]):.0%}" if n > 1 and 1 in rates else "")
+                  + f"; the workers ran tasks {busy:.0%} of the time)")
             if n == max(w or n for _, w in clusters):
                 overhead = task_overhead(client)
                 compute = args.chunk * steps / baseline
