@@ -187,6 +187,15 @@ def pcg64_states(seed: int, samples: np.ndarray, stream: int) -> list[tuple[int,
 
 
 @numba.njit(cache=True)
+def _load_stream(words, flags, row):
+    """Write a fresh stream's state into the generator: the state words, no buffered 32-bit half."""
+    for j in range(4):
+        words[j] = row[j]
+    flags[0] = 0
+    flags[1] = 0
+
+
+@numba.njit(cache=True)
 def _fill_normals(generator, words, flags, rows, cut, out):
     """Row i of ``out``: standard normals of the stream whose state is ``rows[i]``, in order.
 
@@ -196,10 +205,7 @@ def _fill_normals(generator, words, flags, rows, cut, out):
     uinteger pair, written in place to load each row's fresh stream.
     """
     for i in range(rows.shape[0]):
-        for j in range(4):
-            words[j] = rows[i, j]
-        flags[0] = 0
-        flags[1] = 0
+        _load_stream(words, flags, rows[i])
         for c in range(out.shape[1]):
             out[i, c] = generator.standard_normal()
         beyond = cut > 0.0
@@ -216,10 +222,7 @@ def _fill_normals(generator, words, flags, rows, cut, out):
 def _fill_uniforms(generator, words, flags, rows, low, high, out):
     """Row i of ``out``: uniform numbers in [low, high) of the stream whose state is ``rows[i]``."""
     for i in range(rows.shape[0]):
-        for j in range(4):
-            words[j] = rows[i, j]
-        flags[0] = 0
-        flags[1] = 0
+        _load_stream(words, flags, rows[i])
         for c in range(out.shape[1]):
             out[i, c] = generator.uniform(low, high)
     return out
