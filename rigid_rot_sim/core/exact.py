@@ -455,12 +455,13 @@ def _elliptic_params(moments, omega, q0, order, d, params, agm_a, agm_c, long_ru
             params[_E_AGM_TOP], params[_E_AGM_TOP + 1] = dd_div(*PI_DD, 2.0 * k_dd[0], 2.0 * k_dd[1])
     _, _, _, j0, g0 = _phase(params, agm_a, agm_c, u0_dd[0], u0_dd[1])
     params[_E_J0], params[_E_G0] = j0, g0
-    # q_world<-body = q_WL (x) q_zxz(t) (x) q_perm; q_WL from q(t0) = q0, with q_zxz(t0)
-    # evaluated by the flow itself so that the two agree to rounding
-    for idx in range(4):
-        params[_E_QWL + idx] = 1.0 if idx == 3 else 0.0
-        params[_E_QPERM + idx] = 1.0 if idx == 3 else 0.0
-    q_zxz0 = _elliptic_state(params, agm_a, agm_c, 0.0)[0]
+    # q_world<-body = q_WL (x) q_zxz(t) (x) q_perm; q_WL from q(t0) = q0, with q_zxz(t0) from the
+    # omega0 given (phi = 0; theta and psi as _elliptic_state takes them from the flow's omega):
+    # the flow's own omega(t0) agrees with it to an ulp, and evaluating the flow at t0 would
+    # cost a whole evaluation more per build
+    theta0 = math.atan2(math.hypot(i1 * w1, i2 * w2), i3 * w3)
+    psi0 = math.atan2(s1 * i1 * alpha1 * cn0, sigma * i2 * alpha2 * sn0)
+    q_zxz0 = _zxz_dd(0.0, 0.0, theta0, psi0)
     q_wl = quat.multiply(quat.multiply(q0, quat.conjugate(q_perm)), quat.conjugate(q_zxz0))
     for idx in range(4):
         params[_E_QWL + idx] = q_wl[idx]
