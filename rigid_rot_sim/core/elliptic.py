@@ -13,7 +13,6 @@ arithmetic-geometric mean with the complementary parameter passed exactly
 from __future__ import annotations
 
 import math
-
 from typing import Any
 
 import numpy as np
@@ -72,8 +71,7 @@ def two_product(a: float, b: float) -> tuple[float, float]:
     return p, ((ah * bh - p) + ah * bl + al * bh) + al * bl
 
 
-@intrinsic
-def _fma(typingctx: Any, a: Any, b: Any, c: Any) -> Any:
+def _fma_intrinsic(typingctx: Any, a: Any, b: Any, c: Any) -> Any:
     """fma(a, b, c) = a b + c rounded once (IEEE 754 fusedMultiplyAdd, LLVM's llvm.fma.f64): one
     instruction where the CPU has FMA, else libm's fma; exact either way, so the same bits."""
     sig = types.float64(types.float64, types.float64, types.float64)
@@ -82,6 +80,10 @@ def _fma(typingctx: Any, a: Any, b: Any, c: Any) -> Any:
         return builder.fma(*args)
 
     return sig, codegen
+
+
+#: ``_fma(a, b, c)`` in compiled code only (numba passes the typing context itself).
+_fma: Any = intrinsic(_fma_intrinsic)
 
 
 @overload(two_product)

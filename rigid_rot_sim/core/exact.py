@@ -423,7 +423,6 @@ def _elliptic_params(moments, omega, q0, order, d, params, agm_a, agm_c, long_ru
     """
     row = 3 * order[0] + order[1]
     axis_signs = (_RELABELLING[row, 0], _RELABELLING[row, 1], _RELABELLING[row, 2])
-    q_perm = (_RELABELLING[row, 3], _RELABELLING[row, 4], _RELABELLING[row, 5], _RELABELLING[row, 6])
     i1, i2, i3 = moments[order[0]], moments[order[1]], moments[order[2]]
     w1 = axis_signs[0] * omega[order[0]]
     w2 = axis_signs[1] * omega[order[1]]
