@@ -7,13 +7,22 @@ and ``generate_state``, 32-bit words) and PCG64's seeding (``pcg_setseq_128_sran
 128-bit arithmetic on 32-bit limbs), vectorised over the samples. :class:`StreamDraws` loads each state into
 one generator in turn, so every draw is numpy's own, bit for bit
 (``test/analysis/test_streams.py`` compares the states and draws with numpy's).
+
+A sweep's draws are a few numbers per sample and stream. Drawn from Python, each sample
+costs ~2 µs of calls, as much as the physics of a short run; :meth:`StreamDraws.normals`
+and :meth:`StreamDraws.uniforms` load the states and draw in one compiled loop instead,
+through numba's ``Generator`` support, whose ``standard_normal`` and ``uniform`` are ports of
+numpy's (the ziggurat with its tables) calling the same PCG64 through its ``ctypes``
+interface: the same bits, ~70 ns per sample.
 """
 
 from __future__ import annotations
 
 import ctypes
+import functools
 from collections.abc import Iterator
 
+import numba
 import numpy as np
 
 __all__ = ["pcg64_state_words", "pcg64_states", "StreamDraws"]
@@ -42,8 +51,10 @@ def _words(value: int) -> list[int]:
     return words
 
 
-def _pool(entropy: list[np.ndarray]) -> list[np.ndarray]:
+def _pool(entropy: list[np.ndarray]) -> tuple[list[np.ndarray], int]:
     """SeedSequence.mix_entropy on columns of 32-bit words (uint64 arrays, values < 2**32).
+
+    Returns the pool and the hash constant it leaves (the next words continue from it).
 
     Array arithmetic wraps modulo 2**64 without warnings; masking keeps the low 32 bits,
     which is numpy's uint32 arithmetic.
@@ -71,90 +82,158 @@ def _pool(entropy: list[np.ndarray]) -> list[np.ndarray]:
     for src in range(_POOL_SIZE, len(entropy)):
         for dst in range(_POOL_SIZE):
             pool[dst] = mix(pool[dst], hashmix(entropy[src]))
-    return pool
+    return pool, hash_const
 
 
-def _seed_words(pool: list[np.ndarray]) -> list[np.ndarray]:
-    """SeedSequence.generate_state(4, np.uint64) from the pools: four uint64 columns."""
-    hash_const = _INIT_B
-    state = []
-    for i in range(8):
-        value = pool[i % _POOL_SIZE] ^ np.uint64(hash_const)
-        hash_const = (hash_const * _MULT_B) & _M32
-        value = (value * np.uint64(hash_const)) & np.uint64(_M32)
-        state.append(value ^ (value >> np.uint64(_XSHIFT)))
-    return [state[2 * i] | (state[2 * i + 1] << np.uint64(32)) for i in range(4)]
+# the constants as uint64 for the compiled loop (numba turns mixed int64/uint64 arithmetic into floats)
+_U = np.uint64
+_K_M32, _K_0, _K_1, _K_16, _K_32, _K_63 = _U(_M32), _U(0), _U(1), _U(_XSHIFT), _U(32), _U(63)
+_K_MULT_A, _K_INIT_B, _K_MULT_B = _U(_MULT_A), _U(_INIT_B), _U(_MULT_B)
+_K_MIX_L, _K_MIX_R = _U(_MIX_MULT_L), _U(_MIX_MULT_R)
+_K_PCG_HI, _K_PCG_LO = _U(_PCG_MULT >> 64), _U(_PCG_MULT & _M64)
 
 
-def _limbs(high: np.ndarray, low: np.ndarray) -> list[np.ndarray]:
-    """A 128-bit number from its two 64-bit words, as four 32-bit limbs (uint64 arrays), low first."""
-    m32 = np.uint64(_M32)
-    return [low & m32, low >> np.uint64(32), high & m32, high >> np.uint64(32)]
+@numba.njit(cache=True)
+def _hashmix(value, hash_const):
+    """SeedSequence's hashmix: (the mixed value, the next hash constant)."""
+    value = value ^ hash_const
+    hash_const = (hash_const * _K_MULT_A) & _K_M32
+    value = (value * hash_const) & _K_M32
+    return value ^ (value >> _K_16), hash_const
 
 
-def _normalised(limbs: list[np.ndarray]) -> list[np.ndarray]:
-    """Carry each limb's excess over 32 bits into the next (mod 2**128)."""
-    out = []
-    carry: np.ndarray | np.uint64 = np.uint64(0)
-    for limb in limbs:
-        total = limb + carry
-        out.append(total & np.uint64(_M32))
-        carry = total >> np.uint64(32)
+@numba.njit(cache=True)
+def _mix(x, y):
+    result = (x * _K_MIX_L - y * _K_MIX_R) & _K_M32
+    return result ^ (result >> _K_16)
+
+
+@numba.njit(cache=True)
+def _mul_hi(a, b):
+    """The high 64 bits of the 128-bit product of two uint64, on 32-bit halves."""
+    a0, a1, b0, b1 = a & _K_M32, a >> _K_32, b & _K_M32, b >> _K_32
+    middle = a1 * b0 + ((a0 * b0) >> _K_32)
+    middle2 = a0 * b1 + (middle & _K_M32)
+    return a1 * b1 + (middle >> _K_32) + (middle2 >> _K_32)
+
+
+@numba.njit(cache=True)
+def _seed_samples(pool0, hash_const0, samples, key, out):
+    """``out[i]``: PCG64 seeded from SeedSequence(run, spawn_key=(samples[i], key)), the run's pool given.
+
+    ``pool0``, ``hash_const0``: mix_entropy's pool and hash constant after the run's words.
+    Then, as numpy: the sample's 32-bit words (one, or two from 2**32) and the key's are
+    mixed in, ``generate_state(4, uint64)``, and ``pcg64_set_seed``: inc = initseq << 1 | 1;
+    state = (inc + initstate) * PCG_DEFAULT_MULTIPLIER_128 + inc, mod 2**128.
+    """
+    entropy = np.empty(2 + key.size, dtype=np.uint64)
+    pool = np.empty(4, dtype=np.uint64)
+    words = np.empty(8, dtype=np.uint64)
+    for i in range(samples.size):
+        sample = np.uint64(samples[i])
+        count = 1 if (sample >> _K_32) == _K_0 else 2
+        entropy[0] = sample & _K_M32
+        entropy[1] = sample >> _K_32
+        for k in range(key.size):
+            entropy[count + k] = key[k]
+        pool[:] = pool0
+        hash_const = hash_const0
+        for src in range(count + key.size):
+            for dst in range(4):
+                hashed, hash_const = _hashmix(entropy[src], hash_const)
+                pool[dst] = _mix(pool[dst], hashed)
+        hash_const = _K_INIT_B
+        for k in range(8):
+            value = pool[k % 4] ^ hash_const
+            hash_const = (hash_const * _K_MULT_B) & _K_M32
+            value = (value * hash_const) & _K_M32
+            words[k] = value ^ (value >> _K_16)
+        w0, w1 = words[0] | (words[1] << _K_32), words[2] | (words[3] << _K_32)
+        w2, w3 = words[4] | (words[5] << _K_32), words[6] | (words[7] << _K_32)
+        # initstate = (w0 << 64) | w1, initseq = (w2 << 64) | w3
+        inc_hi, inc_lo = (w2 << _K_1) | (w3 >> _K_63), (w3 << _K_1) | _K_1
+        lo = inc_lo + w1
+        hi = inc_hi + w0 + (_K_1 if lo < inc_lo else _K_0)
+        product_lo = lo * _K_PCG_LO
+        product_hi = _mul_hi(lo, _K_PCG_LO) + lo * _K_PCG_HI + hi * _K_PCG_LO
+        state_lo = product_lo + inc_lo
+        state_hi = product_hi + inc_hi + (_K_1 if state_lo < product_lo else _K_0)
+        out[i, 0], out[i, 1], out[i, 2], out[i, 3] = state_lo, state_hi, inc_lo, inc_hi
     return out
-
-
-def _add(a: list[np.ndarray], b: list[np.ndarray]) -> list[np.ndarray]:
-    return _normalised([x + y for x, y in zip(a, b, strict=True)])
-
-
-def _times_multiplier(a: list[np.ndarray]) -> list[np.ndarray]:
-    """``a * PCG_DEFAULT_MULTIPLIER_128 mod 2**128`` on limbs: partial products split into 32-bit halves."""
-    m = [(_PCG_MULT >> (32 * j)) & _M32 for j in range(4)]
-    acc = [np.zeros_like(a[0]) for _ in range(4)]
-    for i in range(4):
-        for j in range(4 - i):
-            product = a[i] * np.uint64(m[j])  # < 2**64
-            acc[i + j] += product & np.uint64(_M32)
-            if i + j + 1 < 4:
-                acc[i + j + 1] += product >> np.uint64(32)
-    return _normalised(acc)
 
 
 def pcg64_state_words(seed: int, samples: np.ndarray, stream: int) -> np.ndarray:
     """The states of ``PCG64(SeedSequence(seed, spawn_key=(s, stream)))`` for each s of ``samples``.
 
     (N, 4) uint64: the 128-bit state's low and high words, then the increment's.
+
+    The run's words come first in the entropy, so the pool they give (and the hash
+    constant after them) is the same for every sample: it is computed once, on one
+    column; then each sample's words and the stream's are mixed in and the generator
+    seeded, one sample at a time in a compiled loop (:func:`_seed_samples`).
     """
     samples = np.asarray(samples, dtype=np.int64)
     if samples.size and samples.min() < 0:
         raise ValueError("sample indices must be >= 0")
-    run = _words(int(seed))
-    run += [0] * (_POOL_SIZE - len(run))  # SeedSequence pads the run entropy when there is a spawn key
-    key = _words(int(stream))
+    key = np.array(_words(int(stream)), dtype=np.uint64)
+    pool, hash_const = _run_pool(int(seed))
     out = np.zeros((samples.size, 4), dtype=np.uint64)
-    # SeedSequence coerces each sample index to as many words as it needs: group by that count
-    n_words = np.where(samples >> 32 == 0, 1, 2)
-    for count in np.unique(n_words):
-        where = np.flatnonzero(n_words == count)
-        s = samples[where].astype(np.uint64)
-        columns = [(s >> np.uint64(32 * j)) & np.uint64(_M32) for j in range(int(count))]
-        entropy = [np.full(s.size, word, dtype=np.uint64) for word in run] + columns
-        entropy += [np.full(s.size, word, dtype=np.uint64) for word in key]
-        w0, w1, w2, w3 = _seed_words(_pool(entropy))
-        # pcg64_set_seed: initstate = (w0, w1), initseq = (w2, w3) as (high, low) words;
-        # srandom_r: inc = initseq << 1 | 1; state = 0; step; state += initstate; step
-        init_state, init_seq = _limbs(w0, w1), _limbs(w2, w3)
-        inc = [(limb << np.uint64(1)) & np.uint64(_M32) for limb in init_seq]
-        inc = [inc[0] | np.uint64(1)] + [inc[k] | (init_seq[k - 1] >> np.uint64(31)) for k in range(1, 4)]
-        state = _add(_times_multiplier(_add(inc, init_state)), inc)
-        for column, limbs in ((0, state[:2]), (1, state[2:]), (2, inc[:2]), (3, inc[2:])):
-            out[where, column] = limbs[0] | (limbs[1] << np.uint64(32))
-    return out
+    return _seed_samples(pool, np.uint64(hash_const), samples, key, out)
+
+
+@functools.lru_cache(maxsize=64)
+def _run_pool(seed: int) -> tuple[np.ndarray, int]:
+    """mix_entropy's pool and hash constant after the run's words (the same for every sample and stream)."""
+    run = _words(seed)
+    run += [0] * (_POOL_SIZE - len(run))  # SeedSequence pads the run entropy when there is a spawn key
+    pool, hash_const = _pool([np.full(1, word, dtype=np.uint64) for word in run])
+    words = np.array([p[0] for p in pool], dtype=np.uint64)
+    words.flags.writeable = False  # shared by every call with this seed
+    return words, hash_const
 
 
 def pcg64_states(seed: int, samples: np.ndarray, stream: int) -> list[tuple[int, int]]:
     """``(state, inc)`` of ``PCG64(SeedSequence(seed, spawn_key=(s, stream)))`` for each s, as integers."""
     return [(lo | hi << 64, ilo | ihi << 64) for lo, hi, ilo, ihi in pcg64_state_words(seed, samples, stream).tolist()]
+
+
+@numba.njit(cache=True)
+def _fill_normals(generator, words, flags, rows, cut, out):
+    """Row i of ``out``: standard normals of the stream whose state is ``rows[i]``, in order.
+
+    ``cut`` > 0: a number beyond ``cut`` is drawn again (the next draw of the stream, each
+    position in turn, until none is beyond), as ``z[bad] = rng.standard_normal(bad.sum())``
+    in a loop does. ``words``/``flags``: the generator's state words and its has_uint32,
+    uinteger pair, written in place to load each row's fresh stream.
+    """
+    for i in range(rows.shape[0]):
+        for j in range(4):
+            words[j] = rows[i, j]
+        flags[0] = 0
+        flags[1] = 0
+        for c in range(out.shape[1]):
+            out[i, c] = generator.standard_normal()
+        beyond = cut > 0.0
+        while beyond:
+            beyond = False
+            for c in range(out.shape[1]):
+                if abs(out[i, c]) > cut:
+                    out[i, c] = generator.standard_normal()
+                    beyond = beyond or abs(out[i, c]) > cut
+    return out
+
+
+@numba.njit(cache=True)
+def _fill_uniforms(generator, words, flags, rows, low, high, out):
+    """Row i of ``out``: uniform numbers in [low, high) of the stream whose state is ``rows[i]``."""
+    for i in range(rows.shape[0]):
+        for j in range(4):
+            words[j] = rows[i, j]
+        flags[0] = 0
+        flags[1] = 0
+        for c in range(out.shape[1]):
+            out[i, c] = generator.uniform(low, high)
+    return out
 
 
 class StreamDraws:
@@ -204,3 +283,32 @@ class StreamDraws:
                 "bit_generator": "PCG64", "state": {"state": state, "inc": inc}, "has_uint32": 0, "uinteger": 0,
             }
             yield self.generator
+
+    def normals(self, seed: int, samples: np.ndarray, stream: int, count: int, cut: float = 0.0) -> np.ndarray:
+        """(N, count): each sample's stream's first ``count`` standard normals.
+
+        ``cut`` > 0 draws a number beyond ``cut`` again, from the same stream, until none is:
+        the numbers ``z = rng.standard_normal(count)`` and ``z[bad] = rng.standard_normal(...)``
+        while any is beyond give.
+        """
+        out = np.empty((len(samples), count))
+        if self._words is not None and self._flags is not None and count:
+            rows = np.ascontiguousarray(pcg64_state_words(seed, samples, stream))
+            return _fill_normals(self.generator, self._words, self._flags[2:], rows, float(cut), out)
+        for i, rng in enumerate(self.each(seed, samples, stream)):
+            z = rng.standard_normal(count)
+            while cut > 0.0 and (np.abs(z) > cut).any():
+                bad = np.abs(z) > cut
+                z[bad] = rng.standard_normal(int(bad.sum()))
+            out[i] = z
+        return out
+
+    def uniforms(self, seed: int, samples: np.ndarray, stream: int, count: int, low: float, high: float) -> np.ndarray:
+        """(N, count): each sample's stream's first ``count`` numbers of ``rng.uniform(low, high)``."""
+        out = np.empty((len(samples), count))
+        if self._words is not None and self._flags is not None and count:
+            rows = np.ascontiguousarray(pcg64_state_words(seed, samples, stream))
+            return _fill_uniforms(self.generator, self._words, self._flags[2:], rows, float(low), float(high), out)
+        for i, rng in enumerate(self.each(seed, samples, stream)):
+            out[i] = rng.uniform(low, high, count)
+        return out

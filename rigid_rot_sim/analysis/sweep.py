@@ -36,6 +36,7 @@ from typing import Any
 import numpy as np
 from scipy.spatial.transform import Rotation
 
+from rigid_rot_sim.analysis.checkpoints import CheckpointTrack
 from rigid_rot_sim.analysis.streams import StreamDraws
 from rigid_rot_sim.analysis.sweep_spec import NORMAL_CUT_SIGMAS, Dispersion, SweepSpec
 from rigid_rot_sim.core import quaternion as quat
@@ -114,18 +115,6 @@ def plan_chunks(spec: SweepSpec, chunk_size: int) -> list[Chunk]:
 # ----------------------------------------------------------------------------- inputs
 
 
-def _draw(rng: np.random.Generator, dispersion: Dispersion) -> np.ndarray:
-    """One draw per axis: normal cut at NORMAL_CUT_SIGMAS (drawn again beyond), or uniform."""
-    size = np.asarray(dispersion.size)
-    if dispersion.distribution == "uniform":
-        return rng.uniform(-1.0, 1.0, 3) * size
-    z = rng.standard_normal(3)
-    while (np.abs(z) > NORMAL_CUT_SIGMAS).any():
-        bad = np.abs(z) > NORMAL_CUT_SIGMAS
-        z[bad] = rng.standard_normal(int(bad.sum()))
-    return z * size
-
-
 def sample_inputs(spec: SweepSpec, sample: int) -> dict[str, np.ndarray]:
     """The random perturbations of ``sample`` (zeros where not dispersed), from its own seed.
 
@@ -151,20 +140,11 @@ def _sample_draws(spec: SweepSpec, samples: np.ndarray) -> dict[str, np.ndarray]
         if not dispersion:
             return np.zeros((n, 3))
         k = _STREAMS.index(name)
-        # _draw's first three numbers for every sample; the rare sample with one beyond the
-        # cut runs _draw from its stream's start again (the same first draw, then redraws)
-        generators = draws.each(spec.seed, samples, k)
         if dispersion.distribution == "uniform":
-            z = np.array([rng.uniform(-1.0, 1.0, 3) for rng in generators]).reshape(n, 3)
+            z = draws.uniforms(spec.seed, samples, k, 3, -1.0, 1.0)
         else:
-            z = np.array([rng.standard_normal(3) for rng in generators]).reshape(n, 3)
-        beyond = np.flatnonzero(
-            (np.abs(z) > NORMAL_CUT_SIGMAS).any(axis=1) if dispersion.distribution != "uniform" else np.zeros(n, bool)
-        )
-        z *= np.asarray(dispersion.size)
-        for i, rng in zip(beyond, draws.each(spec.seed, samples[beyond], k), strict=True):
-            z[i] = _draw(rng, dispersion)
-        return z
+            z = draws.normals(spec.seed, samples, k, 3, cut=NORMAL_CUT_SIGMAS)
+        return z * np.asarray(dispersion.size)
 
     out = {
         "moments": stream("principal_moments", d.principal_moments),
@@ -176,8 +156,8 @@ def _sample_draws(spec: SweepSpec, samples: np.ndarray) -> dict[str, np.ndarray]
     if d.torque_noise_sigma is not None:
         intervals = math.ceil(spec.duration / d.torque_noise_interval)
         sigma = np.asarray(d.torque_noise_sigma)
-        generators = draws.each(spec.seed, samples, _STREAMS.index("torque_noise"))
-        out["noise"] = np.array([rng.standard_normal((intervals, 3)) * sigma for rng in generators]).reshape(n, intervals, 3)
+        z = draws.normals(spec.seed, samples, _STREAMS.index("torque_noise"), 3 * intervals)
+        out["noise"] = z.reshape(n, intervals, 3) * sigma
     else:
         out["noise"] = np.zeros((n, 0, 3))
     return out
@@ -217,8 +197,8 @@ def _bodies(spec: SweepSpec, spin_rate: float | None, samples: range | None) -> 
     misalignment = stack("misalignment")
     attitude = stack("attitude")
     moments = np.asarray(body.principal_moments) * (1.0 + stack("moments"))
-    body_from_principal = Rotation.from_quat(np.broadcast_to(body.body_from_principal, (n, 4))) * Rotation.from_rotvec(misalignment)
-    q0 = (Rotation.from_quat(np.broadcast_to(spec.scene.initial.orientation, (n, 4))) * Rotation.from_rotvec(attitude)).as_quat()
+    body_from_principal = quat.compose_rotations(Rotation.from_quat(body.body_from_principal), Rotation.from_rotvec(misalignment))
+    q0 = quat.compose_rotations(Rotation.from_quat(spec.scene.initial.orientation), Rotation.from_rotvec(attitude)).as_quat()
     d = spec.dispersions
     intervals = math.ceil(spec.duration / d.torque_noise_interval) if d.torque_noise_sigma is not None else 0
     noise = draws["noise"] if draws is not None else np.zeros((1, intervals, 3))
@@ -347,7 +327,7 @@ def _simulate(spec: SweepSpec, bodies: _Bodies, method: str, dt: float) -> _Outc
     bp = bodies.body_from_principal
     principal_from_body = _rows(quat.conjugate, bp.as_quat(canonical=False))
     moments = bodies.moments
-    q = (Rotation.from_quat(bodies.q0_body) * bp).as_quat()  # principal -> world
+    q = quat.compose_rotations(Rotation.from_quat(bodies.q0_body), bp).as_quat()  # principal -> world
     omega = bp.apply(bodies.omega0_body, inverse=True)
     alive = np.ones(n, dtype=bool)
     errors: dict[int, str] = {}
@@ -357,35 +337,10 @@ def _simulate(spec: SweepSpec, bodies: _Bodies, method: str, dt: float) -> _Outc
         return 0.5 * np.einsum("ij,ij->i", momentum, omega_p), np.linalg.norm(momentum, axis=1)
 
     energy0, momentum0 = invariants(omega)
-    intermediate = np.argsort(moments, axis=1)[:, 1]
-    major = np.argmax(moments, axis=1)
-    rows = np.arange(n)
-    sign0 = np.sign(omega[rows, intermediate])
-    first_flip = np.full(n, np.nan)
-    previous = (0.0, omega[rows, intermediate].copy())
-    nut_min = np.full(n, np.inf)
-    nut_max = np.full(n, -np.inf)
-    max_omega = np.linalg.norm(omega, axis=1)
+    track = CheckpointTrack(moments, omega)
     impulse = np.zeros(n)
-
-    def observe(t: float, omega_p: np.ndarray) -> None:
-        nonlocal previous
-        np.maximum(max_omega, np.linalg.norm(omega_p, axis=1), out=max_omega)
-        momentum = moments * omega_p
-        cos = np.abs(momentum[rows, major]) / np.maximum(np.linalg.norm(momentum, axis=1), np.finfo(float).tiny)
-        angle = np.arccos(np.clip(cos, 0.0, 1.0))
-        np.minimum(nut_min, angle, out=nut_min)
-        np.maximum(nut_max, angle, out=nut_max)
-        w_int = omega_p[rows, intermediate]
-        flipped = np.isnan(first_flip) & (sign0 != 0) & (np.sign(w_int) == -sign0)
-        if flipped.any():
-            t0, w0 = previous
-            # linear interpolation of the zero crossing between two checkpoints
-            frac = w0[flipped] / (w0[flipped] - w_int[flipped])
-            first_flip[flipped] = t0 + frac * (t - t0)
-        previous = (t, w_int.copy())
-
-    observe(0.0, omega)
+    track.observe(0.0, omega)
+    last_torque: tuple[Any, np.ndarray, np.ndarray] = (None, np.empty(0), np.empty(0))
     world_frame = any(schedule.frame == "world" for schedule in spec.scene.schedules)
     segments = [(int(a), int(b)) for a, b in zip(marks[:-1], marks[1:]) if b > a]
     if last > 0.0:
@@ -400,21 +355,28 @@ def _simulate(spec: SweepSpec, bodies: _Bodies, method: str, dt: float) -> _Outc
         live = slice(None) if everyone else alive
         q_body = _rows(quat.multiply, q[live], principal_from_body[live]) if world_frame else None
         torque_body = _body_torque(spec, bodies if everyone else _subset(bodies, alive), a, dt, q_body)
-        impulse[live] += np.linalg.norm(torque_body, axis=1) * step * (b - a)
-        torque_p = _rows(quat.rotate, principal_from_body[live], torque_body)
+        # most segments of a run repeat the last one's torques (a torque-free run: all of them)
+        key = (step, torque_body.tobytes()) if everyone else None
+        if key is None or key != last_torque[0]:
+            last_torque = (key, np.linalg.norm(torque_body, axis=1) * step, _rows(quat.rotate, principal_from_body[live], torque_body))
+        _, impulse_rate, torque_p = last_torque
+        impulse[live] += impulse_rate * (b - a)
         # the first call normalises q as an integrator's set_state does; later ones continue from it
         q_new, omega_new, failed = _advance_isolated(
             method, moments[live], q[live], omega[live], step, b - a, torque_p, normalize_q=a == 0
         )
-        index = np.flatnonzero(alive)
-        for i, message in failed.items():
-            errors[int(index[i])] = f"{message} (segment from t = {t_a:.9g} s, dt = {step:.9g} s)"
-        q[live], omega[live] = q_new, omega_new
-        for i in failed:
-            alive[index[i]] = False
+        if everyone:
+            q, omega = q_new, omega_new  # fresh arrays: no copy back
+        else:
+            q[live], omega[live] = q_new, omega_new
+        if failed:
+            index = np.flatnonzero(alive)
+            for i, message in failed.items():
+                errors[int(index[i])] = f"{message} (segment from t = {t_a:.9g} s, dt = {step:.9g} s)"
+                alive[index[i]] = False
         if b in checkpoint_set or partial:
             t_b = spec.duration if partial or b == n_full and last == 0.0 else b * dt
-            observe(t_b, np.where(alive[:, None], omega, np.nan))
+            track.observe(t_b, omega if not errors else np.where(alive[:, None], omega, np.nan))
 
     energy, momentum = invariants(omega)
     with np.errstate(divide="ignore", invalid="ignore"):
@@ -429,12 +391,12 @@ def _simulate(spec: SweepSpec, bodies: _Bodies, method: str, dt: float) -> _Outc
         q_body=q_body,
         omega_body=omega_body,
         errors=errors,
-        max_omega=np.where(alive, max_omega, np.nan),
+        max_omega=np.where(alive, track.max_omega, np.nan),
         energy_drift=energy_drift,
         momentum_drift=momentum_drift,
         omega_bound=omega_bound,
-        first_flip=first_flip,
-        nutation_range=np.where(alive, nut_max - nut_min, np.nan),
+        first_flip=track.first_flip,
+        nutation_range=np.where(alive, track.nutation_range(), np.nan),
     )
 
 
@@ -503,7 +465,9 @@ def run_chunk(spec: SweepSpec, chunk: Chunk, nominal: _Outcome | None = None) ->
         if nominal is None:
             nominal = run_nominal(spec, spin_rate)
         outcome = _simulate(spec, bodies, method, dt)
-    attitude_error = (Rotation.from_quat(np.nan_to_num(nominal.q_body[0], nan=1.0)).inv() * Rotation.from_quat(np.nan_to_num(outcome.q_body, nan=1.0))).magnitude()
+    attitude_error = quat.compose_rotations(
+        Rotation.from_quat(np.nan_to_num(nominal.q_body[0], nan=1.0)).inv(), Rotation.from_quat(np.nan_to_num(outcome.q_body, nan=1.0))
+    ).magnitude()
     failed = np.isnan(outcome.q_body).any(axis=1) | np.isnan(nominal.q_body[0]).any()
     attitude_error = np.where(failed, np.nan, attitude_error)
     omega_error = np.linalg.norm(outcome.omega_body - nominal.omega_body[0], axis=1)

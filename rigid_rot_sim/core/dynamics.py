@@ -197,10 +197,14 @@ class RigidBody:
 
     def attitude_to_principal(self, q_body: Any) -> np.ndarray:
         """Attitude body -> world (..., 4) -> attitude principal -> world, ``q (x) q_bp``."""
-        r = Rotation.from_quat(np.reshape(q_body, (-1, 4))) * Rotation.from_quat(self.body_from_principal)
+        r = quat.compose_rotations(
+            Rotation.from_quat(np.reshape(q_body, (-1, 4))), Rotation.from_quat(self.body_from_principal)
+        )
         return r.as_quat(canonical=False).reshape(np.shape(q_body))
 
     def attitude_from_principal(self, q_principal: Any) -> np.ndarray:
         """Attitude principal -> world (..., 4) -> attitude body -> world, ``q (x) q_bp^-1``."""
-        r = Rotation.from_quat(np.reshape(q_principal, (-1, 4))) * Rotation.from_quat(self.body_from_principal).inv()
+        r = quat.compose_rotations(
+            Rotation.from_quat(np.reshape(q_principal, (-1, 4))), Rotation.from_quat(self.body_from_principal).inv()
+        )
         return r.as_quat(canonical=False).reshape(np.shape(q_principal))

@@ -7,7 +7,8 @@ rotation "first q, then p", the quaternion of ``Rotation.from_quat(p) * Rotation
 
 These functions take any length-3/length-4 sequence and return tuples of floats: a
 call costs well under a microsecond, where the same on small numpy arrays costs several.
-For arrays of many quaternions (output, plotting) use ``scipy.spatial.transform.Rotation``.
+For arrays of many quaternions (output, plotting) use ``scipy.spatial.transform.Rotation``
+(and :func:`compose_rotations` to compose many at once).
 They are also the compiled integrator kernels' quaternion algebra: ``register_jitable``
 leaves them plain Python functions for Python callers and lets numba compile them into
 the kernels (on tuples), so each formula exists once.
@@ -25,6 +26,7 @@ from typing import Any
 import numpy as np
 import numpy.typing as npt
 from numba.extending import register_jitable
+from scipy.spatial.transform import Rotation
 
 Quaternion = tuple[float, float, float, float]
 Vector = tuple[float, float, float]
@@ -172,3 +174,26 @@ def quaternion_to_zxz(q: Any) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
 def _wrap_angle(a: np.ndarray) -> np.ndarray:
     """a reduced to (-pi, pi]."""
     return np.pi - np.mod(np.pi - a, 2.0 * np.pi)
+
+
+
+def compose_rotations(p: Rotation, q: Rotation) -> Rotation:
+    """``p * q`` ("first q, then p"), the same bits as scipy's, for arrays of rotations ~40x faster.
+
+    scipy (1.15 on) composes arrays of rotations one row at a time with an allocation per
+    row (~0.4 µs each). This is its arithmetic on whole columns, in its order (the cross
+    product added last), normalised by scipy's own constructor as ``Rotation.__mul__`` does;
+    p and q broadcast as there. ``test/core/test_quaternion.py`` compares the bits.
+    """
+    px, py, pz, pw = np.moveaxis(p.as_quat(canonical=False), -1, 0)
+    qx, qy, qz, qw = np.moveaxis(q.as_quat(canonical=False), -1, 0)
+    product = np.stack(
+        (
+            pw * qx + qw * px + (py * qz - pz * qy),
+            pw * qy + qw * py + (pz * qx - px * qz),
+            pw * qz + qw * pz + (px * qy - py * qx),
+            pw * qw - px * qx - py * qy - pz * qz,
+        ),
+        axis=-1,
+    )
+    return Rotation(product, normalize=True, copy=False)

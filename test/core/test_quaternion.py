@@ -109,3 +109,20 @@ def test_zxz_quaternion_matches_scipy():
     q = quat.zxz_to_quaternion(angles[:, 0], angles[:, 1], angles[:, 2])
     distance = (Rotation.from_quat(q).inv() * Rotation.from_euler("ZXZ", angles)).magnitude()
     assert np.max(distance) < 1e-15 * 8
+
+
+def _bits(rotation):
+    return rotation.as_quat(canonical=False).view(np.uint64)
+
+
+def test_compose_rotations_gives_scipys_bits():
+    """Arrays (unit, far from unit, from rotation vectors), one against many, single ones, inverses."""
+    rng = np.random.default_rng(5)
+    n = 20_000
+    a = Rotation.from_quat(rng.normal(size=(n, 4)) * rng.choice([1.0, 1e-3, 1e5], size=(n, 1)))
+    b = Rotation.from_quat(rng.normal(size=(n, 4)))
+    v = Rotation.from_rotvec(rng.normal(size=(n, 3)) * rng.choice([1e-9, 1e-3, 3.0], size=(n, 1)))
+    for p, q in ((a, b), (a, v), (v, a), (a[:1], v), (v, a[0]), (a.inv(), b), (a[3], v[7])):
+        ours, theirs = quat.compose_rotations(p, q), p * q
+        assert ours.single == theirs.single and np.array_equal(_bits(ours), _bits(theirs))
+    assert np.array_equal(quat.compose_rotations(a.inv(), b).magnitude(), (a.inv() * b).magnitude())
