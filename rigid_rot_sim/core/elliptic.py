@@ -13,9 +13,11 @@ arithmetic-geometric mean with the complementary parameter passed exactly
 from __future__ import annotations
 
 import math
+from typing import Any
 
 import numpy as np
-from numba.extending import register_jitable
+from numba import types
+from numba.extending import intrinsic, overload, register_jitable
 
 from rigid_rot_sim.core.validation import FloatArray
 
@@ -50,9 +52,14 @@ def fast_two_sum(a: float, b: float) -> tuple[float, float]:
     return s, b - (s - a)
 
 
-@register_jitable
 def two_product(a: float, b: float) -> tuple[float, float]:
-    """a b = p + e exactly (Dekker's splitting; no FMA needed)."""
+    """a b = p + e exactly: p = fl(a b) and e its rounding error.
+
+    Interpreted, Dekker's splitting (Python 3.11 has no ``math.fma``); compiled, one fused
+    multiply-add, ``e = fma(a, b, -p)`` (:func:`_two_product_fma`). Both give the exact e, so
+    the same bits (barring overflow past 2^996 or products below 2^-969, where Dekker's split
+    is inexact); the FMA costs 2 operations instead of 17.
+    """
     p = a * b
     split = 134217729.0  # 2^27 + 1
     t = split * a
@@ -62,6 +69,34 @@ def two_product(a: float, b: float) -> tuple[float, float]:
     bh = t - (t - b)
     bl = b - bh
     return p, ((ah * bh - p) + ah * bl + al * bh) + al * bl
+
+
+def _fma_intrinsic(typingctx: Any, a: Any, b: Any, c: Any) -> Any:
+    """fma(a, b, c) = a b + c rounded once (IEEE 754 fusedMultiplyAdd, LLVM's llvm.fma.f64): one
+    instruction where the CPU has FMA, else libm's fma; exact either way, so the same bits."""
+    sig = types.float64(types.float64, types.float64, types.float64)
+
+    def codegen(context: Any, builder: Any, signature: Any, args: Any) -> Any:
+        return builder.fma(*args)
+
+    return sig, codegen
+
+
+#: ``_fma(a, b, c)`` in compiled code only (numba passes the typing context itself).
+_fma: Any = intrinsic(_fma_intrinsic)
+
+
+@overload(two_product)
+def _two_product_fma(a, b):  # type: ignore[no-untyped-def]  # numba matches the signature, annotations included
+    """The compiled two_product: the FMA gives the exact rounding error of a b."""
+
+    def impl(a, b):  # type: ignore[no-untyped-def]
+        x = float(a)
+        y = float(b)
+        p = x * y
+        return p, _fma(x, y, -p)
+
+    return impl
 
 
 @register_jitable

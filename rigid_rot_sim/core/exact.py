@@ -61,16 +61,21 @@ lam, u0, K, |L| / I1 and the precession per half period 2K (``Pi(n|m) - K`` by t
 DLMF 19.8.6) are built to ~1e-32 from the floats given, u = lam t + u0 and its reduction by
 2K, the Jacobi amplitude, phi and its reduction by 4 pi are carried in double-double, so the
 phase does not lose a digit per decade of t. Accuracy against a 40-digit mpmath reference
-(test/core/test_exact_ulps.py, 100 rad of rotation): omega within ~2 ulps of the correctly
-rounded value (u0 refined by a Newton step on its amplitude), q within ~16 (in 1e-16
-absolute units near a zero crossing); what is left in
-q is the rounding of the product q_WL (x) q_zxz (x) q_perm. Next to the separatrix the
+(test/core/test_exact_ulps.py, 100 rad of rotation): omega within ~2.5 ulps of the correctly
+rounded value (u0 refined by a Newton step on its amplitude). The attitude is composed as
+``q = Q (x) z(t)``, Q = q_WL (x) q_perm a double-double from the build and z = q_perm* (x) q_zxz (x) q_perm
+(a signed permutation of q_zxz, exact), the product summed without rounding error (Dot2: Ogita,
+Rump and Oishi 2005) and normalised to first order before its one rounding. q is then within
+~13 units (1e-16 absolute near a zero crossing); what is left is the precession angle: its
+bounded part ``g = Pi(n; am u | m) - u`` comes from Carlson's R_J in double (2-3 ulps of |g| <= 0.8,
+times COEFF ~ 2), and theta and psi are rounded angles. Next to the separatrix the
 problem itself is ill-conditioned and the error stays below that of a 1-ulp change of omega0.
 
 Special cases in closed form: a spherical body (omega constant); a symmetric body
 (I_a = I_b = I_p, distinct axis d): ``q(t) = exp(tau L_world / I_p) q0 exp(tau beta e_d)``
-with ``beta = (1/I_d - 1/I_p) L_d`` (the two flows commute); a stationary spin about
-the middle axis (or a body at rest), labelled 'separatrix' because L^2 = 2 E I2 holds.
+with ``beta = (1/I_d - 1/I_p) L_d`` (the two flows commute); a spin about a principal axis
+(or a body at rest): omega constant, ``q(t) = q0 (x) exp(tau omega)``, the product compensated as
+above (within ~3 units); about the middle axis it is labelled 'separatrix' because L^2 = 2 E I2 holds.
 
 Implementation: the construction of a solution from a state and its evaluation at a time
 are numba kernels on a parameter vector (``register_jitable``; Carlson's integrals and the
@@ -107,6 +112,7 @@ from rigid_rot_sim.core.elliptic import (
     dd_reduce,
     dd_sin_cos,
     dd_sqrt,
+    fast_two_sum,
     jacobi_amplitude_dd,
     jacobi_dd,
     two_product,
@@ -129,16 +135,17 @@ _EXACT_SEPARATRIX_DISTANCE = 1e-2
 # The flow's parameter vector: the kind, then the fields of each kind.
 _KIND = 0
 _RIGID, _SYMMETRIC_FLOW, _ELLIPTIC = 0.0, 1.0, 2.0
-# rigid rotation: omega (body), q0, omega_world, |omega| (a double-double), the unit axis (world)
-_R_OMEGA, _R_Q0, _R_OMEGA_WORLD, _R_RATE, _R_AXIS = 1, 4, 8, 11, 13
+# rigid rotation: omega (body), q0, |omega| (a double-double), the unit axis (body)
+_R_OMEGA, _R_Q0, _R_RATE, _R_AXIS = 1, 4, 11, 13
 # symmetric: moments, axis, rate_world, beta, l_body, q0
 _S_MOMENTS, _S_AXIS, _S_RATE, _S_BETA, _S_L, _S_Q0 = 1, 4, 5, 8, 9, 12
 # elliptic (relabelled frame): order, axis signs, moments, amplitudes, signs, psi scale,
-# lam, u0, m1 (1 - m), n, |L|, K, COEFF = |L| (I3 - I1) / (I1 I3 lam), j0, g0, q_wl, q_perm,
+# lam, u0, m1 (1 - m), n, |L|, K, COEFF = |L| (I3 - I1) / (I1 I3 lam), j0, g0, Q = q_WL (x) q_perm
+# (a double-double: hi in QWL, lo in QWL_LO, see _elliptic_state),
 # AGM levels; lam, u0 and K are double-doubles (hi in the slot named, lo in *_LO); RATE = |L| / I1,
 # TURN (the precession beyond RATE t per half period 2K) and AGM_TOP (the AGM limit) too.
 (_E_ORDER, _E_AXIS_SIGNS, _E_MOMENTS, _E_AMPLITUDE, _E_SIGNS, _E_PSI_SCALE, _E_LAM, _E_U0, _E_M1, _E_N,
- _E_LNORM, _E_K, _E_COEFF, _E_J0, _E_G0, _E_QWL, _E_QPERM, _E_LEVELS, _E_LAM_LO, _E_U0_LO, _E_K_LO,
+ _E_LNORM, _E_K, _E_COEFF, _E_J0, _E_G0, _E_QWL, _E_QWL_LO, _E_LEVELS, _E_LAM_LO, _E_U0_LO, _E_K_LO,
  _E_RATE, _E_TURN, _E_AGM_TOP) = (
     1, 4, 7, 10, 13, 16, 18, 19, 20, 21, 22, 23, 24, 25, 26, 27, 31, 35, 36, 37, 38, 39, 41, 43)
 PARAMS_SIZE = 45
@@ -285,15 +292,71 @@ def _elliptic_state(params, agm_a, agm_c, tau):
     w2 = params[_E_SIGNS + 2] * params[_E_AMPLITUDE + 2] * dn
     theta = math.atan2(math.hypot(i1 * w0, i2 * w1), i3 * w2)
     psi = math.atan2(params[_E_PSI_SCALE] * cn, params[_E_PSI_SCALE + 1] * sn)
-    q_wl = (params[_E_QWL], params[_E_QWL + 1], params[_E_QWL + 2], params[_E_QWL + 3])
-    q_perm = (params[_E_QPERM], params[_E_QPERM + 1], params[_E_QPERM + 2], params[_E_QPERM + 3])
-    # a product of unit quaternions: normalised against the rounding of the products
-    q = quat.normalize(quat.multiply(quat.multiply(q_wl, _zxz_dd(phi_h, phi_l, theta, psi)), q_perm))
+    z = _in_body_frame(_zxz_dd(phi_h, phi_l, theta, psi), params[_E_ORDER:_E_ORDER + 3],
+                       params[_E_AXIS_SIGNS:_E_AXIS_SIGNS + 3])
+    q = _compensated_product(params[_E_QWL:_E_QWL + 4], params[_E_QWL_LO:_E_QWL_LO + 4], z)
     omega = np.zeros(3)
     omega[int(params[_E_ORDER])] = params[_E_AXIS_SIGNS] * w0
     omega[int(params[_E_ORDER + 1])] = params[_E_AXIS_SIGNS + 1] * w1
     omega[int(params[_E_ORDER + 2])] = params[_E_AXIS_SIGNS + 2] * w2
     return q, (omega[0], omega[1], omega[2])
+
+
+@register_jitable
+def _in_body_frame(z, order, axis_signs):
+    """q_perm* (x) z (x) q_perm for the relabelling x' = P x (P = q_perm's matrix): the vector part
+    goes to P^T v, (P^T v)[order[k]] = axis_signs[k] v[k], a signed permutation, so exact."""
+    v0 = v1 = v2 = 0.0
+    for k in range(3):
+        if order[k] == 0.0:
+            v0 = axis_signs[k] * z[k]
+        elif order[k] == 1.0:
+            v1 = axis_signs[k] * z[k]
+        else:
+            v2 = axis_signs[k] * z[k]
+    return (v0, v1, v2, z[3])
+
+
+@register_jitable
+def _dot2_product(p_hi, p_lo, q):
+    """``(p_hi + p_lo) (x) q`` as arrays (hi, lo) whose sum is the product to ~1e-32: each
+    component's four terms summed by Dot2 (see _compensated_product)."""
+    qx, qy, qz, qw = q
+    x = _dot2(p_hi, p_lo, qw, qz, -qy, qx)
+    y = _dot2(p_hi, p_lo, -qz, qw, qx, qy)
+    z = _dot2(p_hi, p_lo, qy, -qx, qw, qz)
+    w = _dot2(p_hi, p_lo, -qx, -qy, -qz, qw)
+    return (x[0], y[0], z[0], w[0]), (x[1], y[1], z[1], w[1])
+
+
+@register_jitable
+def _dot2(a_hi, a_lo, b0, b1, b2, b3):
+    """``sum_j (a_hi[j] + a_lo[j]) b_j`` as (s, c), s + c within ~1e-32 of it (Dot2, see _compensated_product)."""
+    s, c = two_product(a_hi[0], b0)
+    c += a_lo[0] * b0
+    for j, b in ((1, b1), (2, b2), (3, b3)):
+        t, e = two_product(a_hi[j], b)
+        s, f = two_sum(s, t)
+        c += e + f + a_lo[j] * b
+    return s, c
+
+
+@register_jitable
+def _compensated_product(p_hi, p_lo, q):
+    """``(p_hi + p_lo) (x) q`` normalised, each component rounded once from ~1e-32 (a unit quaternion).
+
+    The Hamilton product's 16 terms are summed without rounding error (Ogita, Rump and Oishi's
+    Dot2: two_product and two_sum, errors kept in a second sum) with p_lo's terms in that
+    second sum; the norm is then brought to 1 to first order, ``x (1 - (|x|^2 - 1) / 2)`` with
+    |x|^2 - 1 compensated in the same way (|x| is 1 to within a few ulps: x (1 - d / 2) is
+    1 / sqrt(1 + d) to 1e-31). A plain double product and normalisation would leave an ulp or
+    two of each of the four terms of every component.
+    """
+    hi, lo = _dot2_product(p_hi, p_lo, q)
+    d, c = _dot2(hi, (2.0 * lo[0], 2.0 * lo[1], 2.0 * lo[2], 2.0 * lo[3]), hi[0], hi[1], hi[2], hi[3])
+    d = (d - 1.0) + c  # d ~ 1: d - 1 is exact (Sterbenz)
+    return (hi[0] + (lo[0] - 0.5 * d * hi[0]), hi[1] + (lo[1] - 0.5 * d * hi[1]),
+            hi[2] + (lo[2] - 0.5 * d * hi[2]), hi[3] + (lo[3] - 0.5 * d * hi[3]))
 
 
 @register_jitable
@@ -324,7 +387,7 @@ def flow_state(params, agm_a, agm_c, tau):
         half_h, half_l = dd_reduce(half_h, half_l + 0.5 * params[_R_RATE + 1] * tau, TWO_PI_DD[0], TWO_PI_DD[1])
         s, c = dd_sin_cos(half_h, half_l)
         spin = (s * params[_R_AXIS], s * params[_R_AXIS + 1], s * params[_R_AXIS + 2], c)
-        q = quat.normalize(quat.multiply(spin, q0))
+        q = _compensated_product(q0, (0.0, 0.0, 0.0, 0.0), spin)  # exp(tau omega_world) q0 = q0 exp(tau omega)
         return q, (params[_R_OMEGA], params[_R_OMEGA + 1], params[_R_OMEGA + 2])
     if kind == _SYMMETRIC_FLOW:
         axis = int(params[_S_AXIS])
@@ -360,7 +423,6 @@ def _elliptic_params(moments, omega, q0, order, d, params, agm_a, agm_c, long_ru
     """
     row = 3 * order[0] + order[1]
     axis_signs = (_RELABELLING[row, 0], _RELABELLING[row, 1], _RELABELLING[row, 2])
-    q_perm = (_RELABELLING[row, 3], _RELABELLING[row, 4], _RELABELLING[row, 5], _RELABELLING[row, 6])
     i1, i2, i3 = moments[order[0]], moments[order[1]], moments[order[2]]
     w1 = axis_signs[0] * omega[order[0]]
     w2 = axis_signs[1] * omega[order[1]]
@@ -455,16 +517,23 @@ def _elliptic_params(moments, omega, q0, order, d, params, agm_a, agm_c, long_ru
             params[_E_AGM_TOP], params[_E_AGM_TOP + 1] = dd_div(*PI_DD, 2.0 * k_dd[0], 2.0 * k_dd[1])
     _, _, _, j0, g0 = _phase(params, agm_a, agm_c, u0_dd[0], u0_dd[1])
     params[_E_J0], params[_E_G0] = j0, g0
-    # q_world<-body = q_WL (x) q_zxz(t) (x) q_perm; q_WL from q(t0) = q0, with q_zxz(t0)
-    # evaluated by the flow itself so that the two agree to rounding
+    # q_world<-body = q_WL (x) q_zxz(t) (x) q_perm; q_WL from q(t0) = q0, with q_zxz(t0) from the
+    # omega0 given (phi = 0; theta and psi as _elliptic_state takes them from the flow's omega):
+    # the flow's own omega(t0) agrees with it to an ulp, and evaluating the flow at t0 would
+    # cost a whole evaluation more per build
+    theta0 = math.atan2(math.hypot(i1 * w1, i2 * w2), i3 * w3)
+    psi0 = math.atan2(s1 * i1 * alpha1 * cn0, sigma * i2 * alpha2 * sn0)
+    # q = q_WL (x) q_zxz (x) q_perm = Q (x) z, z = q_perm* (x) q_zxz (x) q_perm (_in_body_frame, exact)
+    # and Q = q_WL (x) q_perm = q0 (x) z(t0)*, kept as a double-double; q0 and z(t0) need not be
+    # unit to the last bit: the evaluation normalises the product
+    for k in range(3):
+        params[_E_ORDER + k] = order[k]
+        params[_E_AXIS_SIGNS + k] = axis_signs[k]
+    z0 = quat.conjugate(_in_body_frame(_zxz_dd(0.0, 0.0, theta0, psi0), params[_E_ORDER:_E_ORDER + 3],
+                                       params[_E_AXIS_SIGNS:_E_AXIS_SIGNS + 3]))
+    q_hi, q_lo = _dot2_product(q0, (0.0, 0.0, 0.0, 0.0), z0)
     for idx in range(4):
-        params[_E_QWL + idx] = 1.0 if idx == 3 else 0.0
-        params[_E_QPERM + idx] = 1.0 if idx == 3 else 0.0
-    q_zxz0 = _elliptic_state(params, agm_a, agm_c, 0.0)[0]
-    q_wl = quat.multiply(quat.multiply(q0, quat.conjugate(q_perm)), quat.conjugate(q_zxz0))
-    for idx in range(4):
-        params[_E_QWL + idx] = q_wl[idx]
-        params[_E_QPERM + idx] = q_perm[idx]
+        params[_E_QWL + idx], params[_E_QWL_LO + idx] = fast_two_sum(q_hi[idx], q_lo[idx])
 
 
 @register_jitable
@@ -509,8 +578,9 @@ def flow_params(moments, omega, q0, params, agm_a, agm_c, long_run):
         case = _SEPARATRIX
     else:
         case = _ABOVE if d > 0.0 else _BELOW
-    if omega[i_min] == 0.0 and omega[i_max] == 0.0:
-        # at rest, or a stationary spin about the middle axis
+    if (omega[0] == 0.0) + (omega[1] == 0.0) + (omega[2] == 0.0) >= 2:
+        # at rest, or a spin about a principal axis: omega is constant (the elliptic flow's
+        # precession would be the difference of terms of order 1 there, so a few ulps off)
         _rigid_params(omega, q0, params)
     elif d < 0.0:
         _elliptic_params(moments, omega, q0, (i_max, i_mid, i_min), d, params, agm_a, agm_c, long_run)
@@ -521,16 +591,16 @@ def flow_params(moments, omega, q0, params, agm_a, agm_c, long_run):
 
 @register_jitable
 def _rigid_params(omega, q0, params):
-    """omega constant in the body; q(t) = exp(tau omega_world) q0."""
+    """omega constant in the body; q(t) = exp(tau omega_world) q0 = q0 exp(tau omega)."""
     params[_KIND] = _RIGID
-    omega_world = quat.rotate(q0, omega)
     rate = dd_sqrt(*dd_add(*dd_add(*two_product(omega[0], omega[0]), *two_product(omega[1], omega[1])),
                            *two_product(omega[2], omega[2])))
-    norm_world = math.sqrt(omega_world[0] ** 2 + omega_world[1] ** 2 + omega_world[2] ** 2)
+    # in the body frame, the axis of a spin about a principal axis is exactly +-e_k
+    # (sqrt(w^2) = |w| in IEEE arithmetic)
+    norm = math.sqrt(omega[0] ** 2 + omega[1] ** 2 + omega[2] ** 2)
     for idx in range(3):
         params[_R_OMEGA + idx] = omega[idx]
-        params[_R_OMEGA_WORLD + idx] = omega_world[idx]
-        params[_R_AXIS + idx] = omega_world[idx] / norm_world if norm_world > 0.0 else 0.0
+        params[_R_AXIS + idx] = omega[idx] / norm if norm > 0.0 else 0.0
     params[_R_RATE], params[_R_RATE + 1] = rate
     for idx in range(4):
         params[_R_Q0 + idx] = q0[idx]

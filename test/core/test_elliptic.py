@@ -38,3 +38,25 @@ def test_carlson_integrals_return_nan_for_non_finite_arguments_instead_of_loopin
     assert math.isnan(elliptic.carlson_rf(1.0, bad, 2.0))
     assert math.isnan(elliptic.carlson_rc(bad, 1.0))
     assert math.isnan(elliptic.carlson_rj(1.0, 2.0, 3.0, bad))
+
+
+def test_compiled_two_product_gives_the_bits_of_dekkers_split():
+    """The kernels' two_product (one FMA) and the interpreted one (Dekker's split) agree bit for bit."""
+    from numba import njit
+
+    @njit(cache=False)
+    def compiled(a, b, out):
+        for k in range(a.size):
+            out[k, 0], out[k, 1] = elliptic.two_product(a[k], b[k])
+
+    rng = np.random.default_rng(21)
+    a = rng.standard_normal(2000) * 10.0 ** rng.integers(-150, 150, 2000)
+    b = rng.standard_normal(2000) * 10.0 ** rng.integers(-150, 150, 2000)
+    a[:4] = (1.0 + 2.0**-52, 0.1, 3.0, -0.0)
+    b[:4] = (1.0 - 2.0**-53, 0.7, 1.0 / 3.0, 5.0)
+    out = np.empty((a.size, 2))
+    compiled(a, b, out)
+    for k in range(a.size):
+        p, e = elliptic.two_product(float(a[k]), float(b[k]))
+        assert (out[k, 0], out[k, 1]) == (p, e)
+        assert abs(e) <= 0.5 * math.ulp(p)

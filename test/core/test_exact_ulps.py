@@ -9,12 +9,16 @@ Metric: for a component x with reference value r, the error |x - r| in units of
 ulp(r) where 4 ulp(r) >= 1e-16 (|r| >= 1/8 of the scale), else in units of 2.5e-17 * scale
 (near a zero crossing 4 units are 1e-16 absolute); scale is 1 for q and |omega| for omega.
 
-Issue 21 asks for 4 units on every component. Measured (100 times per case, the __main__
-below; 24 times in the tests): omega <= 2.2, q <= 15.6, where the flow before the
-double-double phase was at up to 570 (omega) and 1222 (q). omega is held to the target; q to
-a bound just above the one reached, so that a regression fails: what is left in q is the
-rounding of the attitude's composition q_WL (x) q_zxz (x) q_perm and of q_WL itself
-(~1.5e-16 each), not the phase.
+Issue 21 asks for 4 units on every component. Measured (101 times per case, the __main__
+below, and at 100 random times; 25 times in the tests): omega <= 2.6 on every case; q <= 2.9
+on the spins about a principal axis (a uniform rotation, the product q0 (x) exp(tau omega)
+compensated) and 5.7 to 13.2 on the triaxial cases (near_axis_3 the largest), where the flow
+before the double-double phase was at up to 570 (omega) and 1222 (q). omega and the principal
+spins are held to the target; the triaxial q to a bound just above the one reached, so that a
+regression fails. The attitude's composition is compensated (Dot2, core/exact.py); what is
+left in q is the precession angle phi: its bounded part g = Pi(n; am u | m) - u comes from
+Carlson's R_J in double, 2-3 ulps of |g| <= 0.8, times |L| (I3 - I1) / (I1 I3 lam) ~ 2: up to
+6e-16 rad of phi (measured against mpmath), and the rounding of theta and psi (~2e-16 rad).
 """
 
 from __future__ import annotations
@@ -43,7 +47,9 @@ CASES = {
     "general_scaled": ((0.7, 0.9, 1.3), (0.9, -0.8, 0.4), 100.0),
 }
 BOUND_OMEGA = 4.0  # the target
-BOUND_Q = 20.0  # the target is 4; 15.6 reached
+BOUND_Q_PRINCIPAL = 4.0  # the target, on the spins about a principal axis (2.9 reached)
+BOUND_Q = 14.0  # the target is 4; 13.2 reached on the triaxial cases (R_J in double, see above)
+PRINCIPAL = ("about_axis_1", "about_axis_2", "about_axis_3")
 SAMPLES = 24
 
 
@@ -89,7 +95,8 @@ def test_reference_satisfies_the_equations_of_motion(name):
 @pytest.mark.parametrize("name", sorted(CASES))
 def test_within_a_few_ulps_over_100_rad(name):
     errors = max_errors(name)
-    assert errors["q"] <= BOUND_Q and errors["omega"] <= BOUND_OMEGA, errors
+    bound_q = BOUND_Q_PRINCIPAL if name in PRINCIPAL else BOUND_Q
+    assert errors["q"] <= bound_q and errors["omega"] <= BOUND_OMEGA, errors
 
 
 @pytest.mark.parametrize("m, n", [(0.3, -0.5), (0.9, -3.0), (1e-6, -0.2), (0.999999, -1.5), (0.5, -40.0)])
