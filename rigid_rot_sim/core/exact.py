@@ -146,9 +146,9 @@ _S_MOMENTS, _S_AXIS, _S_RATE, _S_BETA, _S_L, _S_Q0 = 1, 4, 5, 8, 9, 12
 # TURN (the precession beyond RATE t per half period 2K) and AGM_TOP (the AGM limit) too.
 (_E_ORDER, _E_AXIS_SIGNS, _E_MOMENTS, _E_AMPLITUDE, _E_SIGNS, _E_PSI_SCALE, _E_LAM, _E_U0, _E_M1, _E_N,
  _E_LNORM, _E_K, _E_COEFF, _E_J0, _E_G0, _E_QWL, _E_QWL_LO, _E_LEVELS, _E_LAM_LO, _E_U0_LO, _E_K_LO,
- _E_RATE, _E_TURN, _E_AGM_TOP) = (
-    1, 4, 7, 10, 13, 16, 18, 19, 20, 21, 22, 23, 24, 25, 26, 27, 31, 35, 36, 37, 38, 39, 41, 43)
-PARAMS_SIZE = 45
+ _E_RATE, _E_TURN, _E_AGM_TOP, _E_LSCALE) = (
+    1, 4, 7, 10, 13, 16, 18, 19, 20, 21, 22, 23, 24, 25, 26, 27, 31, 35, 36, 37, 38, 39, 41, 43, 45)
+PARAMS_SIZE = 51
 
 
 def _relabelling_table() -> np.ndarray:
@@ -270,7 +270,7 @@ def _phase(params, agm_a, agm_c, uh, ul):
 @register_jitable
 def _elliptic_state(params, agm_a, agm_c, tau):
     """(q, omega) of the elliptic flow at tau (s) after its anchor."""
-    i1, i2, i3 = params[_E_MOMENTS], params[_E_MOMENTS + 1], params[_E_MOMENTS + 2]
+    i3 = params[_E_MOMENTS + 2]
     lam = params[_E_LAM]
     n = params[_E_N]
     l_norm = params[_E_LNORM]
@@ -290,11 +290,14 @@ def _elliptic_state(params, agm_a, agm_c, tau):
     w0 = params[_E_SIGNS] * params[_E_AMPLITUDE] * cn
     w1 = params[_E_SIGNS + 1] * params[_E_AMPLITUDE + 1] * sn
     w2 = params[_E_SIGNS + 2] * params[_E_AMPLITUDE + 2] * dn
-    theta = math.atan2(math.hypot(i1 * w0, i2 * w1), i3 * w2)
-    psi = math.atan2(params[_E_PSI_SCALE] * cn, params[_E_PSI_SCALE + 1] * sn)
-    z = _in_body_frame(_zxz_dd(phi_h, phi_l, theta, psi), params[_E_ORDER:_E_ORDER + 3],
-                       params[_E_AXIS_SIGNS:_E_AXIS_SIGNS + 3])
-    q = _compensated_product(params[_E_QWL:_E_QWL + 4], params[_E_QWL_LO:_E_QWL_LO + 4], z)
+    # L_body = (I1 w1, I2 w2, I3 w3) from I_k A_k s_k (double-doubles) and cn, sn, dn
+    l_body = (dd_mul(params[_E_LSCALE], params[_E_LSCALE + 3], cn, 0.0),
+              dd_mul(params[_E_LSCALE + 1], params[_E_LSCALE + 4], sn, 0.0),
+              dd_mul(params[_E_LSCALE + 2], params[_E_LSCALE + 5], dn, 0.0))
+    z_hi, z_lo = _zxz_from_momentum(phi_h, phi_l, *l_body)
+    order, axis_signs = params[_E_ORDER:_E_ORDER + 3], params[_E_AXIS_SIGNS:_E_AXIS_SIGNS + 3]
+    q = _compensated_product(params[_E_QWL:_E_QWL + 4], params[_E_QWL_LO:_E_QWL_LO + 4],
+                             _in_body_frame(z_hi, order, axis_signs), _in_body_frame(z_lo, order, axis_signs))
     omega = np.zeros(3)
     omega[int(params[_E_ORDER])] = params[_E_AXIS_SIGNS] * w0
     omega[int(params[_E_ORDER + 1])] = params[_E_AXIS_SIGNS + 1] * w1
@@ -318,32 +321,34 @@ def _in_body_frame(z, order, axis_signs):
 
 
 @register_jitable
-def _dot2_product(p_hi, p_lo, q):
-    """``(p_hi + p_lo) (x) q`` as arrays (hi, lo) whose sum is the product to ~1e-32: each
+def _dot2_product(p_hi, p_lo, q, q_lo):
+    """``(p_hi + p_lo) (x) (q + q_lo)`` as arrays (hi, lo) whose sum is the product to ~1e-32: each
     component's four terms summed by Dot2 (see _compensated_product)."""
     qx, qy, qz, qw = q
-    x = _dot2(p_hi, p_lo, qw, qz, -qy, qx)
-    y = _dot2(p_hi, p_lo, -qz, qw, qx, qy)
-    z = _dot2(p_hi, p_lo, qy, -qx, qw, qz)
-    w = _dot2(p_hi, p_lo, -qx, -qy, -qz, qw)
+    lx, ly, lz, lw = q_lo
+    x = _dot2(p_hi, p_lo, (qw, qz, -qy, qx), (lw, lz, -ly, lx))
+    y = _dot2(p_hi, p_lo, (-qz, qw, qx, qy), (-lz, lw, lx, ly))
+    z = _dot2(p_hi, p_lo, (qy, -qx, qw, qz), (ly, -lx, lw, lz))
+    w = _dot2(p_hi, p_lo, (-qx, -qy, -qz, qw), (-lx, -ly, -lz, lw))
     return (x[0], y[0], z[0], w[0]), (x[1], y[1], z[1], w[1])
 
 
 @register_jitable
-def _dot2(a_hi, a_lo, b0, b1, b2, b3):
-    """``sum_j (a_hi[j] + a_lo[j]) b_j`` as (s, c), s + c within ~1e-32 of it (Dot2, see _compensated_product)."""
-    s, c = two_product(a_hi[0], b0)
-    c += a_lo[0] * b0
-    for j, b in ((1, b1), (2, b2), (3, b3)):
-        t, e = two_product(a_hi[j], b)
+def _dot2(a_hi, a_lo, b, b_lo):
+    """``sum_j (a_hi[j] + a_lo[j]) (b[j] + b_lo[j])`` as (s, c), s + c within ~1e-32 of it (Dot2, see
+    _compensated_product; the products of the low parts are below that and left out)."""
+    s, c = two_product(a_hi[0], b[0])
+    c += a_lo[0] * b[0] + a_hi[0] * b_lo[0]
+    for j in range(1, 4):
+        t, e = two_product(a_hi[j], b[j])
         s, f = two_sum(s, t)
-        c += e + f + a_lo[j] * b
+        c += e + f + (a_lo[j] * b[j] + a_hi[j] * b_lo[j])
     return s, c
 
 
 @register_jitable
-def _compensated_product(p_hi, p_lo, q):
-    """``(p_hi + p_lo) (x) q`` normalised, each component rounded once from ~1e-32 (a unit quaternion).
+def _compensated_product(p_hi, p_lo, q, q_lo):
+    """``(p_hi + p_lo) (x) (q + q_lo)`` normalised, each component rounded once from ~1e-32 (a unit quaternion).
 
     The Hamilton product's 16 terms are summed without rounding error (Ogita, Rump and Oishi's
     Dot2: two_product and two_sum, errors kept in a second sum) with p_lo's terms in that
@@ -352,28 +357,58 @@ def _compensated_product(p_hi, p_lo, q):
     1 / sqrt(1 + d) to 1e-31). A plain double product and normalisation would leave an ulp or
     two of each of the four terms of every component.
     """
-    hi, lo = _dot2_product(p_hi, p_lo, q)
-    d, c = _dot2(hi, (2.0 * lo[0], 2.0 * lo[1], 2.0 * lo[2], 2.0 * lo[3]), hi[0], hi[1], hi[2], hi[3])
+    hi, lo = _dot2_product(p_hi, p_lo, q, q_lo)
+    d, c = _dot2(hi, (2.0 * lo[0], 2.0 * lo[1], 2.0 * lo[2], 2.0 * lo[3]), hi, (0.0, 0.0, 0.0, 0.0))
     d = (d - 1.0) + c  # d ~ 1: d - 1 is exact (Sterbenz)
     return (hi[0] + (lo[0] - 0.5 * d * hi[0]), hi[1] + (lo[1] - 0.5 * d * hi[1]),
             hi[2] + (lo[2] - 0.5 * d * hi[2]), hi[3] + (lo[3] - 0.5 * d * hi[3]))
 
 
 @register_jitable
-def _zxz_dd(phi_h, phi_l, theta, psi):
-    """Quaternion of Rz(phi) Rx(theta) Rz(psi) with phi = phi_h + phi_l a double-double (rad):
-    phi is reduced by 4 pi (the period of the half angles (phi +- psi) / 2) in double-double,
-    and the half angles keep their low parts into their sine and cosine."""
-    phi_h, phi_l = dd_reduce(phi_h, phi_l, FOUR_PI_DD[0], FOUR_PI_DD[1])  # the half angles' period
-    sum_h, sum_l = two_sum(0.5 * phi_h, 0.5 * psi)
-    diff_h, diff_l = two_sum(0.5 * phi_h, -0.5 * psi)
-    sum_l += 0.5 * phi_l
-    diff_l += 0.5 * phi_l
-    sin_sum, cos_sum = dd_sin_cos(sum_h, sum_l)
-    sin_diff, cos_diff = dd_sin_cos(diff_h, diff_l)
-    ch = math.cos(0.5 * theta)
-    sh = math.sin(0.5 * theta)
-    return (sh * cos_diff, sh * sin_diff, ch * sin_sum, ch * cos_sum)
+def _half_angles_dd(near_h, near_l, far_h, far_l, norm_h, norm_l):
+    """cos and sin of half the angle between a vector and an axis, as double-doubles, from the
+    component ``near`` along the axis (>= 0), the one ``far`` across it (>= 0) and the norm
+    (norm^2 = near^2 + far^2): cos^2 = (norm + near) / (2 norm) and sin = far / (2 norm cos),
+    free of cancellation (the angle is at most pi / 2)."""
+    big = dd_add(norm_h, norm_l, near_h, near_l)
+    twice = dd_mul(2.0 * norm_h, 2.0 * norm_l, *big)  # (2 norm cos)^2
+    root = dd_sqrt(*twice)
+    cos_half = dd_div(*big, *root)
+    sin_half = dd_div(far_h, far_l, *root)
+    return cos_half, sin_half
+
+
+@register_jitable
+def _zxz_from_momentum(phi_h, phi_l, l1, l2, l3):
+    """The quaternion of Rz(phi) Rx(theta) Rz(psi) with ``L_body = |L| (sin th sin psi, sin th cos psi, cos th)``
+    for L_body = (l1, l2, l3) (double-doubles, any scale) and phi = phi_h + phi_l (rad), as (hi, lo) tuples.
+
+    Rx(theta) Rz(psi) is ``(sh c, -sh s, ch s, ch c)`` with ch, sh = cos, sin(theta / 2) and c, s = cos,
+    sin(psi / 2): all four from L_body by +, *, / and sqrt in double-double (:func:`_half_angles_dd`), so
+    the rounding of the angles theta and psi never enters; phi is reduced by 4 pi (the period of its
+    half angle) in double-double and the half angle keeps its low part into its sine and cosine."""
+    sq12 = dd_add(*dd_mul(*l1, *l1), *dd_mul(*l2, *l2))
+    across = dd_sqrt(*sq12)  # |L| sin theta
+    norm = dd_sqrt(*dd_add(*sq12, *dd_mul(*l3, *l3)))
+    near, far = _half_angles_dd(abs(l3[0]), math.copysign(1.0, l3[0]) * l3[1], *across, *norm)
+    ch, sh = (near, far) if l3[0] >= 0.0 else (far, near)
+    if across[0] > 0.0:
+        near, far = _half_angles_dd(abs(l2[0]), math.copysign(1.0, l2[0]) * l2[1],
+                                    abs(l1[0]), math.copysign(1.0, l1[0]) * l1[1], *across)
+    else:  # along the axis: psi is 0 by convention (sh = 0 anyway)
+        near, far = (1.0, 0.0), (0.0, 0.0)
+    c, s = (near, far) if l2[0] >= 0.0 else (far, near)
+    if l1[0] < 0.0:  # psi = atan2(l1, l2) in (-pi, pi]: sin(psi / 2) has the sign of l1
+        s = (-s[0], -s[1])
+    bx, by, bz, bw = dd_mul(*sh, *c), dd_mul(-sh[0], -sh[1], *s), dd_mul(*ch, *s), dd_mul(*ch, *c)
+    phi_h, phi_l = dd_reduce(phi_h, phi_l, FOUR_PI_DD[0], FOUR_PI_DD[1])
+    sp, cp = dd_sin_cos(0.5 * phi_h, 0.5 * phi_l)
+    # (0, 0, sin(phi / 2), cos(phi / 2)) (x) B
+    x = dd_add(*dd_mul(cp, 0.0, *bx), *dd_mul(-sp, 0.0, *by))
+    y = dd_add(*dd_mul(cp, 0.0, *by), *dd_mul(sp, 0.0, *bx))
+    z = dd_add(*dd_mul(cp, 0.0, *bz), *dd_mul(sp, 0.0, *bw))
+    w = dd_add(*dd_mul(cp, 0.0, *bw), *dd_mul(-sp, 0.0, *bz))
+    return (x[0], y[0], z[0], w[0]), (x[1], y[1], z[1], w[1])
 
 
 @register_jitable
@@ -387,7 +422,7 @@ def flow_state(params, agm_a, agm_c, tau):
         half_h, half_l = dd_reduce(half_h, half_l + 0.5 * params[_R_RATE + 1] * tau, TWO_PI_DD[0], TWO_PI_DD[1])
         s, c = dd_sin_cos(half_h, half_l)
         spin = (s * params[_R_AXIS], s * params[_R_AXIS + 1], s * params[_R_AXIS + 2], c)
-        q = _compensated_product(q0, (0.0, 0.0, 0.0, 0.0), spin)  # exp(tau omega_world) q0 = q0 exp(tau omega)
+        q = _compensated_product(q0, (0.0, 0.0, 0.0, 0.0), spin, (0.0, 0.0, 0.0, 0.0))  # exp(tau omega_world) q0 = q0 exp(tau omega)
         return q, (params[_R_OMEGA], params[_R_OMEGA + 1], params[_R_OMEGA + 2])
     if kind == _SYMMETRIC_FLOW:
         axis = int(params[_S_AXIS])
@@ -432,7 +467,8 @@ def _elliptic_params(moments, omega, q0, order, d, params, agm_a, agm_c, long_ru
     a1_sq = _dd_ratio_sum(i2, d32, i1, d31, w2, w1)
     a2_sq = _dd_ratio_sum(i1, d31, i2, d32, w1, w2)
     a3_sq = _dd_ratio_sum(i2, d21, i3, d31, w2, w3)
-    a1, a2, a3 = dd_sqrt(*a1_sq)[0], dd_sqrt(*a2_sq)[0], dd_sqrt(*a3_sq)[0]
+    a1_dd, a2_dd, a3_dd = dd_sqrt(*a1_sq), dd_sqrt(*a2_sq), dd_sqrt(*a3_sq)
+    a1, a2, a3 = a1_dd[0], a2_dd[0], a3_dd[0]
     big = dd_mul(*dd_mul(i3, 0.0, *d32), *a3_sq)
     above = dd_mul(*dd_mul(i3, 0.0, *d32), *two_product(w3, w3))
     below = dd_mul(*dd_mul(i1, 0.0, *d21), *two_product(w1, w1))
@@ -500,6 +536,8 @@ def _elliptic_params(moments, omega, q0, order, d, params, agm_a, agm_c, long_ru
     params[_E_AMPLITUDE], params[_E_AMPLITUDE + 1], params[_E_AMPLITUDE + 2] = a1, a2, a3
     params[_E_SIGNS], params[_E_SIGNS + 1], params[_E_SIGNS + 2] = s1, sigma, s3
     params[_E_PSI_SCALE], params[_E_PSI_SCALE + 1] = s1 * i1 * alpha1, sigma * i2 * alpha2
+    for idx, (sign, moment, amplitude) in enumerate(((s1, i1, a1_dd), (sigma, i2, a2_dd), (s3, i3, a3_dd))):
+        params[_E_LSCALE + idx], params[_E_LSCALE + 3 + idx] = dd_mul(sign * moment, 0.0, *amplitude)
     params[_E_LAM], params[_E_LAM_LO] = lam_dd
     params[_E_U0], params[_E_U0_LO] = u0_dd
     params[_E_M1], params[_E_N] = m1, n
@@ -521,17 +559,16 @@ def _elliptic_params(moments, omega, q0, order, d, params, agm_a, agm_c, long_ru
     # omega0 given (phi = 0; theta and psi as _elliptic_state takes them from the flow's omega):
     # the flow's own omega(t0) agrees with it to an ulp, and evaluating the flow at t0 would
     # cost a whole evaluation more per build
-    theta0 = math.atan2(math.hypot(i1 * w1, i2 * w2), i3 * w3)
-    psi0 = math.atan2(s1 * i1 * alpha1 * cn0, sigma * i2 * alpha2 * sn0)
     # q = q_WL (x) q_zxz (x) q_perm = Q (x) z, z = q_perm* (x) q_zxz (x) q_perm (_in_body_frame, exact)
     # and Q = q_WL (x) q_perm = q0 (x) z(t0)*, kept as a double-double; q0 and z(t0) need not be
     # unit to the last bit: the evaluation normalises the product
     for k in range(3):
         params[_E_ORDER + k] = order[k]
         params[_E_AXIS_SIGNS + k] = axis_signs[k]
-    z0 = quat.conjugate(_in_body_frame(_zxz_dd(0.0, 0.0, theta0, psi0), params[_E_ORDER:_E_ORDER + 3],
-                                       params[_E_AXIS_SIGNS:_E_AXIS_SIGNS + 3]))
-    q_hi, q_lo = _dot2_product(q0, (0.0, 0.0, 0.0, 0.0), z0)
+    z0_hi, z0_lo = _zxz_from_momentum(0.0, 0.0, two_product(i1, w1), two_product(i2, w2), two_product(i3, w3))
+    order_k, signs_k = params[_E_ORDER:_E_ORDER + 3], params[_E_AXIS_SIGNS:_E_AXIS_SIGNS + 3]
+    q_hi, q_lo = _dot2_product(q0, (0.0, 0.0, 0.0, 0.0), quat.conjugate(_in_body_frame(z0_hi, order_k, signs_k)),
+                               quat.conjugate(_in_body_frame(z0_lo, order_k, signs_k)))
     for idx in range(4):
         params[_E_QWL + idx], params[_E_QWL_LO + idx] = fast_two_sum(q_hi[idx], q_lo[idx])
 
