@@ -146,6 +146,17 @@ def dd_sqrt(ah: float, al: float) -> tuple[float, float]:
 
 
 @register_jitable
+def dd_rsqrt(ah: float, al: float) -> tuple[float, float]:
+    """1 / sqrt(ah + al) as a double-double (ah + al > 0): one Newton step from the double
+    y = 1 / sqrt(ah), y (1 - r / 2) with r = (ah + al) y^2 - 1 from error-free products."""
+    y = 1.0 / math.sqrt(ah)
+    p, pe = two_product(y, y)
+    t, te = two_product(ah, p)
+    r = ((t - 1.0) + te) + (ah * pe + al * p)  # t - 1 is exact: t is within ulps of 1
+    return fast_two_sum(y, -0.5 * y * r)
+
+
+@register_jitable
 def dd_sin_cos(h: float, lo: float) -> tuple[float, float]:
     """sin and cos of the angle h + lo (rad), |lo| <= ulp(h): first order in lo is exact to rounding."""
     s, c = math.sin(h), math.cos(h)

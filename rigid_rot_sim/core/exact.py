@@ -110,6 +110,7 @@ from rigid_rot_sim.core.elliptic import (
     dd_div,
     dd_mul,
     dd_reduce,
+    dd_rsqrt,
     dd_sin_cos,
     dd_sqrt,
     fast_two_sum,
@@ -365,17 +366,22 @@ def _compensated_product(p_hi, p_lo, q, q_lo):
 
 
 @register_jitable
-def _half_angles_dd(near_h, near_l, far_h, far_l, norm_h, norm_l):
-    """cos and sin of half the angle between a vector and an axis, as double-doubles, from the
-    component ``near`` along the axis (>= 0), the one ``far`` across it (>= 0) and the norm
-    (norm^2 = near^2 + far^2): cos^2 = (norm + near) / (2 norm) and sin = far / (2 norm cos),
-    free of cancellation (the angle is at most pi / 2)."""
-    big = dd_add(norm_h, norm_l, near_h, near_l)
-    twice = dd_mul(2.0 * norm_h, 2.0 * norm_l, *big)  # (2 norm cos)^2
-    root = dd_sqrt(*twice)
-    cos_half = dd_div(*big, *root)
-    sin_half = dd_div(far_h, far_l, *root)
-    return cos_half, sin_half
+def _half_angles_dd(near_h, near_l, far_h, far_l):
+    """cos and sin of half the angle a in [0, pi / 2] with cos a = near and sin a = far (double-doubles):
+    cos^2 = (1 + near) / 2 and sin = far / (2 cos), free of cancellation."""
+    big_h, big_l = two_sum(1.0, near_h)
+    big_h, big_l = fast_two_sum(big_h, big_l + near_l)
+    r_h, r_l = dd_rsqrt(2.0 * big_h, 2.0 * big_l)  # 1 / (2 cos)
+    return dd_mul(big_h, big_l, r_h, r_l), dd_mul(far_h, far_l, r_h, r_l)
+
+
+@register_jitable
+def _dot2_pair(a, b_h, b_l, c, d_h, d_l):
+    """``a (b_h + b_l) + c (d_h + d_l)`` (a, c doubles) as a double-double (Dot2)."""
+    p, pe = two_product(a, b_h)
+    q, qe = two_product(c, d_h)
+    s, se = two_sum(p, q)
+    return fast_two_sum(s, se + pe + qe + (a * b_l + c * d_l))
 
 
 @register_jitable
@@ -384,30 +390,32 @@ def _zxz_from_momentum(phi_h, phi_l, l1, l2, l3):
     for L_body = (l1, l2, l3) (double-doubles, any scale) and phi = phi_h + phi_l (rad), as (hi, lo) tuples.
 
     Rx(theta) Rz(psi) is ``(sh c, -sh s, ch s, ch c)`` with ch, sh = cos, sin(theta / 2) and c, s = cos,
-    sin(psi / 2): all four from L_body by +, *, / and sqrt in double-double (:func:`_half_angles_dd`), so
+    sin(psi / 2): all four from L_body by +, * and 1 / sqrt in double-double (:func:`_half_angles_dd`), so
     the rounding of the angles theta and psi never enters; phi is reduced by 4 pi (the period of its
     half angle) in double-double and the half angle keeps its low part into its sine and cosine."""
     sq12 = dd_add(*dd_mul(*l1, *l1), *dd_mul(*l2, *l2))
-    across = dd_sqrt(*sq12)  # |L| sin theta
-    norm = dd_sqrt(*dd_add(*sq12, *dd_mul(*l3, *l3)))
-    near, far = _half_angles_dd(abs(l3[0]), math.copysign(1.0, l3[0]) * l3[1], *across, *norm)
-    ch, sh = (near, far) if l3[0] >= 0.0 else (far, near)
-    if across[0] > 0.0:
-        near, far = _half_angles_dd(abs(l2[0]), math.copysign(1.0, l2[0]) * l2[1],
-                                    abs(l1[0]), math.copysign(1.0, l1[0]) * l1[1], *across)
-    else:  # along the axis: psi is 0 by convention (sh = 0 anyway)
-        near, far = (1.0, 0.0), (0.0, 0.0)
+    r_norm = dd_rsqrt(*dd_add(*sq12, *dd_mul(*l3, *l3)))
+    if sq12[0] > 0.0:
+        r_across = dd_rsqrt(*sq12)
+        sin_theta = dd_mul(*dd_mul(*sq12, *r_across), *r_norm)
+        # psi = atan2(l1, l2) in (-pi, pi]: its half angle from |l2|, |l1| and the sign of l1
+        near, far = _half_angles_dd(*dd_mul(abs(l2[0]), math.copysign(1.0, l2[0]) * l2[1], *r_across),
+                                    *dd_mul(abs(l1[0]), math.copysign(1.0, l1[0]) * l1[1], *r_across))
+    else:  # along the axis: psi is 0 by convention (sin theta = 0 anyway)
+        sin_theta, near, far = (0.0, 0.0), (1.0, 0.0), (0.0, 0.0)
     c, s = (near, far) if l2[0] >= 0.0 else (far, near)
-    if l1[0] < 0.0:  # psi = atan2(l1, l2) in (-pi, pi]: sin(psi / 2) has the sign of l1
+    if l1[0] < 0.0:
         s = (-s[0], -s[1])
+    near, far = _half_angles_dd(*dd_mul(abs(l3[0]), math.copysign(1.0, l3[0]) * l3[1], *r_norm), *sin_theta)
+    ch, sh = (near, far) if l3[0] >= 0.0 else (far, near)
     bx, by, bz, bw = dd_mul(*sh, *c), dd_mul(-sh[0], -sh[1], *s), dd_mul(*ch, *s), dd_mul(*ch, *c)
     phi_h, phi_l = dd_reduce(phi_h, phi_l, FOUR_PI_DD[0], FOUR_PI_DD[1])
     sp, cp = dd_sin_cos(0.5 * phi_h, 0.5 * phi_l)
     # (0, 0, sin(phi / 2), cos(phi / 2)) (x) B
-    x = dd_add(*dd_mul(cp, 0.0, *bx), *dd_mul(-sp, 0.0, *by))
-    y = dd_add(*dd_mul(cp, 0.0, *by), *dd_mul(sp, 0.0, *bx))
-    z = dd_add(*dd_mul(cp, 0.0, *bz), *dd_mul(sp, 0.0, *bw))
-    w = dd_add(*dd_mul(cp, 0.0, *bw), *dd_mul(-sp, 0.0, *bz))
+    x = _dot2_pair(cp, *bx, -sp, *by)
+    y = _dot2_pair(cp, *by, sp, *bx)
+    z = _dot2_pair(cp, *bz, sp, *bw)
+    w = _dot2_pair(cp, *bw, -sp, *bz)
     return (x[0], y[0], z[0], w[0]), (x[1], y[1], z[1], w[1])
 
 
