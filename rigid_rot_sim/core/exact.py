@@ -116,6 +116,7 @@ from rigid_rot_sim.core.elliptic import (
     fast_two_sum,
     jacobi_amplitude_dd,
     jacobi_dd,
+    third_kind_excess_dd,
     two_product,
     two_sum,
 )
@@ -147,9 +148,9 @@ _S_MOMENTS, _S_AXIS, _S_RATE, _S_BETA, _S_L, _S_Q0 = 1, 4, 5, 8, 9, 12
 # TURN (the precession beyond RATE t per half period 2K) and AGM_TOP (the AGM limit) too.
 (_E_ORDER, _E_AXIS_SIGNS, _E_MOMENTS, _E_AMPLITUDE, _E_SIGNS, _E_PSI_SCALE, _E_LAM, _E_U0, _E_M1, _E_N,
  _E_LNORM, _E_K, _E_COEFF, _E_J0, _E_G0, _E_QWL, _E_QWL_LO, _E_LEVELS, _E_LAM_LO, _E_U0_LO, _E_K_LO,
- _E_RATE, _E_TURN, _E_AGM_TOP, _E_LSCALE) = (
-    1, 4, 7, 10, 13, 16, 18, 19, 20, 21, 22, 23, 24, 25, 26, 27, 31, 35, 36, 37, 38, 39, 41, 43, 45)
-PARAMS_SIZE = 51
+ _E_RATE, _E_TURN, _E_AGM_TOP, _E_LSCALE, _E_N_LO, _E_COEFF_LO, _E_G0_LO) = (
+    1, 4, 7, 10, 13, 16, 18, 19, 20, 21, 22, 23, 24, 25, 26, 27, 31, 35, 36, 37, 38, 39, 41, 43, 45, 51, 52, 53)
+PARAMS_SIZE = 54
 
 
 def _relabelling_table() -> np.ndarray:
@@ -244,8 +245,8 @@ def _separatrix_distance(moments, omega, i_min, i_mid, i_max):
 
 @register_jitable
 def _phase(params, agm_a, agm_c, uh, ul):
-    """sn, cn, dn at u = uh + ul and the two parts of Pi(n; am u | m) beyond u: (j, g),
-    j the number of half periods 2K from 0 to u and g a bounded remainder."""
+    """sn, cn, dn at u = uh + ul and the two parts of Pi(n; am u | m) beyond u: (j, g_h, g_l),
+    j the number of half periods 2K from 0 to u and g = g_h + g_l a bounded remainder."""
     n = params[_E_N]
     if params[_E_M1] == 0.0:  # separatrix
         u = uh + ul
@@ -253,7 +254,7 @@ def _phase(params, agm_a, agm_c, uh, ul):
         e = math.exp(-abs(u))
         cn = 2.0 * e / (1.0 + e * e)
         a = math.sqrt(-n)
-        return sn, cn, cn, 0.0, a * math.atan(a * sn)
+        return sn, cn, cn, 0.0, a * math.atan(a * sn), 0.0
     k = params[_E_K]
     j = math.floor((uh + k) / (2.0 * k))
     # u - 2 K j in double-double: the phase is reduced without the rounding of u or of K j
@@ -261,11 +262,10 @@ def _phase(params, agm_a, agm_c, uh, ul):
     rh, rl = dd_add(uh, ul, -ph, -pl - j * 2.0 * params[_E_K_LO])
     sn, cn, dn = jacobi_dd(rh, rl, agm_a, agm_c, int(params[_E_LEVELS]), params[_E_M1], params[_E_AGM_TOP],
                            params[_E_AGM_TOP + 1])
-    s2 = sn * sn
-    g = (n / 3.0) * sn * s2 * carlson_rj(cn * cn, dn * dn, 1.0, 1.0 - n * s2)
+    g_h, g_l = third_kind_excess_dd(sn, cn, dn, n, params[_E_N_LO])
     # sn and cn change sign over each half period 2K (dn does not)
     parity = 1.0 - 2.0 * (j % 2.0)
-    return parity * sn, parity * cn, dn, j, g
+    return parity * sn, parity * cn, dn, j, g_h, g_l
 
 
 @register_jitable
@@ -278,16 +278,18 @@ def _elliptic_state(params, agm_a, agm_c, tau):
     # u = lam tau + u0 and the precession angle phi in double-double: both grow with tau
     uh, ul = two_product(lam, tau)
     uh, ul = dd_add(uh, ul + params[_E_LAM_LO] * tau, params[_E_U0], params[_E_U0_LO])
-    sn, cn, dn, j, g = _phase(params, agm_a, agm_c, uh, ul)
+    sn, cn, dn, j, g_h, g_l = _phase(params, agm_a, agm_c, uh, ul)
     j0, g0 = params[_E_J0], params[_E_G0]
     coeff = params[_E_COEFF]
     if params[_E_M1] == 0.0:
-        phi_h, phi_l = l_norm * tau / i3 + coeff * (lam * tau + (g - g0)) / (1.0 - n), 0.0
+        phi_h, phi_l = l_norm * tau / i3 + coeff * (lam * tau + (g_h - g0)) / (1.0 - n), 0.0
     else:
         phi_h, phi_l = two_product(params[_E_RATE], tau)
         turn_h, turn_l = two_product(params[_E_TURN], j - j0)
-        phi_h, phi_l = dd_add(phi_h, phi_l + params[_E_RATE + 1] * tau, turn_h,
-                              turn_l + params[_E_TURN + 1] * (j - j0) + coeff * (g - g0))
+        phi_h, phi_l = dd_add(phi_h, phi_l + params[_E_RATE + 1] * tau, turn_h, turn_l + params[_E_TURN + 1] * (j - j0))
+        # the bounded part COEFF (g - g0) in double-double: it is up to ~2 rad
+        bounded = dd_mul(coeff, params[_E_COEFF_LO], *dd_add(g_h, g_l, -g0, -params[_E_G0_LO]))
+        phi_h, phi_l = dd_add(phi_h, phi_l, *bounded)
     w0 = params[_E_SIGNS] * params[_E_AMPLITUDE] * cn
     w1 = params[_E_SIGNS + 1] * params[_E_AMPLITUDE + 1] * sn
     w2 = params[_E_SIGNS + 2] * params[_E_AMPLITUDE + 2] * dn
@@ -548,10 +550,10 @@ def _elliptic_params(moments, omega, q0, order, d, params, agm_a, agm_c, long_ru
         params[_E_LSCALE + idx], params[_E_LSCALE + 3 + idx] = dd_mul(sign * moment, 0.0, *amplitude)
     params[_E_LAM], params[_E_LAM_LO] = lam_dd
     params[_E_U0], params[_E_U0_LO] = u0_dd
-    params[_E_M1], params[_E_N] = m1, n
+    params[_E_M1], params[_E_N], params[_E_N_LO] = m1, n, n_dd[1]
     params[_E_LNORM] = l_dd[0]
     params[_E_K], params[_E_K_LO] = k_dd
-    params[_E_COEFF] = coeff_dd[0]
+    params[_E_COEFF], params[_E_COEFF_LO] = coeff_dd
     params[_E_RATE], params[_E_RATE + 1] = dd_div(*l_dd, i1, 0.0)
     params[_E_TURN], params[_E_TURN + 1] = turn_dd
     params[_E_LEVELS] = levels
@@ -561,8 +563,8 @@ def _elliptic_params(moments, omega, q0, order, d, params, agm_a, agm_c, long_ru
         params[_E_AGM_TOP] = agm_a[levels]
         if long_run:
             params[_E_AGM_TOP], params[_E_AGM_TOP + 1] = dd_div(*PI_DD, 2.0 * k_dd[0], 2.0 * k_dd[1])
-    _, _, _, j0, g0 = _phase(params, agm_a, agm_c, u0_dd[0], u0_dd[1])
-    params[_E_J0], params[_E_G0] = j0, g0
+    _, _, _, j0, g0_h, g0_l = _phase(params, agm_a, agm_c, u0_dd[0], u0_dd[1])
+    params[_E_J0], params[_E_G0], params[_E_G0_LO] = j0, g0_h, g0_l
     # q_world<-body = q_WL (x) q_zxz(t) (x) q_perm; q_WL from q(t0) = q0, with q_zxz(t0) from the
     # omega0 given (phi = 0; theta and psi as _elliptic_state takes them from the flow's omega):
     # the flow's own omega(t0) agrees with it to an ulp, and evaluating the flow at t0 would
