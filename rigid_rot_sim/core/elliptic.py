@@ -280,6 +280,33 @@ def carlson_rj(x: float, y: float, z: float, p: float) -> float:
     return 3.0 * total + fac * series / (ave * math.sqrt(ave))
 
 
+#: binom(2k, k) / (4^k (2k + 1)), k = 15..1: for 0 <= x <= y, R_C(x, y) = asin(sqrt(s)) / sqrt(s y) with
+#: s = 1 - x / y (DLMF 19.2.18), and asin(z) / z = sum_k binom(2k, k) / (4^k (2k + 1)) z^(2k); at s <= 0.05
+#: the terms beyond k = 15 are below 1e-21.
+_RC_SERIES = tuple(math.comb(2 * k, k) / (4**k * (2 * k + 1)) for k in range(15, 0, -1))
+_RC_SERIES_S = 0.05
+
+
+@register_jitable
+def carlson_rc_dd(xh: float, xl: float, yh: float, yl: float) -> tuple[float, float]:
+    """R_C(x, y) as a double-double for 0 <= x <= y (double-doubles): duplication steps in double-double
+    (R_C(x, y) = R_C((x + l) / 4, (y + l) / 4), l = 2 sqrt(x y) + y, which divide y - x by 4 and keep it
+    exact) until s = 1 - x / y <= 0.05, then the series in s in double (it is 1 + O(s))."""
+    dh, dl = dd_add(yh, yl, -xh, -xl)
+    while dh > _RC_SERIES_S * yh:
+        root = dd_sqrt(*dd_mul(xh, xl, yh, yl))
+        lam = dd_add(2.0 * root[0], 2.0 * root[1], yh, yl)
+        yh, yl = dd_add(yh, yl, *lam)
+        yh, yl, dh, dl = 0.25 * yh, 0.25 * yl, 0.25 * dh, 0.25 * dl
+        xh, xl = dd_add(yh, yl, -dh, -dl)
+    ratio = dh / yh
+    series = 0.0
+    for c in _RC_SERIES:
+        series = (series + c) * ratio
+    rh, rl = dd_rsqrt(yh, yl)
+    return fast_two_sum(rh, rl + rh * series)
+
+
 @register_jitable
 def third_kind_excess_dd(sn: float, cn: float, dn: float, nh: float, nl: float) -> tuple[float, float]:
     """``Pi(n; phi | m) - F(phi | m) = (n / 3) sn^3 R_J(cn^2, dn^2, 1, 1 - n sn^2)`` as a double-double, for
@@ -299,7 +326,8 @@ def third_kind_excess_dd(sn: float, cn: float, dn: float, nh: float, nl: float) 
     shifted = dd_add(ph, pl, *lam)
     beta = dd_mul(ph, pl, *dd_mul(*shifted, *shifted))
     tail = carlson_rj(0.25 * (c * c + lam[0]), 0.25 * (dn * dn + lam[0]), 0.25 * (1.0 + lam[0]), 0.25 * shifted[0])
-    rj = dd_add_d(*two_product(3.0, carlson_rc(alpha[0], beta[0])), 0.25 * tail)
+    rc = carlson_rc_dd(*alpha, *beta)  # alpha <= beta: p >= 1 >= the other arguments
+    rj = dd_add_d(3.0 * rc[0], 3.0 * rc[1], 0.25 * tail)
     prefactor = dd_mul(*dd_mul(nh, nl, *THIRD_DD), *dd_mul(s2h, s2l, sn, 0.0))
     return dd_mul(*prefactor, *rj)
 
