@@ -13,6 +13,7 @@ arithmetic-geometric mean with the complementary parameter passed exactly
 from __future__ import annotations
 
 import math
+from fractions import Fraction
 from typing import Any
 
 import numpy as np
@@ -165,6 +166,71 @@ def dd_sin_cos(h: float, lo: float) -> tuple[float, float]:
     return s + c * lo, c - s * lo
 
 
+def _sin_cos_table(steps: int = 27, bits: int = 200) -> FloatArray:
+    """Rows (sin hi, sin lo, cos hi, cos lo) of k / 32, k = 0..steps - 1, each correctly rounded to a
+    double-double: the Taylor series in exact integer fixed point (bits fraction bits)."""
+    one = 1 << bits
+    rows = []
+    for k in range(steps):
+        x = k << (bits - 5)
+        sums = []
+        for term in (x, one):  # sin, cos
+            total, order = term, 1 if term == x else 0
+            while term:
+                term = -((term * x >> bits) * x >> bits) // ((order + 1) * (order + 2))
+                total += term
+                order += 2
+            exact = Fraction(total, one)
+            hi = float(exact)
+            sums += [hi, float(exact - Fraction(hi))]
+        rows.append(sums)
+    return np.array(rows)
+
+
+#: sin and cos of k / 32 (k = 0..26, up to pi / 4 + 1 / 64) as double-doubles, for :func:`dd_sin_cos_dd`.
+_SIN_COS_TABLE = _sin_cos_table()
+#: pi / 2 as a double-double.
+HALF_PI_DD = (0.5 * PI_DD[0], 0.5 * PI_DD[1])
+
+
+@register_jitable
+def dd_sin_cos_dd(h: float, lo: float) -> tuple[float, float, float, float]:
+    """sin and cos of the angle h + lo (rad, |h| <= ~1e9) as double-doubles (sin_h, sin_l, cos_h, cos_l).
+
+    The angle is reduced by pi / 2 in double-double to |b| <= pi / 4, then to r = |b| - k / 32 (|r| <= 1 / 64,
+    exact), and ``sin(k / 32 + r)`` is formed from the double-double table of k / 32 and the Taylor series
+    of r (to r^10); within ~3e-20 of the exact values for |h| <= 2 pi (r^2 is rounded)."""
+    quadrant = math.floor(h / HALF_PI_DD[0] + 0.5)
+    ph, pl = two_product(quadrant, HALF_PI_DD[0])
+    bh, bl = two_sum(h, -ph)
+    bh, bl = fast_two_sum(bh, (bl + lo) - (pl + quadrant * HALF_PI_DD[1]))
+    negative = bh < 0.0
+    if negative:
+        bh, bl = -bh, -bl
+    k = min(int(bh * 32.0 + 0.5), _SIN_COS_TABLE.shape[0] - 1)
+    rh, rl = fast_two_sum(bh - k / 32.0, bl)  # bh - k / 32 is exact (Sterbenz)
+    r2 = rh * rh
+    sin_r = fast_two_sum(rh, rl + rh * r2 * (-1.0 / 6.0 + r2 * (1.0 / 120.0 + r2 * (-1.0 / 5040.0 + r2 / 362880.0))))
+    cos_m1 = r2 * (-0.5 + r2 * (1.0 / 24.0 + r2 * (-1.0 / 720.0 + r2 * (1.0 / 40320.0 - r2 / 3628800.0))))
+    row = _SIN_COS_TABLE[k]
+    t = dd_mul(row[2], row[3], *sin_r)
+    sh, sl = dd_add(row[0], row[1], *t)
+    sh, sl = fast_two_sum(sh, sl + row[0] * cos_m1)
+    t = dd_mul(row[0], row[1], *sin_r)
+    ch, cl = dd_add(row[2], row[3], -t[0], -t[1])
+    ch, cl = fast_two_sum(ch, cl + row[2] * cos_m1)
+    if negative:
+        sh, sl = -sh, -sl
+    turn = quadrant % 4.0
+    if turn == 1.0:
+        return ch, cl, -sh, -sl
+    if turn == 2.0:
+        return -sh, -sl, -ch, -cl
+    if turn == 3.0:
+        return -ch, -cl, sh, sl
+    return sh, sl, ch, cl
+
+
 @register_jitable
 def dd_reduce(h: float, lo: float, period_h: float, period_l: float) -> tuple[float, float]:
     """(h + lo) - k period, k the nearest integer to (h + lo) / period: a double-double in
@@ -308,27 +374,30 @@ def carlson_rc_dd(xh: float, xl: float, yh: float, yl: float) -> tuple[float, fl
 
 
 @register_jitable
-def third_kind_excess_dd(sn: float, cn: float, dn: float, nh: float, nl: float) -> tuple[float, float]:
+def third_kind_excess_dd(
+    sn: tuple[float, float], cn: tuple[float, float], dn: tuple[float, float], nh: float, nl: float
+) -> tuple[float, float]:
     """``Pi(n; phi | m) - F(phi | m) = (n / 3) sn^3 R_J(cn^2, dn^2, 1, 1 - n sn^2)`` as a double-double, for
-    sn, cn, dn of the amplitude phi (|phi| <= pi / 2, taken as exact) and n = nh + nl < 1.
+    sn, cn, dn of the amplitude phi (|phi| <= pi / 2; double-doubles) and n = nh + nl < 1.
 
     The first duplication step of R_J carries most of it (3 R_C(alpha, beta), about 3/4, against a
-    quarter of R_J at the duplicated arguments) and starts from square roots that are exact here
-    (|cn|, dn, 1), so its lambda, alpha and beta are formed in double-double and only R_C and the
-    remaining R_J come in double: about half the error of :func:`carlson_rj` on the whole."""
-    s2h, s2l = two_product(sn, sn)
-    nsh, nsl = dd_mul(nh, nl, s2h, s2l)
-    ph, pl = dd_add(1.0, 0.0, -nsh, -nsl)  # 1 - n sn^2
-    c = abs(cn)
-    lam = dd_add_d(*dd_mul(c, 0.0, *two_sum(dn, 1.0)), dn)  # sqrt(x y) + sqrt(x z) + sqrt(y z)
-    root = dd_add(*dd_mul(ph, pl, *dd_add_d(*two_sum(c, dn), 1.0)), *two_product(c, dn))
+    quarter of R_J at the duplicated arguments) and starts from the square roots |cn|, dn, 1 at hand,
+    so it is formed in double-double with :func:`carlson_rc_dd`; only the remaining R_J comes in
+    double (about 0.5 ulp of the whole)."""
+    s2 = dd_mul(*sn, *sn)
+    ns2 = dd_mul(nh, nl, *s2)
+    p = dd_add(1.0, 0.0, -ns2[0], -ns2[1])  # 1 - n sn^2 >= 1
+    c = (abs(cn[0]), math.copysign(1.0, cn[0]) * cn[1])
+    lam = dd_add(*dd_mul(*c, *dd_add_d(*dn, 1.0)), *dn)  # sqrt(x y) + sqrt(x z) + sqrt(y z)
+    root = dd_add(*dd_mul(*p, *dd_add_d(*dd_add(*c, *dn), 1.0)), *dd_mul(*c, *dn))
     alpha = dd_mul(*root, *root)
-    shifted = dd_add(ph, pl, *lam)
-    beta = dd_mul(ph, pl, *dd_mul(*shifted, *shifted))
-    tail = carlson_rj(0.25 * (c * c + lam[0]), 0.25 * (dn * dn + lam[0]), 0.25 * (1.0 + lam[0]), 0.25 * shifted[0])
+    shifted = dd_add(*p, *lam)
+    beta = dd_mul(*p, *dd_mul(*shifted, *shifted))
+    tail = carlson_rj(0.25 * (c[0] * c[0] + lam[0]), 0.25 * (dn[0] * dn[0] + lam[0]), 0.25 * (1.0 + lam[0]),
+                      0.25 * shifted[0])
     rc = carlson_rc_dd(*alpha, *beta)  # alpha <= beta: p >= 1 >= the other arguments
     rj = dd_add_d(3.0 * rc[0], 3.0 * rc[1], 0.25 * tail)
-    prefactor = dd_mul(*dd_mul(nh, nl, *THIRD_DD), *dd_mul(s2h, s2l, sn, 0.0))
+    prefactor = dd_mul(*dd_mul(nh, nl, *THIRD_DD), *dd_mul(*s2, *sn))
     return dd_mul(*prefactor, *rj)
 
 
@@ -382,11 +451,14 @@ def jacobi_amplitude_dd(
 
 @register_jitable
 def jacobi_dd(
-    rh: float, rl: float, a: FloatArray, c: FloatArray, levels: int, m1: float, top_h: float, top_l: float
-) -> tuple[float, float, float]:
-    """sn, cn, dn of r = rh + rl (|r| <= K) as :func:`jacobi`, from :func:`jacobi_amplitude_dd`."""
-    sn, cn = dd_sin_cos(*jacobi_amplitude_dd(rh, rl, a, c, levels, top_h, top_l))
-    return sn, cn, math.sqrt(cn * cn + m1 * sn * sn)
+    rh: float, rl: float, a: FloatArray, c: FloatArray, levels: int, m1h: float, m1l: float, top_h: float,
+    top_l: float
+) -> tuple[tuple[float, float], tuple[float, float], tuple[float, float]]:
+    """sn, cn, dn of r = rh + rl (|r| <= K) as double-doubles, from :func:`jacobi_amplitude_dd` and
+    :func:`dd_sin_cos_dd` (1 - m = m1h + m1l, dn = sqrt(cn^2 + (1 - m) sn^2))."""
+    sh, sl, ch, cl = dd_sin_cos_dd(*jacobi_amplitude_dd(rh, rl, a, c, levels, top_h, top_l))
+    dn2 = dd_add(*dd_mul(ch, cl, ch, cl), *dd_mul(m1h, m1l, *dd_mul(sh, sl, sh, sl)))
+    return (sh, sl), (ch, cl), dd_sqrt(*dn2)
 
 
 def agm_buffers() -> tuple[FloatArray, FloatArray]:

@@ -112,6 +112,7 @@ from rigid_rot_sim.core.elliptic import (
     dd_reduce,
     dd_rsqrt,
     dd_sin_cos,
+    dd_sin_cos_dd,
     dd_sqrt,
     fast_two_sum,
     jacobi_amplitude_dd,
@@ -148,9 +149,10 @@ _S_MOMENTS, _S_AXIS, _S_RATE, _S_BETA, _S_L, _S_Q0 = 1, 4, 5, 8, 9, 12
 # TURN (the precession beyond RATE t per half period 2K) and AGM_TOP (the AGM limit) too.
 (_E_ORDER, _E_AXIS_SIGNS, _E_MOMENTS, _E_AMPLITUDE, _E_SIGNS, _E_PSI_SCALE, _E_LAM, _E_U0, _E_M1, _E_N,
  _E_LNORM, _E_K, _E_COEFF, _E_J0, _E_G0, _E_QWL, _E_QWL_LO, _E_LEVELS, _E_LAM_LO, _E_U0_LO, _E_K_LO,
- _E_RATE, _E_TURN, _E_AGM_TOP, _E_LSCALE, _E_N_LO, _E_COEFF_LO, _E_G0_LO) = (
-    1, 4, 7, 10, 13, 16, 18, 19, 20, 21, 22, 23, 24, 25, 26, 27, 31, 35, 36, 37, 38, 39, 41, 43, 45, 51, 52, 53)
-PARAMS_SIZE = 54
+ _E_RATE, _E_TURN, _E_AGM_TOP, _E_LSCALE, _E_N_LO, _E_COEFF_LO, _E_G0_LO,
+ _E_M1_LO) = (
+    1, 4, 7, 10, 13, 16, 18, 19, 20, 21, 22, 23, 24, 25, 26, 27, 31, 35, 36, 37, 38, 39, 41, 43, 45, 51, 52, 53, 54)
+PARAMS_SIZE = 55
 
 
 def _relabelling_table() -> np.ndarray:
@@ -254,18 +256,18 @@ def _phase(params, agm_a, agm_c, uh, ul):
         e = math.exp(-abs(u))
         cn = 2.0 * e / (1.0 + e * e)
         a = math.sqrt(-n)
-        return sn, cn, cn, 0.0, a * math.atan(a * sn), 0.0
+        return (sn, 0.0), (cn, 0.0), (cn, 0.0), 0.0, a * math.atan(a * sn), 0.0
     k = params[_E_K]
     j = math.floor((uh + k) / (2.0 * k))
     # u - 2 K j in double-double: the phase is reduced without the rounding of u or of K j
     ph, pl = two_product(j, 2.0 * k)
     rh, rl = dd_add(uh, ul, -ph, -pl - j * 2.0 * params[_E_K_LO])
-    sn, cn, dn = jacobi_dd(rh, rl, agm_a, agm_c, int(params[_E_LEVELS]), params[_E_M1], params[_E_AGM_TOP],
-                           params[_E_AGM_TOP + 1])
+    sn, cn, dn = jacobi_dd(rh, rl, agm_a, agm_c, int(params[_E_LEVELS]), params[_E_M1], params[_E_M1_LO],
+                           params[_E_AGM_TOP], params[_E_AGM_TOP + 1])
     g_h, g_l = third_kind_excess_dd(sn, cn, dn, n, params[_E_N_LO])
     # sn and cn change sign over each half period 2K (dn does not)
     parity = 1.0 - 2.0 * (j % 2.0)
-    return parity * sn, parity * cn, dn, j, g_h, g_l
+    return (parity * sn[0], parity * sn[1]), (parity * cn[0], parity * cn[1]), dn, j, g_h, g_l
 
 
 @register_jitable
@@ -290,13 +292,13 @@ def _elliptic_state(params, agm_a, agm_c, tau):
         # the bounded part COEFF (g - g0) in double-double: it is up to ~2 rad
         bounded = dd_mul(coeff, params[_E_COEFF_LO], *dd_add(g_h, g_l, -g0, -params[_E_G0_LO]))
         phi_h, phi_l = dd_add(phi_h, phi_l, *bounded)
-    w0 = params[_E_SIGNS] * params[_E_AMPLITUDE] * cn
-    w1 = params[_E_SIGNS + 1] * params[_E_AMPLITUDE + 1] * sn
-    w2 = params[_E_SIGNS + 2] * params[_E_AMPLITUDE + 2] * dn
+    w0 = params[_E_SIGNS] * params[_E_AMPLITUDE] * cn[0]
+    w1 = params[_E_SIGNS + 1] * params[_E_AMPLITUDE + 1] * sn[0]
+    w2 = params[_E_SIGNS + 2] * params[_E_AMPLITUDE + 2] * dn[0]
     # L_body = (I1 w1, I2 w2, I3 w3) from I_k A_k s_k (double-doubles) and cn, sn, dn
-    l_body = (dd_mul(params[_E_LSCALE], params[_E_LSCALE + 3], cn, 0.0),
-              dd_mul(params[_E_LSCALE + 1], params[_E_LSCALE + 4], sn, 0.0),
-              dd_mul(params[_E_LSCALE + 2], params[_E_LSCALE + 5], dn, 0.0))
+    l_body = (dd_mul(params[_E_LSCALE], params[_E_LSCALE + 3], *cn),
+              dd_mul(params[_E_LSCALE + 1], params[_E_LSCALE + 4], *sn),
+              dd_mul(params[_E_LSCALE + 2], params[_E_LSCALE + 5], *dn))
     z_hi, z_lo = _zxz_from_momentum(phi_h, phi_l, *l_body)
     order, axis_signs = params[_E_ORDER:_E_ORDER + 3], params[_E_AXIS_SIGNS:_E_AXIS_SIGNS + 3]
     q = _compensated_product(params[_E_QWL:_E_QWL + 4], params[_E_QWL_LO:_E_QWL_LO + 4],
@@ -378,12 +380,12 @@ def _half_angles_dd(near_h, near_l, far_h, far_l):
 
 
 @register_jitable
-def _dot2_pair(a, b_h, b_l, c, d_h, d_l):
-    """``a (b_h + b_l) + c (d_h + d_l)`` (a, c doubles) as a double-double (Dot2)."""
-    p, pe = two_product(a, b_h)
-    q, qe = two_product(c, d_h)
+def _dot2_pair(a_h, a_l, b_h, b_l, c_h, c_l, d_h, d_l):
+    """``a b + c d`` (double-doubles) as a double-double (Dot2; the products of low parts left out)."""
+    p, pe = two_product(a_h, b_h)
+    q, qe = two_product(c_h, d_h)
     s, se = two_sum(p, q)
-    return fast_two_sum(s, se + pe + qe + (a * b_l + c * d_l))
+    return fast_two_sum(s, se + pe + qe + ((a_h * b_l + a_l * b_h) + (c_h * d_l + c_l * d_h)))
 
 
 @register_jitable
@@ -412,12 +414,12 @@ def _zxz_from_momentum(phi_h, phi_l, l1, l2, l3):
     ch, sh = (near, far) if l3[0] >= 0.0 else (far, near)
     bx, by, bz, bw = dd_mul(*sh, *c), dd_mul(-sh[0], -sh[1], *s), dd_mul(*ch, *s), dd_mul(*ch, *c)
     phi_h, phi_l = dd_reduce(phi_h, phi_l, FOUR_PI_DD[0], FOUR_PI_DD[1])
-    sp, cp = dd_sin_cos(0.5 * phi_h, 0.5 * phi_l)
+    sp_h, sp_l, cp_h, cp_l = dd_sin_cos_dd(0.5 * phi_h, 0.5 * phi_l)
     # (0, 0, sin(phi / 2), cos(phi / 2)) (x) B
-    x = _dot2_pair(cp, *bx, -sp, *by)
-    y = _dot2_pair(cp, *by, sp, *bx)
-    z = _dot2_pair(cp, *bz, sp, *bw)
-    w = _dot2_pair(cp, *bw, -sp, *bz)
+    x = _dot2_pair(cp_h, cp_l, *bx, -sp_h, -sp_l, *by)
+    y = _dot2_pair(cp_h, cp_l, *by, sp_h, sp_l, *bx)
+    z = _dot2_pair(cp_h, cp_l, *bz, sp_h, sp_l, *bw)
+    w = _dot2_pair(cp_h, cp_l, *bw, -sp_h, -sp_l, *bz)
     return (x[0], y[0], z[0], w[0]), (x[1], y[1], z[1], w[1])
 
 
@@ -550,7 +552,7 @@ def _elliptic_params(moments, omega, q0, order, d, params, agm_a, agm_c, long_ru
         params[_E_LSCALE + idx], params[_E_LSCALE + 3 + idx] = dd_mul(sign * moment, 0.0, *amplitude)
     params[_E_LAM], params[_E_LAM_LO] = lam_dd
     params[_E_U0], params[_E_U0_LO] = u0_dd
-    params[_E_M1], params[_E_N], params[_E_N_LO] = m1, n, n_dd[1]
+    params[_E_M1], params[_E_M1_LO], params[_E_N], params[_E_N_LO] = m1, m1_dd[1], n, n_dd[1]
     params[_E_LNORM] = l_dd[0]
     params[_E_K], params[_E_K_LO] = k_dd
     params[_E_COEFF], params[_E_COEFF_LO] = coeff_dd
