@@ -346,18 +346,31 @@ def carlson_rj(x: float, y: float, z: float, p: float) -> float:
     return 3.0 * total + fac * series / (ave * math.sqrt(ave))
 
 
-#: binom(2k, k) / (4^k (2k + 1)), k = 15..1: for 0 <= x <= y, R_C(x, y) = asin(sqrt(s)) / sqrt(s y) with
-#: s = 1 - x / y (DLMF 19.2.18), and asin(z) / z = sum_k binom(2k, k) / (4^k (2k + 1)) z^(2k); at s <= 0.05
-#: the terms beyond k = 15 are below 1e-21.
-_RC_SERIES = tuple(math.comb(2 * k, k) / (4**k * (2 * k + 1)) for k in range(15, 0, -1))
-_RC_SERIES_S = 0.05
+#: binom(2k, k) / (4^k (2k + 1)), k = 1..16: for 0 <= x <= y, R_C(x, y) = asin(sqrt(s)) / sqrt(s y) with
+#: s = 1 - x / y (DLMF 19.2.18), and asin(z) / z = sum_k binom(2k, k) / (4^k (2k + 1)) z^(2k); at s <= 0.1
+#: the terms beyond k = 16 are below 1e-19 (relative).
+_RC_SERIES = np.array([math.comb(2 * k, k) / (4**k * (2 * k + 1)) for k in range(1, 17)])
+_RC_SERIES_S = 0.1
+
+
+@register_jitable
+def _estrin16(c: FloatArray, x: float) -> float:
+    """sum_k c[k] x^k for k < 16 by Estrin's scheme (short dependency chains)."""
+    x2 = x * x
+    x4 = x2 * x2
+    x8 = x4 * x4
+    a = (c[0] + c[1] * x) + x2 * (c[2] + c[3] * x)
+    b = (c[4] + c[5] * x) + x2 * (c[6] + c[7] * x)
+    d = (c[8] + c[9] * x) + x2 * (c[10] + c[11] * x)
+    e = (c[12] + c[13] * x) + x2 * (c[14] + c[15] * x)
+    return (a + x4 * b) + x8 * (d + x4 * e)
 
 
 @register_jitable
 def carlson_rc_dd(xh: float, xl: float, yh: float, yl: float) -> tuple[float, float]:
     """R_C(x, y) as a double-double for 0 <= x <= y (double-doubles): duplication steps in double-double
     (R_C(x, y) = R_C((x + l) / 4, (y + l) / 4), l = 2 sqrt(x y) + y, which divide y - x by 4 and keep it
-    exact) until s = 1 - x / y <= 0.05, then the series in s in double (it is 1 + O(s))."""
+    exact) until s = 1 - x / y <= 0.1, then the series in s in double (it is 1 + O(s))."""
     dh, dl = dd_add(yh, yl, -xh, -xl)
     while dh > _RC_SERIES_S * yh:
         root = dd_sqrt(*dd_mul(xh, xl, yh, yl))
@@ -366,9 +379,7 @@ def carlson_rc_dd(xh: float, xl: float, yh: float, yl: float) -> tuple[float, fl
         yh, yl, dh, dl = 0.25 * yh, 0.25 * yl, 0.25 * dh, 0.25 * dl
         xh, xl = dd_add(yh, yl, -dh, -dl)
     ratio = dh / yh
-    series = 0.0
-    for c in _RC_SERIES:
-        series = (series + c) * ratio
+    series = _estrin16(_RC_SERIES, ratio) * ratio
     rh, rl = dd_rsqrt(yh, yl)
     return fast_two_sum(rh, rl + rh * series)
 

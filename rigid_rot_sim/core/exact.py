@@ -150,9 +150,9 @@ _S_MOMENTS, _S_AXIS, _S_RATE, _S_BETA, _S_L, _S_Q0 = 1, 4, 5, 8, 9, 12
 (_E_ORDER, _E_AXIS_SIGNS, _E_MOMENTS, _E_AMPLITUDE, _E_SIGNS, _E_PSI_SCALE, _E_LAM, _E_U0, _E_M1, _E_N,
  _E_LNORM, _E_K, _E_COEFF, _E_J0, _E_G0, _E_QWL, _E_QWL_LO, _E_LEVELS, _E_LAM_LO, _E_U0_LO, _E_K_LO,
  _E_RATE, _E_TURN, _E_AGM_TOP, _E_LSCALE, _E_N_LO, _E_COEFF_LO, _E_G0_LO,
- _E_M1_LO) = (
-    1, 4, 7, 10, 13, 16, 18, 19, 20, 21, 22, 23, 24, 25, 26, 27, 31, 35, 36, 37, 38, 39, 41, 43, 45, 51, 52, 53, 54)
-PARAMS_SIZE = 55
+ _E_M1_LO, _E_RNORM) = (
+    1, 4, 7, 10, 13, 16, 18, 19, 20, 21, 22, 23, 24, 25, 26, 27, 31, 35, 36, 37, 38, 39, 41, 43, 45, 51, 52, 53, 54, 55)
+PARAMS_SIZE = 57
 
 
 def _relabelling_table() -> np.ndarray:
@@ -299,7 +299,7 @@ def _elliptic_state(params, agm_a, agm_c, tau):
     l_body = (dd_mul(params[_E_LSCALE], params[_E_LSCALE + 3], *cn),
               dd_mul(params[_E_LSCALE + 1], params[_E_LSCALE + 4], *sn),
               dd_mul(params[_E_LSCALE + 2], params[_E_LSCALE + 5], *dn))
-    z_hi, z_lo = _zxz_from_momentum(phi_h, phi_l, *l_body)
+    z_hi, z_lo = _zxz_from_momentum(phi_h, phi_l, *l_body, (params[_E_RNORM], params[_E_RNORM + 1]))
     order, axis_signs = params[_E_ORDER:_E_ORDER + 3], params[_E_AXIS_SIGNS:_E_AXIS_SIGNS + 3]
     q = _compensated_product(params[_E_QWL:_E_QWL + 4], params[_E_QWL_LO:_E_QWL_LO + 4],
                              _in_body_frame(z_hi, order, axis_signs), _in_body_frame(z_lo, order, axis_signs))
@@ -389,16 +389,16 @@ def _dot2_pair(a_h, a_l, b_h, b_l, c_h, c_l, d_h, d_l):
 
 
 @register_jitable
-def _zxz_from_momentum(phi_h, phi_l, l1, l2, l3):
+def _zxz_from_momentum(phi_h, phi_l, l1, l2, l3, r_norm):
     """The quaternion of Rz(phi) Rx(theta) Rz(psi) with ``L_body = |L| (sin th sin psi, sin th cos psi, cos th)``
-    for L_body = (l1, l2, l3) (double-doubles, any scale) and phi = phi_h + phi_l (rad), as (hi, lo) tuples.
+    for L_body = (l1, l2, l3) and r_norm = 1 / |L| (double-doubles) and phi = phi_h + phi_l (rad), as (hi, lo)
+    tuples.
 
     Rx(theta) Rz(psi) is ``(sh c, -sh s, ch s, ch c)`` with ch, sh = cos, sin(theta / 2) and c, s = cos,
     sin(psi / 2): all four from L_body by +, * and 1 / sqrt in double-double (:func:`_half_angles_dd`), so
     the rounding of the angles theta and psi never enters; phi is reduced by 4 pi (the period of its
     half angle) in double-double and the half angle keeps its low part into its sine and cosine."""
     sq12 = dd_add(*dd_mul(*l1, *l1), *dd_mul(*l2, *l2))
-    r_norm = dd_rsqrt(*dd_add(*sq12, *dd_mul(*l3, *l3)))
     if sq12[0] > 0.0:
         r_across = dd_rsqrt(*sq12)
         sin_theta = dd_mul(*dd_mul(*sq12, *r_across), *r_norm)
@@ -554,6 +554,8 @@ def _elliptic_params(moments, omega, q0, order, d, params, agm_a, agm_c, long_ru
     params[_E_U0], params[_E_U0_LO] = u0_dd
     params[_E_M1], params[_E_M1_LO], params[_E_N], params[_E_N_LO] = m1, m1_dd[1], n, n_dd[1]
     params[_E_LNORM] = l_dd[0]
+    # 1 / |L|: L_body(t) from the amplitudes and the double-double sn, cn, dn has this norm to ~1e-20
+    params[_E_RNORM], params[_E_RNORM + 1] = dd_div(1.0, 0.0, *l_dd)
     params[_E_K], params[_E_K_LO] = k_dd
     params[_E_COEFF], params[_E_COEFF_LO] = coeff_dd
     params[_E_RATE], params[_E_RATE + 1] = dd_div(*l_dd, i1, 0.0)
@@ -577,7 +579,8 @@ def _elliptic_params(moments, omega, q0, order, d, params, agm_a, agm_c, long_ru
     for k in range(3):
         params[_E_ORDER + k] = order[k]
         params[_E_AXIS_SIGNS + k] = axis_signs[k]
-    z0_hi, z0_lo = _zxz_from_momentum(0.0, 0.0, two_product(i1, w1), two_product(i2, w2), two_product(i3, w3))
+    z0_hi, z0_lo = _zxz_from_momentum(0.0, 0.0, two_product(i1, w1), two_product(i2, w2), two_product(i3, w3),
+                                      (params[_E_RNORM], params[_E_RNORM + 1]))
     order_k, signs_k = params[_E_ORDER:_E_ORDER + 3], params[_E_AXIS_SIGNS:_E_AXIS_SIGNS + 3]
     q_hi, q_lo = _dot2_product(q0, (0.0, 0.0, 0.0, 0.0), quat.conjugate(_in_body_frame(z0_hi, order_k, signs_k)),
                                quat.conjugate(_in_body_frame(z0_lo, order_k, signs_k)))
