@@ -199,8 +199,8 @@ def dd_sin_cos_dd(h: float, lo: float) -> tuple[float, float, float, float]:
 
     The angle is reduced by pi / 2 in double-double to |b| <= pi / 4, then to r = |b| - k / 32 (|r| <= 1 / 64,
     exact), and ``sin(k / 32 + r)`` is formed from the double-double table of k / 32 and the Taylor series
-    of r (to r^10); within ~3e-20 of the exact values for |h| <= 2 pi (r^2 is rounded)."""
-    quadrant = math.floor(h / HALF_PI_DD[0] + 0.5)
+    of r (to r^8: 1e-21); within ~3e-20 of the exact values for |h| <= 2 pi (r^2 is rounded)."""
+    quadrant = float(math.floor(h * (1.0 / HALF_PI_DD[0]) + 0.5))
     ph, pl = two_product(quadrant, HALF_PI_DD[0])
     bh, bl = two_sum(h, -ph)
     bh, bl = fast_two_sum(bh, (bl + lo) - (pl + quadrant * HALF_PI_DD[1]))
@@ -210,8 +210,8 @@ def dd_sin_cos_dd(h: float, lo: float) -> tuple[float, float, float, float]:
     k = min(int(bh * 32.0 + 0.5), _SIN_COS_TABLE.shape[0] - 1)
     rh, rl = fast_two_sum(bh - k / 32.0, bl)  # bh - k / 32 is exact (Sterbenz)
     r2 = rh * rh
-    sin_r = fast_two_sum(rh, rl + rh * r2 * (-1.0 / 6.0 + r2 * (1.0 / 120.0 + r2 * (-1.0 / 5040.0 + r2 / 362880.0))))
-    cos_m1 = r2 * (-0.5 + r2 * (1.0 / 24.0 + r2 * (-1.0 / 720.0 + r2 * (1.0 / 40320.0 - r2 / 3628800.0))))
+    sin_r = fast_two_sum(rh, rl + rh * r2 * (-1.0 / 6.0 + r2 * (1.0 / 120.0 - r2 / 5040.0)))
+    cos_m1 = r2 * (-0.5 + r2 * (1.0 / 24.0 + r2 * (-1.0 / 720.0 + r2 / 40320.0)))
     row = _SIN_COS_TABLE[k]
     t = dd_mul(row[2], row[3], *sin_r)
     sh, sl = dd_add(row[0], row[1], *t)
@@ -221,12 +221,12 @@ def dd_sin_cos_dd(h: float, lo: float) -> tuple[float, float, float, float]:
     ch, cl = fast_two_sum(ch, cl + row[2] * cos_m1)
     if negative:
         sh, sl = -sh, -sl
-    turn = quadrant % 4.0
-    if turn == 1.0:
+    turn = int(quadrant) & 3  # quadrant mod 4, negative quadrants included
+    if turn == 1:
         return ch, cl, -sh, -sl
-    if turn == 2.0:
+    if turn == 2:
         return -sh, -sl, -ch, -cl
-    if turn == 3.0:
+    if turn == 3:
         return -ch, -cl, sh, sl
     return sh, sl, ch, cl
 
@@ -297,11 +297,28 @@ def carlson_rf(x: float, y: float, z: float) -> float:
     return (1.0 + (e2 / 24.0 - 0.1 - 3.0 / 44.0 * e3) * e2 + e3 / 14.0) / math.sqrt(ave)
 
 
+#: binom(2k, k) / (4^k (2k + 1)), k = 1..16: for 0 <= x <= y, R_C(x, y) = asin(sqrt(s)) / sqrt(s y) with
+#: s = 1 - x / y (DLMF 19.2.18), and asin(z) / z = sum_k binom(2k, k) / (4^k (2k + 1)) z^(2k); at s <= 0.1
+#: the terms beyond k = 16 are below 1e-19 (relative). The same series holds for x > y (s < 0).
+_RC_SERIES = np.array([math.comb(2 * k, k) / (4**k * (2 * k + 1)) for k in range(1, 17)])
+_RC_SERIES_S = 0.1
+#: |s| below which carlson_rc sums the series directly.
+_RC_SHORT_S = 0.01
+
+
 @register_jitable
 def carlson_rc(x: float, y: float) -> float:
     """R_C(x, y) for x >= 0, y > 0 (NaN for a non-finite argument)."""
     if not math.isfinite(x + y):
         return math.nan  # the duplication below would never converge
+    s = (y - x) / y  # y - x is exact where |s| <= 1/2 (Sterbenz)
+    if abs(s) <= _RC_SHORT_S:
+        # near x = y (every R_C in carlson_rj after its first steps): the series of
+        # :data:`_RC_SERIES` to s^8 (the rest below 2e-18 relative) instead of a duplication
+        c = _RC_SERIES
+        s2 = s * s
+        poly = ((c[0] + c[1] * s) + s2 * (c[2] + c[3] * s)) + (s2 * s2) * ((c[4] + c[5] * s) + s2 * (c[6] + c[7] * s))
+        return (1.0 + s * poly) / math.sqrt(y)
     xt, yt = x, y
     while True:
         lam = 2.0 * math.sqrt(xt) * math.sqrt(yt) + yt
@@ -346,11 +363,6 @@ def carlson_rj(x: float, y: float, z: float, p: float) -> float:
     return 3.0 * total + fac * series / (ave * math.sqrt(ave))
 
 
-#: binom(2k, k) / (4^k (2k + 1)), k = 1..16: for 0 <= x <= y, R_C(x, y) = asin(sqrt(s)) / sqrt(s y) with
-#: s = 1 - x / y (DLMF 19.2.18), and asin(z) / z = sum_k binom(2k, k) / (4^k (2k + 1)) z^(2k); at s <= 0.1
-#: the terms beyond k = 16 are below 1e-19 (relative).
-_RC_SERIES = np.array([math.comb(2 * k, k) / (4**k * (2 * k + 1)) for k in range(1, 17)])
-_RC_SERIES_S = 0.1
 
 
 @register_jitable
@@ -385,29 +397,41 @@ def carlson_rc_dd(xh: float, xl: float, yh: float, yl: float) -> tuple[float, fl
 
 
 @register_jitable
+def _rj_step_dd(x, y, z, p, sx, sy, sz):  # type: ignore[no-untyped-def]  # double-doubles as tuples
+    """One duplication step of R_J in double-double, for p >= x, y, z (double-doubles, with the square
+    roots sx, sy, sz of x, y, z): ``R_J(x, y, z, p) = 3 R_C(alpha, beta) + R_J(x', y', z', p') / 4`` with
+    x' = (x + lam) / 4 and so on (Carlson 1995); returns R_C(alpha, beta) and (x', y', z', p')."""
+    lam = dd_add(*dd_mul(*sx, *dd_add(*sy, *sz)), *dd_mul(*sy, *sz))
+    root = dd_add(*dd_mul(*p, *dd_add(*dd_add(*sx, *sy), *sz)), *dd_mul(*dd_mul(*sx, *sy), *sz))
+    shifted = dd_add(*p, *lam)
+    rc = carlson_rc_dd(*dd_mul(*root, *root), *dd_mul(*p, *dd_mul(*shifted, *shifted)))  # alpha <= beta
+    x = dd_add(*x, *lam)
+    y = dd_add(*y, *lam)
+    z = dd_add(*z, *lam)
+    return rc, (0.25 * x[0], 0.25 * x[1]), (0.25 * y[0], 0.25 * y[1]), (0.25 * z[0], 0.25 * z[1]), \
+        (0.25 * shifted[0], 0.25 * shifted[1])
+
+
+@register_jitable
 def third_kind_excess_dd(
     sn: tuple[float, float], cn: tuple[float, float], dn: tuple[float, float], nh: float, nl: float
 ) -> tuple[float, float]:
     """``Pi(n; phi | m) - F(phi | m) = (n / 3) sn^3 R_J(cn^2, dn^2, 1, 1 - n sn^2)`` as a double-double, for
     sn, cn, dn of the amplitude phi (|phi| <= pi / 2; double-doubles) and n = nh + nl < 1.
 
-    The first duplication step of R_J carries most of it (3 R_C(alpha, beta), about 3/4, against a
-    quarter of R_J at the duplicated arguments) and starts from the square roots |cn|, dn, 1 at hand,
-    so it is formed in double-double with :func:`carlson_rc_dd`; only the remaining R_J comes in
-    double (about 0.5 ulp of the whole)."""
+    R_J's first two duplication steps carry about 15/16 of it (3 R_C(alpha, beta) each) and are formed
+    in double-double (:func:`_rj_step_dd`, :func:`carlson_rc_dd`; the first starts from the roots |cn|,
+    dn, 1 at hand); only the rest, R_J at the twice duplicated arguments / 16, comes in double
+    (:func:`carlson_rj`, a few ulps of 1/16)."""
     s2 = dd_mul(*sn, *sn)
     ns2 = dd_mul(nh, nl, *s2)
-    p = dd_add(1.0, 0.0, -ns2[0], -ns2[1])  # 1 - n sn^2 >= 1
+    p = dd_add(1.0, 0.0, -ns2[0], -ns2[1])  # 1 - n sn^2 >= 1 >= cn^2, dn^2
     c = (abs(cn[0]), math.copysign(1.0, cn[0]) * cn[1])
-    lam = dd_add(*dd_mul(*c, *dd_add_d(*dn, 1.0)), *dn)  # sqrt(x y) + sqrt(x z) + sqrt(y z)
-    root = dd_add(*dd_mul(*p, *dd_add_d(*dd_add(*c, *dn), 1.0)), *dd_mul(*c, *dn))
-    alpha = dd_mul(*root, *root)
-    shifted = dd_add(*p, *lam)
-    beta = dd_mul(*p, *dd_mul(*shifted, *shifted))
-    tail = carlson_rj(0.25 * (c[0] * c[0] + lam[0]), 0.25 * (dn[0] * dn[0] + lam[0]), 0.25 * (1.0 + lam[0]),
-                      0.25 * shifted[0])
-    rc = carlson_rc_dd(*alpha, *beta)  # alpha <= beta: p >= 1 >= the other arguments
-    rj = dd_add_d(3.0 * rc[0], 3.0 * rc[1], 0.25 * tail)
+    one = (1.0, 0.0)
+    rc1, x, y, z, p = _rj_step_dd(dd_mul(*c, *c), dd_mul(*dn, *dn), one, p, c, dn, one)
+    rc2, x, y, z, p = _rj_step_dd(x, y, z, p, dd_sqrt(*x), dd_sqrt(*y), dd_sqrt(*z))
+    rj = dd_add(*dd_add(3.0 * rc1[0], 3.0 * rc1[1], 0.75 * rc2[0], 0.75 * rc2[1]),
+                carlson_rj(x[0], y[0], z[0], p[0]) / 16.0, 0.0)
     prefactor = dd_mul(*dd_mul(nh, nl, *THIRD_DD), *dd_mul(*s2, *sn))
     return dd_mul(*prefactor, *rj)
 
