@@ -112,6 +112,14 @@ def dd_add(ah: float, al: float, bh: float, bl: float) -> tuple[float, float]:
 
 
 @register_jitable
+def dd_add_same_sign(ah: float, al: float, bh: float, bl: float) -> tuple[float, float]:
+    """(ah + al) + (bh + bl) as a double-double where the two have the same sign (no cancellation, so
+    the low parts may be added first: a few units of 1e-32 relative, cheaper than :func:`dd_add`)."""
+    s, e = two_sum(ah, bh)
+    return fast_two_sum(s, e + (al + bl))
+
+
+@register_jitable
 def dd_add_d(ah: float, al: float, b: float) -> tuple[float, float]:
     """(ah + al) + b (a double) as a double-double."""
     s, e = two_sum(ah, b)
@@ -350,7 +358,8 @@ def carlson_rj(x: float, y: float, z: float, p: float) -> float:
         fac *= 0.25
         xt, yt, zt, pt = 0.25 * (xt + lam), 0.25 * (yt + lam), 0.25 * (zt + lam), 0.25 * (pt + lam)
         ave = 0.2 * (xt + yt + zt + pt + pt)
-        dx, dy, dz, dp = (ave - xt) / ave, (ave - yt) / ave, (ave - zt) / ave, (ave - pt) / ave
+        inv = 1.0 / ave
+        dx, dy, dz, dp = (ave - xt) * inv, (ave - yt) * inv, (ave - zt) * inv, (ave - pt) * inv
         if max(abs(dx), abs(dy), abs(dz), abs(dp)) <= 0.0015:
             break
     ea = dx * (dy + dz) + dy * dz
@@ -386,8 +395,8 @@ def carlson_rc_dd(xh: float, xl: float, yh: float, yl: float) -> tuple[float, fl
     dh, dl = dd_add(yh, yl, -xh, -xl)
     while dh > _RC_SERIES_S * yh:
         root = dd_sqrt(*dd_mul(xh, xl, yh, yl))
-        lam = dd_add(2.0 * root[0], 2.0 * root[1], yh, yl)
-        yh, yl = dd_add(yh, yl, *lam)
+        lam = dd_add_same_sign(2.0 * root[0], 2.0 * root[1], yh, yl)
+        yh, yl = dd_add_same_sign(yh, yl, *lam)
         yh, yl, dh, dl = 0.25 * yh, 0.25 * yl, 0.25 * dh, 0.25 * dl
         xh, xl = dd_add(yh, yl, -dh, -dl)
     ratio = dh / yh
@@ -401,13 +410,14 @@ def _rj_step_dd(x, y, z, p, sx, sy, sz):  # type: ignore[no-untyped-def]  # doub
     """One duplication step of R_J in double-double, for p >= x, y, z (double-doubles, with the square
     roots sx, sy, sz of x, y, z): ``R_J(x, y, z, p) = 3 R_C(alpha, beta) + R_J(x', y', z', p') / 4`` with
     x' = (x + lam) / 4 and so on (Carlson 1995); returns R_C(alpha, beta) and (x', y', z', p')."""
-    lam = dd_add(*dd_mul(*sx, *dd_add(*sy, *sz)), *dd_mul(*sy, *sz))
-    root = dd_add(*dd_mul(*p, *dd_add(*dd_add(*sx, *sy), *sz)), *dd_mul(*dd_mul(*sx, *sy), *sz))
-    shifted = dd_add(*p, *lam)
+    lam = dd_add_same_sign(*dd_mul(*sx, *dd_add_same_sign(*sy, *sz)), *dd_mul(*sy, *sz))
+    total = dd_add_same_sign(*dd_add_same_sign(*sx, *sy), *sz)
+    root = dd_add_same_sign(*dd_mul(*p, *total), *dd_mul(*dd_mul(*sx, *sy), *sz))
+    shifted = dd_add_same_sign(*p, *lam)
     rc = carlson_rc_dd(*dd_mul(*root, *root), *dd_mul(*p, *dd_mul(*shifted, *shifted)))  # alpha <= beta
-    x = dd_add(*x, *lam)
-    y = dd_add(*y, *lam)
-    z = dd_add(*z, *lam)
+    x = dd_add_same_sign(*x, *lam)
+    y = dd_add_same_sign(*y, *lam)
+    z = dd_add_same_sign(*z, *lam)
     return rc, (0.25 * x[0], 0.25 * x[1]), (0.25 * y[0], 0.25 * y[1]), (0.25 * z[0], 0.25 * z[1]), \
         (0.25 * shifted[0], 0.25 * shifted[1])
 
