@@ -422,6 +422,10 @@ def _rj_step_dd(x, y, z, p, sx, sy, sz):  # type: ignore[no-untyped-def]  # doub
         (0.25 * shifted[0], 0.25 * shifted[1])
 
 
+#: |cn| below which third_kind_excess_dd takes a second duplication step in double-double.
+_SECOND_STEP_CN = 0.5
+
+
 @register_jitable
 def third_kind_excess_dd(
     sn: tuple[float, float], cn: tuple[float, float], dn: tuple[float, float], nh: float, nl: float
@@ -438,10 +442,15 @@ def third_kind_excess_dd(
     p = dd_add(1.0, 0.0, -ns2[0], -ns2[1])  # 1 - n sn^2 >= 1 >= cn^2, dn^2
     c = (abs(cn[0]), math.copysign(1.0, cn[0]) * cn[1])
     one = (1.0, 0.0)
-    rc1, x, y, z, p = _rj_step_dd(dd_mul(*c, *c), dd_mul(*dn, *dn), one, p, c, dn, one)
-    rc2, x, y, z, p = _rj_step_dd(x, y, z, p, dd_sqrt(*x), dd_sqrt(*y), dd_sqrt(*z))
-    rj = dd_add(*dd_add(3.0 * rc1[0], 3.0 * rc1[1], 0.75 * rc2[0], 0.75 * rc2[1]),
-                carlson_rj(x[0], y[0], z[0], p[0]) / 16.0, 0.0)
+    rc, x, y, z, p = _rj_step_dd(dd_mul(*c, *c), dd_mul(*dn, *dn), one, p, c, dn, one)
+    rj = (3.0 * rc[0], 3.0 * rc[1])
+    weight = 0.25
+    if c[0] < _SECOND_STEP_CN:
+        # cn^2 near 0 leaves the duplicated arguments furthest apart, where carlson_rj is least accurate
+        rc, x, y, z, p = _rj_step_dd(x, y, z, p, dd_sqrt(*x), dd_sqrt(*y), dd_sqrt(*z))
+        rj = dd_add_same_sign(*rj, 0.75 * rc[0], 0.75 * rc[1])
+        weight = 0.0625
+    rj = dd_add_d(*rj, weight * carlson_rj(x[0], y[0], z[0], p[0]))
     prefactor = dd_mul(*dd_mul(nh, nl, *THIRD_DD), *dd_mul(*s2, *sn))
     return dd_mul(*prefactor, *rj)
 
