@@ -43,8 +43,10 @@ with the incomplete integral of the third kind. In Carlson form, for |am u| <= p
 period 2K it grows by ``2 Pi(n|m) = 2K + (2n/3) R_J(0, 1 - m, 1, 1 - n)``, which is
 how large arguments are reduced. On the separatrix
 ``Pi(n; am u | 1) = (u + a atan(a tanh u)) / (1 - n)`` with a = sqrt(-n).
-psi = atan2(L1, L2) is evaluated from the normalised amplitudes so that it stays
-continuous through pure spin about axis 3 (L1 = L2 = 0).
+theta and psi are never formed as angles: the half-angle factor ``Rx(theta) Rz(psi) = (sh c, -sh s,
+ch s, ch c)`` (ch, sh = cos, sin theta/2; c, s = cos, sin psi/2, psi = atan2(L1, L2)) comes from
+L_body / |L| by +, * and 1/sqrt (``cos^2(a/2) = (1 + cos a) / 2``, ``sin(a/2) = sin a / (2 cos(a/2))``,
+each from the side where it does not cancel).
 
 The elliptic functions come from the arithmetic-geometric mean with the complementary
 parameter 1 - m passed exactly (scipy's ``ellipj`` takes m only, and rounding m near 1
@@ -57,19 +59,22 @@ separatrix are those of the omega0 given (the label 'separatrix' allows 8 ulps, 
 does not snap to it).
 
 Where the angles grow with time the arithmetic is compensated (double-doubles, ``core/elliptic.py``):
-lam, u0, K, |L| / I1 and the precession per half period 2K (``Pi(n|m) - K`` by the AGM of
-DLMF 19.8.6) are built to ~1e-32 from the floats given, u = lam t + u0 and its reduction by
-2K, the Jacobi amplitude, phi and its reduction by 4 pi are carried in double-double, so the
-phase does not lose a digit per decade of t. Accuracy against a 40-digit mpmath reference
-(test/core/test_exact_ulps.py, 100 rad of rotation): omega within ~2.5 ulps of the correctly
-rounded value (u0 refined by a Newton step on its amplitude). The attitude is composed as
-``q = Q (x) z(t)``, Q = q_WL (x) q_perm a double-double from the build and z = q_perm* (x) q_zxz (x) q_perm
-(a signed permutation of q_zxz, exact), the product summed without rounding error (Dot2: Ogita,
-Rump and Oishi 2005) and normalised to first order before its one rounding. q is then within
-~13 units (1e-16 absolute near a zero crossing); what is left is the precession angle: its
-bounded part ``g = Pi(n; am u | m) - u`` comes from Carlson's R_J in double (2-3 ulps of |g| <= 0.8,
-times COEFF ~ 2), and theta and psi are rounded angles. Next to the separatrix the
-problem itself is ill-conditioned and the error stays below that of a 1-ulp change of omega0.
+lam, u0, K, m, n, |L|, |L| / I1, COEFF and the precession per half period 2K (``Pi(n|m) - K`` by the AGM
+of DLMF 19.8.6) are built to ~1e-32 from the floats given, u = lam t + u0 and its reduction by 2K, the
+Jacobi amplitude, phi and its reduction by 4 pi are carried in double-double, so the phase does not lose
+a digit per decade of t. sn, cn, dn come in double-double from the amplitude (``dd_sin_cos_dd``: a table of
+k/32 and a short Taylor series, ~3e-20), and so does the bounded part of the precession
+``g = Pi(n; am u | m) - u`` (``third_kind_excess_dd``: R_J's first duplication step, and where |cn| < 1/2
+its second, in double-double with R_C by ``carlson_rc_dd``; only the remainder, 1/4 or 1/16 of R_J,
+in double). The attitude is composed as ``q = Q (x) z(t)``, Q = q_WL (x) q_perm a double-double from the
+build and z = q_perm* (x) q_zxz (x) q_perm (a signed permutation of q_zxz, exact; q_zxz a double-double
+from the half angles above and phi's half angle in double-double), the product summed without rounding
+error (Dot2: Ogita, Rump and Oishi 2005) and normalised to first order before its one rounding. Accuracy
+against a 40-digit mpmath reference (test/core/test_exact_ulps.py, 100 rad of rotation, units of the
+correctly rounded value, 1e-16 absolute near a zero crossing): omega within ~2 ulps (u0 refined by a
+Newton step on its amplitude), q within ~3 units on every case (the triaxial ones at 1-3.6, the spins
+about a principal axis at 2.3-3.4). Next to the separatrix the problem itself is ill-conditioned and
+the error stays below that of a 1-ulp change of omega0.
 
 Special cases in closed form: a spherical body (omega constant); a symmetric body
 (I_a = I_b = I_p, distinct axis d): ``q(t) = exp(tau L_world / I_p) q0 exp(tau beta e_d)``
@@ -142,17 +147,17 @@ _RIGID, _SYMMETRIC_FLOW, _ELLIPTIC = 0.0, 1.0, 2.0
 _R_OMEGA, _R_Q0, _R_RATE, _R_AXIS = 1, 4, 11, 13
 # symmetric: moments, axis, rate_world, beta, l_body, q0
 _S_MOMENTS, _S_AXIS, _S_RATE, _S_BETA, _S_L, _S_Q0 = 1, 4, 5, 8, 9, 12
-# elliptic (relabelled frame): order, axis signs, moments, amplitudes, signs, psi scale,
+# elliptic (relabelled frame): order, axis signs, moments, amplitudes, signs, 1 / |L|,
 # lam, u0, m1 (1 - m), n, |L|, K, COEFF = |L| (I3 - I1) / (I1 I3 lam), j0, g0, Q = q_WL (x) q_perm
 # (a double-double: hi in QWL, lo in QWL_LO, see _elliptic_state),
-# AGM levels; lam, u0 and K are double-doubles (hi in the slot named, lo in *_LO); RATE = |L| / I1,
-# TURN (the precession beyond RATE t per half period 2K) and AGM_TOP (the AGM limit) too.
-(_E_ORDER, _E_AXIS_SIGNS, _E_MOMENTS, _E_AMPLITUDE, _E_SIGNS, _E_PSI_SCALE, _E_LAM, _E_U0, _E_M1, _E_N,
+# AGM levels; lam, u0, K, m1, n, COEFF and g0 are double-doubles (hi in the slot named, lo in *_LO); RATE = |L| / I1,
+# TURN (the precession beyond RATE t per half period 2K), AGM_TOP (the AGM limit), RNORM = 1 / |L| and
+# LSCALE = s_k I_k A_k (L_body = LSCALE * (cn, sn, dn); hi x3 then lo x3) too.
+(_E_ORDER, _E_AXIS_SIGNS, _E_MOMENTS, _E_AMPLITUDE, _E_SIGNS, _E_RNORM, _E_LAM, _E_U0, _E_M1, _E_N,
  _E_LNORM, _E_K, _E_COEFF, _E_J0, _E_G0, _E_QWL, _E_QWL_LO, _E_LEVELS, _E_LAM_LO, _E_U0_LO, _E_K_LO,
- _E_RATE, _E_TURN, _E_AGM_TOP, _E_LSCALE, _E_N_LO, _E_COEFF_LO, _E_G0_LO,
- _E_M1_LO, _E_RNORM) = (
-    1, 4, 7, 10, 13, 16, 18, 19, 20, 21, 22, 23, 24, 25, 26, 27, 31, 35, 36, 37, 38, 39, 41, 43, 45, 51, 52, 53, 54, 55)
-PARAMS_SIZE = 57
+ _E_RATE, _E_TURN, _E_AGM_TOP, _E_LSCALE, _E_N_LO, _E_COEFF_LO, _E_G0_LO, _E_M1_LO) = (
+    1, 4, 7, 10, 13, 16, 18, 19, 20, 21, 22, 23, 24, 25, 26, 27, 31, 35, 36, 37, 38, 39, 41, 43, 45, 51, 52, 53, 54)
+PARAMS_SIZE = 55
 
 
 def _relabelling_table() -> np.ndarray:
@@ -496,8 +501,6 @@ def _elliptic_params(moments, omega, q0, order, d, params, agm_a, agm_c, long_ru
     s3 = _sign(w3)
     s1 = _sign(w1) if separatrix else 1.0
     sigma = eps * s1 * s3
-    alpha1 = 1.0 / math.sqrt(i1 * abs(d31[0]))
-    alpha2 = 1.0 / math.sqrt(i2 * abs(d32[0]))
     # phase u0 from sn u0 = sigma w2 / A2, cn u0 = s1 w1 / A1 (normalised against rounding)
     if a1 > 0.0:
         sn0, cn0 = sigma * w2 / a2, s1 * w1 / a1
@@ -547,7 +550,6 @@ def _elliptic_params(moments, omega, q0, order, d, params, agm_a, agm_c, long_ru
     params[_E_MOMENTS], params[_E_MOMENTS + 1], params[_E_MOMENTS + 2] = i1, i2, i3
     params[_E_AMPLITUDE], params[_E_AMPLITUDE + 1], params[_E_AMPLITUDE + 2] = a1, a2, a3
     params[_E_SIGNS], params[_E_SIGNS + 1], params[_E_SIGNS + 2] = s1, sigma, s3
-    params[_E_PSI_SCALE], params[_E_PSI_SCALE + 1] = s1 * i1 * alpha1, sigma * i2 * alpha2
     for idx, (sign, moment, amplitude) in enumerate(((s1, i1, a1_dd), (sigma, i2, a2_dd), (s3, i3, a3_dd))):
         params[_E_LSCALE + idx], params[_E_LSCALE + 3 + idx] = dd_mul(sign * moment, 0.0, *amplitude)
     params[_E_LAM], params[_E_LAM_LO] = lam_dd
