@@ -23,6 +23,8 @@ from numba.extending import intrinsic, overload, register_jitable
 from rigid_rot_sim.core.validation import FloatArray
 
 _EPS = 2.220446049250313e-16
+#: A double-double (hi, lo) as a tuple.
+DoubleDouble = tuple[float, float]
 #: Most AGM levels kept (the AGM converges quadratically: 40 is never reached for m < 1).
 AGM_LEVELS = 40
 #: pi and 2 pi as double-doubles (hi + lo, |lo| <= ulp(hi) / 2).
@@ -326,7 +328,7 @@ def carlson_rc(x: float, y: float) -> float:
         c = _RC_SERIES
         s2 = s * s
         poly = ((c[0] + c[1] * s) + s2 * (c[2] + c[3] * s)) + (s2 * s2) * ((c[4] + c[5] * s) + s2 * (c[6] + c[7] * s))
-        return (1.0 + s * poly) / math.sqrt(y)
+        return float((1.0 + s * poly) / math.sqrt(y))
     xt, yt = x, y
     while True:
         lam = 2.0 * math.sqrt(xt) * math.sqrt(yt) + yt
@@ -384,7 +386,7 @@ def _estrin16(c: FloatArray, x: float) -> float:
     b = (c[4] + c[5] * x) + x2 * (c[6] + c[7] * x)
     d = (c[8] + c[9] * x) + x2 * (c[10] + c[11] * x)
     e = (c[12] + c[13] * x) + x2 * (c[14] + c[15] * x)
-    return (a + x4 * b) + x8 * (d + x4 * e)
+    return float((a + x4 * b) + x8 * (d + x4 * e))
 
 
 @register_jitable
@@ -406,7 +408,9 @@ def carlson_rc_dd(xh: float, xl: float, yh: float, yl: float) -> tuple[float, fl
 
 
 @register_jitable
-def _rj_step_dd(x, y, z, p, sx, sy, sz):  # type: ignore[no-untyped-def]  # double-doubles as tuples
+def _rj_step_dd(x: DoubleDouble, y: DoubleDouble, z: DoubleDouble, p: DoubleDouble, sx: DoubleDouble,
+                sy: DoubleDouble, sz: DoubleDouble) -> tuple[DoubleDouble, DoubleDouble, DoubleDouble, DoubleDouble,
+                                                           DoubleDouble]:
     """One duplication step of R_J in double-double, for p >= x, y, z (double-doubles, with the square
     roots sx, sy, sz of x, y, z): ``R_J(x, y, z, p) = 3 R_C(alpha, beta) + R_J(x', y', z', p') / 4`` with
     x' = (x + lam) / 4 and so on (Carlson 1995); returns R_C(alpha, beta) and (x', y', z', p')."""
