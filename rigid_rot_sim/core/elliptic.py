@@ -426,8 +426,8 @@ def _rj_step_dd(x: DoubleDouble, y: DoubleDouble, z: DoubleDouble, p: DoubleDoub
         (0.25 * shifted[0], 0.25 * shifted[1])
 
 
-#: |cn| below which third_kind_excess_dd takes a second duplication step in double-double.
-_SECOND_STEP_CN = 0.5
+#: third_kind_excess_dd takes up to three more duplication steps in double-double while x < _SPREAD_X_P p.
+_SPREAD_X_P = 0.5
 
 
 @register_jitable
@@ -437,23 +437,25 @@ def third_kind_excess_dd(
     """``Pi(n; phi | m) - F(phi | m) = (n / 3) sn^3 R_J(cn^2, dn^2, 1, 1 - n sn^2)`` as a double-double, for
     sn, cn, dn of the amplitude phi (|phi| <= pi / 2; double-doubles) and n = nh + nl < 1.
 
-    R_J's first two duplication steps carry about 15/16 of it (3 R_C(alpha, beta) each) and are formed
-    in double-double (:func:`_rj_step_dd`, :func:`carlson_rc_dd`; the first starts from the roots |cn|,
-    dn, 1 at hand); only the rest, R_J at the twice duplicated arguments / 16, comes in double
-    (:func:`carlson_rj`, a few ulps of 1/16)."""
+    R_J's first duplication step carries most of it (3 R_C(alpha, beta)) and is formed in double-double
+    (:func:`_rj_step_dd`, :func:`carlson_rc_dd`) from the roots |cn|, dn, 1 at hand; where x stays small
+    against p (cn near 0), the remainder R_J(x', y', z', p') / 4 is still a large share with its arguments
+    far apart, and up to three more steps follow. Only the last remainder (1/4 to 1/256 of R_J at the
+    duplicated arguments) comes in double (:func:`carlson_rj`): within ~0.35 ulp of the largest value."""
     s2 = dd_mul(*sn, *sn)
     ns2 = dd_mul(nh, nl, *s2)
     p = dd_add(1.0, 0.0, -ns2[0], -ns2[1])  # 1 - n sn^2 >= 1 >= cn^2, dn^2
     c = (abs(cn[0]), math.copysign(1.0, cn[0]) * cn[1])
     one = (1.0, 0.0)
     rc, x, y, z, p = _rj_step_dd(dd_mul(*c, *c), dd_mul(*dn, *dn), one, p, c, dn, one)
-    rj = (3.0 * rc[0], 3.0 * rc[1])
+    rj = dd_mul(3.0, 0.0, *rc)  # 3 rc_hi is not exact
     weight = 0.25
-    if c[0] < _SECOND_STEP_CN:
-        # cn^2 near 0 leaves the duplicated arguments furthest apart, where carlson_rj is least accurate
+    while x[0] < _SPREAD_X_P * p[0] and weight > 0.01:
+        # a small x (cn^2 near 0) leaves the remainder R_J(x, y, z, p) a large share of the whole, and
+        # its arguments far apart, where carlson_rj is least accurate: one more step in double-double
         rc, x, y, z, p = _rj_step_dd(x, y, z, p, dd_sqrt(*x), dd_sqrt(*y), dd_sqrt(*z))
-        rj = dd_add_same_sign(*rj, 0.75 * rc[0], 0.75 * rc[1])
-        weight = 0.0625
+        rj = dd_add_same_sign(*rj, *dd_mul(3.0 * weight, 0.0, *rc))
+        weight *= 0.25
     rj = dd_add_d(*rj, weight * carlson_rj(x[0], y[0], z[0], p[0]))
     prefactor = dd_mul(*dd_mul(nh, nl, *THIRD_DD), *dd_mul(*s2, *sn))
     return dd_mul(*prefactor, *rj)

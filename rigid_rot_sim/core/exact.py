@@ -64,9 +64,9 @@ of DLMF 19.8.6) are built to ~1e-32 from the floats given, u = lam t + u0 and it
 Jacobi amplitude, phi and its reduction by 4 pi are carried in double-double, so the phase does not lose
 a digit per decade of t. sn, cn, dn come in double-double from the amplitude (``dd_sin_cos_dd``: a table of
 k/32 and a short Taylor series, ~3e-20), and so does the bounded part of the precession
-``g = Pi(n; am u | m) - u`` (``third_kind_excess_dd``: R_J's first duplication step, and where |cn| < 1/2
-its second, in double-double with R_C by ``carlson_rc_dd``; only the remainder, 1/4 or 1/16 of R_J,
-in double). The attitude is composed as ``q = Q (x) z(t)``, Q = q_WL (x) q_perm a double-double from the
+``g = Pi(n; am u | m) - u`` (``third_kind_excess_dd``: R_J's first duplication step, and where its
+remainder's arguments stay far apart (small cn) up to three more, in double-double with R_C by
+``carlson_rc_dd``; only the last remainder, 1/4 to 1/256 of R_J, in double). The attitude is composed as ``q = Q (x) z(t)``, Q = q_WL (x) q_perm a double-double from the
 build and z = q_perm* (x) q_zxz (x) q_perm (a signed permutation of q_zxz, exact; q_zxz a double-double
 from the half angles above and phi's half angle in double-double), the product summed without rounding
 error (Dot2: Ogita, Rump and Oishi 2005) and normalised to first order before its one rounding. Accuracy

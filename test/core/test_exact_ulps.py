@@ -110,6 +110,48 @@ def test_double_double_complete_integrals(m, n):
         assert abs((x_h + mpmath.mpf(x_l) - excess) / excess) < 1e-31
 
 
+
+def _dd_value(pair):
+    return mpmath.mpf(pair[0]) + mpmath.mpf(pair[1])
+
+
+def test_double_double_sin_cos():
+    """dd_sin_cos_dd to ~3e-20 over four turns (both signs, low parts included)."""
+    from rigid_rot_sim.core.elliptic import dd_sin_cos_dd
+
+    rng = np.random.default_rng(7)
+    with mpmath.workdps(40):
+        for h in rng.uniform(-4.0 * math.pi, 4.0 * math.pi, 400):
+            lo = float(h) * 1e-17 * float(rng.uniform(-1.0, 1.0))
+            s_h, s_l, c_h, c_l = dd_sin_cos_dd(float(h), lo)
+            angle = mpmath.mpf(float(h)) + lo
+            assert abs(_dd_value((s_h, s_l)) - mpmath.sin(angle)) < 1e-19
+            assert abs(_dd_value((c_h, c_l)) - mpmath.cos(angle)) < 1e-19
+
+
+def test_double_double_rc_and_third_kind_excess():
+    """carlson_rc_dd to ~1e-17 relative, and Pi(n; phi|m) - F(phi|m) from sn, cn, dn within half an ulp of
+    its largest value (0.25-0.35 reached; carlson_rj in double on the whole is at 2-3 ulps)."""
+    from rigid_rot_sim.core.elliptic import carlson_rc_dd, third_kind_excess_dd
+
+    rng = np.random.default_rng(8)
+    with mpmath.workdps(40):
+        for _ in range(200):
+            y = float(rng.uniform(0.1, 50.0))
+            x = y * float(rng.uniform(0.0, 1.0)) ** 3
+            assert abs(_dd_value(carlson_rc_dd(x, 0.0, y, 0.0)) / mpmath.elliprc(x, y) - 1) < 1e-17
+        for m, n in ((0.1, -3.0), (0.52, -0.67), (0.84, -1.08), (1e-6, -3.0), (0.5, -40.0)):
+            errors, values = [], []
+            for phi in np.linspace(-1.5707, 1.5707, 61):
+                p = mpmath.mpf(float(phi))
+                sn, cn = mpmath.sin(p), mpmath.cos(p)
+                dn = mpmath.sqrt(1 - m * sn * sn)
+                as_dd = [(float(v), float(v - float(v))) for v in (sn, cn, dn)]
+                exact = mpmath.ellippi(n, p, m) - mpmath.ellipf(p, m)
+                errors.append(abs(_dd_value(third_kind_excess_dd(*as_dd, n, 0.0)) - exact))
+                values.append(abs(exact))
+            assert max(errors) <= 0.5 * math.ulp(float(max(values))), (m, n)
+
 if __name__ == "__main__":  # the figures of the report: PYTHONPATH=. python test/core/test_exact_ulps.py
     for case in CASES:
         e = max_errors(case, samples=int(sys.argv[1]) if len(sys.argv) > 1 else 100)
