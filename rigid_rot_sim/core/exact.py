@@ -72,8 +72,8 @@ from the half angles above and phi's half angle in double-double), the product s
 error (Dot2: Ogita, Rump and Oishi 2005) and normalised to first order before its one rounding. Accuracy
 against a 40-digit mpmath reference (test/core/test_exact_ulps.py, 100 rad of rotation, units of the
 correctly rounded value, 1e-16 absolute near a zero crossing): omega within ~2 ulps (u0 refined by a
-Newton step on its amplitude), q within ~3 units on every case (the triaxial ones at 1-3.6, the spins
-about a principal axis at 2.3-3.4). Next to the separatrix the problem itself is ill-conditioned and
+Newton step on its amplitude), q within ~3.5 units on every case (the triaxial ones at 0.6-2.6, the
+spins about a principal axis at 2.3-3.4). Next to the separatrix the problem itself is ill-conditioned and
 the error stays below that of a 1-ulp change of omega0.
 
 Special cases in closed form: a spherical body (omega constant); a symmetric body
