@@ -161,7 +161,10 @@ def map_tasks(
 
     token = uuid.uuid4().hex[:12]
     futures = {
-        client.submit(function, *args, key=f"rigid-rot-{getattr(function, '__name__', 'task')}-{token}-{index}", pure=False): index
+        client.submit(
+            _on_one_thread, function, *args, key=f"rigid-rot-{getattr(function, '__name__', 'task')}-{token}-{index}",
+            pure=False,
+        ): index
         for index, (function, args) in enumerate(calls)
     }
     results = [None] * len(calls)
@@ -177,6 +180,23 @@ def map_tasks(
             client.cancel(list(futures), force=True)
         raise
     return results
+
+
+def _on_one_thread(function: Callable[..., Any], *args: Any) -> Any:
+    """``function(*args)`` with numba's parallel kernels on one thread (in this thread only).
+
+    The cluster runs one task per worker thread; a task's kernels fanning out over every
+    core as well (numba's default) would oversubscribe them. Parallel and serial kernels
+    give the same bits.
+    """
+    import numba
+
+    threads = numba.get_num_threads()
+    numba.set_num_threads(1)
+    try:
+        return function(*args)
+    finally:
+        numba.set_num_threads(threads)
 
 
 @contextlib.contextmanager
