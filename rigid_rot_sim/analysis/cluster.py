@@ -233,6 +233,8 @@ def _assemble(parts: list[dict[str, Any]]) -> dict[str, Any]:
             columns[name] = [value for part in parts for value in part[name]]
         else:
             columns[name] = np.concatenate([np.asarray(part[name]) for part in parts])
+    if np.all(np.diff(columns["run"]) > 0):  # the chunks came in run order (the usual case): nothing to move
+        return columns
     order = np.argsort(columns["run"], kind="stable")
     return {name: (values[order] if isinstance(values, np.ndarray) else [values[i] for i in order]) for name, values in columns.items()}
 
