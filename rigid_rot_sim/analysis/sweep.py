@@ -36,7 +36,7 @@ from typing import Any
 import numpy as np
 from scipy.spatial.transform import Rotation
 
-from rigid_rot_sim.analysis.checkpoints import CheckpointTrack
+from rigid_rot_sim.analysis.checkpoints import CheckpointTrack, row_norms
 from rigid_rot_sim.analysis.streams import StreamDraws
 from rigid_rot_sim.analysis.sweep_spec import NORMAL_CUT_SIGMAS, Dispersion, SweepSpec
 from rigid_rot_sim.core import quaternion as quat
@@ -209,8 +209,8 @@ def _bodies(spec: SweepSpec, spin_rate: float | None, samples: range | None) -> 
         omega0_body=_nominal_omega0(spec, spin_rate) + stack("omega"),
         torque_scale=1.0 + stack("torque_scale"),
         noise=noise,
-        misalignment=np.linalg.norm(misalignment, axis=1),
-        attitude0_error=np.linalg.norm(attitude, axis=1),
+        misalignment=row_norms(misalignment),
+        attitude0_error=row_norms(attitude),
     )
 
 
@@ -334,7 +334,7 @@ def _simulate(spec: SweepSpec, bodies: _Bodies, method: str, dt: float) -> _Outc
 
     def invariants(omega_p: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         momentum = moments * omega_p
-        return 0.5 * np.einsum("ij,ij->i", momentum, omega_p), np.linalg.norm(momentum, axis=1)
+        return 0.5 * np.einsum("ij,ij->i", momentum, omega_p), row_norms(momentum)
 
     energy0, momentum0 = invariants(omega)
     track = CheckpointTrack(moments, omega)
@@ -358,7 +358,7 @@ def _simulate(spec: SweepSpec, bodies: _Bodies, method: str, dt: float) -> _Outc
         # most segments of a run repeat the last one's torques (a torque-free run: all of them)
         key = (step, torque_body.tobytes()) if everyone else None
         if key is None or key != last_torque[0]:
-            last_torque = (key, np.linalg.norm(torque_body, axis=1) * step, _rows(quat.rotate, principal_from_body[live], torque_body))
+            last_torque = (key, row_norms(torque_body) * step, _rows(quat.rotate, principal_from_body[live], torque_body))
         _, impulse_rate, torque_p = last_torque
         impulse[live] += impulse_rate * (b - a)
         # the first call normalises q as an integrator's set_state does; later ones continue from it
@@ -470,7 +470,7 @@ def run_chunk(spec: SweepSpec, chunk: Chunk, nominal: _Outcome | None = None) ->
     ).magnitude()
     failed = np.isnan(outcome.q_body).any(axis=1) | np.isnan(nominal.q_body[0]).any()
     attitude_error = np.where(failed, np.nan, attitude_error)
-    omega_error = np.linalg.norm(outcome.omega_body - nominal.omega_body[0], axis=1)
+    omega_error = row_norms(outcome.omega_body - nominal.omega_body[0])
     torque_free = _torque_free(spec)
     tolerance = spec.energy_tolerance
     if torque_free:

@@ -2,7 +2,7 @@
 
 import numpy as np
 
-from rigid_rot_sim.analysis.checkpoints import CheckpointTrack
+from rigid_rot_sim.analysis.checkpoints import CheckpointTrack, row_norms
 
 
 def _numpy_trackers(moments, omegas, times):
@@ -52,3 +52,13 @@ def test_trackers_match_the_array_formulas_bit_for_bit():
     assert np.isnan(track.max_omega[5:20]).all() and np.isnan(track.nutation_range()[5:20]).all()
     for ours, theirs in ((track.max_omega, max_omega), (track.nutation_range(), nutation), (track.first_flip, flip)):
         assert np.array_equal(ours, theirs, equal_nan=True)
+
+
+def test_row_norms_are_numpys_bits():
+    rng = np.random.default_rng(8)
+    x = rng.normal(size=(3000, 3)) * rng.choice([1e-160, 1.0, 1e150], size=(3000, 1))
+    x[:10] = np.nan
+    x[10:20] = 0.0
+    x[20, 1] = np.inf
+    assert np.array_equal(row_norms(x), np.linalg.norm(x, axis=1), equal_nan=True)
+    assert np.array_equal(row_norms(np.asfortranarray(x)), np.linalg.norm(x, axis=1), equal_nan=True)  # any layout

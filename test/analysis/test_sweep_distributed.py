@@ -187,3 +187,20 @@ def test_ctrl_c_stops_a_sweep_on_the_local_cluster_and_its_workers(tmp_path):
         if process.poll() is None:
             process.kill()
             process.wait()
+
+
+def test_tasks_run_their_kernels_on_one_thread(dask_cluster):
+    """The cluster parallelises over tasks: a task's numba kernels do not fan out over the cores as well."""
+    import numba
+    from distributed import Client
+
+    from rigid_rot_sim.analysis.cluster import map_tasks
+
+    with Client(dask_cluster.address, timeout=START_TIMEOUT) as client:
+        def plain() -> list[int]:  # numba.get_num_threads as a bare task on the workers
+            return client.gather([client.submit(numba.get_num_threads, pure=False) for _ in range(4)])
+
+        before = plain()
+        assert before == [numba.config.NUMBA_NUM_THREADS] * 4 and before[0] > 1  # what a task would get otherwise
+        assert map_tasks(client, [(numba.get_num_threads, ())] * 4) == [1, 1, 1, 1]
+        assert plain() == before  # the worker threads' own setting is restored after each task
