@@ -58,23 +58,23 @@ from the floats given (error-free products and sums, Dekker and Shewchuk), so th
 separatrix are those of the omega0 given (the label 'separatrix' allows 8 ulps, the flow
 does not snap to it).
 
-Where the angles grow with time the arithmetic is compensated (double-doubles, ``core/elliptic.py``):
-lam, u0, K, m, n, |L|, |L| / I1, COEFF and the precession per half period 2K (``Pi(n|m) - K`` by the AGM
-of DLMF 19.8.6) are built to ~1e-32 from the floats given, u = lam t + u0 and its reduction by 2K, the
-Jacobi amplitude, phi and its reduction by 4 pi are carried in double-double, so the phase does not lose
-a digit per decade of t. sn, cn, dn come in double-double from the amplitude (``dd_sin_cos_dd``: a table of
-k/32 and a short Taylor series, ~3e-20), and so does the bounded part of the precession
-``g = Pi(n; am u | m) - u`` (``third_kind_excess_dd``: R_J's first duplication step, and where its
-remainder's arguments stay far apart (small cn) up to three more, in double-double with R_C by
-``carlson_rc_dd``; only the last remainder, 1/4 to 1/256 of R_J, in double). The attitude is composed as ``q = Q (x) z(t)``, Q = q_WL (x) q_perm a double-double from the
-build and z = q_perm* (x) q_zxz (x) q_perm (a signed permutation of q_zxz, exact; q_zxz a double-double
-from the half angles above and phi's half angle in double-double), the product summed without rounding
-error (Dot2: Ogita, Rump and Oishi 2005) and normalised to first order before its one rounding. Accuracy
-against a 40-digit mpmath reference (test/core/test_exact_ulps.py, 100 rad of rotation, units of the
-correctly rounded value, 1e-16 absolute near a zero crossing): omega within ~2 ulps (u0 refined by a
-Newton step on its amplitude), q within ~3.5 units on every case (the triaxial ones at 0.6-2.6, the
-spins about a principal axis at 2.3-3.4). Next to the separatrix the problem itself is ill-conditioned and
-the error stays below that of a 1-ulp change of omega0.
+Where the angles grow with time the arithmetic is compensated (double-doubles, ``core/elliptic.py``): lam, u0,
+K, m, n, |L|, |L| / I1, COEFF and the precession per half period 2K (``Pi(n|m) - K`` by the AGM of DLMF
+19.8.6) are built to ~1e-32 from the floats given, u = lam t + u0 and its reduction by 2K, the Jacobi
+amplitude, phi and its reduction by 4 pi are carried in double-double, so the phase does not lose a digit per
+decade of t. sn, cn, dn come in double-double from the amplitude (``dd_sin_cos_dd``: a table of k/32 and a
+short Taylor series, ~3e-20), and so does the bounded part of the precession ``g = Pi(n; am u | m) - u``
+(``third_kind_excess_dd``: R_J's first duplication step, and where its remainder's arguments stay far apart
+(small cn) up to three more, in double-double with R_C by ``carlson_rc_dd``; only the last remainder, 1/4 to
+1/256 of R_J, in double). The attitude is composed as ``q = Q (x) z(t)``, Q = q_WL (x) q_perm a double-double
+from the build and z = q_perm* (x) q_zxz (x) q_perm (a signed permutation of q_zxz, exact; q_zxz a
+double-double from the half angles above and phi's half angle in double-double), the product summed without
+rounding error (Dot2: Ogita, Rump and Oishi 2005) and normalised to first order before its one rounding.
+Accuracy against a 40-digit mpmath reference (test/core/test_exact_ulps.py, 100 rad of rotation, units of the
+correctly rounded value, 1e-16 absolute near a zero crossing): omega within ~2 ulps (u0 refined by a Newton
+step on its amplitude), q within ~3.5 units on every case (the triaxial ones at 0.6-2.6, the spins about a
+principal axis at 2.3-3.4). Next to the separatrix the problem itself is ill-conditioned and the error stays
+below that of a 1-ulp change of omega0.
 
 Special cases in closed form: a spherical body (omega constant); a symmetric body
 (I_a = I_b = I_p, distinct axis d): ``q(t) = exp(tau L_world / I_p) q0 exp(tau beta e_d)``
@@ -439,7 +439,8 @@ def flow_state(params, agm_a, agm_c, tau):
         half_h, half_l = dd_reduce(half_h, half_l + 0.5 * params[_R_RATE + 1] * tau, TWO_PI_DD[0], TWO_PI_DD[1])
         s, c = dd_sin_cos(half_h, half_l)
         spin = (s * params[_R_AXIS], s * params[_R_AXIS + 1], s * params[_R_AXIS + 2], c)
-        q = _compensated_product(q0, (0.0, 0.0, 0.0, 0.0), spin, (0.0, 0.0, 0.0, 0.0))  # exp(tau omega_world) q0 = q0 exp(tau omega)
+        # exp(tau omega_world) q0 = q0 exp(tau omega)
+        q = _compensated_product(q0, (0.0, 0.0, 0.0, 0.0), spin, (0.0, 0.0, 0.0, 0.0))
         return q, (params[_R_OMEGA], params[_R_OMEGA + 1], params[_R_OMEGA + 2])
     if kind == _SYMMETRIC_FLOW:
         axis = int(params[_S_AXIS])
