@@ -204,3 +204,24 @@ def test_tasks_run_their_kernels_on_one_thread(dask_cluster):
         assert before == [numba.config.NUMBA_NUM_THREADS] * 4 and before[0] > 1  # what a task would get otherwise
         assert map_tasks(client, [(numba.get_num_threads, ())] * 4) == [1, 1, 1, 1]
         assert plain() == before  # the worker threads' own setting is restored after each task
+
+
+def _worker_settings() -> dict:
+    import os
+
+    import dask
+
+    return {
+        "trim": os.environ.get("MALLOC_TRIM_THRESHOLD_"),
+        "threads": os.environ.get("OMP_NUM_THREADS"),
+        "profile": dask.config.get("distributed.worker.profile.enabled"),
+    }
+
+
+def test_local_workers_keep_glibcs_malloc_and_skip_the_profiler():
+    """Dask's nanny would set MALLOC_TRIM_THRESHOLD_ (page faults on every chunk-sized array) and sample stacks."""
+    from rigid_rot_sim.analysis.cluster import open_client
+
+    with open_client(None, 1) as client:
+        settings = client.submit(_worker_settings, pure=False).result()
+    assert settings == {"trim": None, "threads": "1", "profile": False}
