@@ -7,7 +7,9 @@ The workload is a dispersed torque-free sweep (free_tumble, rk4, dt = 0.01 s, in
 misalignment and rate dispersions), the same rows each time. Measured, in one run:
 
 * the raw batch kernel (``core.batch.advance_batch``, rk4, the same N and steps, one
-  thread): the rate a sweep worker is measured against (target: >= 80 % of it);
+  thread), called once per chunk over the whole workload like the sweep, so that both rates
+  are totals of the same work: the rate a sweep worker is measured against (target: >= 80 %
+  of it); its fastest single call is printed beside it;
 * in this process without Dask (run_local): the baseline rate, and its share of the raw
   kernel's;
 * on a local cluster of 1 worker, then 2 (single-thread processes): body-steps per second,
@@ -18,8 +20,9 @@ misalignment and rate dispersions), the same rows each time. Measured, in one ru
   the share of a sweep task's time that is not simulation;
 * memory per worker: resident set size after the sweep (psutil, on each worker).
 
-Each rate is the fastest of ``--repeats`` runs (3): on a shared machine a burst of other work
-slows one run, not all. Then, on paper, what a 1e9-run sweep of the shipped slew (6000 steps per run) needs at the
+The measurements run in ``--repeats`` rounds (3), each round the raw kernel, this process and
+each cluster one after the other, so that a slower spell of a shared or virtual machine touches
+a whole round; each round's ratios are printed, and the fastest round's rates. Then, on paper, what a 1e9-run sweep of the shipped slew (6000 steps per run) needs at the
 measured per-worker rate. Printed, never asserted. With ``--scheduler`` the 1/2-worker
 steps are replaced by one measurement on that cluster.
 """
@@ -27,6 +30,7 @@ steps are replaced by one measurement on that cluster.
 from __future__ import annotations
 
 import argparse
+import contextlib
 import os
 import platform
 import time
@@ -77,8 +81,12 @@ def measure(client, spec, chunk: int) -> tuple[float, float, float]:
     return seconds, spec.n_runs * (spec.duration / spec.dts[0]) / seconds, computing / (workers * seconds)
 
 
-def raw_kernel_rate(n: int, steps: int) -> float:
-    """Body-steps per second of advance_batch alone (rk4, one thread, N = ``n``, no torque): best of 3."""
+def raw_kernel_rate(n: int, steps: int, calls: int, repeats: int) -> tuple[float, float]:
+    """Body-steps per second of advance_batch alone (rk4, one thread, N = ``n``, no torque).
+
+    Returns (the whole workload: ``calls`` calls one after the other, as the sweep's chunks run,
+    fastest of ``repeats``; the fastest single call).
+    """
     import numba
 
     rng = np.random.default_rng(0)
@@ -89,14 +97,17 @@ def raw_kernel_rate(n: int, steps: int) -> float:
     numba.set_num_threads(1)
     try:
         advance_batch("rk4", moments, q, omega, 0.01, 1, np.zeros((n, 3)))  # compiled and warm
-        best = np.inf
-        for _ in range(3):
-            start = time.perf_counter()
-            advance_batch("rk4", moments, q, omega, 0.01, steps, np.zeros((n, 3)))
-            best = min(best, time.perf_counter() - start)
+        best_run = best_call = np.inf
+        for _ in range(repeats):
+            run_start = time.perf_counter()
+            for _ in range(calls):
+                start = time.perf_counter()
+                advance_batch("rk4", moments, q, omega, 0.01, steps, np.zeros((n, 3)))
+                best_call = min(best_call, time.perf_counter() - start)
+            best_run = min(best_run, time.perf_counter() - run_start)
     finally:
         numba.set_num_threads(threads)
-    return n * steps / best
+    return n * steps * calls / best_run, n * steps / best_call
 
 
 def task_overhead(client, n: int = 200) -> float:
@@ -123,38 +134,54 @@ def main() -> None:
     print(f"workload: {spec.n_runs} runs x {steps:.0f} rk4 steps = {body_steps:.3g} body-steps, "
           f"{args.chunk} bodies per task ({-(-spec.n_runs // args.chunk)} tasks)")
 
-    raw = raw_kernel_rate(min(args.chunk, spec.n_runs), round(steps))
-    print(f"raw batch kernel, rk4, N = {min(args.chunk, spec.n_runs)}, {steps:.0f} steps, 1 thread: {raw:.3g} body-steps/s")
+    n_chunk = min(args.chunk, spec.n_runs)
+    calls = -(-spec.n_runs // n_chunk)
     run_local(parse_sweep_text(SPEC.format(samples=4, duration=0.1), "warm.yaml"), chunk_size=4)
-    best = np.inf
-    for _ in range(args.repeats):
-        start = time.perf_counter()
-        run_local(spec, chunk_size=args.chunk)
-        best = min(best, time.perf_counter() - start)
-    baseline = body_steps / best
-    print(f"in this process, no Dask:  {baseline:.3g} body-steps/s (baseline; {baseline / raw:.0%} of the raw kernel)")
-
-    rates = {}
     clusters = [(None, 1), (None, 2)] if args.scheduler is None else [(args.scheduler, None)]
-    for scheduler, workers in clusters:
-        with open_client(scheduler, workers) as client:
+    with contextlib.ExitStack() as stack:
+        clients = {}
+        for scheduler, workers in clusters:
+            client = stack.enter_context(open_client(scheduler, workers))
             n = len(client.scheduler_info(n_workers=-1)["workers"])
             run_sweep(parse_sweep_text(SPEC.format(samples=n, duration=0.1), "warm.yaml"), client=client,
                       chunk_size=1, progress=False)  # imports on every worker
-            seconds, rate, busy = min((measure(client, spec, args.chunk) for _ in range(args.repeats)), key=lambda m: m[0])
+            clients[n] = client
+        # rounds: the raw kernel, this process and each cluster one after the other, so that a
+        # slower or faster spell of the (shared, virtual) machine touches all of a round alike
+        rounds = []
+        for k in range(args.repeats):
+            raw, raw_call = raw_kernel_rate(n_chunk, round(steps), calls, 1)
+            start = time.perf_counter()
+            run_local(spec, chunk_size=args.chunk)
+            baseline = body_steps / (time.perf_counter() - start)
+            measured = {n: measure(client, spec, args.chunk) for n, client in clients.items()}
+            rounds.append((raw, baseline, measured))
+            print(f"round {k + 1}: raw kernel {raw:.3g}, this process {baseline:.3g} ({baseline / raw:.0%}), "
+                  + ", ".join(f"{n} worker(s) {rate:.3g} ({rate / n / raw:.0%} per worker, tasks {busy:.0%} of the time)"
+                              for n, (_, rate, busy) in measured.items()) + " body-steps/s")
+        raw = max(r for r, _, _ in rounds)
+        baseline = max(b for _, b, _ in rounds)
+        print(f"raw batch kernel, rk4, N = {n_chunk}, {steps:.0f} steps, 1 thread, {calls} calls (the workload): "
+              f"{raw:.3g} body-steps/s (fastest round)")
+        print(f"in this process, no Dask:  {baseline:.3g} body-steps/s (fastest round; {baseline / raw:.0%} of the raw "
+              f"kernel; per round {', '.join(f'{b / r:.0%}' for r, b, _ in rounds)})")
+        rates = {}
+        for n in clients:
+            rate = max(m[n][1] for _, _, m in rounds)
             rates[n] = rate
-            print(f"{n} worker(s): {rate:.3g} body-steps/s ({seconds:.1f} s; {rate / baseline:.2f}x the baseline, "
-                  f"{rate / n / raw:.0%} of the raw kernel per worker"
-                  + (f", efficiency {rate / (n * rates[1]):.0%}" if n > 1 and 1 in rates else "")
-                  + f"; the workers ran tasks {busy:.0%} of the time)")
-            if n == max(w or n for _, w in clusters):
-                overhead = task_overhead(client)
-                compute = args.chunk * steps / baseline
-                print(f"task overhead: {overhead * 1e3:.1f} ms per no-op task round trip; a {args.chunk}-body task "
-                      f"computes {compute:.2f} s, so overhead is {overhead / compute:.2%} of it")
-                memory = client.run(_rss)
-                print("memory per worker (RSS after the sweep): "
-                      + ", ".join(f"{m / 2**20:.0f} MiB" for m in memory.values()))
+            per_round = ", ".join(f"{m[n][1] / n / r:.0%}" for r, _, m in rounds)
+            print(f"{n} worker(s): {rate:.3g} body-steps/s (fastest round; {rate / baseline:.2f}x the baseline, "
+                  f"{rate / n / raw:.0%} of the raw kernel per worker; per round {per_round}"
+                  + (f"; efficiency {rate / (n * rates[1]):.0%}, per round "
+                     + ", ".join(f"{m[n][1] / (n * m[1][1]):.0%}" for _, _, m in rounds) if n > 1 and 1 in rates else "")
+                  + ")")
+        n = max(clients)
+        overhead = task_overhead(clients[n])
+        compute = args.chunk * steps / baseline
+        print(f"task overhead: {overhead * 1e3:.1f} ms per no-op task round trip; a {args.chunk}-body task "
+              f"computes {compute:.2f} s, so overhead is {overhead / compute:.2%} of it")
+        memory = clients[n].run(_rss)
+        print("memory per worker (RSS after the sweep): " + ", ".join(f"{m / 2**20:.0f} MiB" for m in memory.values()))
     print(f"load average at the end: {' '.join(f'{x:.2f}' for x in os.getloadavg())}")
     # one worker on a core of its own is the per-worker rate a cluster scales out
     per_worker = rates.get(1, max(rates.values()) / max(rates))
