@@ -218,9 +218,13 @@ def _worker_settings() -> dict:
     }
 
 
-def test_local_workers_keep_glibcs_malloc_and_skip_the_profiler():
+def test_local_workers_keep_glibcs_malloc_and_skip_the_profiler(monkeypatch):
     """Dask's nanny would set MALLOC_TRIM_THRESHOLD_ (page faults on every chunk-sized array) and sample stacks."""
     from rigid_rot_sim.analysis.cluster import open_client
+
+    # a plain LocalCluster started earlier in this process (test_cluster_suites) leaves the variable in
+    # os.environ, where workers would inherit it (a variable the user exports is theirs to keep)
+    monkeypatch.delenv("MALLOC_TRIM_THRESHOLD_", raising=False)
 
     with open_client(None, 1) as client:
         settings = client.submit(_worker_settings, pure=False).result()
