@@ -10,8 +10,8 @@ misalignment and rate dispersions), the same rows each time. Measured, in one ru
   thread), called once per chunk over the whole workload like the sweep, so that both rates
   are totals of the same work: the rate a sweep worker is measured against (target: >= 80 %
   of it); its fastest single call is printed beside it;
-* in this process without Dask (run_local): the baseline rate, and its share of the raw
-  kernel's;
+* in this process without Dask (run_local, numba on one thread as in a worker's task): the
+  baseline rate, and its share of the raw kernel's;
 * on a local cluster of 1 worker, then 2 (single-thread processes): body-steps per second,
   the efficiency ``rate(2) / (2 rate(1))``, the ratio to the baseline, and the share of the
   workers' wall time spent running tasks (Dask's task stream; the rest is scheduling, moving
@@ -38,6 +38,7 @@ import time
 import numpy as np
 
 from rigid_rot_sim.analysis.cluster import open_client, run_local, run_sweep
+from rigid_rot_sim.analysis.sweep import choose_chunk_size
 from rigid_rot_sim.analysis.sweep_spec import parse_sweep_text
 from rigid_rot_sim.core.batch import advance_batch
 
@@ -81,6 +82,19 @@ def measure(client, spec, chunk: int) -> tuple[float, float, float]:
     return seconds, spec.n_runs * (spec.duration / spec.dts[0]) / seconds, computing / (workers * seconds)
 
 
+@contextlib.contextmanager
+def one_numba_thread():
+    """numba's parallel kernels on one thread inside the block (a long segment would use every core)."""
+    import numba
+
+    threads = numba.get_num_threads()
+    numba.set_num_threads(1)
+    try:
+        yield
+    finally:
+        numba.set_num_threads(threads)
+
+
 def raw_kernel_rate(n: int, steps: int, calls: int, repeats: int) -> tuple[float, float]:
     """Body-steps per second of advance_batch alone (rk4, one thread, N = ``n``, no torque).
 
@@ -122,11 +136,14 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--samples", type=int, default=32768)
     parser.add_argument("--duration", type=float, default=5.0, help="s of sim time per run (dt = 0.01 s)")
-    parser.add_argument("--chunk", type=int, default=4096, help="bodies per task (what choose_chunk_size picks for the slew)")
+    parser.add_argument("--chunk", default="4096",
+                        help="bodies per task (4096: what choose_chunk_size picks for the slew), or 'auto': what it "
+                             "picks for this workload on 1 worker")
     parser.add_argument("--scheduler", help="measure on this existing cluster instead of local ones")
     parser.add_argument("--repeats", type=int, default=3, help="runs of each measurement; the fastest is kept")
     args = parser.parse_args()
     spec = parse_sweep_text(SPEC.format(samples=args.samples, duration=args.duration), "scaling.yaml")
+    args.chunk = choose_chunk_size(spec, 1)[0] if args.chunk == "auto" else int(args.chunk)
     steps = spec.duration / spec.dts[0]
     body_steps = spec.n_runs * steps
     print(f"machine: {platform.processor() or platform.machine()}, {os.cpu_count()} CPUs, "
@@ -152,7 +169,8 @@ def main() -> None:
         for k in range(args.repeats):
             raw, raw_call = raw_kernel_rate(n_chunk, round(steps), calls, 1)
             start = time.perf_counter()
-            run_local(spec, chunk_size=args.chunk)
+            with one_numba_thread():  # as a worker's task runs, and as the raw kernel is measured
+                run_local(spec, chunk_size=args.chunk)
             baseline = body_steps / (time.perf_counter() - start)
             measured = {n: measure(client, spec, args.chunk) for n, client in clients.items()}
             rounds.append((raw, baseline, measured))
