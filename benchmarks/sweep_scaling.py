@@ -37,7 +37,7 @@ import time
 
 import numpy as np
 
-from rigid_rot_sim.analysis.cluster import open_client, run_local, run_sweep
+from rigid_rot_sim.analysis.cluster import one_numba_thread, open_client, run_local, run_sweep
 from rigid_rot_sim.analysis.sweep import choose_chunk_size
 from rigid_rot_sim.analysis.sweep_spec import parse_sweep_text
 from rigid_rot_sim.core.batch import advance_batch
@@ -82,35 +82,18 @@ def measure(client, spec, chunk: int) -> tuple[float, float, float]:
     return seconds, spec.n_runs * (spec.duration / spec.dts[0]) / seconds, computing / (workers * seconds)
 
 
-@contextlib.contextmanager
-def one_numba_thread():
-    """numba's parallel kernels on one thread inside the block (a long segment would use every core)."""
-    import numba
-
-    threads = numba.get_num_threads()
-    numba.set_num_threads(1)
-    try:
-        yield
-    finally:
-        numba.set_num_threads(threads)
-
-
 def raw_kernel_rate(n: int, steps: int, calls: int, repeats: int) -> tuple[float, float]:
     """Body-steps per second of advance_batch alone (rk4, one thread, N = ``n``, no torque).
 
     Returns (the whole workload: ``calls`` calls one after the other, as the sweep's chunks run,
     fastest of ``repeats``; the fastest single call).
     """
-    import numba
-
     rng = np.random.default_rng(0)
     moments = np.array([1.0, 2.0, 3.0]) * (1.0 + 0.02 * rng.standard_normal((n, 3)))
     q = np.tile([0.0, 0.0, 0.0, 1.0], (n, 1))
     omega = np.array([0.3, 1.0, 0.2]) + 1e-3 * rng.standard_normal((n, 3))
-    threads = numba.get_num_threads()
-    numba.set_num_threads(1)
-    try:
-        advance_batch("rk4", moments, q, omega, 0.01, 1, np.zeros((n, 3)))  # compiled and warm
+    with one_numba_thread():
+        advance_batch("rk4", moments, q, omega, 0.01, steps, np.zeros((n, 3)))  # compiled (the same kernel) and warm
         best_run = best_call = np.inf
         for _ in range(repeats):
             run_start = time.perf_counter()
@@ -119,8 +102,6 @@ def raw_kernel_rate(n: int, steps: int, calls: int, repeats: int) -> tuple[float
                 advance_batch("rk4", moments, q, omega, 0.01, steps, np.zeros((n, 3)))
                 best_call = min(best_call, time.perf_counter() - start)
             best_run = min(best_run, time.perf_counter() - run_start)
-    finally:
-        numba.set_num_threads(threads)
     return n * steps * calls / best_run, n * steps / best_call
 
 

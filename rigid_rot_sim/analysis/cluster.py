@@ -36,7 +36,8 @@ from tqdm import tqdm
 from rigid_rot_sim.analysis.sweep import COLUMNS, Chunk, choose_chunk_size, plan_chunks, run_chunk, run_nominal
 from rigid_rot_sim.analysis.sweep_spec import SweepSpec
 
-__all__ = ["SweepResult", "require", "open_client", "run_sweep", "map_tasks", "wants_cluster", "scheduler_address", "available_cpus"]
+__all__ = ["SweepResult", "require", "open_client", "run_sweep", "map_tasks", "wants_cluster", "scheduler_address", "available_cpus",
+           "one_numba_thread"]
 
 #: How long to wait for a scheduler to answer, and for ``workers`` workers to join, s.
 CONNECT_TIMEOUT = 30.0
@@ -201,21 +202,28 @@ def map_tasks(
     return results
 
 
-def _on_one_thread(function: Callable[..., Any], *args: Any) -> Any:
-    """``function(*args)`` with numba's parallel kernels on one thread (in this thread only).
+@contextlib.contextmanager
+def one_numba_thread() -> Iterator[None]:
+    """numba's parallel kernels on one thread inside the block (numba's setting is per thread: this one only).
 
-    The cluster runs one task per worker thread; a task's kernels fanning out over every
-    core as well (numba's default) would oversubscribe them. Parallel and serial kernels
-    give the same bits.
+    Parallel and serial kernels give the same bits; this is about sharing the cores.
     """
     import numba
 
     threads = numba.get_num_threads()
     numba.set_num_threads(1)
     try:
-        return function(*args)
+        yield
     finally:
         numba.set_num_threads(threads)
+
+
+def _on_one_thread(function: Callable[..., Any], *args: Any) -> Any:
+    """``function(*args)`` under :func:`one_numba_thread`: the cluster runs one task per worker
+    thread, and a task's kernels fanning out over every core as well (numba's default) would
+    oversubscribe them."""
+    with one_numba_thread():
+        return function(*args)
 
 
 @contextlib.contextmanager

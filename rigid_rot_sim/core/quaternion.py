@@ -176,7 +176,6 @@ def _wrap_angle(a: np.ndarray) -> np.ndarray:
     return np.pi - np.mod(np.pi - a, 2.0 * np.pi)
 
 
-
 def compose_rotations(p: Rotation, q: Rotation) -> Rotation:
     """``p * q`` ("first q, then p"), the same bits as scipy's, for arrays of rotations ~40x faster.
 
