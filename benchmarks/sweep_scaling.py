@@ -1,6 +1,6 @@
 """Sweep throughput on Dask: body-steps per second with 1 and 2 workers, task overhead, memory.
 
-    .venv/bin/python benchmarks/sweep_scaling.py [--samples 32768] [--duration 5] [--chunk 4096]
+    .venv/bin/python benchmarks/sweep_scaling.py [--samples 32768] [--duration 5] [--chunk auto]
     .venv/bin/python benchmarks/sweep_scaling.py --scheduler tcp://HOST:8786   # an existing cluster
 
 The workload is a dispersed torque-free sweep (free_tumble, rk4, dt = 0.01 s, inertia,
@@ -12,7 +12,8 @@ misalignment and rate dispersions), the same rows each time. Measured, in one ru
   of it); its fastest single call is printed beside it;
 * in this process without Dask (run_local, numba on one thread as in a worker's task): the
   baseline rate, and its share of the raw kernel's;
-* on a local cluster of 1 worker, then 2 (single-thread processes): body-steps per second,
+* on a local cluster of 1 worker, then 2 (single-thread processes; each cluster started for
+  its measurement and closed after it, as a user's sweep does): body-steps per second,
   the efficiency ``rate(2) / (2 rate(1))``, the ratio to the baseline, and the share of the
   workers' wall time spent running tasks (Dask's task stream; the rest is scheduling, moving
   results and waiting for a core);
@@ -30,7 +31,6 @@ steps are replaced by one measurement on that cluster.
 from __future__ import annotations
 
 import argparse
-import contextlib
 import os
 import platform
 import time
@@ -117,9 +117,10 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--samples", type=int, default=32768)
     parser.add_argument("--duration", type=float, default=5.0, help="s of sim time per run (dt = 0.01 s)")
-    parser.add_argument("--chunk", default="4096",
-                        help="bodies per task (4096: what choose_chunk_size picks for the slew), or 'auto': what it "
-                             "picks for this workload on 1 worker")
+    parser.add_argument("--chunk", default="auto",
+                        help="bodies per task: 'auto' (default), what choose_chunk_size picks for this workload on "
+                             "1 worker, as a sweep does; or a number (4096 is what it picks for the slew, whose runs "
+                             "are 12x longer: on this workload's short runs it measures Dask's per-task cost)")
     parser.add_argument("--scheduler", help="measure on this existing cluster instead of local ones")
     parser.add_argument("--repeats", type=int, default=3, help="runs of each measurement; the fastest is kept")
     args = parser.parse_args()
@@ -136,51 +137,53 @@ def main() -> None:
     calls = -(-spec.n_runs // n_chunk)
     run_local(parse_sweep_text(SPEC.format(samples=4, duration=0.1), "warm.yaml"), chunk_size=4)
     clusters = [(None, 1), (None, 2)] if args.scheduler is None else [(args.scheduler, None)]
-    with contextlib.ExitStack() as stack:
-        clients = {}
+    # rounds: the raw kernel, this process and each cluster one after the other, so that a
+    # slower or faster spell of the (shared, virtual) machine touches all of a round alike.
+    # Each cluster lives only for its own measurement, as a user's does: an idle cluster's
+    # heartbeats and monitors would take CPU from the one being measured.
+    rounds = []
+    overhead = 0.0
+    memory: dict[str, int] = {}
+    for k in range(args.repeats):
+        raw, raw_call = raw_kernel_rate(n_chunk, round(steps), calls, 1)
+        start = time.perf_counter()
+        with one_numba_thread():  # as a worker's task runs, and as the raw kernel is measured
+            run_local(spec, chunk_size=args.chunk)
+        baseline = body_steps / (time.perf_counter() - start)
+        measured = {}
         for scheduler, workers in clusters:
-            client = stack.enter_context(open_client(scheduler, workers))
-            n = len(client.scheduler_info(n_workers=-1)["workers"])
-            run_sweep(parse_sweep_text(SPEC.format(samples=n, duration=0.1), "warm.yaml"), client=client,
-                      chunk_size=1, progress=False)  # imports on every worker
-            clients[n] = client
-        # rounds: the raw kernel, this process and each cluster one after the other, so that a
-        # slower or faster spell of the (shared, virtual) machine touches all of a round alike
-        rounds = []
-        for k in range(args.repeats):
-            raw, raw_call = raw_kernel_rate(n_chunk, round(steps), calls, 1)
-            start = time.perf_counter()
-            with one_numba_thread():  # as a worker's task runs, and as the raw kernel is measured
-                run_local(spec, chunk_size=args.chunk)
-            baseline = body_steps / (time.perf_counter() - start)
-            measured = {n: measure(client, spec, args.chunk) for n, client in clients.items()}
-            rounds.append((raw, baseline, measured))
-            print(f"round {k + 1}: raw kernel {raw:.3g}, this process {baseline:.3g} ({baseline / raw:.0%}), "
-                  + ", ".join(f"{n} worker(s) {rate:.3g} ({rate / n / raw:.0%} per worker, tasks {busy:.0%} of the time)"
-                              for n, (_, rate, busy) in measured.items()) + " body-steps/s")
-        raw = max(r for r, _, _ in rounds)
-        baseline = max(b for _, b, _ in rounds)
-        print(f"raw batch kernel, rk4, N = {n_chunk}, {steps:.0f} steps, 1 thread, {calls} calls (the workload): "
-              f"{raw:.3g} body-steps/s (fastest round)")
-        print(f"in this process, no Dask:  {baseline:.3g} body-steps/s (fastest round; {baseline / raw:.0%} of the raw "
-              f"kernel; per round {', '.join(f'{b / r:.0%}' for r, b, _ in rounds)})")
-        rates = {}
-        for n in clients:
-            rate = max(m[n][1] for _, _, m in rounds)
-            rates[n] = rate
-            per_round = ", ".join(f"{m[n][1] / n / r:.0%}" for r, _, m in rounds)
-            print(f"{n} worker(s): {rate:.3g} body-steps/s (fastest round; {rate / baseline:.2f}x the baseline, "
-                  f"{rate / n / raw:.0%} of the raw kernel per worker; per round {per_round}"
-                  + (f"; efficiency {rate / (n * rates[1]):.0%}, per round "
-                     + ", ".join(f"{m[n][1] / (n * m[1][1]):.0%}" for _, _, m in rounds) if n > 1 and 1 in rates else "")
-                  + ")")
-        n = max(clients)
-        overhead = task_overhead(clients[n])
-        compute = args.chunk * steps / baseline
-        print(f"task overhead: {overhead * 1e3:.1f} ms per no-op task round trip; a {args.chunk}-body task "
-              f"computes {compute:.2f} s, so overhead is {overhead / compute:.2%} of it")
-        memory = clients[n].run(_rss)
-        print("memory per worker (RSS after the sweep): " + ", ".join(f"{m / 2**20:.0f} MiB" for m in memory.values()))
+            with open_client(scheduler, workers) as client:
+                n = len(client.scheduler_info(n_workers=-1)["workers"])
+                run_sweep(parse_sweep_text(SPEC.format(samples=n, duration=0.1), "warm.yaml"), client=client,
+                          chunk_size=1, progress=False)  # imports and compiled kernels loaded on every worker
+                measured[n] = measure(client, spec, args.chunk)
+                if k == args.repeats - 1 and n == max(w or n for _, w in clusters):
+                    overhead = task_overhead(client)
+                    memory = client.run(_rss)
+        rounds.append((raw, baseline, measured))
+        print(f"round {k + 1}: raw kernel {raw:.3g}, this process {baseline:.3g} ({baseline / raw:.0%}), "
+              + ", ".join(f"{n} worker(s) {rate:.3g} ({rate / n / raw:.0%} per worker, tasks {busy:.0%} of the time)"
+                          for n, (_, rate, busy) in measured.items()) + " body-steps/s")
+    raw = max(r for r, _, _ in rounds)
+    baseline = max(b for _, b, _ in rounds)
+    print(f"raw batch kernel, rk4, N = {n_chunk}, {steps:.0f} steps, 1 thread, {calls} calls (the workload): "
+          f"{raw:.3g} body-steps/s (fastest round)")
+    print(f"in this process, no Dask:  {baseline:.3g} body-steps/s (fastest round; {baseline / raw:.0%} of the raw "
+          f"kernel; per round {', '.join(f'{b / r:.0%}' for r, b, _ in rounds)})")
+    rates = {}
+    for n in rounds[0][2]:
+        rate = max(m[n][1] for _, _, m in rounds)
+        rates[n] = rate
+        per_round = ", ".join(f"{m[n][1] / n / r:.0%}" for r, _, m in rounds)
+        print(f"{n} worker(s): {rate:.3g} body-steps/s (fastest round; {rate / baseline:.2f}x the baseline, "
+              f"{rate / n / raw:.0%} of the raw kernel per worker; per round {per_round}"
+              + (f"; efficiency {rate / (n * rates[1]):.0%}, per round "
+                 + ", ".join(f"{m[n][1] / (n * m[1][1]):.0%}" for _, _, m in rounds) if n > 1 and 1 in rates else "")
+              + ")")
+    compute = args.chunk * steps / baseline
+    print(f"task overhead: {overhead * 1e3:.1f} ms per no-op task round trip; a {args.chunk}-body task "
+          f"computes {compute:.2f} s, so overhead is {overhead / compute:.2%} of it")
+    print("memory per worker (RSS after the sweep): " + ", ".join(f"{m / 2**20:.0f} MiB" for m in memory.values()))
     print(f"load average at the end: {' '.join(f'{x:.2f}' for x in os.getloadavg())}")
     # one worker on a core of its own is the per-worker rate a cluster scales out
     per_worker = rates.get(1, max(rates.values()) / max(rates))

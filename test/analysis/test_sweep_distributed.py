@@ -210,16 +210,22 @@ def _worker_settings() -> dict:
     import os
 
     import dask
+    from distributed import get_worker
 
+    worker = get_worker()
     return {
         "trim": os.environ.get("MALLOC_TRIM_THRESHOLD_"),
         "threads": os.environ.get("OMP_NUM_THREADS"),
         "profile": dask.config.get("distributed.worker.profile.enabled"),
+        "memory_watch_s": worker.memory_manager.memory_monitor_interval,
+        "system_monitor_ms": worker.periodic_callbacks["monitor"].callback_time,
     }
 
 
 def test_local_workers_keep_glibcs_malloc_and_skip_the_profiler(monkeypatch):
-    """Dask's nanny would set MALLOC_TRIM_THRESHOLD_ (page faults on every chunk-sized array) and sample stacks."""
+    """Dask's nanny would set MALLOC_TRIM_THRESHOLD_ (page faults on every chunk-sized array) and sample stacks;
+    its monitors would wake the scheduler's and the workers' event loops 5x as often; results would come
+    through the scheduler."""
     from rigid_rot_sim.analysis.cluster import open_client
 
     # a plain LocalCluster started earlier in this process (test_cluster_suites) leaves the variable in
@@ -228,4 +234,10 @@ def test_local_workers_keep_glibcs_malloc_and_skip_the_profiler(monkeypatch):
 
     with open_client(None, 1) as client:
         settings = client.submit(_worker_settings, pure=False).result()
-    assert settings == {"trim": None, "threads": "1", "profile": False}
+        (nanny,) = client.cluster.workers.values()
+        nanny_watch_s = nanny.memory_manager.memory_monitor_interval
+        scheduler_monitor_ms = client.cluster.scheduler.periodic_callbacks["monitor"].callback_time
+        direct = client.direct_to_workers
+    assert settings == {"trim": None, "threads": "1", "profile": False, "memory_watch_s": 0.5,
+                        "system_monitor_ms": 2000.0}
+    assert (nanny_watch_s, scheduler_monitor_ms, direct) == (0.5, 2000.0, True)
