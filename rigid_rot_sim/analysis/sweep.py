@@ -40,7 +40,7 @@ from rigid_rot_sim.analysis.checkpoints import CheckpointTrack, row_norms
 from rigid_rot_sim.analysis.streams import StreamDraws
 from rigid_rot_sim.analysis.sweep_spec import NORMAL_CUT_SIGMAS, Dispersion, SweepSpec
 from rigid_rot_sim.core import quaternion as quat
-from rigid_rot_sim.core.batch import advance_batch
+from rigid_rot_sim.core.batch import advance_batch, advance_batch_recording
 from rigid_rot_sim.core.dynamics import RigidBody
 from rigid_rot_sim.core.integrators.base import NonFiniteStateError
 from rigid_rot_sim.core.simulate import step_grid
@@ -345,12 +345,13 @@ def _simulate(spec: SweepSpec, bodies: _Bodies, method: str, dt: float) -> _Outc
     segments = [(int(a), int(b)) for a, b in zip(marks[:-1], marks[1:]) if b > a]
     if last > 0.0:
         segments.append((n_full, n_full + 1))  # the last, shorter step landing on the duration
-    for a, b in segments:
+    k = 0
+    cut_until = 0  # segments before this one run one call each (a joined call failed there)
+    while k < len(segments) and alive.any():
+        a, b = segments[k]
         t_a = a * dt
         partial = a == n_full
         step = last if partial else dt
-        if not alive.any():
-            break
         everyone = len(errors) == 0  # no body has failed yet: no subsets to copy
         live = slice(None) if everyone else alive
         q_body = _rows(quat.multiply, q[live], principal_from_body[live]) if world_frame else None
@@ -360,6 +361,30 @@ def _simulate(spec: SweepSpec, bodies: _Bodies, method: str, dt: float) -> _Outc
         if key is None or key != last_torque[0]:
             last_torque = (key, row_norms(torque_body) * step, _rows(quat.rotate, principal_from_body[live], torque_body))
         _, impulse_rate, torque_p = last_torque
+        # the following segments under the same torques join this one in a call that records the
+        # checkpoints' rates (a return to Python at each costs ~5 % of a short run); their torques
+        # do not depend on the state unless a schedule is in the world frame
+        joined = [(a, b)]
+        if everyone and not world_frame and not partial and k >= cut_until:
+            while k + len(joined) < len(segments):
+                a_next, b_next = segments[k + len(joined)]
+                if a_next == n_full or (dt, _body_torque(spec, bodies, a_next, dt, None).tobytes()) != key:
+                    break
+                joined.append((a_next, b_next))
+        if len(joined) > 1:
+            try:
+                q, omega, omega_at = advance_batch_recording(
+                    method, moments, q, omega, dt, [end - a for _, end in joined], torque_p, normalize_q=a == 0
+                )
+            except (NonFiniteStateError, ArithmeticError):
+                cut_until = k + len(joined)  # run them one at a time: the failing bodies fail alone
+                continue
+            for (a_j, b_j), omega_j in zip(joined, omega_at):
+                impulse += impulse_rate * (b_j - a_j)
+                if b_j in checkpoint_set:
+                    track.observe(spec.duration if b_j == n_full and last == 0.0 else b_j * dt, omega_j)
+            k += len(joined)
+            continue
         impulse[live] += impulse_rate * (b - a)
         # the first call normalises q as an integrator's set_state does; later ones continue from it
         q_new, omega_new, failed = _advance_isolated(
@@ -377,6 +402,7 @@ def _simulate(spec: SweepSpec, bodies: _Bodies, method: str, dt: float) -> _Outc
         if b in checkpoint_set or partial:
             t_b = spec.duration if partial or b == n_full and last == 0.0 else b * dt
             track.observe(t_b, omega if not errors else np.where(alive[:, None], omega, np.nan))
+        k += 1
 
     energy, momentum = invariants(omega)
     with np.errstate(divide="ignore", invalid="ignore"):

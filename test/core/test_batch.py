@@ -184,3 +184,49 @@ def test_simd_rk4_reports_the_failing_step_and_body_as_the_per_body_loop(n_steps
 def test_unknown_layout_is_refused():
     with pytest.raises(ValueError, match="layout"):
         batch.advance_batch("rk4", MOMENTS, [IDENTITY], [OMEGA0], 0.1, 1, layout="aos")
+
+
+@pytest.mark.parametrize(
+    "method, layout",
+    [("rk4", "soa"), ("rk4", "per_body"), ("implicit_midpoint", "soa"), ("splitting", "soa"),
+     ("exact_split", "soa"), ("exact", "soa")],
+)
+@pytest.mark.parametrize("n", [7, 4 * batch._SOA_CHUNK + 3])  # serial; parallel, over SIMD chunks and a partial one
+def test_recording_gives_the_bits_of_calls_cut_at_the_records(method, layout, n):
+    """One call keeping the rates at checkpoints = calls cut there, the first normalising q, the others continuing."""
+    rng = np.random.default_rng(31)
+    moments = np.sort(rng.uniform(0.5, 3.0, size=(n, 3)), axis=1)
+    omega = rng.normal(size=(n, 3))
+    q = rng.normal(size=(n, 4))  # not normalised: the first cut normalises it
+    torque = None if method == "exact" else 0.1 * rng.normal(size=(n, 3))
+    record_steps = [3, 4, 40, 120]
+    q_rec, w_rec, w_at = batch.advance_batch_recording(method, moments, q, omega, 0.02, record_steps, torque,
+                                                       layout=layout)
+    q_cut, w_cut = q, omega
+    begun = 0
+    for k, end in enumerate(record_steps):
+        q_cut, w_cut = batch.advance_batch(method, moments, q_cut, w_cut, 0.02, end - begun, torque, normalize_q=k == 0,
+                                           layout=layout)
+        assert np.array_equal(w_at[k], w_cut), k
+        begun = end
+    assert w_at.shape == (len(record_steps), n, 3)
+    assert np.array_equal(q_rec, q_cut) and np.array_equal(w_rec, w_cut)  # the run ends at the last record
+
+
+@pytest.mark.parametrize("record_steps", [[], [0, 3], [3, 3], [5, 2], [[1, 2]], [1.0, 2.0]])
+def test_recording_refuses_steps_that_are_not_increasing_positive_integers(record_steps):
+    with pytest.raises(ValueError, match="record_steps"):
+        batch.advance_batch_recording("rk4", MOMENTS, [IDENTITY], [OMEGA0], 0.1, record_steps)
+
+
+@pytest.mark.parametrize("layout", ["soa", "per_body"])
+def test_recording_reports_a_failure_as_advance_batch(layout):
+    n = 40
+    omega = np.tile([1.0, 0.1, 0.5], (n, 1))
+    omega[17] = (10.0, 1.0, 5.0)  # beyond rk4's stability limit at dt = 2: blows up
+    with pytest.raises(NonFiniteStateError) as plain:
+        batch.advance_batch("rk4", MOMENTS, np.tile(IDENTITY, (n, 1)), omega, 2.0, 50, layout=layout)
+    with pytest.raises(NonFiniteStateError) as recording:
+        batch.advance_batch_recording("rk4", MOMENTS, np.tile(IDENTITY, (n, 1)), omega, 2.0, [10, 20, 50],
+                                      layout=layout)
+    assert str(recording.value) == str(plain.value)
