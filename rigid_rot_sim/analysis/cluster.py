@@ -185,13 +185,10 @@ def map_tasks(
     from distributed import as_completed
 
     token = uuid.uuid4().hex[:12]
-    futures = {
-        client.submit(
-            _on_one_thread, function, *args, key=f"rigid-rot-{getattr(function, '__name__', 'task')}-{token}-{index}",
-            pure=False,
-        ): index
-        for index, (function, args) in enumerate(calls)
-    }
+    keys = [f"rigid-rot-{getattr(function, '__name__', 'task')}-{token}-{index}" for index, (function, _) in enumerate(calls)]
+    # one map: the scheduler gets every task in one message (a client sends one message per
+    # 10 ms, so tasks submitted one by one would reach the second worker ~10 ms late)
+    futures = {future: index for index, future in enumerate(client.map(_on_one_thread, calls, key=keys, pure=False))}
     results = [None] * len(calls)
     try:
         for future in as_completed(list(futures)):
@@ -223,10 +220,11 @@ def one_numba_thread() -> Iterator[None]:
         numba.set_num_threads(threads)
 
 
-def _on_one_thread(function: Callable[..., Any], *args: Any) -> Any:
-    """``function(*args)`` under :func:`one_numba_thread`: the cluster runs one task per worker
-    thread, and a task's kernels fanning out over every core as well (numba's default) would
-    oversubscribe them."""
+def _on_one_thread(call: tuple[Callable[..., Any], tuple[Any, ...]]) -> Any:
+    """``function(*args)`` of ``call = (function, args)`` under :func:`one_numba_thread`: the cluster
+    runs one task per worker thread, and a task's kernels fanning out over every core as well
+    (numba's default) would oversubscribe them."""
+    function, args = call
     with one_numba_thread():
         return function(*args)
 
