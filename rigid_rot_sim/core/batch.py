@@ -301,7 +301,6 @@ def _rk4_soa_serial(moments, q, omega, torque, dt, n_steps, normalize_q, failed_
                        failed_step, failure, record_steps, omega_at)
 
 
-
 def advance_batch(
     method: str,
     principal_moments: Any,
