@@ -17,6 +17,8 @@ formula. The compiled loop is cached like the single-body one (``make setup`` bu
 ``rk4`` (the sweeps' workhorse) runs by default in chunks of bodies laid out for SIMD
 (structure of arrays, the inner loops over bodies, see ``_rk4_soa_chunk``): rk4_step's
 operations in its order, so the same bits as the per-body loop (``layout="per_body"``).
+:func:`advance_batch_recording` runs several stretches in one call and keeps the rates at the
+end of each (a sweep's checkpoints), with the bits of calls cut there.
 """
 
 from __future__ import annotations
