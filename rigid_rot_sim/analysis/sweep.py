@@ -305,6 +305,11 @@ def _body_torque(spec: SweepSpec, bodies: _Bodies, k: int, dt: float, q_body: np
     return torque
 
 
+#: At most this many bytes of recorded rates (N bodies x 3 x 8 bytes per checkpoint) per kernel call:
+#: a run of many checkpoints is joined into several calls (a few calls cost no more than one).
+_RECORDED_BYTES = 8 * 2**20
+
+
 @dataclass
 class _Outcome:
     q_body: np.ndarray
@@ -347,6 +352,7 @@ def _simulate(spec: SweepSpec, bodies: _Bodies, method: str, dt: float) -> _Outc
         segments.append((n_full, n_full + 1))  # the last, shorter step landing on the duration
     k = 0
     cut_until = 0  # segments before this one run one call each (a joined call failed there)
+    max_joined = max(2, _RECORDED_BYTES // (3 * 8 * n))  # the recorded rates of a call stay small
     while k < len(segments) and alive.any():
         a, b = segments[k]
         t_a = a * dt
@@ -366,7 +372,7 @@ def _simulate(spec: SweepSpec, bodies: _Bodies, method: str, dt: float) -> _Outc
         # do not depend on the state unless a schedule is in the world frame
         joined = [(a, b)]
         if everyone and not world_frame and not partial and k >= cut_until:
-            while k + len(joined) < len(segments):
+            while k + len(joined) < len(segments) and len(joined) < max_joined:
                 a_next, b_next = segments[k + len(joined)]
                 if a_next == n_full or (dt, _body_torque(spec, bodies, a_next, dt, None).tobytes()) != key:
                     break

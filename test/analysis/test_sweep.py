@@ -65,6 +65,27 @@ def test_rows_do_not_depend_on_chunking(mixed):
         assert np.array_equal(alone[name][0], rows[name][row], equal_nan=True), name
 
 
+@pytest.mark.parametrize("text", [MIXED, SLEW, SLEW.replace("  torque_noise: {sigma: 1.0e-3, interval: 2.0}\n", "")])
+def test_rows_do_not_depend_on_how_a_run_is_cut_into_kernel_calls(text, monkeypatch):
+    """Stretches under unchanged torques run as one recording call, at most _RECORDED_BYTES of rates per call,
+    and as one call per segment after a failure: every way gives the same bits, failed runs and errors included."""
+    from rigid_rot_sim.analysis import sweep
+    from rigid_rot_sim.core.integrators.base import NonFiniteStateError
+
+    spec = parse_sweep_text(text, "cuts.yaml")
+    joined = run_local(spec, chunk_size=7)
+    monkeypatch.setattr(sweep, "_RECORDED_BYTES", 0)  # two segments per call
+    same_columns(joined, run_local(spec, chunk_size=7))
+
+    def refused(*args, **kwargs):
+        raise NonFiniteStateError("joined call refused: run the segments one at a time")
+
+    monkeypatch.setattr(sweep, "advance_batch_recording", refused)
+    same_columns(joined, run_local(spec, chunk_size=7))
+    if text is MIXED:
+        assert any(verdict == "unstable" for verdict in joined["verdict"])
+
+
 def test_a_numerically_failing_run_is_a_row_with_its_error(mixed):
     spec, rows = mixed
     assert len(rows["run"]) == spec.n_runs and list(rows["run"]) == list(range(spec.n_runs))
