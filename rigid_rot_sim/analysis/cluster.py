@@ -81,7 +81,7 @@ def scheduler_address(scheduler: str | None) -> str | None:
     return scheduler or os.environ.get("DASK_SCHEDULER_ADDRESS") or None
 
 
-#: How the local cluster's workers differ from Dask's defaults, each measured on a sweep task:
+#: How the local cluster (scheduler, nannies, workers) differs from Dask's defaults, each measured on a sweep:
 #:
 #: * glibc's own malloc trimming: Dask's nanny starts workers with ``MALLOC_TRIM_THRESHOLD_=65536``
 #:   (memory back to the OS early), which makes every chunk-sized temporary array (~100 kB) a fresh
@@ -93,11 +93,15 @@ def scheduler_address(scheduler: str | None) -> str | None:
 #: * the memory limit watched every 0.5 s instead of 0.1 s: each look is a psutil call in this
 #:   process per worker, and a worker's own; a sweep task's memory grows with its chunk, not
 #:   within 0.5 s.
+#: * the event loops' tick (a check that the loop is responsive, logged after 3 s) every 0.5 s
+#:   instead of 20 ms: 50 wake-ups a second per scheduler, nanny and worker took ~45 ms of CPU a
+#:   second in this process and ~18 in each worker while the cluster idled (7.5 and ~3 now).
 _LOCAL_WORKER_CONFIG = {
     "distributed.nanny.pre-spawn-environ.MALLOC_TRIM_THRESHOLD_": None,
     "distributed.worker.profile.enabled": False,
     "distributed.admin.system-monitor.interval": "2s",
     "distributed.worker.memory.monitor-interval": "500ms",
+    "distributed.admin.tick.interval": "500ms",
 }
 
 

@@ -219,6 +219,7 @@ def _worker_settings() -> dict:
         "profile": dask.config.get("distributed.worker.profile.enabled"),
         "memory_watch_s": worker.memory_manager.memory_monitor_interval,
         "system_monitor_ms": worker.periodic_callbacks["monitor"].callback_time,
+        "tick_ms": worker.periodic_callbacks["tick"].callback_time,
     }
 
 
@@ -236,8 +237,10 @@ def test_local_workers_keep_glibcs_malloc_and_skip_the_profiler(monkeypatch):
         settings = client.submit(_worker_settings, pure=False).result()
         (nanny,) = client.cluster.workers.values()
         nanny_watch_s = nanny.memory_manager.memory_monitor_interval
-        scheduler_monitor_ms = client.cluster.scheduler.periodic_callbacks["monitor"].callback_time
+        scheduler = client.cluster.scheduler
+        scheduler_ms = (scheduler.periodic_callbacks["monitor"].callback_time, scheduler.periodic_callbacks["tick"].callback_time)
+        nanny_tick_ms = nanny.periodic_callbacks["tick"].callback_time
         direct = client.direct_to_workers
     assert settings == {"trim": None, "threads": "1", "profile": False, "memory_watch_s": 0.5,
-                        "system_monitor_ms": 2000.0}
-    assert (nanny_watch_s, scheduler_monitor_ms, direct) == (0.5, 2000.0, True)
+                        "system_monitor_ms": 2000.0, "tick_ms": 500.0}
+    assert (nanny_watch_s, nanny_tick_ms, scheduler_ms, direct) == (0.5, 500.0, (2000.0, 500.0), True)
