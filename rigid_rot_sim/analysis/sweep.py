@@ -341,6 +341,10 @@ def _simulate(spec: SweepSpec, bodies: _Bodies, method: str, dt: float) -> _Outc
         momentum = moments * omega_p
         return 0.5 * np.einsum("ij,ij->i", momentum, omega_p), row_norms(momentum)
 
+    def time_of(step_end: int) -> float:
+        """s: the time at the end of a full step (the duration itself at the last, with no shorter step after)."""
+        return spec.duration if step_end == n_full and last == 0.0 else step_end * dt
+
     energy0, momentum0 = invariants(omega)
     track = CheckpointTrack(moments, omega)
     impulse = np.zeros(n)
@@ -372,11 +376,7 @@ def _simulate(spec: SweepSpec, bodies: _Bodies, method: str, dt: float) -> _Outc
         # do not depend on the state unless a schedule is in the world frame
         joined = [(a, b)]
         if everyone and not world_frame and not partial and k >= cut_until:
-            while k + len(joined) < len(segments) and len(joined) < max_joined:
-                a_next, b_next = segments[k + len(joined)]
-                if a_next == n_full or (dt, _body_torque(spec, bodies, a_next, dt, None).tobytes()) != key:
-                    break
-                joined.append((a_next, b_next))
+            joined = _same_torques(spec, bodies, segments[k : k + max_joined], dt, n_full, key)
         if len(joined) > 1:
             try:
                 q, omega, omega_at = advance_batch_recording(
@@ -388,7 +388,7 @@ def _simulate(spec: SweepSpec, bodies: _Bodies, method: str, dt: float) -> _Outc
             for (a_j, b_j), omega_j in zip(joined, omega_at):
                 impulse += impulse_rate * (b_j - a_j)
                 if b_j in checkpoint_set:
-                    track.observe(spec.duration if b_j == n_full and last == 0.0 else b_j * dt, omega_j)
+                    track.observe(time_of(b_j), omega_j)
             k += len(joined)
             continue
         impulse[live] += impulse_rate * (b - a)
@@ -406,7 +406,7 @@ def _simulate(spec: SweepSpec, bodies: _Bodies, method: str, dt: float) -> _Outc
                 errors[int(index[i])] = f"{message} (segment from t = {t_a:.9g} s, dt = {step:.9g} s)"
                 alive[index[i]] = False
         if b in checkpoint_set or partial:
-            t_b = spec.duration if partial or b == n_full and last == 0.0 else b * dt
+            t_b = spec.duration if partial else time_of(b)
             track.observe(t_b, omega if not errors else np.where(alive[:, None], omega, np.nan))
         k += 1
 
@@ -430,6 +430,19 @@ def _simulate(spec: SweepSpec, bodies: _Bodies, method: str, dt: float) -> _Outc
         first_flip=track.first_flip,
         nutation_range=np.where(alive, track.nutation_range(), np.nan),
     )
+
+
+def _same_torques(
+    spec: SweepSpec, bodies: _Bodies, segments: list[tuple[int, int]], dt: float, n_full: int, key: tuple[float, bytes]
+) -> list[tuple[int, int]]:
+    """The first of ``segments`` and those right after it whose torques are the first's (``key``: its step and
+    torques' bytes), full steps only; the torques must not depend on the state (no world-frame schedule)."""
+    joined = segments[:1]
+    for a, b in segments[1:]:
+        if a == n_full or (dt, _body_torque(spec, bodies, a, dt, None).tobytes()) != key:
+            break
+        joined.append((a, b))
+    return joined
 
 
 def _subset(bodies: _Bodies, mask: np.ndarray) -> _Bodies:
