@@ -375,7 +375,7 @@ def _simulate(spec: SweepSpec, bodies: _Bodies, method: str, dt: float) -> _Outc
         # checkpoints' rates (a return to Python at each costs ~5 % of a short run); their torques
         # do not depend on the state unless a schedule is in the world frame
         joined = [(a, b)]
-        if everyone and not world_frame and not partial and k >= cut_until:
+        if key is not None and not world_frame and not partial and k >= cut_until:  # key: no body has failed
             joined = _same_torques(spec, bodies, segments[k : k + max_joined], dt, n_full, key)
         if len(joined) > 1:
             try:
