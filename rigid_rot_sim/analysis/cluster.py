@@ -96,7 +96,7 @@ def scheduler_address(scheduler: str | None) -> str | None:
 #: * the event loops' tick (a check that the loop is responsive, logged after 3 s) every 0.5 s
 #:   instead of 20 ms: 50 wake-ups a second per scheduler, nanny and worker took ~45 ms of CPU a
 #:   second in this process and ~18 in each worker while the cluster idled (7.5 and ~3 now).
-_LOCAL_WORKER_CONFIG = {
+_LOCAL_CLUSTER_CONFIG = {
     "distributed.nanny.pre-spawn-environ.MALLOC_TRIM_THRESHOLD_": None,
     "distributed.worker.profile.enabled": False,
     "distributed.admin.system-monitor.interval": "2s",
@@ -128,7 +128,7 @@ def open_client(scheduler: str | None = None, workers: int | None = None) -> Ite
         return
     # the scheduler first (a Ctrl-C meanwhile is taken once it runs: a half-built cluster cannot be
     # closed, and distributed's atexit would wait 10 s for it), then the workers
-    with _sigint_deferred() as interrupted, dask.config.set(_LOCAL_WORKER_CONFIG):
+    with _sigint_deferred() as interrupted, dask.config.set(_LOCAL_CLUSTER_CONFIG):
         cluster = LocalCluster(
             n_workers=0,
             threads_per_worker=1,
@@ -142,7 +142,7 @@ def open_client(scheduler: str | None = None, workers: int | None = None) -> Ite
         if interrupted:
             raise KeyboardInterrupt
         n_workers = workers or available_cpus()
-        with dask.config.set(_LOCAL_WORKER_CONFIG):  # read as the nannies start their workers
+        with dask.config.set(_LOCAL_CLUSTER_CONFIG):  # read as the nannies start their workers
             cluster.scale(n_workers)
             client.wait_for_workers(n_workers, timeout=WORKERS_TIMEOUT)
         yield client

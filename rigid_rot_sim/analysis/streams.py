@@ -261,13 +261,9 @@ class StreamDraws:
     def each(self, seed: int, samples: np.ndarray, stream: int) -> Iterator[np.random.Generator]:
         """The generator, set to each sample's fresh stream in order of ``samples``."""
         if self._words is not None and self._flags is not None:
-            words = np.ascontiguousarray(pcg64_state_words(seed, samples, stream))
-            clear = np.zeros(2, dtype=np.uint32)
-            state_at, flags_at = self._words.ctypes.data, self._flags[2:].ctypes.data
-            row_at, clear_at = words.ctypes.data, clear.ctypes.data
-            for i in range(words.shape[0]):
-                ctypes.memmove(state_at, row_at + 32 * i, 32)  # state, inc: the row's four words
-                ctypes.memmove(flags_at, clear_at, 8)  # has_uint32, uinteger: a fresh stream's
+            rows = np.ascontiguousarray(pcg64_state_words(seed, samples, stream))
+            for row in rows:
+                _load_stream(self._words, self._flags[2:], row)
                 yield self.generator
             return
         for state, inc in pcg64_states(seed, samples, stream):

@@ -88,12 +88,13 @@ def _advance_body(b, method, moments, q, omega, torque, dt, n_steps, normalize_q
         qx, qy, qz, qw = quat.normalize((qx, qy, qz, qw))
     state = (qx, qy, qz, qw, omega[b, 0], omega[b, 1], omega[b, 2])
     n_records = record_steps.shape[0]
+    no_saves = np.empty((0, 7))
     begun = 0
     for r in range(n_records + 1):
         end = record_steps[r] if r < n_records else n_steps
         span = end - begun
         if method == _EXACT:
-            # as ExactFlow.advance(n_steps): one evaluation of the flow at n_steps * dt
+            # as ExactFlow.advance(span): one evaluation of the flow at span * dt
             done, status = span, OK
             if span > 0:
                 q_end, w_end = free_flow(body_moments, (state[0], state[1], state[2], state[3]),
@@ -107,7 +108,7 @@ def _advance_body(b, method, moments, q, omega, torque, dt, n_steps, normalize_q
                     done, status = span - 1, NON_FINITE
         else:
             state, done, status, bad = kernels.advance_steps(
-                method, 0.0, 0, dt, span, state, body_moments, body_torque, 0, np.empty((0, 7))
+                method, 0.0, 0, dt, span, state, body_moments, body_torque, 0, no_saves
             )
         if status != OK:
             failed_step[b] = begun + done + 1
