@@ -29,7 +29,14 @@ setup(
         *config_data_files(),
     ],
     python_requires=">=3.10",
-    install_requires=["setuptools", "numpy", "scipy", "pyyaml", "jsonschema>=4.0", "numba"],  # jsonschema: Draft 2020-12
+    install_requires=[
+        "setuptools",
+        "numpy",
+        "scipy",
+        "pyyaml",
+        "jsonschema>=4.0",
+        "numba",
+    ],  # jsonschema: Draft 2020-12
     # sweeps (`rigid-rot sweep`, --scheduler): no rosdep keys exist for these; pip installs them
     # viewer (`--foxglove`, `rigid-rot view`): the Foxglove live server, without ROS
     extras_require={"sweep": ["dask[distributed]", "pyarrow"], "viewer": ["foxglove-sdk"]},

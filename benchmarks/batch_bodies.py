@@ -54,8 +54,10 @@ def main() -> None:
     args = parser.parse_args()
     rng = np.random.default_rng(0)
     sizes = [n for n in (1, 10, 100, 1_000, 10_000, 100_000, 1_000_000) if n <= args.max_n]
-    print(f"# {platform.processor() or platform.machine()}, {os.cpu_count()} CPUs, numpy {np.__version__}, "
-          f"numba {numba.__version__} ({numba.get_num_threads()} threads), load average {os.getloadavg()[0]:.2f}")
+    print(
+        f"# {platform.processor() or platform.machine()}, {os.cpu_count()} CPUs, numpy {np.__version__}, "
+        f"numba {numba.__version__} ({numba.get_num_threads()} threads), load average {os.getloadavg()[0]:.2f}"
+    )
     print(f"{'N':>9} " + " ".join(f"{m + ' [body-steps/s]':>32}" for m in BATCH_METHODS))
     rk4 = 0.0
     for n in sizes:
@@ -66,8 +68,10 @@ def main() -> None:
     numba.set_num_threads(1)
     one = body_steps_per_second("rk4", sizes[-1], args.seconds, rng)
     numba.set_num_threads(threads)
-    print(f"rk4, N = {sizes[-1]}: {rk4:.3e} body-steps/s on {threads} threads, {one:.3e} on 1 thread "
-          f"({rk4 / one:.2f}x); {rk4 / OLD_NUMPY_RK4:.1f}x the numpy batch core's {OLD_NUMPY_RK4:.0e}")
+    print(
+        f"rk4, N = {sizes[-1]}: {rk4:.3e} body-steps/s on {threads} threads, {one:.3e} on 1 thread "
+        f"({rk4 / one:.2f}x); {rk4 / OLD_NUMPY_RK4:.1f}x the numpy batch core's {OLD_NUMPY_RK4:.0e}"
+    )
     # issue 21: the structure-of-arrays rk4 against the per-body loop it replaced, same run, same bodies
     n = sizes[-1]
     rates = {}
@@ -79,9 +83,12 @@ def main() -> None:
     numba.set_num_threads(threads)
     for label in (f"{threads} threads", "1 thread"):
         old, new = rates[label, "per_body"], rates[label, "soa"]
-        print(f"rk4 with attitude, N = {n}, {label}: per-body loop {old:.3e}, SIMD layout {new:.3e} body-steps/s "
-              f"({new / old:.2f}x)")
+        print(
+            f"rk4 with attitude, N = {n}, {label}: per-body loop {old:.3e}, SIMD layout {new:.3e} body-steps/s "
+            f"({new / old:.2f}x)"
+        )
     print(f"load average {' '.join(f'{v:.2f}' for v in os.getloadavg())}")
+
 
 if __name__ == "__main__":
     main()

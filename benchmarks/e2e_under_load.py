@@ -52,11 +52,22 @@ def counts(summary: str) -> dict[str, int]:
 
 def run_once(pytest_args: list[str], log_path: Path) -> tuple[int, dict[str, int], float, list[str]]:
     """One ``pytest test/e2e`` run: exit code, counts, wall seconds, names of failed tests."""
-    command = [sys.executable, "-m", "pytest", str(ROOT / "test" / "e2e"), "-q", "-rfE", "-p", "no:cacheprovider",
-               *pytest_args]
+    command = [
+        sys.executable,
+        "-m",
+        "pytest",
+        str(ROOT / "test" / "e2e"),
+        "-q",
+        "-rfE",
+        "-p",
+        "no:cacheprovider",
+        *pytest_args,
+    ]
     started = time.monotonic()
     with open(log_path, "w") as log:
-        code = subprocess.run(command, cwd=ROOT, stdout=log, stderr=subprocess.STDOUT, stdin=subprocess.DEVNULL).returncode
+        code = subprocess.run(
+            command, cwd=ROOT, stdout=log, stderr=subprocess.STDOUT, stdin=subprocess.DEVNULL
+        ).returncode
     elapsed = time.monotonic() - started
     text = log_path.read_text(errors="replace")
     lines = [line for line in text.splitlines() if line.strip()]
@@ -68,7 +79,9 @@ def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--repeats", type=int, default=5, help="runs of the e2e tests (default 5)")
     parser.add_argument("--busy", type=int, default=4, help="busy processes during the runs (default 4)")
-    parser.add_argument("--logs", type=Path, default=ROOT / "out" / "e2e_under_load", help="one pytest log per run here")
+    parser.add_argument(
+        "--logs", type=Path, default=ROOT / "out" / "e2e_under_load", help="one pytest log per run here"
+    )
     parser.add_argument("pytest_args", nargs="*", help="extra pytest arguments (after --)")
     args = parser.parse_args(argv)
     if args.repeats < 1 or args.busy < 0:
@@ -78,17 +91,22 @@ def main(argv: list[str] | None = None) -> int:
     signal.signal(signal.SIGTERM, lambda *_: (_ for _ in ()).throw(KeyboardInterrupt()))
     busy = start_busy(args.busy)
     results = []
-    print(f"e2e under load: {args.repeats} runs of pytest test/e2e, {args.busy} busy processes, "
-          f"{os.cpu_count()} CPUs, load average before {os.getloadavg()[0]:.1f}", flush=True)
+    print(
+        f"e2e under load: {args.repeats} runs of pytest test/e2e, {args.busy} busy processes, "
+        f"{os.cpu_count()} CPUs, load average before {os.getloadavg()[0]:.1f}",
+        flush=True,
+    )
     try:
         for index in range(1, args.repeats + 1):
             code, tally, elapsed, failed = run_once(args.pytest_args, args.logs / f"run_{index}.log")
             load = os.getloadavg()[0]
             results.append((code, tally, failed))
-            print(f"run {index}/{args.repeats}: exit {code}, {tally.get('passed', 0)} passed, "
-                  f"{tally.get('failed', 0) + tally.get('error', 0) + tally.get('errors', 0)} failed, "
-                  f"{elapsed:.0f} s, load average {load:.1f}" + (f"; failed: {', '.join(failed)}" if failed else ""),
-                  flush=True)
+            print(
+                f"run {index}/{args.repeats}: exit {code}, {tally.get('passed', 0)} passed, "
+                f"{tally.get('failed', 0) + tally.get('error', 0) + tally.get('errors', 0)} failed, "
+                f"{elapsed:.0f} s, load average {load:.1f}" + (f"; failed: {', '.join(failed)}" if failed else ""),
+                flush=True,
+            )
     except KeyboardInterrupt:
         print("interrupted", file=sys.stderr)
     finally:
@@ -96,8 +114,10 @@ def main(argv: list[str] | None = None) -> int:
     ok = sum(1 for code, _, _ in results if code == 0)
     tests_passed = sum(t.get("passed", 0) for _, t, _ in results)
     tests_failed = sum(t.get("failed", 0) + t.get("error", 0) + t.get("errors", 0) for _, t, _ in results)
-    print(f"summary: {ok} of {len(results)} runs passed ({len(results) - ok} failed); "
-          f"tests: {tests_passed} passed, {tests_failed} failed; logs in {args.logs}")
+    print(
+        f"summary: {ok} of {len(results)} runs passed ({len(results) - ok} failed); "
+        f"tests: {tests_passed} passed, {tests_failed} failed; logs in {args.logs}"
+    )
     return 0 if results and ok == len(results) == args.repeats else 1
 
 

@@ -8,6 +8,7 @@ more accurate than the float64 solution it checks.
 
 Run: .venv/bin/python benchmarks/exact_accuracy.py [T_SECONDS]   (default 1000)
 """
+
 import sys
 import time
 
@@ -15,7 +16,6 @@ import numpy as np
 from scipy.spatial.transform import Rotation
 
 from rigid_rot_sim.core.exact import torque_free_solution
-
 
 LD = np.longdouble
 
@@ -46,15 +46,19 @@ def taylor_reference(moments, omega0, q0, t_end, h=LD(1) / 32, order=28):
             W[k + 1] = c * np.array([p23, p31, p12], dtype=LD) / (k + 1)
             x, y, z, s = Qr[:, 0], Qr[:, 1], Qr[:, 2], Qr[:, 3]
             a, b, d = Wk[:, 0], Wk[:, 1], Wk[:, 2]
-            Q[k + 1] = LD(0.5) * np.array(
-                [
-                    np.dot(s, a) + np.dot(y, d) - np.dot(z, b),
-                    np.dot(s, b) + np.dot(z, a) - np.dot(x, d),
-                    np.dot(s, d) + np.dot(x, b) - np.dot(y, a),
-                    -np.dot(x, a) - np.dot(y, b) - np.dot(z, d),
-                ],
-                dtype=LD,
-            ) / (k + 1)
+            Q[k + 1] = (
+                LD(0.5)
+                * np.array(
+                    [
+                        np.dot(s, a) + np.dot(y, d) - np.dot(z, b),
+                        np.dot(s, b) + np.dot(z, a) - np.dot(x, d),
+                        np.dot(s, d) + np.dot(x, b) - np.dot(y, a),
+                        -np.dot(x, a) - np.dot(y, b) - np.dot(z, d),
+                    ],
+                    dtype=LD,
+                )
+                / (k + 1)
+            )
         w = powers @ W
         q = powers @ Q
     return q, w
@@ -80,7 +84,9 @@ def main() -> None:
         werr = float(np.max(np.abs(w.astype(np.longdouble) - w_ref)) / np.linalg.norm(omega0))
         qr = (q_ref / np.sqrt(np.sum(q_ref * q_ref))).astype(float)
         qerr = float(min(np.linalg.norm(q - qr), np.linalg.norm(q + qr)))
-        print(f"{str(moments):18s} {str(omega0):32s} {sol.case:17s} T={T:g} s  |dw|/|w0| = {werr:.2e}  |dq| = {qerr:.2e}  (ref {el:.1f} s)")
+        print(
+            f"{str(moments):18s} {str(omega0):32s} {sol.case:17s} T={T:g} s  |dw|/|w0| = {werr:.2e}  |dq| = {qerr:.2e}  (ref {el:.1f} s)"
+        )
 
 
 if __name__ == "__main__":

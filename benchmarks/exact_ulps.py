@@ -83,8 +83,14 @@ def measure(repeats: int) -> dict[str, float]:
 
 def _run_tree(tree: Path, repeats: int) -> dict[str, float]:
     env = dict(os.environ, PYTHONPATH=str(tree))
-    result = subprocess.run([sys.executable, __file__, "--measure", "--repeats", str(repeats)], env=env,
-                            cwd=tree, check=True, capture_output=True, text=True)
+    result = subprocess.run(
+        [sys.executable, __file__, "--measure", "--repeats", str(repeats)],
+        env=env,
+        cwd=tree,
+        check=True,
+        capture_output=True,
+        text=True,
+    )
     return json.loads(result.stdout.strip().splitlines()[-1])
 
 
@@ -101,8 +107,9 @@ def main() -> None:
     here = Path(__file__).resolve().parent.parent
     with tempfile.TemporaryDirectory() as tmp:
         base = Path(tmp) / "baseline"
-        subprocess.run(["git", "-C", str(here), "worktree", "add", "--detach", "-q", str(base), args.baseline],
-                       check=True)
+        subprocess.run(
+            ["git", "-C", str(here), "worktree", "add", "--detach", "-q", str(base), args.baseline], check=True
+        )
         try:
             old: dict[str, float] = {}
             new: dict[str, float] = {}

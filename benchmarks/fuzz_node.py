@@ -41,17 +41,17 @@ os.environ["PYTHONUNBUFFERED"] = "1"
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT / "test" / "fuzz"))
 
+import generators  # noqa: E402
 import rclpy  # noqa: E402
 from builtin_interfaces.msg import Duration  # noqa: E402
 from geometry_msgs.msg import Point, Vector3, WrenchStamped  # noqa: E402
 from rcl_interfaces.srv import SetParameters  # noqa: E402
 from rclpy.executors import SingleThreadedExecutor  # noqa: E402
 from rclpy.parameter import Parameter  # noqa: E402
-from rigid_rot_msgs.msg import RejectedCommand, RigidBodyState  # noqa: E402
-from rigid_rot_msgs.srv import ApplyTorque, ComputeInertia, SetState, Step  # noqa: E402
 from std_srvs.srv import SetBool, Trigger  # noqa: E402
 
-import generators  # noqa: E402
+from rigid_rot_msgs.msg import RejectedCommand, RigidBodyState  # noqa: E402
+from rigid_rot_msgs.srv import ApplyTorque, ComputeInertia, SetState, Step  # noqa: E402
 from rigid_rot_sim.core import limits  # noqa: E402
 from rigid_rot_sim.ros.qos import COMMAND_QOS, REJECTED_QOS, STATE_QOS  # noqa: E402
 
@@ -81,10 +81,23 @@ def signal_and_wait(process: subprocess.Popen, signum: int, timeout: float = 10.
 
 
 def finite_state(msg: RigidBodyState) -> bool:
-    values = [msg.orientation.x, msg.orientation.y, msg.orientation.z, msg.orientation.w,
-              msg.kinetic_energy, msg.potential_energy, msg.energy_drift, msg.angular_momentum_drift]
-    for name in ("angular_velocity_body", "angular_velocity_world", "angular_momentum_body",
-                 "angular_momentum_world", "torque_body"):
+    values = [
+        msg.orientation.x,
+        msg.orientation.y,
+        msg.orientation.z,
+        msg.orientation.w,
+        msg.kinetic_energy,
+        msg.potential_energy,
+        msg.energy_drift,
+        msg.angular_momentum_drift,
+    ]
+    for name in (
+        "angular_velocity_body",
+        "angular_velocity_world",
+        "angular_momentum_body",
+        "angular_momentum_world",
+        "torque_body",
+    ):
         v = getattr(msg, name)
         values += [v.x, v.y, v.z]
     return all(math.isfinite(x) for x in values)
@@ -154,22 +167,36 @@ def service_request(rng: random.Random):
     kind = rng.choice(["inertia", "set_state", "step", "apply", "reset", "pause"])
     if kind == "inertia":
         r = generators.inertia_request(rng)
-        return ComputeInertia, "compute_inertia", ComputeInertia.Request(
-            masses=[float(m) for m in r["masses"]], positions=[Point(x=p[0], y=p[1], z=p[2]) for p in r["positions"]],
-            origin=Point(x=r["origin"][0], y=r["origin"][1], z=r["origin"][2]), frame_id=r["frame_id"])
+        return (
+            ComputeInertia,
+            "compute_inertia",
+            ComputeInertia.Request(
+                masses=[float(m) for m in r["masses"]],
+                positions=[Point(x=p[0], y=p[1], z=p[2]) for p in r["positions"]],
+                origin=Point(x=r["origin"][0], y=r["origin"][1], z=r["origin"][2]),
+                frame_id=r["frame_id"],
+            ),
+        )
     if kind == "set_state":
         r = generators.set_state_request(rng)
-        request = SetState.Request(angular_velocity=Vector3(x=r["angular_velocity"][0], y=r["angular_velocity"][1],
-                                                             z=r["angular_velocity"][2]))
+        request = SetState.Request(
+            angular_velocity=Vector3(x=r["angular_velocity"][0], y=r["angular_velocity"][1], z=r["angular_velocity"][2])
+        )
         request.orientation.x, request.orientation.y, request.orientation.z, request.orientation.w = r["orientation"]
         return SetState, "set_state", request
     if kind == "step":
         return Step, "step", Step.Request(steps=generators.step_count(rng))
     if kind == "apply":
         torque = [generators.number(rng) for _ in range(3)]
-        return ApplyTorque, "apply_torque", ApplyTorque.Request(
-            torque=Vector3(x=torque[0], y=torque[1], z=torque[2]), frame_id=rng.choice(generators.FRAMES),
-            duration=Duration(sec=rng.choice([0, 1, 100]), nanosec=rng.choice([0, 1000])))
+        return (
+            ApplyTorque,
+            "apply_torque",
+            ApplyTorque.Request(
+                torque=Vector3(x=torque[0], y=torque[1], z=torque[2]),
+                frame_id=rng.choice(generators.FRAMES),
+                duration=Duration(sec=rng.choice([0, 1, 100]), nanosec=rng.choice([0, 1000])),
+            ),
+        )
     if kind == "reset":
         return Trigger, "reset", Trigger.Request()
     return SetBool, "pause", SetBool.Request(data=rng.random() < 0.5)
@@ -182,13 +209,32 @@ def parameter_request(rng: random.Random) -> SetParameters.Request:
 
 def running_node_campaign(args, rng: random.Random, log_dir: Path) -> dict:
     log_path = log_dir / "node.log"
-    command = [sys.executable, "-m", "rigid_rot_sim.ros.node", "--ros-args", "-p", f"scene:={SCENES / 'torque_driven.yaml'}",
-               "-p", "integrator:=rk4", "-p", "commands.max_torque:=0.0", "-p", "rates.state:=200.0"]
+    command = [
+        sys.executable,
+        "-m",
+        "rigid_rot_sim.ros.node",
+        "--ros-args",
+        "-p",
+        f"scene:={SCENES / 'torque_driven.yaml'}",
+        "-p",
+        "integrator:=rk4",
+        "-p",
+        "commands.max_torque:=0.0",
+        "-p",
+        "rates.state:=200.0",
+    ]
     with open(log_path, "wb") as log:
         process = subprocess.Popen(command, stdout=log, stderr=subprocess.STDOUT, stdin=subprocess.DEVNULL)
     client = Client()
-    figures = {"sent": 0, "requests": 0, "refused": 0, "parameter_sets": 0, "parameters_refused": 0, "hangs": 0,
-               "probe_max_s": 0.0}
+    figures = {
+        "sent": 0,
+        "requests": 0,
+        "refused": 0,
+        "parameter_sets": 0,
+        "parameters_refused": 0,
+        "hangs": 0,
+        "probe_max_s": 0.0,
+    }
     try:
         probe = ComputeInertia.Request(masses=[1.0, 2.0], positions=[Point(x=1.0), Point(y=1.0)])
         if client.call(ComputeInertia, "compute_inertia", probe, timeout=30.0) is None:
@@ -240,7 +286,11 @@ def running_node_campaign(args, rng: random.Random, log_dir: Path) -> dict:
     finally:
         if process.poll() is None:
             process.kill()
-        figures["states"], figures["non_finite"], figures["reported"] = client.states, client.non_finite, client.rejected
+        figures["states"], figures["non_finite"], figures["reported"] = (
+            client.states,
+            client.non_finite,
+            client.rejected,
+        )
         client.close()
     text = log_path.read_text(errors="replace")
     figures["tracebacks"] = text.count("Traceback")
@@ -250,21 +300,43 @@ def running_node_campaign(args, rng: random.Random, log_dir: Path) -> dict:
 
 
 def scene_campaign(args, rng: random.Random, work: Path) -> dict:
-    figures = {"scenes": 0, "started": 0, "refused": 0, "other_exit": 0, "tracebacks": 0, "hangs": 0,
-               "bad_error_lines": 0, "longest_error": 0}
+    figures = {
+        "scenes": 0,
+        "started": 0,
+        "refused": 0,
+        "other_exit": 0,
+        "tracebacks": 0,
+        "hangs": 0,
+        "bad_error_lines": 0,
+        "longest_error": 0,
+    }
     deadline = time.monotonic() + args.duration
     for index in range(args.scenes):
         if time.monotonic() > deadline:
             break
         path = work / f"scene_{index}.yaml"
         # one in five a shipped scene as is: the started path is exercised too
-        path.write_text(generators.mutated_scene(rng) if index % 5 else rng.choice(sorted(SCENES.glob("*.yaml"))).read_text())
-        command = [sys.executable, "-m", "rigid_rot_sim.ros.node", "--ros-args", "-p", f"scene:={path}",
-                   "-p", "duration:=0.2", "-p", "real_time_factor:=0.0"]
+        path.write_text(
+            generators.mutated_scene(rng) if index % 5 else rng.choice(sorted(SCENES.glob("*.yaml"))).read_text()
+        )
+        command = [
+            sys.executable,
+            "-m",
+            "rigid_rot_sim.ros.node",
+            "--ros-args",
+            "-p",
+            f"scene:={path}",
+            "-p",
+            "duration:=0.2",
+            "-p",
+            "real_time_factor:=0.0",
+        ]
         figures["scenes"] += 1
         try:
             # in the work directory: a mutated scene may name a relative recording path
-            done = subprocess.run(command, capture_output=True, text=True, timeout=20.0, stdin=subprocess.DEVNULL, cwd=work)
+            done = subprocess.run(
+                command, capture_output=True, text=True, timeout=20.0, stdin=subprocess.DEVNULL, cwd=work
+            )
         except subprocess.TimeoutExpired:
             figures["hangs"] += 1
             continue
@@ -282,10 +354,19 @@ def scene_campaign(args, rng: random.Random, work: Path) -> dict:
     # Ctrl-C while the largest allowed scene loads
     n = limits.MAX_POINT_MASSES
     big = work / "largest.yaml"
-    big.write_text("body:\n  point_masses:\n    masses: [" + ", ".join("1" for _ in range(n)) + "]\n    positions: ["
-                   + ", ".join(f"[{i % 7}, {i % 5}, {i % 3}]" for i in range(n)) + "]\n")
-    process = subprocess.Popen([sys.executable, "-m", "rigid_rot_sim.ros.node", "--ros-args", "-p", f"scene:={big}"],
-                               stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, stdin=subprocess.DEVNULL)
+    big.write_text(
+        "body:\n  point_masses:\n    masses: ["
+        + ", ".join("1" for _ in range(n))
+        + "]\n    positions: ["
+        + ", ".join(f"[{i % 7}, {i % 5}, {i % 3}]" for i in range(n))
+        + "]\n"
+    )
+    process = subprocess.Popen(
+        [sys.executable, "-m", "rigid_rot_sim.ros.node", "--ros-args", "-p", f"scene:={big}"],
+        stdout=subprocess.DEVNULL,
+        stderr=subprocess.PIPE,
+        stdin=subprocess.DEVNULL,
+    )
     time.sleep(1.0)
     figures["ctrl_c_during_load_s"] = signal_and_wait(process, signal.SIGINT)
     figures["hangs"] += figures["ctrl_c_during_load_s"] == math.inf
@@ -303,29 +384,44 @@ def main() -> int:
     if args.quick:
         args.duration, args.scenes = 15.0, 10
     rng = random.Random(args.seed)
-    print(f"fuzz_node: seed {args.seed}, ROS_DOMAIN_ID {os.environ['ROS_DOMAIN_ID']}, loopback only, "
-          f"load average {os.getloadavg()[0]:.2f}", flush=True)
+    print(
+        f"fuzz_node: seed {args.seed}, ROS_DOMAIN_ID {os.environ['ROS_DOMAIN_ID']}, loopback only, "
+        f"load average {os.getloadavg()[0]:.2f}",
+        flush=True,
+    )
     with tempfile.TemporaryDirectory(prefix="rigid_rot_fuzz_") as tmp:
         work = Path(tmp)
         node = running_node_campaign(args, rng, work)
         print("part 1, running node:")
-        print(f"  torque messages sent {node['sent']}, rejections reported on ~/rejected {node['reported']} "
-              "(the rest accepted, or dropped in bursts beyond torque_driven's commands.qos_depth 100)")
-        print(f"  service requests {node['requests']} (refused with a reason {node['refused']}), "
-              f"parameter sets {node['parameter_sets']} (refused {node['parameters_refused']})")
-        print(f"  ~/state messages {node['states']}, non-finite {node['non_finite']}; tracebacks {node['tracebacks']}; "
-              f"hangs {node['hangs']}; slowest liveness probe {node['probe_max_s']:.3f} s")
-        print(f"  node alive at the end {node['alive']}, RSS before {node['rss_before_kib'] / 1024:.1f} MiB, "
-              f"at 1/4 {node['rss_mid_kib'] / 1024:.1f} MiB, after {node['rss_after_kib'] / 1024:.1f} MiB "
-              f"over {node['wall_s']:.0f} s; "
-              f"SIGTERM -> exit {node['exit_code']} in {node['sigterm_s']:.2f} s")
+        print(
+            f"  torque messages sent {node['sent']}, rejections reported on ~/rejected {node['reported']} "
+            "(the rest accepted, or dropped in bursts beyond torque_driven's commands.qos_depth 100)"
+        )
+        print(
+            f"  service requests {node['requests']} (refused with a reason {node['refused']}), "
+            f"parameter sets {node['parameter_sets']} (refused {node['parameters_refused']})"
+        )
+        print(
+            f"  ~/state messages {node['states']}, non-finite {node['non_finite']}; tracebacks {node['tracebacks']}; "
+            f"hangs {node['hangs']}; slowest liveness probe {node['probe_max_s']:.3f} s"
+        )
+        print(
+            f"  node alive at the end {node['alive']}, RSS before {node['rss_before_kib'] / 1024:.1f} MiB, "
+            f"at 1/4 {node['rss_mid_kib'] / 1024:.1f} MiB, after {node['rss_after_kib'] / 1024:.1f} MiB "
+            f"over {node['wall_s']:.0f} s; "
+            f"SIGTERM -> exit {node['exit_code']} in {node['sigterm_s']:.2f} s"
+        )
         scenes = scene_campaign(args, rng, work)
         print("part 2, scene files:")
-        print(f"  scenes {scenes['scenes']}: started and finished {scenes['started']}, refused (exit 2) {scenes['refused']}, "
-              f"other exit codes {scenes['other_exit']}; tracebacks {scenes['tracebacks']}, hangs {scenes['hangs']}; "
-              f"refusals not one line <= {limits.MAX_ERROR_CHARS} chars on stderr: {scenes['bad_error_lines']} "
-              f"(longest {scenes['longest_error']} chars)")
-        print(f"  Ctrl-C while loading {limits.MAX_POINT_MASSES} point masses: exit in {scenes['ctrl_c_during_load_s']:.2f} s")
+        print(
+            f"  scenes {scenes['scenes']}: started and finished {scenes['started']}, refused (exit 2) {scenes['refused']}, "
+            f"other exit codes {scenes['other_exit']}; tracebacks {scenes['tracebacks']}, hangs {scenes['hangs']}; "
+            f"refusals not one line <= {limits.MAX_ERROR_CHARS} chars on stderr: {scenes['bad_error_lines']} "
+            f"(longest {scenes['longest_error']} chars)"
+        )
+        print(
+            f"  Ctrl-C while loading {limits.MAX_POINT_MASSES} point masses: exit in {scenes['ctrl_c_during_load_s']:.2f} s"
+        )
     bad = node["tracebacks"] + node["hangs"] + node["non_finite"] + scenes["tracebacks"] + scenes["hangs"]
     bad += scenes["bad_error_lines"] + (not node["alive"])
     print("verdict:", "PASS" if bad == 0 else f"FAIL ({bad} problems)")

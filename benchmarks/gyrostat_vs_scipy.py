@@ -35,8 +35,9 @@ def scipy_run(method: str, tol: float) -> Callable[[], np.ndarray]:
     def run() -> np.ndarray:
         with warnings.catch_warnings():
             warnings.simplefilter("ignore", UserWarning)
-            sol = solve_ivp(scipy_rhs(P5), (0.0, P5.t_end), P5.initial_vector(), method=method, rtol=tol,
-                            atol=tol * 1e-2)
+            sol = solve_ivp(
+                scipy_rhs(P5), (0.0, P5.t_end), P5.initial_vector(), method=method, rtol=tol, atol=tol * 1e-2
+            )
         return sol.y[4:7, -1]
 
     return run
@@ -50,8 +51,9 @@ def main() -> None:
     for dt in (1e-2, 1e-3):
         lines.append((f"rk4 dt={dt:g}", lambda dt=dt: P5.final_state("rk4", dt)[1]))
     for tol in (1e-8, 1e-10, 1e-12):
-        lines.append((f"dopri5 rtol={tol:g}",
-                      lambda tol=tol: P5.final_state("dopri5", P5.t_end, rtol=tol, atol=tol * 1e-2)[1]))
+        lines.append(
+            (f"dopri5 rtol={tol:g}", lambda tol=tol: P5.final_state("dopri5", P5.t_end, rtol=tol, atol=tol * 1e-2)[1])
+        )
         lines.append((f"scipy RK45 rtol={tol:g}", scipy_run("RK45", tol)))
         lines.append((f"scipy DOP853 rtol={tol:g}", scipy_run("DOP853", tol)))
     print(f"{'line':28s} {'ms':>9s} {'omega error':>12s}")

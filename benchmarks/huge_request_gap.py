@@ -93,19 +93,27 @@ def largest_gap(times: list[float], start: float, end: float) -> float:
 
 
 def measure(label: str, node_command: list[str], masses: int, requests: int, quiet: float) -> None:
-    node = subprocess.Popen(node_command + ["--ros-args", "-p", f"scene:={SCENE}", "-p", "real_time_factor:=1.0",
-                                            "-p", "rates.state:=100.0"],
-                            stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
-    sender = subprocess.Popen([sys.executable, "-c", SENDER, str(masses), str(requests)],
-                              stdin=subprocess.PIPE, stdout=subprocess.PIPE, text=True)
+    node = subprocess.Popen(
+        node_command
+        + ["--ros-args", "-p", f"scene:={SCENE}", "-p", "real_time_factor:=1.0", "-p", "rates.state:=100.0"],
+        stdout=subprocess.DEVNULL,
+        stderr=subprocess.DEVNULL,
+    )
+    sender = subprocess.Popen(
+        [sys.executable, "-c", SENDER, str(masses), str(requests)],
+        stdin=subprocess.PIPE,
+        stdout=subprocess.PIPE,
+        text=True,
+    )
     context = rclpy.Context()
     rclpy.init(context=context)
     listener = rclpy.create_node("huge_request_listener", context=context)
     executor = SingleThreadedExecutor(context=context)
     executor.add_node(listener)
     arrivals: list[float] = []
-    listener.create_subscription(RigidBodyState, f"{NODE}/state", lambda msg: arrivals.append(time.monotonic()),
-                                 STATE_QOS)
+    listener.create_subscription(
+        RigidBodyState, f"{NODE}/state", lambda msg: arrivals.append(time.monotonic()), STATE_QOS
+    )
     try:
         deadline = time.monotonic() + 60.0
         while len(arrivals) < 50 and time.monotonic() < deadline:
@@ -126,9 +134,11 @@ def measure(label: str, node_command: list[str], masses: int, requests: int, qui
         while time.monotonic() < busy_end + 1.0:  # the stream after the last reply
             executor.spin_once(timeout_sec=0.01)
         replies = [line.strip() for line in lines if line.startswith("REPLY")]
-        print(f"{label}: largest ~/state gap: quiet {largest_gap(arrivals, quiet_start, busy_start) * 1e3:.0f} ms, "
-              f"while serving {largest_gap(arrivals, busy_start, busy_end + 1.0) * 1e3:.0f} ms; "
-              f"node peak RSS {peak_rss_mib(node.pid):.0f} MiB; {len(replies)} of {requests} replies")
+        print(
+            f"{label}: largest ~/state gap: quiet {largest_gap(arrivals, quiet_start, busy_start) * 1e3:.0f} ms, "
+            f"while serving {largest_gap(arrivals, busy_start, busy_end + 1.0) * 1e3:.0f} ms; "
+            f"node peak RSS {peak_rss_mib(node.pid):.0f} MiB; {len(replies)} of {requests} replies"
+        )
         for line in replies:
             _, seconds, success, message = line.split(" ", 3)
             print(f"    round trip {float(seconds):.2f} s, success {success}: {message}")
@@ -148,10 +158,20 @@ def main() -> int:
     parser.add_argument("--quiet", type=float, default=3.0, help="s of baseline stream before the requests")
     args = parser.parse_args()
     print(f"load average {open('/proc/loadavg').read().split()[:3]}, {args.masses} masses x {args.requests}")
-    measure("SingleThreadedExecutor (baseline)", [sys.executable, "-c", SINGLE_THREADED_NODE],
-            args.masses, args.requests, args.quiet)
-    measure("node main (MultiThreadedExecutor)", [sys.executable, "-m", "rigid_rot_sim.ros.node"],
-            args.masses, args.requests, args.quiet)
+    measure(
+        "SingleThreadedExecutor (baseline)",
+        [sys.executable, "-c", SINGLE_THREADED_NODE],
+        args.masses,
+        args.requests,
+        args.quiet,
+    )
+    measure(
+        "node main (MultiThreadedExecutor)",
+        [sys.executable, "-m", "rigid_rot_sim.ros.node"],
+        args.masses,
+        args.requests,
+        args.quiet,
+    )
     return 0
 
 

@@ -76,8 +76,14 @@ def interpreted_per_step(name, options, torque, steps, repeats):
     state = tuple(integrator.q.tolist() + integrator.omega.tolist())
     data = torque_data(torque)
     empty = np.empty((0, 7))
-    return best_of(repeats, lambda: kernels.advance_steps(
-        method, 0.0, 0, DT, steps, state, tuple(MOMENTS.tolist()), data, 0, empty)) / steps * 1e9
+    return (
+        best_of(
+            repeats,
+            lambda: kernels.advance_steps(method, 0.0, 0, DT, steps, state, tuple(MOMENTS.tolist()), data, 0, empty),
+        )
+        / steps
+        * 1e9
+    )
 
 
 def scipy_per_step(solver_class, steps, repeats):
@@ -86,15 +92,20 @@ def scipy_per_step(solver_class, steps, repeats):
 
     def rhs(t, y):
         qx, qy, qz, qw, w1, w2, w3 = y.tolist()
-        return np.array([
-            0.5 * (qw * w1 + qy * w3 - qz * w2), 0.5 * (qw * w2 + qz * w1 - qx * w3),
-            0.5 * (qw * w3 + qx * w2 - qy * w1), -0.5 * (qx * w1 + qy * w2 + qz * w3),
-            *euler_rhs_components(i1, i2, i3, w1, w2, w3, 0.0, 0.0, 0.0),
-        ])
+        return np.array(
+            [
+                0.5 * (qw * w1 + qy * w3 - qz * w2),
+                0.5 * (qw * w2 + qz * w1 - qx * w3),
+                0.5 * (qw * w3 + qx * w2 - qy * w1),
+                -0.5 * (qx * w1 + qy * w2 + qz * w3),
+                *euler_rhs_components(i1, i2, i3, w1, w2, w3, 0.0, 0.0, 0.0),
+            ]
+        )
 
     def run():
-        solver = solver_class(rhs, 0.0, np.r_[0.0, 0.0, 0.0, 1.0, OMEGA0], math.inf, rtol=1e-10, atol=1e-12,
-                              max_step=DT)
+        solver = solver_class(
+            rhs, 0.0, np.r_[0.0, 0.0, 0.0, 1.0, OMEGA0], math.inf, rtol=1e-10, atol=1e-12, max_step=DT
+        )
         for _ in range(steps):
             solver.step()
 
@@ -110,8 +121,10 @@ def main() -> None:
     torques = {"free": None}
     if args.torque:
         torques.update(constant=ConstantTorque(np.array([0.1, -0.05, 0.02])), general=general_torque)
-    print(f"ns/step, dt = {DT} s, {args.steps} steps, best of {args.repeats}; "
-          f"load average {os.getloadavg()[0]:.2f} on {os.cpu_count()} CPUs (shared: compare ratios)")
+    print(
+        f"ns/step, dt = {DT} s, {args.steps} steps, best of {args.repeats}; "
+        f"load average {os.getloadavg()[0]:.2f} on {os.cpu_count()} CPUs (shared: compare ratios)"
+    )
     print(f"{'method':24s}{'torque':>9s}{'advance':>11s}{'step':>11s}{'interpreted':>13s}{'speed-up':>10s}")
     slow_steps = max(200, args.steps // 20)  # the interpreted path and scipy are ~100x slower
     for name in METHODS:

@@ -76,7 +76,13 @@ def float_rhs(torque):
     def rhs(t, y):
         qx, qy, qz, qw, w1, w2, w3 = y.tolist()
         dq = multiply((qx, qy, qz, qw), (w1, w2, w3, 0.0))
-        return [0.5 * dq[0], 0.5 * dq[1], 0.5 * dq[2], 0.5 * dq[3], *euler_rhs_components(i1, i2, i3, w1, w2, w3, n1, n2, n3)]
+        return [
+            0.5 * dq[0],
+            0.5 * dq[1],
+            0.5 * dq[2],
+            0.5 * dq[3],
+            *euler_rhs_components(i1, i2, i3, w1, w2, w3, n1, n2, n3),
+        ]
 
     return rhs
 
@@ -133,7 +139,9 @@ def main() -> None:
         seconds, sol = best_time(run_scipy, repeats)
         y = sol.y[:, -1]
         e_omega, e_att = errors(y[:4] / np.linalg.norm(y[:4]), y[4:], q_ref, omega_ref)
-        print(f"{'scipy solve_ivp':18s}{f'DOP853 rtol={rtol:g}':22s}{'':>9s}{seconds:14.4f}{e_omega:12.2e}{e_att:11.2e}")
+        print(
+            f"{'scipy solve_ivp':18s}{f'DOP853 rtol={rtol:g}':22s}{'':>9s}{seconds:14.4f}{e_omega:12.2e}{e_att:11.2e}"
+        )
 
 
 if __name__ == "__main__":

@@ -103,19 +103,47 @@ def lockstep_turns(node, turns: int) -> tuple[float, int]:
     """Turns per second of node + shipped controller (two processes); (turns/s, turns timed)."""
     bindir = os.path.dirname(sys.executable)
     duration = turns * PERIOD
-    controller = subprocess.Popen([os.path.join(bindir, "rigid-rot-controller"), "--ros-args", "--log-level", "warn",
-                                   "-p", "target:=[0.0, 0.0, 0.5, 0.8660254037844386]"])
-    sim = subprocess.Popen([os.path.join(bindir, "rigid_rot_sim_node"), "--ros-args", "--log-level", "warn",
-                            "-p", "scene:=closed_loop_lockstep", "-p", f"duration:={duration!r}",
-                            "-p", "start_paused:=true"])
+    controller = subprocess.Popen(
+        [
+            os.path.join(bindir, "rigid-rot-controller"),
+            "--ros-args",
+            "--log-level",
+            "warn",
+            "-p",
+            "target:=[0.0, 0.0, 0.5, 0.8660254037844386]",
+        ]
+    )
+    sim = subprocess.Popen(
+        [
+            os.path.join(bindir, "rigid_rot_sim_node"),
+            "--ros-args",
+            "--log-level",
+            "warn",
+            "-p",
+            "scene:=closed_loop_lockstep",
+            "-p",
+            f"duration:={duration!r}",
+            "-p",
+            "start_paused:=true",
+        ]
+    )
     try:
         received: list[tuple[int, float]] = []
         node.create_subscription(
-            RigidBodyState, "/rigid_rot_sim/state",
+            RigidBodyState,
+            "/rigid_rot_sim/state",
             lambda m: received.append((m.header.stamp.sec * 10**9 + m.header.stamp.nanosec, time.perf_counter())),
-            QoSProfile(depth=1000, reliability=ReliabilityPolicy.RELIABLE))
-        wait(node, lambda: node.count_subscribers("/rigid_rot_sim/state") >= 2
-             and node.count_publishers("/rigid_rot_sim/torque") >= 1, 60, "the node and the controller")
+            QoSProfile(depth=1000, reliability=ReliabilityPolicy.RELIABLE),
+        )
+        wait(
+            node,
+            lambda: (
+                node.count_subscribers("/rigid_rot_sim/state") >= 2
+                and node.count_publishers("/rigid_rot_sim/torque") >= 1
+            ),
+            60,
+            "the node and the controller",
+        )
         client = node.create_client(SetBool, "/rigid_rot_sim/pause")
         wait(node, client.service_is_ready, 60, "~/pause")
         future = client.call_async(SetBool.Request(data=False))
@@ -149,8 +177,10 @@ def main() -> int:
         rclpy.try_shutdown()
     with open("/proc/loadavg") as f:
         load = f.read().split()[:3]
-    print(f"bare rclpy round trip (this process <-> echo process): {floor:8.0f} round trips/s (the floor; "
-          f"{before:.0f} before, {after:.0f} after)")
+    print(
+        f"bare rclpy round trip (this process <-> echo process): {floor:8.0f} round trips/s (the floor; "
+        f"{before:.0f} before, {after:.0f} after)"
+    )
     print(f"lockstep, node + rigid-rot-controller over DDS:       {rate:8.0f} turns/s over {timed} turns")
     print(f"  real-time multiple of a 50 Hz controller:            {rate * PERIOD:8.1f}x")
     print(f"  ratio to the bare round trip:                        {rate / floor:8.2f} (aim >= 0.5)")

@@ -40,8 +40,17 @@ from rclpy.parameter import Parameter  # noqa: E402
 ROOT = Path(__file__).resolve().parents[1]
 SCENES = ROOT / "config" / "scenes"
 # Part 1 figures before the compiled kernels (README, load average ~4): steps/s per method.
-OLD_STEPS_PER_SECOND = {"exact": 41e3, "exact_split": 11e3, "taylor": 25e3, "rk4": 34e3, "lie_rk4": 41e3,
-                        "splitting": 38e3, "implicit_midpoint": 35e3, "dop853": 23e3, "euler": 40e3}
+OLD_STEPS_PER_SECOND = {
+    "exact": 41e3,
+    "exact_split": 11e3,
+    "taylor": 25e3,
+    "rk4": 34e3,
+    "lie_rk4": 41e3,
+    "splitting": 38e3,
+    "implicit_midpoint": 35e3,
+    "dop853": 23e3,
+    "euler": 40e3,
+}
 METHODS_FREE = ["exact", "exact_split", "taylor", "rk4", "lie_rk4", "splitting", "implicit_midpoint", "dop853", "euler"]
 
 
@@ -51,14 +60,19 @@ def make_node(scene: str, method: str, **params: float):
 
     context = rclpy.Context()
     rclpy.init(context=context, args=["--ros-args", "--log-level", "warn"])
-    overrides = [Parameter("scene", value=str(SCENES / f"{scene}.yaml")), Parameter("integrator", value=method),
-                 Parameter("dt", value=0.001)]
+    overrides = [
+        Parameter("scene", value=str(SCENES / f"{scene}.yaml")),
+        Parameter("integrator", value=method),
+        Parameter("dt", value=0.001),
+    ]
     overrides += [Parameter(name, value=value) for name, value in params.items()]
     return context, RigidRotSimNode(context=context, parameter_overrides=overrides)
 
 
 def steps_per_second(method: str, seconds: float) -> tuple[float, int]:
-    rates = {f"rates.{name}": 100.0 for name in ("state", "orientation", "angular_velocity", "angular_momentum", "clock")}
+    rates = {
+        f"rates.{name}": 100.0 for name in ("state", "orientation", "angular_velocity", "angular_momentum", "clock")
+    }
     context, node = make_node("free_tumble", method, real_time_factor=0.0, **rates)
     executor = SingleThreadedExecutor(context=context)
     executor.add_node(node)
@@ -78,8 +92,8 @@ def steps_per_second(method: str, seconds: float) -> tuple[float, int]:
 
 def physics_steps_per_second(method: str, seconds: float) -> float:
     """Steps per wall second of the free_tumble scene's Simulator alone, 10 steps a call."""
-    from rigid_rot_sim.scene.scene import load_scene
     from rigid_rot_sim.run.simulator import Simulator
+    from rigid_rot_sim.scene.scene import load_scene
 
     sim = Simulator(load_scene(SCENES / "free_tumble.yaml"), method=method, dt=0.001)
     sim.advance(10)
@@ -154,11 +168,15 @@ def command_latency(n_commands: int, method: str) -> None:
         node.destroy_node()
         rclpy.shutdown(context=context)
     lat = np.array(latencies) * 1e3
-    print(f"  integrator {method}: {len(lat)}/{n_commands} commands reflected in ~/state; "
-          f"{steps / wall:.0f} steps per wall second (target 1000)")
+    print(
+        f"  integrator {method}: {len(lat)}/{n_commands} commands reflected in ~/state; "
+        f"{steps / wall:.0f} steps per wall second (target 1000)"
+    )
     if len(lat):
-        print(f"  latency command arrival -> first ~/state reflecting it: p50 {np.percentile(lat, 50):.2f} ms, "
-              f"p99 {np.percentile(lat, 99):.2f} ms, max {lat.max():.2f} ms")
+        print(
+            f"  latency command arrival -> first ~/state reflecting it: p50 {np.percentile(lat, 50):.2f} ms, "
+            f"p99 {np.percentile(lat, 99):.2f} ms, max {lat.max():.2f} ms"
+        )
     print(f"  node CPU use: {100 * cpu:.0f} % of one core (1 kHz physics, ~/state at 1 kHz + 4 outputs at 100 Hz)")
 
 
@@ -168,18 +186,22 @@ def main() -> None:
     parser.add_argument("--latency-integrator", default="rk4", help="integrator for part 2 (default rk4)")
     args = parser.parse_args()
     seconds = 0.5 if args.quick else 2.0
-    print(f"python {sys.version.split()[0]}, numpy {np.__version__}, cpus {os.cpu_count()}, "
-          f"load average {os.getloadavg()[0]:.2f} (other processes share the cores)")
+    print(
+        f"python {sys.version.split()[0]}, numpy {np.__version__}, cpus {os.cpu_count()}, "
+        f"load average {os.getloadavg()[0]:.2f} (other processes share the cores)"
+    )
     print("part 1: real-time factor 0, dt 1 ms, 5 outputs at 100 Hz (sim time), free_tumble")
     print(f"  {'method':18s} {'node':>16s} {'physics alone':>22s}   split of the node's time per step")
     for method in METHODS_FREE:
         rate, steps = steps_per_second(method, seconds)
         physics = physics_steps_per_second(method, seconds / 2)
         per_step, physics_per_step = 1e6 / rate, 1e6 / physics
-        print(f"  {method:18s} {rate:10.0f} steps/s {physics:12.0f} steps/s   "
-              f"{per_step:6.2f} us = physics {physics_per_step:5.2f} us + rest {per_step - physics_per_step:5.2f} us "
-              f"({steps} steps; {rate / OLD_STEPS_PER_SECOND[method]:.1f}x the old "
-              f"{OLD_STEPS_PER_SECOND[method] / 1e3:.0f}k)")
+        print(
+            f"  {method:18s} {rate:10.0f} steps/s {physics:12.0f} steps/s   "
+            f"{per_step:6.2f} us = physics {physics_per_step:5.2f} us + rest {per_step - physics_per_step:5.2f} us "
+            f"({steps} steps; {rate / OLD_STEPS_PER_SECOND[method]:.1f}x the old "
+            f"{OLD_STEPS_PER_SECOND[method] / 1e3:.0f}k)"
+        )
     print("part 2: real-time factor 1, 1 kHz physics, torque_driven, commands at 20 Hz")
     command_latency(40 if args.quick else 200, args.latency_integrator)
 

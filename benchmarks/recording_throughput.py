@@ -30,13 +30,13 @@ import time
 from pathlib import Path
 
 from rclpy.serialization import serialize_message
-from rigid_rot_msgs.msg import RigidBodyState
 
+from rigid_rot_msgs.msg import RigidBodyState
 from rigid_rot_sim import conversions
-from rigid_rot_sim.scene.scene import load_scene
-from rigid_rot_sim.run.simulator import Simulator
 from rigid_rot_sim.recording.session import RunRecorder
 from rigid_rot_sim.recording.writer import Recorder
+from rigid_rot_sim.run.simulator import Simulator
+from rigid_rot_sim.scene.scene import load_scene
 
 SCENE = Path(__file__).resolve().parents[1] / "config" / "scenes" / "free_tumble.yaml"
 
@@ -74,10 +74,18 @@ def writer_throughput(n: int) -> None:
                 recorder.write_message("/rigid_rot_sim/state", state, i)
         return n, n * len(raw)
 
-    tf_fields = {"transforms": [{"header": {"stamp": {"sec": 1, "nanosec": 2}, "frame_id": "world"},
-                                 "child_frame_id": "body",
-                                 "transform": {"translation": {"x": 0.0, "y": 0.0, "z": 0.0},
-                                               "rotation": {"x": 0.0, "y": 0.0, "z": 0.0, "w": 1.0}}}]}
+    tf_fields = {
+        "transforms": [
+            {
+                "header": {"stamp": {"sec": 1, "nanosec": 2}, "frame_id": "world"},
+                "child_frame_id": "body",
+                "transform": {
+                    "translation": {"x": 0.0, "y": 0.0, "z": 0.0},
+                    "rotation": {"x": 0.0, "y": 0.0, "z": 0.0, "w": 1.0},
+                },
+            }
+        ]
+    }
 
     def tf_dynamic(path: Path) -> tuple[int, int]:
         m = n // 5
@@ -108,7 +116,10 @@ def loop_rate(steps: int, record: bool, publish_every: int) -> float:
             run = None
             if record:
                 run = RunRecorder(
-                    Path(tmp) / "loop.mcap", scene_text=SCENE.read_text(), scene_file=str(SCENE), parameters={},
+                    Path(tmp) / "loop.mcap",
+                    scene_text=SCENE.read_text(),
+                    scene_file=str(SCENE),
+                    parameters={},
                     integrator={"method": sim.method, "dt": sim.dt, "options": sim.options},
                     events_topic="/rigid_rot_sim/sim_events",
                 )
@@ -148,8 +159,12 @@ def node_rate(sim_seconds: float, record: Path | None) -> float:
     scene = SCENE.with_name("torque_driven.yaml")
     context = rclpy.Context()
     rclpy.init(context=context, domain_id=(os.getpid() % 100) + 1)
-    overrides = [Parameter("scene", value=str(scene)), Parameter("integrator", value="rk4"),
-                 Parameter("real_time_factor", value=0.0), Parameter("duration", value=float(sim_seconds))]
+    overrides = [
+        Parameter("scene", value=str(scene)),
+        Parameter("integrator", value="rk4"),
+        Parameter("real_time_factor", value=0.0),
+        Parameter("duration", value=float(sim_seconds)),
+    ]
     if record is not None:
         overrides.append(Parameter("record_path", value=str(record)))
     node = RigidRotSimNode(context=context, parameter_overrides=overrides)
@@ -180,8 +195,10 @@ def main() -> None:
         off = loop_rate(args.steps, record=False, publish_every=every)
         on = loop_rate(args.steps, record=True, publish_every=every)
         print(f"   {label:<28} {off:>14,.0f} {on:>14,.0f} {(off / on - 1.0) * 100:>8.0f}%")
-    print(f"3. The node (torque_driven, rk4 at 1 kHz, rtf 0, outputs at 100 Hz, {args.sim_seconds:g} s of sim time; "
-          "best of 3, interleaved)")
+    print(
+        f"3. The node (torque_driven, rk4 at 1 kHz, rtf 0, outputs at 100 Hz, {args.sim_seconds:g} s of sim time; "
+        "best of 3, interleaved)"
+    )
     offs, ons = [], []
     with tempfile.TemporaryDirectory() as tmp:
         for i in range(3):  # interleaved, so that a change in machine load hits both alike

@@ -71,13 +71,13 @@ def fixed_cost(repeats: int) -> None:
         for label, torque in (("free", None), ("constant torque", TORQUE)):
             if method == "exact" and torque is not None:
                 continue  # the exact flow is torque-free
-            cases[f"simulate {method:6s} {label}"] = (
-                lambda m=method, n=torque: simulate(MOMENTS, OMEGA0, 0.01, 0.01, m, torque=n)
+            cases[f"simulate {method:6s} {label}"] = lambda m=method, n=torque: simulate(
+                MOMENTS, OMEGA0, 0.01, 0.01, m, torque=n
             )
     for label, torque in (("free", (0.0, 0.0, 0.0)), ("constant torque", TORQUE)):
         rhs = scipy_rhs(torque)
-        cases[f"scipy solve_ivp RK45 {label}"] = (
-            lambda rhs=rhs: solve_ivp(rhs, (0.0, 0.01), list(OMEGA0 + Q0), first_step=0.01, rtol=1e-3)
+        cases[f"scipy solve_ivp RK45 {label}"] = lambda rhs=rhs: solve_ivp(
+            rhs, (0.0, 0.01), list(OMEGA0 + Q0), first_step=0.01, rtol=1e-3
         )
     # many short batches: on a shared machine the best of them is the nearest to the uncontended cost
     best = interleaved(cases, 10 * repeats, calls=20)
@@ -100,9 +100,9 @@ def torque_driven(repeats: int) -> None:
     print(f"   reference DOP853 rtol=atol=1e-14; Radau rtol=1e-13 differs by {np.max(np.abs(reference - second)):.1e}")
     cases: dict[str, Callable[[], np.ndarray]] = {}
     for tol in (1e-9, 1e-10, 1e-11, 1e-12, 1e-13):
-        cases[f"simulate taylor tol={tol:.0e}"] = (
-            lambda tol=tol: simulate(MOMENTS, OMEGA0, T_END, T_END, "taylor", torque=TORQUE, tol=tol).omega[-1]
-        )
+        cases[f"simulate taylor tol={tol:.0e}"] = lambda tol=tol: simulate(
+            MOMENTS, OMEGA0, T_END, T_END, "taylor", torque=TORQUE, tol=tol
+        ).omega[-1]
     for rtol in (1e-9, 1e-10, 3e-11, 1e-11, 3e-12, 1e-12):
         cases[f"scipy DOP853 rtol={rtol:.0e}"] = lambda rtol=rtol: scipy_run("DOP853", rtol)
     for rtol in (1e-9, 1e-10, 3e-11, 1e-11):

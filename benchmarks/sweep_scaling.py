@@ -84,7 +84,9 @@ def measure(client, spec, chunk: int) -> tuple[float, float, float]:
         run_sweep(spec, client=client, chunk_size=chunk, progress=False)
         seconds = time.perf_counter() - start
     workers = len(client.scheduler_info(n_workers=-1)["workers"])
-    computing = sum(s["stop"] - s["start"] for task in stream.data for s in task["startstops"] if s["action"] == "compute")
+    computing = sum(
+        s["stop"] - s["start"] for task in stream.data for s in task["startstops"] if s["action"] == "compute"
+    )
     return seconds, spec.n_runs * (spec.duration / spec.dts[0]) / seconds, computing / (workers * seconds)
 
 
@@ -135,28 +137,43 @@ def task_overhead(client, n: int = 200) -> float:
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    parser.add_argument("--samples", type=int, default=131072,
-                        help="runs (131072: a sweep of ~1.6 s on one worker; a sweep through Dask has ~30 ms of "
-                             "fixed latency here, which a much shorter one measures as much as its rate)")
+    parser.add_argument(
+        "--samples",
+        type=int,
+        default=131072,
+        help="runs (131072: a sweep of ~1.6 s on one worker; a sweep through Dask has ~30 ms of "
+        "fixed latency here, which a much shorter one measures as much as its rate)",
+    )
     parser.add_argument("--duration", type=float, default=5.0, help="s of sim time per run (dt = 0.01 s)")
-    parser.add_argument("--chunk", default="auto",
-                        help="bodies per task: 'auto' (default), what choose_chunk_size picks for this workload on "
-                             "1 worker, as a sweep does; or a number (4096 is what it picks for the slew, whose runs "
-                             "are 12x longer: on this workload's short runs it measures Dask's per-task cost)")
+    parser.add_argument(
+        "--chunk",
+        default="auto",
+        help="bodies per task: 'auto' (default), what choose_chunk_size picks for this workload on "
+        "1 worker, as a sweep does; or a number (4096 is what it picks for the slew, whose runs "
+        "are 12x longer: on this workload's short runs it measures Dask's per-task cost)",
+    )
     parser.add_argument("--scheduler", help="measure on this existing cluster instead of local ones")
     parser.add_argument("--repeats", type=int, default=3, help="rounds (each printed)")
-    parser.add_argument("--best-of", type=int, default=2,
-                        help="runs of each measurement in a round, the fastest kept (a slow spell of the machine "
-                             "then has to last a whole measurement to move a ratio)")
+    parser.add_argument(
+        "--best-of",
+        type=int,
+        default=2,
+        help="runs of each measurement in a round, the fastest kept (a slow spell of the machine "
+        "then has to last a whole measurement to move a ratio)",
+    )
     args = parser.parse_args()
     spec = parse_sweep_text(SPEC.format(samples=args.samples, duration=args.duration), "scaling.yaml")
     args.chunk = choose_chunk_size(spec, 1)[0] if args.chunk == "auto" else int(args.chunk)
     steps = spec.duration / spec.dts[0]
     body_steps = spec.n_runs * steps
-    print(f"machine: {platform.processor() or platform.machine()}, {os.cpu_count()} CPUs, "
-          f"load average {' '.join(f'{x:.2f}' for x in os.getloadavg())}")
-    print(f"workload: {spec.n_runs} runs x {steps:.0f} rk4 steps = {body_steps:.3g} body-steps, "
-          f"{args.chunk} bodies per task ({-(-spec.n_runs // args.chunk)} tasks)")
+    print(
+        f"machine: {platform.processor() or platform.machine()}, {os.cpu_count()} CPUs, "
+        f"load average {' '.join(f'{x:.2f}' for x in os.getloadavg())}"
+    )
+    print(
+        f"workload: {spec.n_runs} runs x {steps:.0f} rk4 steps = {body_steps:.3g} body-steps, "
+        f"{args.chunk} bodies per task ({-(-spec.n_runs // args.chunk)} tasks)"
+    )
 
     n_chunk = min(args.chunk, spec.n_runs)
     calls = -(-spec.n_runs // n_chunk)
@@ -192,46 +209,64 @@ def main() -> None:
                 # once untimed: imports and compiled kernels loaded on every worker, and its memory
                 # allocator at the workload's sizes (a long sweep's first task pays this once)
                 run_sweep(spec, client=client, chunk_size=args.chunk, progress=False)
-                measured[n] = max((measure(client, spec, args.chunk) for _ in range(args.best_of)),
-                                  key=lambda m: m[1])
+                measured[n] = max((measure(client, spec, args.chunk) for _ in range(args.best_of)), key=lambda m: m[1])
                 if k == args.repeats - 1 and n == max(w or n for _, w in clusters):
                     overhead = task_overhead(client)
                     memory = client.run(_rss)
         rounds.append((raw, baseline, measured))
-        print(f"round {k + 1}: raw kernel {raw:.3g} (in 2 processes at once {pair / raw:.0%} each), "
-              f"this process {baseline:.3g} ({baseline / raw:.0%}), "
-              + ", ".join(f"{n} worker(s) {rate:.3g} ({rate / n / raw:.0%} per worker, tasks {busy:.0%} of the time)"
-                          for n, (_, rate, busy) in measured.items()) + " body-steps/s")
+        print(
+            f"round {k + 1}: raw kernel {raw:.3g} (in 2 processes at once {pair / raw:.0%} each), "
+            f"this process {baseline:.3g} ({baseline / raw:.0%}), "
+            + ", ".join(
+                f"{n} worker(s) {rate:.3g} ({rate / n / raw:.0%} per worker, tasks {busy:.0%} of the time)"
+                for n, (_, rate, busy) in measured.items()
+            )
+            + " body-steps/s"
+        )
     pool.shutdown()
     raw = max(r for r, _, _ in rounds)
     baseline = max(b for _, b, _ in rounds)
-    print(f"raw batch kernel, rk4, N = {n_chunk}, {steps:.0f} steps, 1 thread, {calls} calls (the workload): "
-          f"{raw:.3g} body-steps/s (fastest round; fastest single call {raw_call:.3g}); in 2 processes at once each ran at "
-          f"{', '.join(f'{p:.0%}' for p in pair_shares)} of it per round: the most 2 workers could scale")
-    print(f"in this process, no Dask:  {baseline:.3g} body-steps/s (fastest round; {baseline / raw:.0%} of the raw "
-          f"kernel; per round {', '.join(f'{b / r:.0%}' for r, b, _ in rounds)})")
+    print(
+        f"raw batch kernel, rk4, N = {n_chunk}, {steps:.0f} steps, 1 thread, {calls} calls (the workload): "
+        f"{raw:.3g} body-steps/s (fastest round; fastest single call {raw_call:.3g}); in 2 processes at once each ran at "
+        f"{', '.join(f'{p:.0%}' for p in pair_shares)} of it per round: the most 2 workers could scale"
+    )
+    print(
+        f"in this process, no Dask:  {baseline:.3g} body-steps/s (fastest round; {baseline / raw:.0%} of the raw "
+        f"kernel; per round {', '.join(f'{b / r:.0%}' for r, b, _ in rounds)})"
+    )
     rates = {}
     for n in rounds[0][2]:
         rate = max(m[n][1] for _, _, m in rounds)
         rates[n] = rate
         per_round = ", ".join(f"{m[n][1] / n / r:.0%}" for r, _, m in rounds)
-        print(f"{n} worker(s): {rate:.3g} body-steps/s (fastest round; {rate / baseline:.2f}x the baseline, "
-              f"{rate / n / raw:.0%} of the raw kernel per worker; per round {per_round}"
-              + (f"; efficiency {rate / (n * rates[1]):.0%}, per round "
-                 + ", ".join(f"{m[n][1] / (n * m[1][1]):.0%}" for _, _, m in rounds) if n > 1 and 1 in rates else "")
-              + ")")
+        print(
+            f"{n} worker(s): {rate:.3g} body-steps/s (fastest round; {rate / baseline:.2f}x the baseline, "
+            f"{rate / n / raw:.0%} of the raw kernel per worker; per round {per_round}"
+            + (
+                f"; efficiency {rate / (n * rates[1]):.0%}, per round "
+                + ", ".join(f"{m[n][1] / (n * m[1][1]):.0%}" for _, _, m in rounds)
+                if n > 1 and 1 in rates
+                else ""
+            )
+            + ")"
+        )
     compute = args.chunk * steps / baseline
-    print(f"task overhead: {overhead * 1e3:.1f} ms per no-op task round trip; a {args.chunk}-body task "
-          f"computes {compute:.2f} s, so overhead is {overhead / compute:.2%} of it")
+    print(
+        f"task overhead: {overhead * 1e3:.1f} ms per no-op task round trip; a {args.chunk}-body task "
+        f"computes {compute:.2f} s, so overhead is {overhead / compute:.2%} of it"
+    )
     print("memory per worker (RSS after the sweep): " + ", ".join(f"{m / 2**20:.0f} MiB" for m in memory.values()))
     print(f"load average at the end: {' '.join(f'{x:.2f}' for x in os.getloadavg())}")
     # one worker on a core of its own is the per-worker rate a cluster scales out
     per_worker = rates.get(1, max(rates.values()) / max(rates))
     runs = 1e9
     worker_hours = runs * SLEW_STEPS / per_worker / 3600.0
-    print(f"on paper: 1e9 slew runs = {runs * SLEW_STEPS:.1e} body-steps; at {per_worker:.3g} body-steps/s per worker "
-          f"that is {worker_hours:.3g} worker-hours, e.g. {worker_hours / 1000:.3g} h on 1000 workers "
-          f"or {worker_hours / 24 / 100:.3g} days on 100")
+    print(
+        f"on paper: 1e9 slew runs = {runs * SLEW_STEPS:.1e} body-steps; at {per_worker:.3g} body-steps/s per worker "
+        f"that is {worker_hours:.3g} worker-hours, e.g. {worker_hours / 1000:.3g} h on 1000 workers "
+        f"or {worker_hours / 24 / 100:.3g} days on 100"
+    )
 
 
 if __name__ == "__main__":

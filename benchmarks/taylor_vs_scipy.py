@@ -26,7 +26,7 @@ import math
 import os
 import platform
 import time
-from typing import Callable
+from collections.abc import Callable
 
 import numpy as np
 from scipy.integrate import solve_ivp
@@ -121,14 +121,8 @@ def sweep(name: str, spec: dict, repeats: int, quick: bool) -> dict[str, list[tu
             )
             for tol in taylor_tols
         ],
-        "scipy DOP853": [
-            (f"rtol={r:.0e}", lambda r=r: run_scipy("DOP853", r, torque, t_end))
-            for r in scipy_rtols
-        ],
-        "scipy RK45": [
-            (f"rtol={r:.0e}", lambda r=r: run_scipy("RK45", r, torque, t_end))
-            for r in scipy_rtols[:-1]
-        ],
+        "scipy DOP853": [(f"rtol={r:.0e}", lambda r=r: run_scipy("DOP853", r, torque, t_end)) for r in scipy_rtols],
+        "scipy RK45": [(f"rtol={r:.0e}", lambda r=r: run_scipy("RK45", r, torque, t_end)) for r in scipy_rtols[:-1]],
     }
     if not any(torque):
         runs["exact (context)"] = [("", lambda: run_registered("exact", t_end))]

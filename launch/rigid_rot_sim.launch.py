@@ -18,10 +18,11 @@ Neither the package nor its tests import this file (launch is not importable in 
 venv); the test suite compiles it and checks its arguments.
 """
 
-from launch import LaunchDescription
 from launch.actions import DeclareLaunchArgument, OpaqueFunction
 from launch.substitutions import LaunchConfiguration
 from launch_ros.actions import Node
+
+from launch import LaunchDescription
 
 ARGUMENTS = {
     "scene": ("free_tumble", "a shipped scene's name or a scene YAML path"),
@@ -65,6 +66,9 @@ def _node(context):
 
 def generate_launch_description() -> LaunchDescription:
     return LaunchDescription(
-        [DeclareLaunchArgument(name, default_value=default, description=text) for name, (default, text) in ARGUMENTS.items()]
+        [
+            DeclareLaunchArgument(name, default_value=default, description=text)
+            for name, (default, text) in ARGUMENTS.items()
+        ]
         + [OpaqueFunction(function=_node)]
     )

@@ -26,13 +26,13 @@ from geometry_msgs.msg import (
     Vector3Stamped,
 )
 from nav_msgs.msg import Odometry
-from rigid_rot_msgs.msg import HeavyTopState, RejectedCommand, RigidBodyState, TorqueBreakdown, WheelTorques
-from rigid_rot_msgs.srv import ComputeInertia
 from rosgraph_msgs.msg import Clock
 from sensor_msgs.msg import Imu, JointState
 from std_msgs.msg import ColorRGBA
 from visualization_msgs.msg import Marker, MarkerArray
 
+from rigid_rot_msgs.msg import HeavyTopState, RejectedCommand, RigidBodyState, TorqueBreakdown, WheelTorques
+from rigid_rot_msgs.srv import ComputeInertia
 from rigid_rot_sim.core.inertia import MassProperties, principal_orientation
 from rigid_rot_sim.message_fields import (  # noqa: F401 (the readers are part of this module's API)
     quaternion_to_array,
@@ -40,7 +40,6 @@ from rigid_rot_sim.message_fields import (  # noqa: F401 (the readers are part o
     time_to_seconds,
     vector3_to_array,
 )
-
 from rigid_rot_sim.run.body_view import BOX_COLOR, MOMENTUM_COLOR, OMEGA_COLOR, BodyView
 
 if TYPE_CHECKING:
@@ -96,9 +95,7 @@ def compute_inertia_request_to_arrays(request: ComputeInertia.Request) -> tuple[
     return masses, positions, point_to_array(request.origin)
 
 
-def fill_compute_inertia_response(
-    response: ComputeInertia.Response, props: MassProperties
-) -> ComputeInertia.Response:
+def fill_compute_inertia_response(response: ComputeInertia.Response, props: MassProperties) -> ComputeInertia.Response:
     """Write every result field of a ComputeInertia response from ``props``; returns it.
 
     ``success`` and ``message`` are left to the caller.
@@ -127,9 +124,7 @@ def arrays_to_compute_inertia_request(
     return request
 
 
-def compute_inertia_response_to_mass_properties(
-    response: ComputeInertia.Response, origin
-) -> MassProperties:
+def compute_inertia_response_to_mass_properties(response: ComputeInertia.Response, origin) -> MassProperties:
     """A successful ComputeInertia response -> MassProperties (``origin`` as in the request, m)."""
     return MassProperties(
         total_mass=float(response.total_mass),
@@ -181,7 +176,9 @@ def _set_vector3(vector, values) -> None:
     vector.x, vector.y, vector.z = values.tolist() if isinstance(values, np.ndarray) else (float(v) for v in values)
 
 
-def fill_rigid_body_state(msg: RigidBodyState, snapshot: StateSnapshot, world_frame: str, body_frame: str) -> RigidBodyState:
+def fill_rigid_body_state(
+    msg: RigidBodyState, snapshot: StateSnapshot, world_frame: str, body_frame: str
+) -> RigidBodyState:
     """Write every field of a RigidBodyState from a snapshot (stamp: sim time); returns it."""
     msg.header.stamp = seconds_to_time(snapshot.t)
     msg.header.frame_id = world_frame
@@ -404,12 +401,20 @@ def body_markers(view: BodyView, snapshot: StateSnapshot, world_frame: str, body
     box.pose.position = array_to_point(view.box_center)
     box.pose.orientation = array_to_quaternion(view.box_orientation)
     box.scale = array_to_vector3([max(side, _MIN_SIDE) for side in view.box_sides])
-    omega = _arrow(_marker(Marker.ARROW, OMEGA_MARKER, snapshot.t, body_frame, OMEGA_COLOR),
-                   *view.omega_arrow(snapshot.angular_velocity_body), view)
-    momentum = _arrow(_marker(Marker.ARROW, MOMENTUM_MARKER, snapshot.t, world_frame, MOMENTUM_COLOR),
-                      *view.momentum_arrow(snapshot.angular_momentum_world), view)
+    omega = _arrow(
+        _marker(Marker.ARROW, OMEGA_MARKER, snapshot.t, body_frame, OMEGA_COLOR),
+        *view.omega_arrow(snapshot.angular_velocity_body),
+        view,
+    )
+    momentum = _arrow(
+        _marker(Marker.ARROW, MOMENTUM_MARKER, snapshot.t, world_frame, MOMENTUM_COLOR),
+        *view.momentum_arrow(snapshot.angular_momentum_world),
+        view,
+    )
     momentum.frame_locked = False
     return MarkerArray(markers=[box, omega, momentum])
+
+
 # --------------------------------------------------------------------- sensor models (issue 20)
 # Readings of the scene's sensors (rigid_rot_sim.run.sensors), not the ground truth: their
 # covariances are the models' own. A quantity a sensor does not measure is marked as such.

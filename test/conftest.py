@@ -9,7 +9,6 @@ import fcntl
 import os
 import tempfile
 
-
 PROBE_SECONDS = 1.0  # s of listening for other ROS nodes on a candidate domain
 
 

@@ -80,11 +80,25 @@ def _from_other_venv(other: Path, command: list[str], timeout: float = 120.0) ->
         print(json.dumps({"ld": os.environ["LD_LIBRARY_PATH"], "rc": child.returncode,
                           "out": child.stdout, "err": child.stderr}))
     """)
-    environ = {k: v for k, v in os.environ.items()
-               if k not in ("LD_LIBRARY_PATH", "_ROS_WHEELS_BOOTSTRAP_COMPLETE", console_scripts.REEXEC_GUARD,
-                            "VIRTUAL_ENV", "PYTHONPATH")}
-    done = subprocess.run([str(other / "bin" / "python"), "-c", parent, json.dumps(command)], env=environ,
-                          capture_output=True, text=True, timeout=timeout)
+    environ = {
+        k: v
+        for k, v in os.environ.items()
+        if k
+        not in (
+            "LD_LIBRARY_PATH",
+            "_ROS_WHEELS_BOOTSTRAP_COMPLETE",
+            console_scripts.REEXEC_GUARD,
+            "VIRTUAL_ENV",
+            "PYTHONPATH",
+        )
+    }
+    done = subprocess.run(
+        [str(other / "bin" / "python"), "-c", parent, json.dumps(command)],
+        env=environ,
+        capture_output=True,
+        text=True,
+        timeout=timeout,
+    )
     assert done.returncode == 0, done.stderr
     return json.loads(done.stdout.splitlines()[-1])
 
@@ -100,14 +114,27 @@ def test_the_inherited_environment_hides_this_venvs_libraries(other_venv):
 
 def test_console_scripts_work_from_another_venvs_process(other_venv, tmp_path):
     # the node: imports every message package, then refuses the scene with one line (exit 2)
-    node = _from_other_venv(other_venv, [str(BIN / "rigid_rot_sim_node"), "--ros-args", "-p",
-                                         f"scene:={tmp_path / 'missing.yaml'}"])
+    node = _from_other_venv(
+        other_venv, [str(BIN / "rigid_rot_sim_node"), "--ros-args", "-p", f"scene:={tmp_path / 'missing.yaml'}"]
+    )
     assert "ImportError" not in node["err"], node["err"]
     assert node["rc"] == 2 and node["err"].strip().startswith("rigid_rot_sim: error:"), node["err"]
     # rigid-rot: a real run of the node over DDS (private domain: test/conftest.py), recorded
     bag = tmp_path / "run.mcap"
-    run = _from_other_venv(other_venv, [str(BIN / "rigid-rot"), "run", "free_tumble", "--duration", "0.2",
-                                        "--realtime-factor", "0", "--record", str(bag)])
+    run = _from_other_venv(
+        other_venv,
+        [
+            str(BIN / "rigid-rot"),
+            "run",
+            "free_tumble",
+            "--duration",
+            "0.2",
+            "--realtime-factor",
+            "0",
+            "--record",
+            str(bag),
+        ],
+    )
     assert run["rc"] == 0, run["err"]
     assert bag.stat().st_size > 0
     resim = _from_other_venv(other_venv, [str(BIN / "rigid-rot"), "resim", str(bag)])

@@ -138,7 +138,8 @@ def is_code_reference(name: str) -> bool:
     return (
         first == "rigid_rot_sim"
         or first in package_classes()
-        or (PACKAGE / first).is_dir() or (PACKAGE / f"{first}.py").is_file()
+        or (PACKAGE / first).is_dir()
+        or (PACKAGE / f"{first}.py").is_file()
         or (PACKAGE / "ros" / f"{first}.py").is_file()
     )
 
@@ -213,7 +214,7 @@ def shell_examples(program: str) -> list[tuple[str, list[str]]]:
             words = shlex.split(line)
             for i, word in enumerate(words):
                 if word == program or word.endswith("/" + program):
-                    found.append((str(path.relative_to(ROOT)), words[i + 1:]))
+                    found.append((str(path.relative_to(ROOT)), words[i + 1 :]))
                     break
     return found
 

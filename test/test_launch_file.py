@@ -21,7 +21,8 @@ def test_launch_file_compiles(tmp_path):
 def test_launch_arguments_and_node_are_the_documented_ones():
     tree = ast.parse(LAUNCH_FILE.read_text())
     arguments = next(
-        node.value for node in ast.walk(tree)
+        node.value
+        for node in ast.walk(tree)
         if isinstance(node, ast.Assign) and any(getattr(t, "id", "") == "ARGUMENTS" for t in node.targets)
     )
     names = {key.value for key in arguments.keys}

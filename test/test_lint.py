@@ -59,3 +59,14 @@ def test_the_ratchet_only_shrinks():
         "pyproject.toml [tool.ruff.lint.per-file-ignores] is a ratchet; these entries are no longer needed:\n"
         + "\n".join(stale)
     )
+
+
+def test_ruff_format_is_clean():
+    """The whole tree is in ``ruff format``'s style (one mechanical commit made it so; new code keeps it)."""
+    assert RUFF.is_file(), f"{RUFF} is missing: `make setup` installs ruff (the Makefile's TEST_PINS)"
+    result = subprocess.run(
+        [str(RUFF), "format", "--check", "--no-cache", "."], cwd=ROOT, capture_output=True, text=True, timeout=300
+    )
+    assert result.returncode == 0, (
+        f"files not in ruff format's style; `.venv/bin/ruff format PATH` fixes them:\n{result.stdout}{result.stderr}"
+    )

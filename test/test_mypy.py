@@ -21,7 +21,10 @@ ROOT = Path(__file__).resolve().parents[1]
 def mypy(*args: str) -> subprocess.CompletedProcess[str]:
     return subprocess.run(
         [sys.executable, "-m", "mypy", "--no-error-summary", "--show-error-codes", *args],
-        cwd=ROOT, capture_output=True, text=True, timeout=900,
+        cwd=ROOT,
+        capture_output=True,
+        text=True,
+        timeout=900,
     )
 
 

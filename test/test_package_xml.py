@@ -15,8 +15,16 @@ import yaml
 ROOT = Path(__file__).resolve().parents[1]
 MANIFESTS = [ROOT / "package.xml", ROOT / "rigid_rot_msgs" / "package.xml"]
 KEYS = yaml.safe_load((ROOT / "test" / "data" / "rosdep_keys.yaml").read_text())
-DEPEND_TAGS = ("depend", "build_depend", "buildtool_depend", "build_export_depend", "buildtool_export_depend",
-               "exec_depend", "test_depend", "doc_depend")
+DEPEND_TAGS = (
+    "depend",
+    "build_depend",
+    "buildtool_depend",
+    "build_export_depend",
+    "buildtool_export_depend",
+    "exec_depend",
+    "test_depend",
+    "doc_depend",
+)
 #: Packages of this repository: rosdep resolves them from the source paths (--ignore-src).
 OWN = {"rigid_rot_sim", "rigid_rot_msgs"}
 
@@ -44,7 +52,9 @@ def test_every_key_resolves_or_is_skipped_exactly_by_the_readme_recipe():
     resolvable = set(KEYS["system"]) | set(KEYS["ros"]) | OWN
     keys = set().union(*(declared_keys(m) for m in MANIFESTS))
     assert keys, "no dependency keys found"
-    assert not keys & set(KEYS["not_keys"]), f"keys that rosdistro does not define: {sorted(keys & set(KEYS['not_keys']))}"
+    assert not keys & set(KEYS["not_keys"]), (
+        f"keys that rosdistro does not define: {sorted(keys & set(KEYS['not_keys']))}"
+    )
     unresolvable = keys - resolvable
     (command,) = readme_rosdep_commands()
     assert skipped_keys(command) == unresolvable, (

@@ -39,13 +39,33 @@ PYTHON_KEYS: dict[str, set[str]] = {
 #: Modules without any rosdep key (rosdistro's python.yaml has no dask, distributed or pyarrow):
 #: optional, for sweeps only; declared for pip as setup.py's `sweep` extra, installed by make setup.
 #: psutil (used by the distributed-sweep tests) is a dependency of distributed.
-PIP_ONLY = {"dask": "dask[distributed]", "distributed": "dask[distributed]", "psutil": "dask[distributed]", "pyarrow": "pyarrow",
-            "foxglove": "foxglove-sdk"}
+PIP_ONLY = {
+    "dask": "dask[distributed]",
+    "distributed": "dask[distributed]",
+    "psutil": "dask[distributed]",
+    "pyarrow": "pyarrow",
+    "foxglove": "foxglove-sdk",
+}
 #: ROS packages imported as Python modules: the key is the package name.
 ROS_PACKAGES = {
-    "rclpy", "rcl_interfaces", "builtin_interfaces", "geometry_msgs", "std_msgs", "std_srvs", "sensor_msgs",
-    "nav_msgs", "rosgraph_msgs", "tf2_msgs", "simulation_interfaces", "diagnostic_msgs", "rigid_rot_msgs",
-    "rosidl_generator_type_description", "ament_index_python", "launch", "launch_ros", "visualization_msgs",
+    "rclpy",
+    "rcl_interfaces",
+    "builtin_interfaces",
+    "geometry_msgs",
+    "std_msgs",
+    "std_srvs",
+    "sensor_msgs",
+    "nav_msgs",
+    "rosgraph_msgs",
+    "tf2_msgs",
+    "simulation_interfaces",
+    "diagnostic_msgs",
+    "rigid_rot_msgs",
+    "rosidl_generator_type_description",
+    "ament_index_python",
+    "launch",
+    "launch_ros",
+    "visualization_msgs",
 }
 #: Needed at run time without an import: diagnostic_msgs' .msg is read from share/ (recording/events.py).
 DATA_DEPENDENCIES = {"diagnostic_msgs"}
@@ -82,7 +102,9 @@ def undeclared(modules: set[str], keys: set[str], own: set[str]) -> list[str]:
             if not PYTHON_KEYS[module] & keys:
                 problems.append(f"{module}: declare one of {sorted(PYTHON_KEYS[module])}")
         else:
-            problems.append(f"{module}: not mapped to a rosdep key (add it to PYTHON_KEYS or ROS_PACKAGES, then declare it)")
+            problems.append(
+                f"{module}: not mapped to a rosdep key (add it to PYTHON_KEYS or ROS_PACKAGES, then declare it)"
+            )
     return problems
 
 

@@ -14,7 +14,10 @@ from pathlib import Path
 import pytest
 
 PACKAGE = Path(__file__).resolve().parents[1] / "rigid_rot_sim"
-MAX_CLASS_LINES = 250
+#: A class's size in lines that start a statement (blank lines, docstring bodies and ruff format's
+#: wrapping of long calls do not count). 180 statement lines were about 250 physical lines before the
+#: tree was put in ruff format's style.
+MAX_CLASS_LINES = 180
 
 
 def _modules() -> dict[str, Path]:
@@ -174,13 +177,15 @@ def test_no_class_is_over_the_size_limit():
     for name, path in _modules().items():
         for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"))):
             if isinstance(node, ast.ClassDef):
-                lines = node.end_lineno - node.lineno + 1
+                lines = len({stmt.lineno for stmt in ast.walk(node) if isinstance(stmt, ast.stmt)})
                 if lines > MAX_CLASS_LINES:
-                    too_long.append(f"{name}.{node.name}: {lines} lines")
+                    too_long.append(f"{name}.{node.name}: {lines} statement lines")
     assert too_long == []
 
 
-@pytest.mark.parametrize("package", ["rigid_rot_sim.core.simulate", "rigid_rot_sim.run.simulator", "rigid_rot_sim.scene.scene"])
+@pytest.mark.parametrize(
+    "package", ["rigid_rot_sim.core.simulate", "rigid_rot_sim.run.simulator", "rigid_rot_sim.scene.scene"]
+)
 def test_core_runs_without_ros(package):
     code = f"import sys, {package}; print(sorted(m for m in sys.modules if m.startswith(('rclpy', 'rigid_rot_msgs'))))"
     result = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120, check=True)
@@ -196,8 +201,15 @@ def test_kernel_cache_is_keyed_on_the_numerics_only(tmp_path):
     code = "from rigid_rot_sim.core.jit import sources_fingerprint; print(sources_fingerprint())"
 
     def fingerprint() -> str:
-        result = subprocess.run([sys.executable, "-c", code], cwd=tmp_path, capture_output=True, text=True,
-                                timeout=120, check=True, env={"PYTHONPATH": str(tmp_path), "PATH": ""})
+        result = subprocess.run(
+            [sys.executable, "-c", code],
+            cwd=tmp_path,
+            capture_output=True,
+            text=True,
+            timeout=120,
+            check=True,
+            env={"PYTHONPATH": str(tmp_path), "PATH": ""},
+        )
         return result.stdout.strip()
 
     before = fingerprint()

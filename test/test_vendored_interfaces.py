@@ -71,8 +71,9 @@ UPSTREAM_1_5_1_ACTION = {
     "action/SimulateSteps_SendGoal_Response": "RIHS01_755f44a68d1e8d116f50dfed7ab30a140137fb71ad59eca4851d55abe2b3d4c2",
     "action/SimulateSteps_GetResult": "RIHS01_a1dae0516ab5c70d6d797e1bcd55c9448dfbb1966643f1ebd3e3f153d8169ae0",
     "action/SimulateSteps_GetResult_Request": "RIHS01_4591b0bfbcb881003bbd46a2acebcaddceb977e5352905218688ce5ed051fdeb",
-    "action/SimulateSteps_GetResult_Response":
-        "RIHS01_5658172e771cb145a986a8ef4c2b80b5407b741038453b8539e35bed5ff23207",
+    "action/SimulateSteps_GetResult_Response": (
+        "RIHS01_5658172e771cb145a986a8ef4c2b80b5407b741038453b8539e35bed5ff23207"
+    ),
 }
 #: The event types of the action's two services: built from the verbatim upstream file, not pinned.
 ACTION_SERVICE_EVENTS = {"action/SimulateSteps_SendGoal_Event", "action/SimulateSteps_GetResult_Event"}
@@ -99,8 +100,9 @@ def test_simulation_interfaces_has_the_23_upstream_types_and_the_action():
     assert set(built_hashes("simulation_interfaces")) == expected
 
 
-@pytest.mark.parametrize(("type_name", "expected"),
-                         sorted((UPSTREAM_1_5_1 | UPSTREAM_1_5_1_PARTS | UPSTREAM_1_5_1_ACTION).items()))
+@pytest.mark.parametrize(
+    ("type_name", "expected"), sorted((UPSTREAM_1_5_1 | UPSTREAM_1_5_1_PARTS | UPSTREAM_1_5_1_ACTION).items())
+)
 def test_simulation_interfaces_hash_is_upstream_1_5_1(type_name, expected):
     assert built_hashes("simulation_interfaces")[type_name] == expected, (
         f"simulation_interfaces/{type_name}: the built type's hash differs from upstream 1.5.1: "
@@ -126,7 +128,8 @@ def test_the_built_definitions_are_the_vendored_ones(package):
         return  # a real installation (apt) is used; the hashes above still had to match
     for relative in vendored:
         assert (share / relative).read_text(encoding="utf-8") == (VENDOR / package / relative).read_text(
-            encoding="utf-8"), f"{share / relative} is not the vendored file: rerun make setup"
+            encoding="utf-8"
+        ), f"{share / relative} is not the vendored file: rerun make setup"
 
 
 def test_vendored_simulation_interfaces_is_labelled_1_5_1():
@@ -140,5 +143,7 @@ def test_the_action_type_imports_with_the_upstream_fields():
 
     assert SimulateSteps.Goal().steps == 0 and SimulateSteps.Goal.get_fields_and_field_types() == {"steps": "uint64"}
     assert SimulateSteps.Feedback.get_fields_and_field_types() == {
-        "completed_steps": "uint64", "remaining_steps": "uint64"}
+        "completed_steps": "uint64",
+        "remaining_steps": "uint64",
+    }
     assert SimulateSteps.Result.get_fields_and_field_types() == {"result": "simulation_interfaces/Result"}

@@ -25,29 +25,35 @@ PRINT_SHARES = (
 
 
 def clean_env(**extra: str) -> dict[str, str]:
-    env = {k: v for k, v in os.environ.items()
-           if k not in ("AMENT_PREFIX_PATH", "CMAKE_PREFIX_PATH", "ROS_DISTRO", "VIRTUAL_ENV")}
+    env = {
+        k: v
+        for k, v in os.environ.items()
+        if k not in ("AMENT_PREFIX_PATH", "CMAKE_PREFIX_PATH", "ROS_DISTRO", "VIRTUAL_ENV")
+    }
     return {**env, **extra}
 
 
 def bash(script: str, **extra: str) -> list[str]:
-    done = subprocess.run(["bash", "-c", script], env=clean_env(**extra), capture_output=True, text=True,
-                          timeout=120, cwd=ROOT)
+    done = subprocess.run(
+        ["bash", "-c", script], env=clean_env(**extra), capture_output=True, text=True, timeout=120, cwd=ROOT
+    )
     assert done.returncode == 0, done.stdout + done.stderr
     return done.stdout.splitlines()
 
 
 def test_activate_makes_a_sourced_workspace_and_deactivate_restores_it():
     activate = PREFIX / "bin" / "activate"
-    lines = bash(f'. "{activate}" && python -c "{PRINT_SHARES}" && echo "$AMENT_PREFIX_PATH|$ROS_DISTRO"'
-                 f' && . "{activate}" && echo "$AMENT_PREFIX_PATH" && deactivate'
-                 ' && echo "${AMENT_PREFIX_PATH-unset}|${ROS_DISTRO-unset}"',
-                 AMENT_PREFIX_PATH="/opt/other")
+    lines = bash(
+        f'. "{activate}" && python -c "{PRINT_SHARES}" && echo "$AMENT_PREFIX_PATH|$ROS_DISTRO"'
+        f' && . "{activate}" && echo "$AMENT_PREFIX_PATH" && deactivate'
+        ' && echo "${AMENT_PREFIX_PATH-unset}|${ROS_DISTRO-unset}"',
+        AMENT_PREFIX_PATH="/opt/other",
+    )
     assert lines[0] == str(PREFIX / "share" / "rigid_rot_sim")
     assert lines[1] == str(PREFIX / "share" / "rigid_rot_msgs")
     assert lines[2] == f"{PREFIX}:/opt/other|jazzy"  # prepended, the previous value kept
-    assert lines[3] == f"{PREFIX}:/opt/other"        # activating twice adds nothing
-    assert lines[4] == "/opt/other|unset"             # deactivate restores
+    assert lines[3] == f"{PREFIX}:/opt/other"  # activating twice adds nothing
+    assert lines[4] == "/opt/other|unset"  # deactivate restores
 
 
 def test_share_directory_from_the_ament_index_holds_package_files():
@@ -65,12 +71,24 @@ def test_share_directory_from_the_ament_index_holds_package_files():
 
 def test_console_script_without_activation_finds_scenes_through_the_index(tmp_path):
     rigid_rot = PREFIX / "bin" / "rigid-rot"
-    done = subprocess.run([str(rigid_rot), "run", "free_tumble", "--duration", "0.1", "--realtime-factor", "0"],
-                          env=clean_env(), capture_output=True, text=True, timeout=120, cwd=tmp_path)
+    done = subprocess.run(
+        [str(rigid_rot), "run", "free_tumble", "--duration", "0.1", "--realtime-factor", "0"],
+        env=clean_env(),
+        capture_output=True,
+        text=True,
+        timeout=120,
+        cwd=tmp_path,
+    )
     assert done.returncode == 0, done.stdout + done.stderr
     assert f"({PREFIX / 'share' / 'rigid_rot_sim' / 'config' / 'scenes' / 'free_tumble.yaml'})" in done.stderr
-    unknown = subprocess.run([str(rigid_rot), "run", "no_such_scene"], env=clean_env(), capture_output=True,
-                             text=True, timeout=120, cwd=tmp_path)
+    unknown = subprocess.run(
+        [str(rigid_rot), "run", "no_such_scene"],
+        env=clean_env(),
+        capture_output=True,
+        text=True,
+        timeout=120,
+        cwd=tmp_path,
+    )
     assert unknown.returncode == 2 and "heavy_top" in unknown.stderr and len(unknown.stderr.strip().splitlines()) == 1
 
 

@@ -108,8 +108,10 @@ def main(argv: list[str]) -> int:
         raise SystemExit("usage: python tools/install_workspace.py CHECKOUT")
     checkout = Path(argv[1]).resolve()
     share = install(checkout, Path(sys.prefix))
-    print(f"setup: {share} and the ament index entry link to {checkout}; "
-          f"{Path(sys.prefix) / 'bin' / 'activate'} sets AMENT_PREFIX_PATH & co.")
+    print(
+        f"setup: {share} and the ament index entry link to {checkout}; "
+        f"{Path(sys.prefix) / 'bin' / 'activate'} sets AMENT_PREFIX_PATH & co."
+    )
     return 0
 
 

@@ -101,8 +101,19 @@ class CheckpointTrack:
 
     def observe(self, t: float, omega: np.ndarray) -> None:
         """Record the checkpoint at ``t`` (s); ``omega`` (N, 3) rad/s, principal frame, NaN for a failed body."""
-        _observe(float(t), np.ascontiguousarray(omega, dtype=float), self.moments, self.major, self.intermediate,
-                 self.sign0, self.max_omega, self._cos_min, self._cos_max, self.first_flip, self._previous)
+        _observe(
+            float(t),
+            np.ascontiguousarray(omega, dtype=float),
+            self.moments,
+            self.major,
+            self.intermediate,
+            self.sign0,
+            self.max_omega,
+            self._cos_min,
+            self._cos_max,
+            self.first_flip,
+            self._previous,
+        )
 
     def nutation_range(self) -> np.ndarray:
         """(N,) rad: the largest minus the smallest nutation angle seen (NaN for a failed body)."""

@@ -28,8 +28,9 @@ import signal
 import threading
 import time
 import uuid
+from collections.abc import Callable, Iterator
 from dataclasses import dataclass, field
-from typing import Any, Callable, Iterator
+from typing import Any
 
 import numpy as np
 from tqdm import tqdm
@@ -37,8 +38,17 @@ from tqdm import tqdm
 from rigid_rot_sim.analysis.sweep import COLUMNS, Chunk, choose_chunk_size, plan_chunks, run_chunk, run_nominal
 from rigid_rot_sim.analysis.sweep_spec import SweepSpec
 
-__all__ = ["SweepResult", "require", "open_client", "run_sweep", "map_tasks", "wants_cluster", "scheduler_address", "available_cpus",
-           "one_numba_thread"]
+__all__ = [
+    "SweepResult",
+    "require",
+    "open_client",
+    "run_sweep",
+    "map_tasks",
+    "wants_cluster",
+    "scheduler_address",
+    "available_cpus",
+    "one_numba_thread",
+]
 
 #: How long to wait for a scheduler to answer, and for ``workers`` workers to join, s.
 CONNECT_TIMEOUT = 30.0
@@ -189,7 +199,10 @@ def map_tasks(
     from distributed import as_completed
 
     token = uuid.uuid4().hex[:12]
-    keys = [f"rigid-rot-{getattr(function, '__name__', 'task')}-{token}-{index}" for index, (function, _) in enumerate(calls)]
+    keys = [
+        f"rigid-rot-{getattr(function, '__name__', 'task')}-{token}-{index}"
+        for index, (function, _) in enumerate(calls)
+    ]
     # one map: the scheduler gets every task in one message (a client sends one message per
     # 10 ms, so tasks submitted one by one would reach the second worker ~10 ms late)
     futures = {future: index for index, future in enumerate(client.map(_on_one_thread, calls, key=keys, pure=False))}
@@ -270,7 +283,10 @@ def _assemble(parts: list[dict[str, Any]]) -> dict[str, Any]:
     if np.all(np.diff(columns["run"]) > 0):  # the chunks came in run order (the usual case): nothing to move
         return columns
     order = np.argsort(columns["run"], kind="stable")
-    return {name: (values[order] if isinstance(values, np.ndarray) else [values[i] for i in order]) for name, values in columns.items()}
+    return {
+        name: (values[order] if isinstance(values, np.ndarray) else [values[i] for i in order])
+        for name, values in columns.items()
+    }
 
 
 def run_sweep(
@@ -306,7 +322,9 @@ def run_sweep(
             # one nominal run per spin rate, a dependency of the chunks of that spin rate
             token = uuid.uuid4().hex[:12]
             for spin in dict.fromkeys(s for _, _, s in spec.grid):
-                nominals[spin] = client.submit(run_nominal, spec, spin, key=f"rigid-rot-nominal-{token}-{spin}", pure=False)
+                nominals[spin] = client.submit(
+                    run_nominal, spec, spin, key=f"rigid-rot-nominal-{token}-{spin}", pure=False
+                )
         calls = [(run_chunk, (spec, chunk, nominals.get(spec.grid[chunk.grid_point][2]))) for chunk in chunks]
         try:
             with tqdm(total=spec.n_runs, desc=f"sweep {spec.name}", unit="run", disable=not progress) as bar:

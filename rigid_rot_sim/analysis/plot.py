@@ -6,8 +6,9 @@ Each function writes one PNG and returns its path; nothing is shown on screen.
 from __future__ import annotations
 
 import math
+from collections.abc import Iterable, Sequence
 from pathlib import Path
-from typing import Any, Iterable, Sequence
+from typing import Any
 
 import matplotlib
 import numpy as np
@@ -58,8 +59,15 @@ def work_precision_plot(
         )
     for target in targets:
         ax.axhline(target, color="grey", linestyle=":", linewidth=0.8)
-        ax.annotate(f"target {target:g}", xy=(1.0, target), xycoords=("axes fraction", "data"),
-                    ha="right", va="bottom", fontsize=8, color="grey")
+        ax.annotate(
+            f"target {target:g}",
+            xy=(1.0, target),
+            xycoords=("axes fraction", "data"),
+            ha="right",
+            va="bottom",
+            fontsize=8,
+            color="grey",
+        )
     ax.set_xlabel("run time, best of repeats [s]")
     ax.set_ylabel(f"ω error at final time, max-norm [rad/s] (values < {ERROR_CLIP:g} drawn at it)")
     ax.set_title(title)
@@ -127,8 +135,9 @@ def long_horizon_plot(rows: Sequence[dict[str, Any]], path: str | Path) -> Path:
     ax.bar(x - 0.2, first, 0.4, label="max over the first tenth")
     ax.bar(x + 0.2, last, 0.4, label="mean over the last tenth")
     ax.set_yscale("log")
-    ax.set_xticks(x, labels=[f"{m}\n({'secular' if r['secular'] else 'bounded'})" for m, r in zip(labels, rows)],
-                  fontsize=8)
+    ax.set_xticks(
+        x, labels=[f"{m}\n({'secular' if r['secular'] else 'bounded'})" for m, r in zip(labels, rows)], fontsize=8
+    )
     steps = rows[0]["steps"] if rows else 0
     ax.set_ylabel("relative energy error |E − E0| / E0 [-]")
     ax.set_title(f"Long horizon: {steps:.0e} steps of dt = {rows[0]['dt'] if rows else 0:g} s on P1's body")

@@ -25,8 +25,9 @@ from __future__ import annotations
 
 import math
 import warnings
+from collections.abc import Callable
 from dataclasses import dataclass, field
-from typing import Any, Callable
+from typing import Any
 
 import numpy as np
 from scipy.integrate import solve_ivp
@@ -77,7 +78,7 @@ class Problem:
     principal_moments: tuple[float, float, float]
     omega0: tuple[float, float, float]
     t_end: float
-    reference_factory: Callable[["Problem"], Reference] = field(repr=False, compare=False)
+    reference_factory: Callable[[Problem], Reference] = field(repr=False, compare=False)
     q0: tuple[float, float, float, float] = IDENTITY
     torque: Any = None
     torque_kind: str = "none"
@@ -116,8 +117,19 @@ class Problem:
         """
         n_steps = max(1, round(self.t_end / dt))
         if self.wheels is not None:  # only the gyrostat methods carry the wheels (ValueError: refused)
-            traj = simulate(self.moments, self.omega0, self.t_end, self.t_end / n_steps, method, self.q0, self.torque,
-                            save_every=n_steps, wheels=self.wheels, wheel_speeds0=self.wheel_speeds0, **options)
+            traj = simulate(
+                self.moments,
+                self.omega0,
+                self.t_end,
+                self.t_end / n_steps,
+                method,
+                self.q0,
+                self.torque,
+                save_every=n_steps,
+                wheels=self.wheels,
+                wheel_speeds0=self.wheel_speeds0,
+                **options,
+            )
         else:
             traj = simulate(
                 self.moments, self.omega0, self.t_end, dt, method, self.q0, self.torque, save_every=n_steps, **options
@@ -131,8 +143,14 @@ _REFERENCES: dict[tuple, Reference] = {}
 def _cached_reference(problem: Problem) -> Reference:
     # keyed by the initial value problem, not the key alone: the stability suite's quick and full
     # cases share a key but not a horizon, and one process may build both
-    cache_key = (problem.key, problem.t_end, problem.principal_moments, problem.omega0, problem.q0,
-                 problem.wheel_speeds0)
+    cache_key = (
+        problem.key,
+        problem.t_end,
+        problem.principal_moments,
+        problem.omega0,
+        problem.q0,
+        problem.wheel_speeds0,
+    )
     if cache_key not in _REFERENCES:
         _REFERENCES[cache_key] = problem.reference_factory(problem)
     return _REFERENCES[cache_key]
@@ -185,8 +203,9 @@ def _gyrostat_reference(problem: Problem) -> Reference:
     """scipy DOP853 at rtol = atol = 1e-14 on (q, omega, Omega), checked against our dopri5 at rtol = 1e-13."""
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", UserWarning)
-        sol = solve_ivp(scipy_rhs(problem), (0.0, problem.t_end), problem.initial_vector(), method="DOP853",
-                        rtol=1e-14, atol=1e-14)
+        sol = solve_ivp(
+            scipy_rhs(problem), (0.0, problem.t_end), problem.initial_vector(), method="DOP853", rtol=1e-14, atol=1e-14
+        )
     if not sol.success:
         raise RuntimeError(f"{problem.key}: reference DOP853 failed: {sol.message}")
     q_ref = np.asarray(quat.normalize(sol.y[:4, -1]))

@@ -40,14 +40,14 @@ import numpy as np
 from rigid_rot_sim.analysis.cluster import map_tasks, open_client, wants_cluster
 from rigid_rot_sim.analysis.metrics import attitude_error_angle, omega_error, relative_change
 from rigid_rot_sim.analysis.problems import P1, Problem
-from rigid_rot_sim.core.integrators.gyrostat import GYROSTAT_METHODS, get_gyrostat_method
-from rigid_rot_sim.core.wheels import gyrostat_energy, total_momentum_body
 from rigid_rot_sim.analysis.stability_cases import Case, Criterion, case_named
-from rigid_rot_sim.run import advice
 from rigid_rot_sim.core.exact import torque_free_solution
 from rigid_rot_sim.core.integrators import METHODS, get_method
 from rigid_rot_sim.core.integrators.base import NonFiniteStateError
+from rigid_rot_sim.core.integrators.gyrostat import GYROSTAT_METHODS, get_gyrostat_method
 from rigid_rot_sim.core.torque import ConstantTorque
+from rigid_rot_sim.core.wheels import gyrostat_energy, total_momentum_body
+from rigid_rot_sim.run import advice
 
 #: Growth of energy or momentum beyond this (relative) counts as unstable.
 GROWTH_LIMIT = 1.0
@@ -111,8 +111,16 @@ def _integrator(method: str, case: Case, dt: float, torque: Any) -> Any:
     problem = case.problem
     options = case.options.get(method, {})
     if problem.wheels is not None:  # a gyrostat: only the gyrostat methods carry the wheels (ValueError: refused)
-        return get_gyrostat_method(method)(problem.moments, dt, torque, q0=problem.q0, omega0=problem.omega0,
-                                           wheels=problem.wheels, wheel_speeds0=problem.wheel_speeds0, **options)
+        return get_gyrostat_method(method)(
+            problem.moments,
+            dt,
+            torque,
+            q0=problem.q0,
+            omega0=problem.omega0,
+            wheels=problem.wheels,
+            wheel_speeds0=problem.wheel_speeds0,
+            **options,
+        )
     if method not in METHODS and method in GYROSTAT_METHODS:
         raise ValueError(f"{method} runs gyrostats only (reaction wheels, gravity gradient): this case has no wheels")
     return get_method(method)(problem.moments, dt, torque, q0=problem.q0, omega0=problem.omega0, **options)
@@ -291,8 +299,11 @@ class LongHorizon:
 ROUNDOFF_FLOOR = 1e-11
 
 LONG_HORIZON_METHODS: tuple[MethodVariant, ...] = (
-    ("rk4", ()), ("lie_rk4", ()), ("implicit_midpoint", ()),
-    ("splitting", (("order", 2),)), ("splitting", (("order", 4),)),
+    ("rk4", ()),
+    ("lie_rk4", ()),
+    ("implicit_midpoint", ()),
+    ("splitting", (("order", 2),)),
+    ("splitting", (("order", 4),)),
 )
 
 
@@ -316,8 +327,18 @@ def long_horizon(method: str | MethodVariant, steps: int, dt: float = 0.01, samp
             integrator.advance(int(chunk))
             errors[k] = relative_change(e0, problem.energy(integrator.q, integrator.omega))
     except (NonFiniteStateError, ArithmeticError) as exc:
-        return LongHorizon(label, steps, dt, time.perf_counter() - start, math.nan, math.nan, math.nan, True,
-                           "unstable", str(exc)[:240])
+        return LongHorizon(
+            label,
+            steps,
+            dt,
+            time.perf_counter() - start,
+            math.nan,
+            math.nan,
+            math.nan,
+            True,
+            "unstable",
+            str(exc)[:240],
+        )
     seconds = time.perf_counter() - start
     tenth = max(1, samples // 10)
     first, last = float(errors[:tenth].max()), float(errors[-tenth:].mean())

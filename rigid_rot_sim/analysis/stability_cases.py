@@ -109,8 +109,12 @@ def _impulse_reference(problem: Problem) -> Reference:
     dt = problem.t_end / IMPULSE_STEPS
     kicked = dataclasses.replace(problem, torque=ConstantTorque(np.asarray(IMPULSE_TORQUE)))
     y = solve_ivp(
-        scipy_rhs(kicked), (0.0, dt), np.concatenate((problem.q0, problem.omega0)),
-        method="DOP853", rtol=1e-13, atol=1e-13,
+        scipy_rhs(kicked),
+        (0.0, dt),
+        np.concatenate((problem.q0, problem.omega0)),
+        method="DOP853",
+        rtol=1e-13,
+        atol=1e-13,
     ).y[:, -1]
     q1 = np.asarray(quat.normalize(y[:4]))
     solution = torque_free_solution(problem.moments, y[4:], q1, t0=dt)
@@ -140,8 +144,9 @@ def catalogue(quick: bool = False) -> list[Case]:
     def accurate(problem: Problem) -> Criterion:
         """Bounded to 0.1 %, omega error <= 0.1 % of |omega0| and attitude error <= 0.01 rad at the end."""
         scale = float(np.linalg.norm(problem.omega0))
-        return dataclasses.replace(bounded, omega_error=1e-3 * scale, attitude_error=1e-2,
-                                   text="bounded to 0.1 %, ω error ≤ 0.1 % of |ω0|")
+        return dataclasses.replace(
+            bounded, omega_error=1e-3 * scale, attitude_error=1e-2, text="bounded to 0.1 %, ω error ≤ 0.1 % of |ω0|"
+        )
 
     cases: list[Case] = []
     for ratio in (1e-2, 1e-4, 1e-6):
@@ -150,9 +155,11 @@ def catalogue(quick: bool = False) -> list[Case]:
                 name=f"thin rod {ratio:g}",
                 description=f"slender body I = (1, 1 + {ratio / 2:g}, {ratio:g}) kg m², spinning 5 rad/s about its "
                 "axis while tumbling, dt = 10 ms",
-                problem=(rod := _free(
-                    f"rod{ratio:g}", "thin rod", (1.0, 1.0 + ratio / 2, ratio), (0.3, 0.2, 5.0), 10.0 * short
-                )),
+                problem=(
+                    rod := _free(
+                        f"rod{ratio:g}", "thin rod", (1.0, 1.0 + ratio / 2, ratio), (0.3, 0.2, 5.0), 10.0 * short
+                    )
+                ),
                 dt=0.01,
                 criterion=accurate(rod),
                 bisect=True,
@@ -163,9 +170,11 @@ def catalogue(quick: bool = False) -> list[Case]:
             name="MuJoCo rod",
             description="MuJoCo's diverging case diaginertia (0.00017231, 0.00000658, 0.00017243) kg m², "
             "ω0 = (2, 50, 3) rad/s, dt = 1 ms",
-            problem=(mujoco := _free(
-                "mujoco", "MuJoCo rod", (0.00017231, 0.00000658, 0.00017243), (2.0, 50.0, 3.0), 10.0 * short
-            )),
+            problem=(
+                mujoco := _free(
+                    "mujoco", "MuJoCo rod", (0.00017231, 0.00000658, 0.00017243), (2.0, 50.0, 3.0), 10.0 * short
+                )
+            ),
             dt=1e-3,
             criterion=accurate(mujoco),
             bisect=True,
@@ -173,9 +182,11 @@ def catalogue(quick: bool = False) -> list[Case]:
         Case(
             name="near-spherical 1e-9",
             description="moments equal to 1e-9 relative: I = (1, 1 + 1e-9, 1 + 2e-9) kg m², dt = 10 ms",
-            problem=(near := _free(
-                "nearsphere", "near-spherical", (1.0, 1.0 + 1e-9, 1.0 + 2e-9), (1.0, 2.0, 3.0), 100.0 * short
-            )),
+            problem=(
+                near := _free(
+                    "nearsphere", "near-spherical", (1.0, 1.0 + 1e-9, 1.0 + 2e-9), (1.0, 2.0, 3.0), 100.0 * short
+                )
+            ),
             dt=0.01,
             criterion=accurate(near),
         ),
@@ -240,27 +251,45 @@ def catalogue(quick: bool = False) -> list[Case]:
                 reference_factory=general_top_reference,
             ),
             dt=1e-3,
-            criterion=Criterion(energy_drift=1e-4, momentum_drift=1e-4, omega_error=0.3, text="E, p_φ, p_ψ to 1e-4, ω error ≤ 0.1 % of |ω0|"),
+            criterion=Criterion(
+                energy_drift=1e-4,
+                momentum_drift=1e-4,
+                omega_error=0.3,
+                text="E, p_φ, p_ψ to 1e-4, ω error ≤ 0.1 % of |ω0|",
+            ),
         ),
         Case(
             name="separatrix top → θ = 0",
             description="P3's separatrix top run until θ ≈ 1e-3 rad (the z-x-z Euler-angle singularity), dt = 1 ms",
             problem=dataclasses.replace(P3, key="separatrix_long", t_end=1.6 if not quick else 1.0),
             dt=1e-3,
-            criterion=Criterion(energy_drift=1e-4, momentum_drift=1e-4, omega_error=1e-2, text="E, p_φ, p_ψ to 1e-4, ω error ≤ 0.1 % of |ω0|"),
+            criterion=Criterion(
+                energy_drift=1e-4,
+                momentum_drift=1e-4,
+                omega_error=1e-2,
+                text="E, p_φ, p_ψ to 1e-4, ω error ≤ 0.1 % of |ω0|",
+            ),
         ),
         Case(
             name="impulsive torque",
             description=f"I = (1, 2, 3) kg m², ω0 = (1, 0.1, 0.5) rad/s, a torque {IMPULSE_TORQUE} N m for one "
             "10 ms step, then free",
             problem=_free(
-                "impulse", "impulse", (1.0, 2.0, 3.0), (1.0, 0.1, 0.5), 0.01 * IMPULSE_STEPS,
+                "impulse",
+                "impulse",
+                (1.0, 2.0, 3.0),
+                (1.0, 0.1, 0.5),
+                0.01 * IMPULSE_STEPS,
                 reference_note="kick by DOP853, then exact",
             ),
             dt=0.01,
             impulse=IMPULSE_TORQUE,
-            criterion=dataclasses.replace(bounded, omega_error=1e-3, attitude_error=1e-2,
-                                          text="after the kick: bounded to 0.1 %; ω error ≤ 1e-3 rad/s"),
+            criterion=dataclasses.replace(
+                bounded,
+                omega_error=1e-3,
+                attitude_error=1e-2,
+                text="after the kick: bounded to 0.1 %; ω error ≤ 1e-3 rad/s",
+            ),
         ),
     ]
     cases[-1] = dataclasses.replace(
@@ -318,8 +347,14 @@ def _fast_wheel_case(quick: bool) -> Case:
     omega0 = np.array([0.01, 0.02, 0.005])
     dt = 0.01
     problem = dataclasses.replace(
-        P5, key="fast_wheel", title="fast wheel on a slow body", principal_moments=moments,
-        omega0=tuple(omega0.tolist()), wheel_speeds0=speeds, wheels=wheels, t_end=5.0 if quick else 20.0,
+        P5,
+        key="fast_wheel",
+        title="fast wheel on a slow body",
+        principal_moments=moments,
+        omega0=tuple(omega0.tolist()),
+        wheel_speeds0=speeds,
+        wheels=wheels,
+        t_end=5.0 if quick else 20.0,
     )
     rate = nutation_rate(moments, wheels, speeds)
     axis = wheels.axes[0]
@@ -335,7 +370,9 @@ def _fast_wheel_case(quick: bool) -> Case:
         problem=problem,
         dt=dt,
         criterion=Criterion(
-            energy_drift=1e-8, momentum_drift=1e-8, omega_error=limit,
+            energy_drift=1e-8,
+            momentum_drift=1e-8,
+            omega_error=limit,
             text="total E and |H| (body + wheel); the ω limit is RK4's nutation phase error (linear theory)",
         ),
     )

@@ -55,7 +55,9 @@ def run_suite(
     case_rows: list[dict[str, Any]] = []
     total = len(cases) * len(methods) + len(long_methods) + 1
     with tqdm(total=total, desc="stability", unit="run", disable=not progress) as bar:
-        case_runs, bisection, horizon = run_all(cases, methods, long_methods, long_steps, quick, bar, scheduler, workers)
+        case_runs, bisection, horizon = run_all(
+            cases, methods, long_methods, long_steps, quick, bar, scheduler, workers
+        )
     for case in cases:
         case_rows.append(
             {
@@ -136,8 +138,13 @@ def _markdown(payload: dict[str, Any]) -> str:
         *markdown_table(
             ("case", "method", "largest stable dt [s]", "advice dt [s]", "measured / advice"),
             (
-                (row["case"], row["method"], number(row["largest_stable_dt"], ".4g"),
-                 number(row["theory_dt"], ".4g"), number(row["ratio"], ".3f"))
+                (
+                    row["case"],
+                    row["method"],
+                    number(row["largest_stable_dt"], ".4g"),
+                    number(row["theory_dt"], ".4g"),
+                    number(row["ratio"], ".3f"),
+                )
                 for row in bis["rows"]
             ),
         ),
@@ -150,12 +157,25 @@ def _markdown(payload: dict[str, Any]) -> str:
         "![long horizon](long_horizon.png)",
         "",
         *markdown_table(
-            ("method", "steps", "run time [s]", "max error, first tenth", "mean error, last tenth", "final error",
-             "verdict"),
             (
-                (row["method"], f"{row['steps']:.0e}", f"{row['seconds']:.1f}", number(row["first_tenth_max"], ".2g"),
-                 number(row["last_tenth_mean"], ".2g"), number(row["final"], ".2g"),
-                 row["status"] if row["status"] != "stable" else ("**secular**" if row["secular"] else "bounded"))
+                "method",
+                "steps",
+                "run time [s]",
+                "max error, first tenth",
+                "mean error, last tenth",
+                "final error",
+                "verdict",
+            ),
+            (
+                (
+                    row["method"],
+                    f"{row['steps']:.0e}",
+                    f"{row['seconds']:.1f}",
+                    number(row["first_tenth_max"], ".2g"),
+                    number(row["last_tenth_mean"], ".2g"),
+                    number(row["final"], ".2g"),
+                    row["status"] if row["status"] != "stable" else ("**secular**" if row["secular"] else "bounded"),
+                )
                 for row in payload["long_horizon"]
             ),
         ),
@@ -171,8 +191,18 @@ def _markdown(payload: dict[str, Any]) -> str:
             f"Reference: {case['reference'] or 'none'}.",
             "",
             *markdown_table(
-                ("method", "status", "pass", "energy drift", "momentum drift", "\\| \\|q\\|−1 \\|",
-                 "ω error [rad/s]", "attitude error [rad]", "run time [s]", "note"),
+                (
+                    "method",
+                    "status",
+                    "pass",
+                    "energy drift",
+                    "momentum drift",
+                    "\\| \\|q\\|−1 \\|",
+                    "ω error [rad/s]",
+                    "attitude error [rad]",
+                    "run time [s]",
+                    "note",
+                ),
                 (_run_cells(method, case["runs"][method]) for method in methods),
             ),
             "",
@@ -182,8 +212,14 @@ def _markdown(payload: dict[str, Any]) -> str:
 
 def _run_cells(method: str, run: dict[str, Any]) -> tuple[str, ...]:
     return (
-        method, run["status"], "yes" if run["passed"] else "no", number(run["energy_drift"], ".2g"),
-        number(run["momentum_drift"], ".2g"), number(run["quaternion_norm_error"], ".2g"),
-        number(run["omega_error"], ".2g"), number(run["attitude_error"], ".2g"), number(run["seconds"], ".3f"),
+        method,
+        run["status"],
+        "yes" if run["passed"] else "no",
+        number(run["energy_drift"], ".2g"),
+        number(run["momentum_drift"], ".2g"),
+        number(run["quaternion_norm_error"], ".2g"),
+        number(run["omega_error"], ".2g"),
+        number(run["attitude_error"], ".2g"),
+        number(run["seconds"], ".3f"),
         run["message"][:160],
     )

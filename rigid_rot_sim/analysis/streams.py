@@ -254,7 +254,10 @@ class StreamDraws:
         words[:] = state & _M64, state >> 64, inc & _M64, inc >> 64
         flags[2:] = 1, 7
         if self._bits.state == {
-            "bit_generator": "PCG64", "state": {"state": state, "inc": inc}, "has_uint32": 1, "uinteger": 7,
+            "bit_generator": "PCG64",
+            "state": {"state": state, "inc": inc},
+            "has_uint32": 1,
+            "uinteger": 7,
         }:
             self._words, self._flags = words, flags
 
@@ -268,7 +271,10 @@ class StreamDraws:
             return
         for state, inc in pcg64_states(seed, samples, stream):
             self._bits.state = {
-                "bit_generator": "PCG64", "state": {"state": state, "inc": inc}, "has_uint32": 0, "uinteger": 0,
+                "bit_generator": "PCG64",
+                "state": {"state": state, "inc": inc},
+                "has_uint32": 0,
+                "uinteger": 0,
             }
             yield self.generator
 

@@ -46,10 +46,26 @@ from rigid_rot_sim.core.integrators.base import NonFiniteStateError
 from rigid_rot_sim.core.simulate import step_grid
 from rigid_rot_sim.core.steps import step_at_or_after, step_at_or_before
 
-__all__ = ["Chunk", "plan_chunks", "run_chunk", "run_nominal", "sample_inputs", "COLUMNS", "measure_step_cost", "choose_chunk_size"]
+__all__ = [
+    "Chunk",
+    "plan_chunks",
+    "run_chunk",
+    "run_nominal",
+    "sample_inputs",
+    "COLUMNS",
+    "measure_step_cost",
+    "choose_chunk_size",
+]
 
 # Streams of SeedSequence(seed, spawn_key=(sample, k)): one per kind of dispersion.
-_STREAMS = ("principal_moments", "axis_misalignment", "initial_omega", "initial_attitude", "torque_scale", "torque_noise")
+_STREAMS = (
+    "principal_moments",
+    "axis_misalignment",
+    "initial_omega",
+    "initial_attitude",
+    "torque_scale",
+    "torque_noise",
+)
 
 #: Output columns in order, with their Arrow types. I1, I2, I3 are the run's principal moments
 #: (kg*m^2) about the base body's principal axes, numbered by the base body's ascending moments; omega
@@ -197,8 +213,12 @@ def _bodies(spec: SweepSpec, spin_rate: float | None, samples: range | None) -> 
     misalignment = stack("misalignment")
     attitude = stack("attitude")
     moments = np.asarray(body.principal_moments) * (1.0 + stack("moments"))
-    body_from_principal = quat.compose_rotations(Rotation.from_quat(body.body_from_principal), Rotation.from_rotvec(misalignment))
-    q0 = quat.compose_rotations(Rotation.from_quat(spec.scene.initial.orientation), Rotation.from_rotvec(attitude)).as_quat()
+    body_from_principal = quat.compose_rotations(
+        Rotation.from_quat(body.body_from_principal), Rotation.from_rotvec(misalignment)
+    )
+    q0 = quat.compose_rotations(
+        Rotation.from_quat(spec.scene.initial.orientation), Rotation.from_rotvec(attitude)
+    ).as_quat()
     d = spec.dispersions
     intervals = math.ceil(spec.duration / d.torque_noise_interval) if d.torque_noise_sigma is not None else 0
     noise = draws["noise"] if draws is not None else np.zeros((1, intervals, 3))
@@ -241,7 +261,11 @@ def _advance_isolated(
                 )
             except (NonFiniteStateError, ArithmeticError) as exc:
                 reason = " ".join(str(exc).split())
-                return np.full_like(q, np.nan), np.full_like(omega, np.nan), {0: f"{type(exc).__name__} at step {k + 1} of the segment: {reason}"}
+                return (
+                    np.full_like(q, np.nan),
+                    np.full_like(omega, np.nan),
+                    {0: f"{type(exc).__name__} at step {k + 1} of the segment: {reason}"},
+                )
         return np.full_like(q, np.nan), np.full_like(omega, np.nan), {0: f"{type(first_error).__name__}: {first_error}"}
     half = n // 2
     parts = [slice(0, half), slice(half, n)]
@@ -369,7 +393,11 @@ def _simulate(spec: SweepSpec, bodies: _Bodies, method: str, dt: float) -> _Outc
         # most segments of a run repeat the last one's torques (a torque-free run: all of them)
         key = (step, torque_body.tobytes()) if everyone else None
         if key is None or key != last_torque[0]:
-            last_torque = (key, row_norms(torque_body) * step, _rows(quat.rotate, principal_from_body[live], torque_body))
+            last_torque = (
+                key,
+                row_norms(torque_body) * step,
+                _rows(quat.rotate, principal_from_body[live], torque_body),
+            )
         _, impulse_rate, torque_p = last_torque
         # the following segments under the same torques join this one in a call that records the
         # checkpoints' rates (a return to Python at each costs ~5 % of a short run); their torques
@@ -452,6 +480,7 @@ def _subset(bodies: _Bodies, mask: np.ndarray) -> _Bodies:
 
 def _concat(a: _Bodies, b: _Bodies) -> _Bodies:
     """The bodies of ``a``, then those of ``b``."""
+
     def join(x: Any, y: Any) -> Any:
         return Rotation.concatenate([x, y]) if isinstance(x, Rotation) else np.concatenate((x, y))
 
@@ -460,6 +489,7 @@ def _concat(a: _Bodies, b: _Bodies) -> _Bodies:
 
 def _split(outcome: _Outcome, n: int) -> tuple[_Outcome, _Outcome]:
     """The first n bodies' outcome and the rest's."""
+
     def part(select: slice, offset: int) -> _Outcome:
         return _Outcome(
             q_body=outcome.q_body[select],
@@ -511,7 +541,8 @@ def run_chunk(spec: SweepSpec, chunk: Chunk, nominal: _Outcome | None = None) ->
             nominal = run_nominal(spec, spin_rate)
         outcome = _simulate(spec, bodies, method, dt)
     attitude_error = quat.compose_rotations(
-        Rotation.from_quat(np.nan_to_num(nominal.q_body[0], nan=1.0)).inv(), Rotation.from_quat(np.nan_to_num(outcome.q_body, nan=1.0))
+        Rotation.from_quat(np.nan_to_num(nominal.q_body[0], nan=1.0)).inv(),
+        Rotation.from_quat(np.nan_to_num(outcome.q_body, nan=1.0)),
     ).magnitude()
     failed = np.isnan(outcome.q_body).any(axis=1) | np.isnan(nominal.q_body[0]).any()
     attitude_error = np.where(failed, np.nan, attitude_error)
@@ -587,7 +618,9 @@ def measure_step_cost(method: str, sizes: tuple[int, int] = (1, 256), steps: int
     return fixed, per_body
 
 
-def choose_chunk_size(spec: SweepSpec, workers: int, target_seconds: float = 5.0, tasks_per_worker: int = 4) -> tuple[int, dict[str, float]]:
+def choose_chunk_size(
+    spec: SweepSpec, workers: int, target_seconds: float = 5.0, tasks_per_worker: int = 4
+) -> tuple[int, dict[str, float]]:
     """Bodies per task from the measured step cost, and the figures it was chosen from.
 
     A batch step costs ``fixed + per_body * N``: the fixed part (Python and numpy call
@@ -600,5 +633,9 @@ def choose_chunk_size(spec: SweepSpec, workers: int, target_seconds: float = 5.0
     bounded = max(1, math.floor(target_seconds / (steps * per_body)))
     balanced = math.ceil(spec.n_runs / (tasks_per_worker * max(workers, 1)))
     size = int(max(1, min(spec.samples, bounded, balanced)))
-    figures = {"fixed_step_seconds": fixed, "per_body_step_seconds": per_body, "overhead_fraction": fixed / (fixed + per_body * size)}
+    figures = {
+        "fixed_step_seconds": fixed,
+        "per_body_step_seconds": per_body,
+        "overhead_fraction": fixed / (fixed + per_body * size),
+    }
     return size, figures

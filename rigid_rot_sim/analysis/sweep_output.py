@@ -27,14 +27,34 @@ from rigid_rot_sim.analysis.sweep import COLUMNS
 from rigid_rot_sim.analysis.sweep_spec import METRICS
 from rigid_rot_sim.recording.provenance import package_versions
 
-__all__ = ["to_table", "write_parquet", "summary_markdown", "write_plots", "write_outputs", "METADATA_KEY", "PERCENTILES"]
+__all__ = [
+    "to_table",
+    "write_parquet",
+    "summary_markdown",
+    "write_plots",
+    "write_outputs",
+    "METADATA_KEY",
+    "PERCENTILES",
+]
 
 METADATA_KEY = b"rigid_rot_sim.sweep"
 PERCENTILES = (0, 5, 50, 95, 99, 100)
 #: Input columns drawn against the metric when they vary.
 INPUT_COLUMNS = (
-    "I1", "I2", "I3", "misalignment", "omega0_x", "omega0_y", "omega0_z", "attitude0_error",
-    "torque_scale_x", "torque_scale_y", "torque_scale_z", "torque_noise_rms", "spin_rate", "dt",
+    "I1",
+    "I2",
+    "I3",
+    "misalignment",
+    "omega0_x",
+    "omega0_y",
+    "omega0_z",
+    "attitude0_error",
+    "torque_scale_x",
+    "torque_scale_y",
+    "torque_scale_z",
+    "torque_noise_rms",
+    "spin_rate",
+    "dt",
 )
 _SWEEP_DISTRIBUTIONS = ("dask", "distributed", "pyarrow", "matplotlib", "tqdm")
 
@@ -71,7 +91,9 @@ def to_table(result: SweepResult) -> Any:
     """The rows as a ``pyarrow.Table`` with the sweep's metadata."""
     import pyarrow as pa
 
-    fields = [pa.field(name, pa.string() if kind == "string" else getattr(pa, kind)()) for name, kind in COLUMNS.items()]
+    fields = [
+        pa.field(name, pa.string() if kind == "string" else getattr(pa, kind)()) for name, kind in COLUMNS.items()
+    ]
     schema = pa.schema(fields, metadata={METADATA_KEY: json.dumps(_metadata(result), sort_keys=True).encode()})
     return pa.table({name: result.columns[name] for name in COLUMNS}, schema=schema)
 
@@ -102,7 +124,9 @@ def _grid_points(columns: dict[str, Any]) -> list[tuple[int, str]]:
     for k, g in enumerate(columns["grid_point"]):
         if int(g) not in seen:
             seen.add(int(g))
-            points.append((int(g), _grid_label(columns["method"][k], float(columns["dt"][k]), float(columns["spin_rate"][k]))))
+            points.append(
+                (int(g), _grid_label(columns["method"][k], float(columns["dt"][k]), float(columns["spin_rate"][k])))
+            )
     return points
 
 
@@ -111,7 +135,11 @@ def summary_markdown(result: SweepResult, files: dict[str, str] | None = None) -
     spec, columns, engine = result.spec, result.columns, result.engine
     n = len(columns["run"])
     verdicts = {v: columns["verdict"].count(v) for v in ("stable", "drifting", "unstable")}
-    header = "| metric | runs | " + " | ".join(f"p{p}" if 0 < p < 100 else ("min" if p == 0 else "max") for p in PERCENTILES) + " |"
+    header = (
+        "| metric | runs | "
+        + " | ".join(f"p{p}" if 0 < p < 100 else ("min" if p == 0 else "max") for p in PERCENTILES)
+        + " |"
+    )
     rule = "|---|---:|" + "---:|" * len(PERCENTILES)
     metrics = [m for m in METRICS if m not in ("first_flip", "nutation_range") or m in spec.events]
     lines = [
@@ -214,7 +242,7 @@ def write_plots(result: SweepResult, out: Path) -> dict[str, str]:
             ax.set_ylabel(spec.metric, fontsize=7)
             if log:
                 ax.set_yscale("log")
-        for ax in list(axes.flat)[len(inputs):]:
+        for ax in list(axes.flat)[len(inputs) :]:
             ax.axis("off")
         fig.suptitle(f"{spec.name}: inputs against {spec.metric}")
         fig.tight_layout()

@@ -46,14 +46,18 @@ def _per_axis(description: str) -> dict[str, Any]:
 
 def _dispersion(name: str) -> dict[str, Any]:
     size_key, unit, what = DISPERSION_KINDS[name]
-    return nullable(mapping(
-        f"Disperses {what}.",
-        {
-            "distribution": choice("normal (cut at 4 sigma) or uniform.", DISTRIBUTIONS, default="normal"),
-            size_key: _per_axis(f"1 sigma (normal) or the half-width (uniform), unit {unit}; a number or [x, y, z]."),
-        },
-        required=[size_key],
-    ))
+    return nullable(
+        mapping(
+            f"Disperses {what}.",
+            {
+                "distribution": choice("normal (cut at 4 sigma) or uniform.", DISTRIBUTIONS, default="normal"),
+                size_key: _per_axis(
+                    f"1 sigma (normal) or the half-width (uniform), unit {unit}; a number or [x, y, z]."
+                ),
+            },
+            required=[size_key],
+        )
+    )
 
 
 _METHODS = _one_or_more("Batch methods (rigid_rot_sim.core.batch.BATCH_METHODS), e.g. rk4.", text("A batch method."))
@@ -82,38 +86,47 @@ SWEEP_SCHEMA: dict[str, Any] = {
             "samples": _SAMPLES,
             "duration": _DURATION,
             "grid": _GRID,
-            "dispersions": nullable(mapping(
-                "What varies between the runs of one grid point; normal draws are cut at 4 sigma.",
-                {
-                    **{name: _dispersion(name) for name in DISPERSION_KINDS},
-                    "torque_noise": nullable(mapping(
-                        "Random torque, normal, held for `interval` s.",
-                        {
-                            "sigma": _per_axis("N*m per axis, body frame"),
-                            "interval": _positive("Seconds each draw is held.") | {"default": 1.0},
-                        },
-                        required=["sigma"],
-                    )),
-                },
-            )),
-            "nominal": nullable(mapping(
-                "The nominal run's integrator (default: the grid point's).",
-                {
-                    "method": text("A batch method.", default="rk4"),
-                    "dt": _positive("Fixed step, s."),
-                },
-                required=["dt"],
-            )),
+            "dispersions": nullable(
+                mapping(
+                    "What varies between the runs of one grid point; normal draws are cut at 4 sigma.",
+                    {
+                        **{name: _dispersion(name) for name in DISPERSION_KINDS},
+                        "torque_noise": nullable(
+                            mapping(
+                                "Random torque, normal, held for `interval` s.",
+                                {
+                                    "sigma": _per_axis("N*m per axis, body frame"),
+                                    "interval": _positive("Seconds each draw is held.") | {"default": 1.0},
+                                },
+                                required=["sigma"],
+                            )
+                        ),
+                    },
+                )
+            ),
+            "nominal": nullable(
+                mapping(
+                    "The nominal run's integrator (default: the grid point's).",
+                    {
+                        "method": text("A batch method.", default="rk4"),
+                        "dt": _positive("Fixed step, s."),
+                    },
+                    required=["dt"],
+                )
+            ),
             "checkpoints": _CHECKPOINTS,
             "energy_tolerance": _positive("Relative energy drift above which a torque-free run is drifting.")
             | {"default": 1e-3},
-            "events": nullable(array("Scene-specific events to record (first_flip, nutation_range).",
-                                     text("An event name."))),
+            "events": nullable(
+                array("Scene-specific events to record (first_flip, nutation_range).", text("An event name."))
+            ),
             "metric": text("The metric the summary plots against the inputs.", default="final_attitude_error"),
-            "quick": nullable(mapping(
-                "What --quick changes (grid: per key).",
-                {"samples": _SAMPLES, "duration": _DURATION, "grid": _GRID, "checkpoints": _CHECKPOINTS},
-            )),
+            "quick": nullable(
+                mapping(
+                    "What --quick changes (grid: per key).",
+                    {"samples": _SAMPLES, "duration": _DURATION, "grid": _GRID, "checkpoints": _CHECKPOINTS},
+                )
+            ),
         },
         required=["scene", "seed", "samples", "grid"],
     ),

@@ -44,17 +44,18 @@ moment must stay positive and satisfy the triangle inequality of a rigid body.
 from __future__ import annotations
 
 import os
+from collections.abc import Mapping
 from dataclasses import dataclass, replace
-from typing import Any, Mapping
+from typing import Any
 
 import numpy as np
 
 from rigid_rot_sim.analysis.sweep_schema import DISPERSION_KINDS, SWEEP_SCHEMA
 from rigid_rot_sim.core.batch import BATCH_METHODS
+from rigid_rot_sim.core.validation import TRIANGLE_RTOL
 from rigid_rot_sim.scene.bounded_yaml import load_input, read_input
 from rigid_rot_sim.scene.scene import Scene, SceneError, load_scene
 from rigid_rot_sim.scene.schema import validated
-from rigid_rot_sim.core.validation import TRIANGLE_RTOL
 from rigid_rot_sim.share import resolve_scene
 
 __all__ = [
@@ -86,6 +87,8 @@ METRICS = {
     "first_flip": EVENTS["first_flip"],
     "nutation_range": EVENTS["nutation_range"],
 }
+
+
 class SweepSpecError(ValueError):
     """A sweep spec is invalid; the message names the file, the key and what is wrong."""
 
@@ -153,7 +156,6 @@ class SweepSpec:
         return len(self.grid) * self.samples
 
 
-
 # ----------------------------------------------------------------------------- loading
 
 
@@ -170,8 +172,13 @@ def parse_sweep_text(text: str, source: str = "<string>", quick: bool = False) -
 
 def parse_sweep_spec(data: Any, source: str = "<string>", text: str = "", quick: bool = False) -> SweepSpec:
     """Validate a sweep spec given as parsed YAML; ``quick`` applies its ``quick`` overrides."""
-    return validated(data, SWEEP_SCHEMA, source, SweepSpecError,
-                     lambda spec: _sweep(_with_quick(spec) if quick else spec, source, text))
+    return validated(
+        data,
+        SWEEP_SCHEMA,
+        source,
+        SweepSpecError,
+        lambda spec: _sweep(_with_quick(spec) if quick else spec, source, text),
+    )
 
 
 def with_samples(spec: SweepSpec, samples: int) -> SweepSpec:
@@ -282,7 +289,9 @@ def _dispersions(spec: Mapping[str, Any], moments: np.ndarray) -> Dispersions:
     if "torque_scale" in values:
         worst = values["torque_scale"].extreme()
         if worst.max() >= 1.0:
-            raise ValueError(f"dispersions.torque_scale.relative: {worst.max():g} at the extremes can reverse the torque (must stay < 1)")
+            raise ValueError(
+                f"dispersions.torque_scale.relative: {worst.max():g} at the extremes can reverse the torque (must stay < 1)"
+            )
     noise = spec.get("torque_noise")
     if noise is not None:
         values["torque_noise_sigma"] = _per_axis(noise["sigma"])
@@ -303,7 +312,9 @@ def _check_moment_dispersion(moments: np.ndarray, dispersion: Dispersion) -> Non
     low, high = moments * (1.0 - extreme), moments * (1.0 + extreme)
     for i in range(3):
         if not low[i] > 0.0:
-            raise ValueError(f"{key}: {dispersion.size[i]:g} ({how}) can make moment {i + 1} ({moments[i]:g} kg*m^2) non-positive")
+            raise ValueError(
+                f"{key}: {dispersion.size[i]:g} ({how}) can make moment {i + 1} ({moments[i]:g} kg*m^2) non-positive"
+            )
     for k in range(3):
         i, j = (k + 1) % 3, (k + 2) % 3
         if low[i] + low[j] < high[k] - TRIANGLE_RTOL * float(high.sum()):

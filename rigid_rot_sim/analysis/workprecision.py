@@ -37,8 +37,9 @@ from __future__ import annotations
 import gc
 import math
 import time
+from collections.abc import Callable, Iterable
 from dataclasses import asdict, dataclass, field
-from typing import Any, Callable, Iterable, Literal
+from typing import Any, Literal
 
 import numpy as np
 from scipy.integrate import solve_ivp
@@ -120,7 +121,7 @@ class Settings:
     methods: tuple[str, ...] | None = None  # None: every method in METHODS
 
     @classmethod
-    def quick_mode(cls, **overrides: Any) -> "Settings":
+    def quick_mode(cls, **overrides: Any) -> Settings:
         values = dict(
             quick=True,
             repeats=2,
@@ -189,7 +190,9 @@ def _best_time(run: Callable[[], Any], repeats: int) -> tuple[Any, float, int]:
     return result, best, done
 
 
-def _runner(problem: Problem, line: DiagramLine, value: float) -> tuple[Callable[[], tuple[np.ndarray, np.ndarray, int]], str]:
+def _runner(
+    problem: Problem, line: DiagramLine, value: float
+) -> tuple[Callable[[], tuple[np.ndarray, np.ndarray, int]], str]:
     """A zero-argument callable doing the full timed run, and the sweep parameter name."""
     if line.family == "scipy":
         y0 = problem.initial_vector()
@@ -222,7 +225,9 @@ def _runner(problem: Problem, line: DiagramLine, value: float) -> tuple[Callable
     return run_ours, parameter
 
 
-def measure_point(problem: Problem, line: DiagramLine, value: float, repeats: int, baseline: bool = False) -> SweepPoint:
+def measure_point(
+    problem: Problem, line: DiagramLine, value: float, repeats: int, baseline: bool = False
+) -> SweepPoint:
     """Run one sweep point and compare its final state with the problem's reference.
 
     ``baseline``: also time scipy's BASELINE_METHOD at BASELINE_TOL on the same problem,
@@ -312,7 +317,9 @@ def problem_lines(problem: Problem, settings: Settings) -> list[DiagramLine]:
     return method_lines(methods, problem) + scipy_lines(settings.scipy_methods)
 
 
-def run_line(problem: Problem, line: DiagramLine, settings: Settings, progress: Any = None, baseline: bool = False) -> list[SweepPoint]:
+def run_line(
+    problem: Problem, line: DiagramLine, settings: Settings, progress: Any = None, baseline: bool = False
+) -> list[SweepPoint]:
     """One line's sweep, coarse to fine, with points chosen by error target (:func:`next_value`).
 
     A line stops once a point meets min(TARGETS) (or the error floor, when the reference
@@ -334,7 +341,12 @@ def run_line(problem: Problem, line: DiagramLine, settings: Settings, progress: 
 
 
 def _sweep_line(
-    problem: Problem, line: DiagramLine, settings: Settings, values: list[float], goal: float, progress: Any,
+    problem: Problem,
+    line: DiagramLine,
+    settings: Settings,
+    values: list[float],
+    goal: float,
+    progress: Any,
     baseline: bool,
 ) -> list[SweepPoint]:
     """run_line's loop over the points of one line."""
@@ -349,7 +361,11 @@ def _sweep_line(
         if progress is not None:
             progress.update(1)
         refusals = refusals + 1 if point.status == "refused" else 0
-        if refusals >= 2 or point.status == "ok" and (point.omega_error <= goal or point.seconds > settings.budget_seconds):
+        if (
+            refusals >= 2
+            or point.status == "ok"
+            and (point.omega_error <= goal or point.seconds > settings.budget_seconds)
+        ):
             break
         value = next_value(line, problem.t_end, points, values, goal)
         if value is not None and line.sweep == "step" and point.status == "ok":
@@ -412,7 +428,11 @@ def errors_fall_with_step(points: Iterable[SweepPoint], label: str, floor: float
 
 
 def run_problems(
-    problems: dict[str, Problem], settings: Settings, bar: Any, scheduler: str | None = None, workers: int | None = None,
+    problems: dict[str, Problem],
+    settings: Settings,
+    bar: Any,
+    scheduler: str | None = None,
+    workers: int | None = None,
     cluster: bool = False,
 ) -> list[ProblemResult]:
     """Every line's sweep on each problem, in order; ``bar`` (tqdm) counts the points.

@@ -9,9 +9,9 @@ from __future__ import annotations
 
 import os
 import time
+from collections.abc import Sequence
 from dataclasses import asdict
 from pathlib import Path
-from typing import Sequence
 
 from tqdm import tqdm
 
@@ -167,23 +167,31 @@ def _markdown(
 
 def _summary_table(results: list[ProblemResult]) -> list[str]:
     header = (
-        "problem", "target ω error [rad/s]", "fastest of ours", "its run time [s]", "its ω error",
-        "fastest scipy", "its run time [s]", "speed-up (scipy time / ours)",
+        "problem",
+        "target ω error [rad/s]",
+        "fastest of ours",
+        "its run time [s]",
+        "its ω error",
+        "fastest scipy",
+        "its run time [s]",
+        "speed-up (scipy time / ours)",
     )
     rows = []
     for result in results:
         for row in summary(result):
             ours, theirs = row["ours"], row["scipy"]
-            rows.append((
-                result.problem,
-                f"{row['target']:g}",
-                _point_label(ours),
-                number(ours and ours["seconds"], ".3e"),
-                number(ours and ours["omega_error"], ".2e"),
-                _point_label(theirs),
-                number(theirs and theirs["seconds"], ".3e"),
-                number(row["speedup"], ".1f") + ("×" if row["speedup"] else ""),
-            ))
+            rows.append(
+                (
+                    result.problem,
+                    f"{row['target']:g}",
+                    _point_label(ours),
+                    number(ours and ours["seconds"], ".3e"),
+                    number(ours and ours["omega_error"], ".2e"),
+                    _point_label(theirs),
+                    number(theirs and theirs["seconds"], ".3e"),
+                    number(row["speedup"], ".1f") + ("×" if row["speedup"] else ""),
+                )
+            )
     return markdown_table(header, rows)
 
 
@@ -193,8 +201,15 @@ def _point_label(point: dict | None) -> str:
 
 def _points_table(result: ProblemResult) -> list[str]:
     header = (
-        "method", "parameter", "status", "run time [s]", "ω error [rad/s]", "attitude error [rad]",
-        "rel. energy error", "rel. \\|L\\| error", "steps / rhs evals",
+        "method",
+        "parameter",
+        "status",
+        "run time [s]",
+        "ω error [rad/s]",
+        "attitude error [rad]",
+        "rel. energy error",
+        "rel. \\|L\\| error",
+        "steps / rhs evals",
     )
     rows = (
         (

@@ -24,12 +24,25 @@ from __future__ import annotations
 import argparse
 import importlib
 import sys
-from typing import Sequence
+from collections.abc import Sequence
 
 from rigid_rot_sim.share import ensure_ament_prefix_path
 
 #: Subcommand modules of rigid_rot_sim.cli, in the order ``--help`` lists them.
-SUBCOMMANDS = ["inertia", "report", "stability", "sweep", "bag", "resim", "plot", "replay", "view", "export", "run", "torque"]
+SUBCOMMANDS = [
+    "inertia",
+    "report",
+    "stability",
+    "sweep",
+    "bag",
+    "resim",
+    "plot",
+    "replay",
+    "view",
+    "export",
+    "run",
+    "torque",
+]
 
 PROG = "rigid-rot"
 

@@ -10,7 +10,9 @@ from __future__ import annotations
 
 
 def add_parser(subparsers) -> None:
-    parser = subparsers.add_parser("bag", help="inspect or repair an MCAP recording", description=__doc__.split("\n\n")[0])
+    parser = subparsers.add_parser(
+        "bag", help="inspect or repair an MCAP recording", description=__doc__.split("\n\n")[0]
+    )
     actions = parser.add_subparsers(dest="action", metavar="ACTION", required=True)
     info = actions.add_parser("info", help="summary of a recording")
     info.add_argument("file", metavar="FILE.mcap")

@@ -53,21 +53,33 @@ def add_parser(subparsers) -> None:
     )
     parser.add_argument("body_file", nargs="?", metavar="FILE.yaml", help="body file with point_masses")
     parser.add_argument(
-        "--mass", action="append", nargs=4, type=float, metavar=("M", "X", "Y", "Z"),
+        "--mass",
+        action="append",
+        nargs=4,
+        type=float,
+        metavar=("M", "X", "Y", "Z"),
         help="a point mass M (kg) at (X, Y, Z) (m); repeat for each mass (instead of FILE)",
     )
-    parser.add_argument("--origin", nargs=3, type=float, metavar=("X", "Y", "Z"),
-                        help="point (m) to take inertia_origin about (default: the file's, else 0 0 0)")
+    parser.add_argument(
+        "--origin",
+        nargs=3,
+        type=float,
+        metavar=("X", "Y", "Z"),
+        help="point (m) to take inertia_origin about (default: the file's, else 0 0 0)",
+    )
     parser.add_argument("--frame-id", help="frame of positions and results (default: the file's)")
     parser.add_argument("--json", action="store_true", help="print JSON instead of a table")
     parser.add_argument(
-        "--service", nargs="?", const=DEFAULT_SERVICE, metavar="NAME",
+        "--service",
+        nargs="?",
+        const=DEFAULT_SERVICE,
+        metavar="NAME",
         help=f"ask a running node's ComputeInertia service (default name {DEFAULT_SERVICE})",
     )
-    parser.add_argument("--compare", action="store_true",
-                        help="with --service: check the answer against the local computation")
-    parser.add_argument("--timeout", type=float, default=10.0,
-                        help="s to wait for the service (default 10)")
+    parser.add_argument(
+        "--compare", action="store_true", help="with --service: check the answer against the local computation"
+    )
+    parser.add_argument("--timeout", type=float, default=10.0, help="s to wait for the service (default 10)")
     add_ros_args(parser)
     parser.set_defaults(handler=run)
 
@@ -110,11 +122,11 @@ def _numbers(value, where: str, ndim: int) -> np.ndarray:
     try:
         array = np.array(value, dtype=float)
     except (TypeError, ValueError, OverflowError):
-        raise ValueError(f"{where} must be {'a list of numbers' if ndim == 1 else 'a list of [x, y, z]'}, "
-                         f"got {shown}") from None
+        raise ValueError(
+            f"{where} must be {'a list of numbers' if ndim == 1 else 'a list of [x, y, z]'}, got {shown}"
+        ) from None
     if array.ndim != ndim or (ndim == 2 and array.shape[1] != 3):
-        raise ValueError(f"{where} must be {'a list of numbers' if ndim == 1 else 'a list of [x, y, z]'}, "
-                         f"got {shown}")
+        raise ValueError(f"{where} must be {'a list of numbers' if ndim == 1 else 'a list of [x, y, z]'}, got {shown}")
     return array
 
 
@@ -151,8 +163,11 @@ def run(args: argparse.Namespace) -> int:
         difference = max_difference(local, remote)
         scale = max(float(local.principal_moments[-1]), float(local.total_mass), 1.0)
         if remote.symmetry != local.symmetry or not difference <= 1e-12 * scale:
-            print(f"rigid-rot inertia: MISMATCH: service and library differ by {difference:.3g} "
-                  f"(symmetry {remote.symmetry} vs {local.symmetry})", file=sys.stderr)
+            print(
+                f"rigid-rot inertia: MISMATCH: service and library differ by {difference:.3g} "
+                f"(symmetry {remote.symmetry} vs {local.symmetry})",
+                file=sys.stderr,
+            )
             return 1
         print(f"service answer matches the library (largest difference {difference:.3g})")
     return 0
@@ -168,21 +183,21 @@ def call_service(name: str, body: BodyInput, timeout: float, ros_args: list[str]
     """
     import rclpy
     from rclpy.executors import SingleThreadedExecutor
-    from rigid_rot_msgs.srv import ComputeInertia
 
+    from rigid_rot_msgs.srv import ComputeInertia
     from rigid_rot_sim import conversions
 
-    request = conversions.arrays_to_compute_inertia_request(
-        body.masses, body.positions, body.origin, body.frame_id
-    )
+    request = conversions.arrays_to_compute_inertia_request(body.masses, body.positions, body.origin, body.frame_id)
     context = rclpy.Context()
     rclpy.init(args=ros_args or [], context=context)
     try:
         node = rclpy.create_node("rigid_rot_inertia_client", context=context)
         client = node.create_client(ComputeInertia, name)
         if not client.wait_for_service(timeout_sec=timeout):
-            raise SystemExit(f"{name}: no ComputeInertia service within {timeout:g} s "
-                             f"(ROS_DOMAIN_ID={os.environ.get('ROS_DOMAIN_ID', '0')})")
+            raise SystemExit(
+                f"{name}: no ComputeInertia service within {timeout:g} s "
+                f"(ROS_DOMAIN_ID={os.environ.get('ROS_DOMAIN_ID', '0')})"
+            )
         executor = SingleThreadedExecutor(context=context)
         executor.add_node(node)
         future = client.call_async(request)

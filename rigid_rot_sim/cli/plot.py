@@ -9,7 +9,9 @@ from __future__ import annotations
 
 
 def add_parser(subparsers) -> None:
-    parser = subparsers.add_parser("plot", help="plot a recorded run to PNG files", description=__doc__.split("\n\n")[0])
+    parser = subparsers.add_parser(
+        "plot", help="plot a recorded run to PNG files", description=__doc__.split("\n\n")[0]
+    )
     parser.add_argument("bag", metavar="BAG.mcap")
     parser.add_argument("--out", metavar="DIR", help="output directory (default: <bag stem>_plots)")
     parser.set_defaults(handler=run)

@@ -22,9 +22,7 @@ def add_parser(subparsers) -> None:
     )
     parser.add_argument("--out", default="out/report", metavar="DIR", help="output directory (default: out/report)")
     parser.add_argument("--quick", action="store_true", help="coarse sweeps and short timing budgets (< 2 min)")
-    parser.add_argument(
-        "--problems", nargs="+", metavar="KEY", help="only these problems (default: all; e.g. P1 P2)"
-    )
+    parser.add_argument("--problems", nargs="+", metavar="KEY", help="only these problems (default: all; e.g. P1 P2)")
     add_suite_options(parser, "points", ", each timed with a scipy baseline")
     parser.set_defaults(handler=run)
 
@@ -38,8 +36,13 @@ def run(args: argparse.Namespace) -> int:
         command += " --problems " + " ".join(args.problems)
     check_workers(args)
     results, paths = run_report(
-        args.out, quick=args.quick, problem_keys=args.problems, command=command, progress=not args.no_progress,
-        scheduler=args.scheduler, workers=args.workers,
+        args.out,
+        quick=args.quick,
+        problem_keys=args.problems,
+        command=command,
+        progress=not args.no_progress,
+        scheduler=args.scheduler,
+        workers=args.workers,
     )
     for result in results:
         for row in summary(result, TARGETS):

@@ -11,7 +11,9 @@ from __future__ import annotations
 
 
 def add_parser(subparsers) -> None:
-    parser = subparsers.add_parser("resim", help="re-simulate a recording and compare states", description=__doc__.split("\n\n")[0])
+    parser = subparsers.add_parser(
+        "resim", help="re-simulate a recording and compare states", description=__doc__.split("\n\n")[0]
+    )
     parser.add_argument("bag", metavar="BAG.mcap")
     parser.add_argument("--integrator", metavar="NAME", help="integrator to re-run with (default: the recorded one)")
     parser.set_defaults(handler=run)

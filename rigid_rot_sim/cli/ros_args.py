@@ -13,7 +13,10 @@ import argparse
 def add_ros_args(parser: argparse.ArgumentParser) -> None:
     """Accept ``--ros-args ...`` as the last option of ``parser``."""
     parser.add_argument(
-        "--ros-args", nargs=argparse.REMAINDER, dest="ros_args", metavar="ARG",
+        "--ros-args",
+        nargs=argparse.REMAINDER,
+        dest="ros_args",
+        metavar="ARG",
         help="everything after it goes to ROS as with ros2 run (e.g. -r __ns:=/robot, -p name:=value)",
     )
 

@@ -34,16 +34,28 @@ def add_parser(subparsers) -> None:
     parser.add_argument("scene", help="scene YAML path, or a shipped scene name (e.g. free_tumble)")
     parser.add_argument("--duration", type=nonnegative_number, help="sim seconds to run, then exit 0 (0 = unbounded)")
     parser.add_argument(
-        "--realtime-factor", type=nonnegative_number, dest="real_time_factor", help="1 = wall-clock pace, 0 = as fast as possible"
+        "--realtime-factor",
+        type=nonnegative_number,
+        dest="real_time_factor",
+        help="1 = wall-clock pace, 0 = as fast as possible",
     )
     parser.add_argument("--integrator", help="integrator name from the registry, or auto")
     parser.add_argument("--dt", type=positive_number, help="physics step, s")
     parser.add_argument("--record", metavar="OUT.mcap", help="record the run to this MCAP file")
-    parser.add_argument("--record-log-time", choices=LOG_TIME_BASES, dest="record_log_time",
-                        help="MCAP log times of the recording: sim time (default) or wall clock")
-    parser.add_argument("--foxglove", metavar="[HOST:]PORT",
-                        help="serve the run live to Foxglove (WebSocket, host default 127.0.0.1); needs foxglove-sdk")
-    parser.add_argument("--echo", type=positive_number, metavar="PERIOD", help="print the received ~/state every PERIOD s of sim time")
+    parser.add_argument(
+        "--record-log-time",
+        choices=LOG_TIME_BASES,
+        dest="record_log_time",
+        help="MCAP log times of the recording: sim time (default) or wall clock",
+    )
+    parser.add_argument(
+        "--foxglove",
+        metavar="[HOST:]PORT",
+        help="serve the run live to Foxglove (WebSocket, host default 127.0.0.1); needs foxglove-sdk",
+    )
+    parser.add_argument(
+        "--echo", type=positive_number, metavar="PERIOD", help="print the received ~/state every PERIOD s of sim time"
+    )
     add_ros_args(parser)
     parser.set_defaults(handler=run)
 
@@ -83,8 +95,8 @@ def _run_with_echo(argv: list[str], period: float) -> int:
     """The node plus a subscriber to its ~/state in one executor, printing every ``period`` s."""
     import rclpy
     from rclpy.node import Node
-    from rigid_rot_msgs.msg import RigidBodyState
 
+    from rigid_rot_msgs.msg import RigidBodyState
     from rigid_rot_sim import conversions
     from rigid_rot_sim.ros.node import STARTUP_ERRORS, RigidRotSimNode, init_ros, run_until_finished
     from rigid_rot_sim.ros.qos import STATE_QOS

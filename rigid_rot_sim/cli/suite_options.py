@@ -10,10 +10,18 @@ import argparse
 
 def add_suite_options(parser: argparse.ArgumentParser, tasks: str, scheduler_note: str = "") -> None:
     """``--scheduler``, ``--workers`` and ``--no-progress``; ``tasks`` names what runs on Dask ("points")."""
-    parser.add_argument("--scheduler", metavar="ADDRESS", help=f"run the {tasks} on this Dask scheduler "
-                        f"(tcp://host:port; default $DASK_SCHEDULER_ADDRESS){scheduler_note}")
-    parser.add_argument("--workers", type=int, metavar="N", help=f"run the {tasks} on a local Dask cluster of N "
-                        "workers (with --scheduler: wait for N workers)")
+    parser.add_argument(
+        "--scheduler",
+        metavar="ADDRESS",
+        help=f"run the {tasks} on this Dask scheduler "
+        f"(tcp://host:port; default $DASK_SCHEDULER_ADDRESS){scheduler_note}",
+    )
+    parser.add_argument(
+        "--workers",
+        type=int,
+        metavar="N",
+        help=f"run the {tasks} on a local Dask cluster of N workers (with --scheduler: wait for N workers)",
+    )
     parser.add_argument("--no-progress", action="store_true", help="no progress bar")
 
 

@@ -31,13 +31,18 @@ def add_parser(subparsers) -> None:
         "torque", help="publish WrenchStamped torque commands to a running node", description=__doc__.split("\n\n")[0]
     )
     parser.add_argument("torque", nargs="*", type=finite_number, metavar="X Y Z", help="torque, N*m (omit with --zero)")
-    parser.add_argument("--frame", default="base_link",
-                        help="header.frame_id: the scene's body or world frame (default base_link)")
+    parser.add_argument(
+        "--frame", default="base_link", help="header.frame_id: the scene's body or world frame (default base_link)"
+    )
     parser.add_argument("--duration", type=positive_number, help="repeat for this many wall seconds, then send zero")
-    parser.add_argument("--rate", type=positive_number, default=20.0, help="repeat rate with --duration, Hz (default 20)")
+    parser.add_argument(
+        "--rate", type=positive_number, default=20.0, help="repeat rate with --duration, Hz (default 20)"
+    )
     parser.add_argument("--topic", default=DEFAULT_TOPIC, help=f"command topic (default {DEFAULT_TOPIC})")
     parser.add_argument("--zero", action="store_true", help="publish a zero torque (clears a held command)")
-    parser.add_argument("--wait", type=positive_number, default=5.0, help="seconds to wait for a subscriber (default 5)")
+    parser.add_argument(
+        "--wait", type=positive_number, default=5.0, help="seconds to wait for a subscriber (default 5)"
+    )
     add_ros_args(parser)
     parser.set_defaults(handler=run)
 
@@ -71,8 +76,11 @@ def run(args: argparse.Namespace) -> int:
         deadline = time.monotonic() + args.wait
         while publisher.get_subscription_count() == 0:
             if time.monotonic() > deadline:
-                print(f"rigid-rot torque: no subscriber on {publisher.topic_name} after {args.wait:g} s "
-                      "(is the node running?)", file=sys.stderr)
+                print(
+                    f"rigid-rot torque: no subscriber on {publisher.topic_name} after {args.wait:g} s "
+                    "(is the node running?)",
+                    file=sys.stderr,
+                )
                 return 1
             rclpy.spin_once(node, timeout_sec=0.05)
         sent = 0
@@ -89,8 +97,10 @@ def run(args: argparse.Namespace) -> int:
             publisher.publish(message((0.0, 0.0, 0.0)))
         # reliable delivery: give the middleware a moment before the process goes away
         publisher.wait_for_all_acked(rclpy.duration.Duration(seconds=2.0))
-        print(f"rigid-rot torque: {sent} command(s) {list(torque)} N*m in frame {args.frame!r} on {publisher.topic_name}"
-              + (", then zero" if args.duration is not None else ""))
+        print(
+            f"rigid-rot torque: {sent} command(s) {list(torque)} N*m in frame {args.frame!r} on {publisher.topic_name}"
+            + (", then zero" if args.duration is not None else "")
+        )
         return 0
     finally:
         node.destroy_node()

@@ -11,11 +11,16 @@ from __future__ import annotations
 
 
 def add_parser(subparsers) -> None:
-    parser = subparsers.add_parser("view", help="serve a recording to Foxglove (WebSocket, no ROS)",
-                                   description=__doc__.split("\n\n")[0])
+    parser = subparsers.add_parser(
+        "view", help="serve a recording to Foxglove (WebSocket, no ROS)", description=__doc__.split("\n\n")[0]
+    )
     parser.add_argument("bag", metavar="BAG.mcap")
-    parser.add_argument("--foxglove", metavar="[HOST:]PORT", default="8765",
-                        help="where to serve (default 8765 on 127.0.0.1; 0: any free port)")
+    parser.add_argument(
+        "--foxglove",
+        metavar="[HOST:]PORT",
+        default="8765",
+        help="where to serve (default 8765 on 127.0.0.1; 0: any free port)",
+    )
     parser.add_argument("--speed", type=float, default=1.0, help="initial playback speed (default 1)")
     parser.add_argument("--once", action="store_true", help="exit when the end is reached (default: serve on)")
     parser.set_defaults(handler=run)

@@ -71,8 +71,9 @@ def _as_batch(name: str, value: Any, n: int | None, width: int) -> np.ndarray:
 
 
 @register_jitable
-def _advance_body(b, method, moments, q, omega, torque, dt, n_steps, normalize_q, failed_step, failure, record_steps,
-                  omega_at):
+def _advance_body(
+    b, method, moments, q, omega, torque, dt, n_steps, normalize_q, failed_step, failure, record_steps, omega_at
+):
     """Advance body b in place; if it fails it keeps its last good state and records the
     (1-based) failing step and the status. After each of ``record_steps`` (increasing, 1-based)
     its rates go to ``omega_at[r, b]``: the run is cut there into calls as separate
@@ -97,8 +98,9 @@ def _advance_body(b, method, moments, q, omega, torque, dt, n_steps, normalize_q
             # as ExactFlow.advance(span): one evaluation of the flow at span * dt
             done, status = span, OK
             if span > 0:
-                q_end, w_end = free_flow(body_moments, (state[0], state[1], state[2], state[3]),
-                                         (state[4], state[5], state[6]), span * dt)
+                q_end, w_end = free_flow(
+                    body_moments, (state[0], state[1], state[2], state[3]), (state[4], state[5], state[6]), span * dt
+                )
                 finite = True
                 for x in q_end + w_end:
                     finite = finite and math.isfinite(x)
@@ -125,21 +127,25 @@ def _advance_body(b, method, moments, q, omega, torque, dt, n_steps, normalize_q
 
 
 @compiled(parallel=True)
-def _advance_bodies_parallel(method, moments, q, omega, torque, dt, n_steps, normalize_q, failed_step, failure,
-                             record_steps, omega_at):
+def _advance_bodies_parallel(
+    method, moments, q, omega, torque, dt, n_steps, normalize_q, failed_step, failure, record_steps, omega_at
+):
     for b in prange(q.shape[0]):
-        _advance_body(b, method, moments, q, omega, torque, dt, n_steps, normalize_q, failed_step, failure,
-                      record_steps, omega_at)
+        _advance_body(
+            b, method, moments, q, omega, torque, dt, n_steps, normalize_q, failed_step, failure, record_steps, omega_at
+        )
 
 
 # Serial for small jobs: starting the parallel region costs up to a scheduler time slice
 # (milliseconds) when the cores are busy with other work.
 @compiled
-def _advance_bodies_serial(method, moments, q, omega, torque, dt, n_steps, normalize_q, failed_step, failure,
-                           record_steps, omega_at):
+def _advance_bodies_serial(
+    method, moments, q, omega, torque, dt, n_steps, normalize_q, failed_step, failure, record_steps, omega_at
+):
     for b in range(q.shape[0]):
-        _advance_body(b, method, moments, q, omega, torque, dt, n_steps, normalize_q, failed_step, failure,
-                      record_steps, omega_at)
+        _advance_body(
+            b, method, moments, q, omega, torque, dt, n_steps, normalize_q, failed_step, failure, record_steps, omega_at
+        )
 
 
 _PARALLEL_BODY_STEPS = 200_000
@@ -162,8 +168,9 @@ _SOA_CHUNK = 512  # bodies per chunk: its scratch rows stay in the L1/L2 cache
 
 
 @register_jitable
-def _rk4_soa_chunk(start, stop, moments, q, omega, torque, dt, n_steps, normalize_q, failed_step, failure, record_steps,
-                   omega_at):
+def _rk4_soa_chunk(
+    start, stop, moments, q, omega, torque, dt, n_steps, normalize_q, failed_step, failure, record_steps, omega_at
+):
     m = stop - start
     # state and per-body constants, one row per component
     x = np.empty((7, m))  # qx, qy, qz, qw, w1, w2, w3
@@ -254,8 +261,13 @@ def _rk4_soa_chunk(start, stop, moments, q, omega, torque, dt, n_steps, normaliz
             nx, ny, nz, nw = nx * inv, ny * inv, nz * inv, nw * inv
             w1, w2, w3 = r[4, j], r[5, j], r[6, j]
             finite = (
-                (nx - nx == 0.0) & (ny - ny == 0.0) & (nz - nz == 0.0) & (nw - nw == 0.0)
-                & (w1 - w1 == 0.0) & (w2 - w2 == 0.0) & (w3 - w3 == 0.0)
+                (nx - nx == 0.0)
+                & (ny - ny == 0.0)
+                & (nz - nz == 0.0)
+                & (nw - nw == 0.0)
+                & (w1 - w1 == 0.0)
+                & (w2 - w2 == 0.0)
+                & (w3 - w3 == 0.0)
             )
             was_alive = alive[j]
             keep = was_alive & finite
@@ -287,21 +299,48 @@ def _rk4_soa_chunk(start, stop, moments, q, omega, torque, dt, n_steps, normaliz
 # stops LLVM from vectorising); the divisors here are moments (> 0, checked), constants and a
 # quaternion norm, whose zero gives a non-finite state, reported as such.
 @compiled(parallel=True, error_model="numpy")
-def _rk4_soa_parallel(moments, q, omega, torque, dt, n_steps, normalize_q, failed_step, failure, record_steps,
-                      omega_at):
+def _rk4_soa_parallel(
+    moments, q, omega, torque, dt, n_steps, normalize_q, failed_step, failure, record_steps, omega_at
+):
     n = q.shape[0]
     for c in prange((n + _SOA_CHUNK - 1) // _SOA_CHUNK):
         start = c * _SOA_CHUNK
-        _rk4_soa_chunk(start, min(n, start + _SOA_CHUNK), moments, q, omega, torque, dt, n_steps, normalize_q,
-                       failed_step, failure, record_steps, omega_at)
+        _rk4_soa_chunk(
+            start,
+            min(n, start + _SOA_CHUNK),
+            moments,
+            q,
+            omega,
+            torque,
+            dt,
+            n_steps,
+            normalize_q,
+            failed_step,
+            failure,
+            record_steps,
+            omega_at,
+        )
 
 
 @compiled(error_model="numpy")
 def _rk4_soa_serial(moments, q, omega, torque, dt, n_steps, normalize_q, failed_step, failure, record_steps, omega_at):
     n = q.shape[0]
     for start in range(0, n, _SOA_CHUNK):
-        _rk4_soa_chunk(start, min(n, start + _SOA_CHUNK), moments, q, omega, torque, dt, n_steps, normalize_q,
-                       failed_step, failure, record_steps, omega_at)
+        _rk4_soa_chunk(
+            start,
+            min(n, start + _SOA_CHUNK),
+            moments,
+            q,
+            omega,
+            torque,
+            dt,
+            n_steps,
+            normalize_q,
+            failed_step,
+            failure,
+            record_steps,
+            omega_at,
+        )
 
 
 def advance_batch(
@@ -352,8 +391,18 @@ def advance_batch(
     """
     if int(n_steps) != n_steps or n_steps < 0:
         raise ValueError(f"n_steps must be a non-negative integer, got {n_steps}")
-    q_end, omega_end, _ = _advance(method, principal_moments, q, omega, dt, int(n_steps), torque_body, normalize_q,
-                                   layout, np.empty(0, dtype=np.int64))
+    q_end, omega_end, _ = _advance(
+        method,
+        principal_moments,
+        q,
+        omega,
+        dt,
+        int(n_steps),
+        torque_body,
+        normalize_q,
+        layout,
+        np.empty(0, dtype=np.int64),
+    )
     return q_end, omega_end
 
 
@@ -440,12 +489,35 @@ def _advance(
     parallel = n > 1 and n * n_steps >= _PARALLEL_BODY_STEPS
     if method == "rk4" and layout == "soa":
         run_soa = _rk4_soa_parallel if parallel else _rk4_soa_serial
-        run_soa(moments, q, omega, torque, float(dt), n_steps, bool(normalize_q), failed_step, failure, record_steps,
-                omega_at)
+        run_soa(
+            moments,
+            q,
+            omega,
+            torque,
+            float(dt),
+            n_steps,
+            bool(normalize_q),
+            failed_step,
+            failure,
+            record_steps,
+            omega_at,
+        )
     else:
         run = _advance_bodies_parallel if parallel else _advance_bodies_serial
-        run(_KERNELS[method], moments, q, omega, torque, float(dt), n_steps, bool(normalize_q), failed_step,
-            failure, record_steps, omega_at)
+        run(
+            _KERNELS[method],
+            moments,
+            q,
+            omega,
+            torque,
+            float(dt),
+            n_steps,
+            bool(normalize_q),
+            failed_step,
+            failure,
+            record_steps,
+            omega_at,
+        )
     if failed_step.any():
         # report the earliest failure (the bodies ran independently, in parallel)
         bad = int(np.argmin(np.where(failed_step > 0, failed_step, np.iinfo(np.int64).max)))

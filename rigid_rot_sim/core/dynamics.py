@@ -159,7 +159,7 @@ class RigidBody:
     inertia_tensor: np.ndarray
 
     @classmethod
-    def from_inertia(cls, inertia: Any, name: str = "inertia") -> "RigidBody":
+    def from_inertia(cls, inertia: Any, name: str = "inertia") -> RigidBody:
         """Build from three principal moments (kg*m^2) or a symmetric 3x3 tensor.
 
         A diagonal tensor keeps the user's axes (no rotation). Otherwise the principal

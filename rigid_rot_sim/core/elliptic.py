@@ -374,8 +374,6 @@ def carlson_rj(x: float, y: float, z: float, p: float) -> float:
     return 3.0 * total + fac * series / (ave * math.sqrt(ave))
 
 
-
-
 @register_jitable
 def _estrin16(c: FloatArray, x: float) -> float:
     """sum_k c[k] x^k for k < 16 by Estrin's scheme (short dependency chains)."""
@@ -408,9 +406,15 @@ def carlson_rc_dd(xh: float, xl: float, yh: float, yl: float) -> tuple[float, fl
 
 
 @register_jitable
-def _rj_step_dd(x: DoubleDouble, y: DoubleDouble, z: DoubleDouble, p: DoubleDouble, sx: DoubleDouble,
-                sy: DoubleDouble, sz: DoubleDouble) -> tuple[DoubleDouble, DoubleDouble, DoubleDouble, DoubleDouble,
-                                                           DoubleDouble]:
+def _rj_step_dd(
+    x: DoubleDouble,
+    y: DoubleDouble,
+    z: DoubleDouble,
+    p: DoubleDouble,
+    sx: DoubleDouble,
+    sy: DoubleDouble,
+    sz: DoubleDouble,
+) -> tuple[DoubleDouble, DoubleDouble, DoubleDouble, DoubleDouble, DoubleDouble]:
     """One duplication step of R_J in double-double, for p >= x, y, z (double-doubles, with the square
     roots sx, sy, sz of x, y, z): ``R_J(x, y, z, p) = 3 R_C(alpha, beta) + R_J(x', y', z', p') / 4`` with
     x' = (x + lam) / 4 and so on (Carlson 1995); returns R_C(alpha, beta) and (x', y', z', p')."""
@@ -422,8 +426,13 @@ def _rj_step_dd(x: DoubleDouble, y: DoubleDouble, z: DoubleDouble, p: DoubleDoub
     x = dd_add_same_sign(*x, *lam)
     y = dd_add_same_sign(*y, *lam)
     z = dd_add_same_sign(*z, *lam)
-    return rc, (0.25 * x[0], 0.25 * x[1]), (0.25 * y[0], 0.25 * y[1]), (0.25 * z[0], 0.25 * z[1]), \
-        (0.25 * shifted[0], 0.25 * shifted[1])
+    return (
+        rc,
+        (0.25 * x[0], 0.25 * x[1]),
+        (0.25 * y[0], 0.25 * y[1]),
+        (0.25 * z[0], 0.25 * z[1]),
+        (0.25 * shifted[0], 0.25 * shifted[1]),
+    )
 
 
 #: third_kind_excess_dd takes up to three more duplication steps in double-double while x < _SPREAD_X_P p.
@@ -511,8 +520,7 @@ def jacobi_amplitude_dd(
 
 @register_jitable
 def jacobi_dd(
-    rh: float, rl: float, a: FloatArray, c: FloatArray, levels: int, m1h: float, m1l: float, top_h: float,
-    top_l: float
+    rh: float, rl: float, a: FloatArray, c: FloatArray, levels: int, m1h: float, m1l: float, top_h: float, top_l: float
 ) -> tuple[tuple[float, float], tuple[float, float], tuple[float, float]]:
     """sn, cn, dn of r = rh + rl (|r| <= K) as double-doubles, from :func:`jacobi_amplitude_dd` and
     :func:`dd_sin_cos_dd` (1 - m = m1h + m1l, dn = sqrt(cn^2 + (1 - m) sn^2))."""

@@ -153,10 +153,37 @@ _S_MOMENTS, _S_AXIS, _S_RATE, _S_BETA, _S_L, _S_Q0 = 1, 4, 5, 8, 9, 12
 # AGM levels; lam, u0, K, m1, n, COEFF and g0 are double-doubles (hi in the slot named, lo in *_LO); RATE = |L| / I1,
 # TURN (the precession beyond RATE t per half period 2K), AGM_TOP (the AGM limit), RNORM = 1 / |L| and
 # LSCALE = s_k I_k A_k (L_body = LSCALE * (cn, sn, dn); hi x3 then lo x3) too.
-(_E_ORDER, _E_AXIS_SIGNS, _E_MOMENTS, _E_AMPLITUDE, _E_SIGNS, _E_RNORM, _E_LAM, _E_U0, _E_M1, _E_N,
- _E_LNORM, _E_K, _E_COEFF, _E_J0, _E_G0, _E_QWL, _E_QWL_LO, _E_LEVELS, _E_LAM_LO, _E_U0_LO, _E_K_LO,
- _E_RATE, _E_TURN, _E_AGM_TOP, _E_LSCALE, _E_N_LO, _E_COEFF_LO, _E_G0_LO, _E_M1_LO) = (
-    1, 4, 7, 10, 13, 16, 18, 19, 20, 21, 22, 23, 24, 25, 26, 27, 31, 35, 36, 37, 38, 39, 41, 43, 45, 51, 52, 53, 54)
+(
+    _E_ORDER,
+    _E_AXIS_SIGNS,
+    _E_MOMENTS,
+    _E_AMPLITUDE,
+    _E_SIGNS,
+    _E_RNORM,
+    _E_LAM,
+    _E_U0,
+    _E_M1,
+    _E_N,
+    _E_LNORM,
+    _E_K,
+    _E_COEFF,
+    _E_J0,
+    _E_G0,
+    _E_QWL,
+    _E_QWL_LO,
+    _E_LEVELS,
+    _E_LAM_LO,
+    _E_U0_LO,
+    _E_K_LO,
+    _E_RATE,
+    _E_TURN,
+    _E_AGM_TOP,
+    _E_LSCALE,
+    _E_N_LO,
+    _E_COEFF_LO,
+    _E_G0_LO,
+    _E_M1_LO,
+) = (1, 4, 7, 10, 13, 16, 18, 19, 20, 21, 22, 23, 24, 25, 26, 27, 31, 35, 36, 37, 38, 39, 41, 43, 45, 51, 52, 53, 54)
 PARAMS_SIZE = 55
 
 
@@ -267,8 +294,17 @@ def _phase(params, agm_a, agm_c, uh, ul):
     # u - 2 K j in double-double: the phase is reduced without the rounding of u or of K j
     ph, pl = two_product(j, 2.0 * k)
     rh, rl = dd_add(uh, ul, -ph, -pl - j * 2.0 * params[_E_K_LO])
-    sn, cn, dn = jacobi_dd(rh, rl, agm_a, agm_c, int(params[_E_LEVELS]), params[_E_M1], params[_E_M1_LO],
-                           params[_E_AGM_TOP], params[_E_AGM_TOP + 1])
+    sn, cn, dn = jacobi_dd(
+        rh,
+        rl,
+        agm_a,
+        agm_c,
+        int(params[_E_LEVELS]),
+        params[_E_M1],
+        params[_E_M1_LO],
+        params[_E_AGM_TOP],
+        params[_E_AGM_TOP + 1],
+    )
     g_h, g_l = third_kind_excess_dd(sn, cn, dn, n, params[_E_N_LO])
     # sn and cn change sign over each half period 2K (dn does not)
     parity = 1.0 - 2.0 * (j % 2.0)
@@ -301,13 +337,19 @@ def _elliptic_state(params, agm_a, agm_c, tau):
     w1 = params[_E_SIGNS + 1] * params[_E_AMPLITUDE + 1] * sn[0]
     w2 = params[_E_SIGNS + 2] * params[_E_AMPLITUDE + 2] * dn[0]
     # L_body = (I1 w1, I2 w2, I3 w3) from I_k A_k s_k (double-doubles) and cn, sn, dn
-    l_body = (dd_mul(params[_E_LSCALE], params[_E_LSCALE + 3], *cn),
-              dd_mul(params[_E_LSCALE + 1], params[_E_LSCALE + 4], *sn),
-              dd_mul(params[_E_LSCALE + 2], params[_E_LSCALE + 5], *dn))
+    l_body = (
+        dd_mul(params[_E_LSCALE], params[_E_LSCALE + 3], *cn),
+        dd_mul(params[_E_LSCALE + 1], params[_E_LSCALE + 4], *sn),
+        dd_mul(params[_E_LSCALE + 2], params[_E_LSCALE + 5], *dn),
+    )
     z_hi, z_lo = _zxz_from_momentum(phi_h, phi_l, *l_body, (params[_E_RNORM], params[_E_RNORM + 1]))
-    order, axis_signs = params[_E_ORDER:_E_ORDER + 3], params[_E_AXIS_SIGNS:_E_AXIS_SIGNS + 3]
-    q = _compensated_product(params[_E_QWL:_E_QWL + 4], params[_E_QWL_LO:_E_QWL_LO + 4],
-                             _in_body_frame(z_hi, order, axis_signs), _in_body_frame(z_lo, order, axis_signs))
+    order, axis_signs = params[_E_ORDER : _E_ORDER + 3], params[_E_AXIS_SIGNS : _E_AXIS_SIGNS + 3]
+    q = _compensated_product(
+        params[_E_QWL : _E_QWL + 4],
+        params[_E_QWL_LO : _E_QWL_LO + 4],
+        _in_body_frame(z_hi, order, axis_signs),
+        _in_body_frame(z_lo, order, axis_signs),
+    )
     omega = np.zeros(3)
     omega[int(params[_E_ORDER])] = params[_E_AXIS_SIGNS] * w0
     omega[int(params[_E_ORDER + 1])] = params[_E_AXIS_SIGNS + 1] * w1
@@ -370,8 +412,12 @@ def _compensated_product(p_hi, p_lo, q, q_lo):
     hi, lo = _dot2_product(p_hi, p_lo, q, q_lo)
     d, c = _dot2(hi, (2.0 * lo[0], 2.0 * lo[1], 2.0 * lo[2], 2.0 * lo[3]), hi, (0.0, 0.0, 0.0, 0.0))
     d = (d - 1.0) + c  # d ~ 1: d - 1 is exact (Sterbenz)
-    return (hi[0] + (lo[0] - 0.5 * d * hi[0]), hi[1] + (lo[1] - 0.5 * d * hi[1]),
-            hi[2] + (lo[2] - 0.5 * d * hi[2]), hi[3] + (lo[3] - 0.5 * d * hi[3]))
+    return (
+        hi[0] + (lo[0] - 0.5 * d * hi[0]),
+        hi[1] + (lo[1] - 0.5 * d * hi[1]),
+        hi[2] + (lo[2] - 0.5 * d * hi[2]),
+        hi[3] + (lo[3] - 0.5 * d * hi[3]),
+    )
 
 
 @register_jitable
@@ -408,8 +454,10 @@ def _zxz_from_momentum(phi_h, phi_l, l1, l2, l3, r_norm):
         r_across = dd_rsqrt(*sq12)
         sin_theta = dd_mul(*dd_mul(*sq12, *r_across), *r_norm)
         # psi = atan2(l1, l2) in (-pi, pi]: its half angle from |l2|, |l1| and the sign of l1
-        near, far = _half_angles_dd(*dd_mul(abs(l2[0]), math.copysign(1.0, l2[0]) * l2[1], *r_across),
-                                    *dd_mul(abs(l1[0]), math.copysign(1.0, l1[0]) * l1[1], *r_across))
+        near, far = _half_angles_dd(
+            *dd_mul(abs(l2[0]), math.copysign(1.0, l2[0]) * l2[1], *r_across),
+            *dd_mul(abs(l1[0]), math.copysign(1.0, l1[0]) * l1[1], *r_across),
+        )
     else:  # along the axis: psi is 0 by convention (sin theta = 0 anyway)
         sin_theta, near, far = (0.0, 0.0), (1.0, 0.0), (0.0, 0.0)
     c, s = (near, far) if l2[0] >= 0.0 else (far, near)
@@ -445,8 +493,9 @@ def flow_state(params, agm_a, agm_c, tau):
     if kind == _SYMMETRIC_FLOW:
         axis = int(params[_S_AXIS])
         angle = tau * params[_S_BETA]
-        spin = quat.exp_rotation_vector((angle if axis == 0 else 0.0, angle if axis == 1 else 0.0,
-                                         angle if axis == 2 else 0.0))
+        spin = quat.exp_rotation_vector(
+            (angle if axis == 0 else 0.0, angle if axis == 1 else 0.0, angle if axis == 2 else 0.0)
+        )
         rate = (tau * params[_S_RATE], tau * params[_S_RATE + 1], tau * params[_S_RATE + 2])
         q0 = (params[_S_Q0], params[_S_Q0 + 1], params[_S_Q0 + 2], params[_S_Q0 + 3])
         q = quat.normalize(quat.multiply(quat.multiply(quat.exp_rotation_vector(rate), q0), spin))
@@ -582,11 +631,21 @@ def _elliptic_params(moments, omega, q0, order, d, params, agm_a, agm_c, long_ru
     for k in range(3):
         params[_E_ORDER + k] = order[k]
         params[_E_AXIS_SIGNS + k] = axis_signs[k]
-    z0_hi, z0_lo = _zxz_from_momentum(0.0, 0.0, two_product(i1, w1), two_product(i2, w2), two_product(i3, w3),
-                                      (params[_E_RNORM], params[_E_RNORM + 1]))
-    order_k, signs_k = params[_E_ORDER:_E_ORDER + 3], params[_E_AXIS_SIGNS:_E_AXIS_SIGNS + 3]
-    q_hi, q_lo = _dot2_product(q0, (0.0, 0.0, 0.0, 0.0), quat.conjugate(_in_body_frame(z0_hi, order_k, signs_k)),
-                               quat.conjugate(_in_body_frame(z0_lo, order_k, signs_k)))
+    z0_hi, z0_lo = _zxz_from_momentum(
+        0.0,
+        0.0,
+        two_product(i1, w1),
+        two_product(i2, w2),
+        two_product(i3, w3),
+        (params[_E_RNORM], params[_E_RNORM + 1]),
+    )
+    order_k, signs_k = params[_E_ORDER : _E_ORDER + 3], params[_E_AXIS_SIGNS : _E_AXIS_SIGNS + 3]
+    q_hi, q_lo = _dot2_product(
+        q0,
+        (0.0, 0.0, 0.0, 0.0),
+        quat.conjugate(_in_body_frame(z0_hi, order_k, signs_k)),
+        quat.conjugate(_in_body_frame(z0_lo, order_k, signs_k)),
+    )
     for idx in range(4):
         params[_E_QWL + idx], params[_E_QWL_LO + idx] = fast_two_sum(q_hi[idx], q_lo[idx])
 
@@ -627,8 +686,10 @@ def flow_params(moments, omega, q0, params, agm_a, agm_c, long_run):
     d = _separatrix_distance(moments, omega, i_min, i_mid, i_max)
     # The label allows for rounding in the caller's omega0; the flow itself is the exact
     # solution for the omega0 given (the separatrix closed form only when d is exactly 0).
-    scale = (moments[i_max] * (moments[i_max] - moments[i_mid]) * omega[i_max] ** 2
-             + moments[i_min] * (moments[i_mid] - moments[i_min]) * omega[i_min] ** 2)
+    scale = (
+        moments[i_max] * (moments[i_max] - moments[i_mid]) * omega[i_max] ** 2
+        + moments[i_min] * (moments[i_mid] - moments[i_min]) * omega[i_min] ** 2
+    )
     if abs(d) <= _SEPARATRIX_ULPS * _EPS * scale:
         case = _SEPARATRIX
     else:
@@ -648,8 +709,12 @@ def flow_params(moments, omega, q0, params, agm_a, agm_c, long_run):
 def _rigid_params(omega, q0, params):
     """omega constant in the body; q(t) = exp(tau omega_world) q0 = q0 exp(tau omega)."""
     params[_KIND] = _RIGID
-    rate = dd_sqrt(*dd_add(*dd_add(*two_product(omega[0], omega[0]), *two_product(omega[1], omega[1])),
-                           *two_product(omega[2], omega[2])))
+    rate = dd_sqrt(
+        *dd_add(
+            *dd_add(*two_product(omega[0], omega[0]), *two_product(omega[1], omega[1])),
+            *two_product(omega[2], omega[2]),
+        )
+    )
     # in the body frame, the axis of a spin about a principal axis is exactly +-e_k
     # (sqrt(w^2) = |w| in IEEE arithmetic)
     norm = math.sqrt(omega[0] ** 2 + omega[1] ** 2 + omega[2] ** 2)
@@ -701,7 +766,9 @@ class _Flow:
         self.params = np.zeros(PARAMS_SIZE)
         self.agm_a = np.zeros(AGM_LEVELS)
         self.agm_c = np.zeros(AGM_LEVELS)
-        self.case = CASES[_build(_floats3(moments), _floats3(omega0), _floats4(q0), self.params, self.agm_a, self.agm_c)]
+        self.case = CASES[
+            _build(_floats3(moments), _floats3(omega0), _floats4(q0), self.params, self.agm_a, self.agm_c)
+        ]
 
     def evaluate(self, tau: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         out = np.empty((tau.size, 7))
@@ -788,7 +855,9 @@ class TorqueFreeSolution:
         return 0.5 * float(np.dot(self.moments * self.omega0, self.omega0))
 
 
-def torque_free_solution(moments: Any, omega0: Any, q0: Any = (0.0, 0.0, 0.0, 1.0), t0: float = 0.0) -> TorqueFreeSolution:
+def torque_free_solution(
+    moments: Any, omega0: Any, q0: Any = (0.0, 0.0, 0.0, 1.0), t0: float = 0.0
+) -> TorqueFreeSolution:
     """Exact torque-free motion of a rigid body.
 
     Parameters

@@ -54,8 +54,8 @@ from scipy.special import ellipj, ellipk, ellipkinc
 
 from rigid_rot_sim.core import validation
 from rigid_rot_sim.core.dynamics import angular_momentum_world, kinetic_energy, world_to_body
-from rigid_rot_sim.core.quaternion import quaternion_to_zxz, zxz_to_quaternion
 from rigid_rot_sim.core.inertia import parallel_axis_shift
+from rigid_rot_sim.core.quaternion import quaternion_to_zxz, zxz_to_quaternion
 from rigid_rot_sim.core.simulate import simulate
 from rigid_rot_sim.core.torque import GravityTorque
 from rigid_rot_sim.core.validation import FloatArray
@@ -138,7 +138,7 @@ class HeavyTop:
 
     def simulate(
         self, q0: Any, omega0: Any, t_end: float, dt: float, method: str, **options: Any
-    ) -> "HeavyTopTrajectory":
+    ) -> HeavyTopTrajectory:
         """Integrate with a core integrator (``METHODS`` name) and add Euler angles and invariants."""
         traj = simulate(self.pivot_moments, omega0, t_end, dt, method, q0=q0, torque=self.torque, **options)
         phi, theta, psi = quaternion_to_zxz(traj.q)
@@ -299,9 +299,7 @@ def heavy_top_reference(top: HeavyTop, q0: Any, omega0: Any) -> HeavyTopReferenc
     b = 2.0 * top.mass * top.gravity * top.com_distance / i1
     a = (2.0 * energy - p_psi * p_psi / i3) / i1
     # f(u) = (1 - u^2)(a - b u) - (p_phi - p_psi u)^2 / I1^2, highest power first
-    coefficients = np.array(
-        [b, -a - (p_psi / i1) ** 2, -b + 2.0 * p_phi * p_psi / i1**2, a - (p_phi / i1) ** 2]
-    )
+    coefficients = np.array([b, -a - (p_psi / i1) ** 2, -b + 2.0 * p_phi * p_psi / i1**2, a - (p_phi / i1) ** 2])
     roots = _polished_roots(coefficients)
     u = float(world_to_body(q0, _E_Z)[2])
     if roots.size != 3:

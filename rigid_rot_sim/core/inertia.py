@@ -133,7 +133,6 @@ def parallel_axis_shift(inertia_com: Any, mass: float, offset: Any) -> FloatArra
     return tensor + mass * (float(shift @ shift) * np.eye(3) - np.outer(shift, shift))
 
 
-
 def inertia_about_center_of_mass(inertia: Any, mass: float, offset: Any) -> FloatArray:
     """Inertia tensor about the centre of mass from the one about a point ``offset`` from it.
 
@@ -202,7 +201,9 @@ def principal_orientation(principal_axes: Any) -> np.ndarray:
     return -quat if quat[3] < 0.0 else quat
 
 
-def principal_frame_pose(inertia_com: Any, center_of_mass: Any = (0.0, 0.0, 0.0)) -> tuple[np.ndarray, np.ndarray] | None:
+def principal_frame_pose(
+    inertia_com: Any, center_of_mass: Any = (0.0, 0.0, 0.0)
+) -> tuple[np.ndarray, np.ndarray] | None:
     """Pose of the principal-axes frame in the body frame, or None where the two coincide.
 
     The principal frame has its origin at the centre of mass (m, body frame) and its axes
@@ -271,7 +272,9 @@ def _mass_properties(mass_array: np.ndarray, position_array: np.ndarray, origin_
     # Computed directly (not by the parallel-axis shift) so each tensor has its own rounding;
     # the tests check the theorem between the two.
     inertia_origin = _point_mass_inertia(mass_array, position_array - origin_vector)
-    _check_finite(total_mass=total_mass, center_of_mass=center_of_mass, inertia_origin=inertia_origin, inertia_com=inertia_com)
+    _check_finite(
+        total_mass=total_mass, center_of_mass=center_of_mass, inertia_origin=inertia_origin, inertia_com=inertia_com
+    )
     principal_moments, principal_axes = principal_frame(inertia_com)
     return MassProperties(
         total_mass=total_mass,
@@ -281,9 +284,7 @@ def _mass_properties(mass_array: np.ndarray, position_array: np.ndarray, origin_
         inertia_com=inertia_com,
         principal_moments=principal_moments,
         principal_axes=principal_axes,
-        symmetry=_symmetry_label(
-            principal_moments, total_mass * float(np.max(np.sum(position_array**2, axis=1)))
-        ),
+        symmetry=_symmetry_label(principal_moments, total_mass * float(np.max(np.sum(position_array**2, axis=1)))),
     )
 
 

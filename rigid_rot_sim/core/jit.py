@@ -17,8 +17,9 @@ from __future__ import annotations
 
 import functools
 import hashlib
+from collections.abc import Callable
 from pathlib import Path
-from typing import Any, Callable
+from typing import Any
 
 from numba import njit
 from numba.core import caching, config
@@ -26,7 +27,7 @@ from numba.core import caching, config
 _CORE = Path(__file__).resolve().parent
 
 
-@functools.lru_cache(maxsize=None)
+@functools.cache
 def sources_fingerprint() -> str:
     """SHA-256 of every Python source of ``rigid_rot_sim/core`` (names and contents)."""
     digest = hashlib.sha256()
@@ -80,4 +81,3 @@ def compiled(function: Callable | None = None, **options: Any) -> Any:
         raise ValueError("core kernels are compiled without fastmath (bit-reproducible results)")
     decorator = njit(cache=True, **options)
     return decorator if function is None else decorator(function)
-

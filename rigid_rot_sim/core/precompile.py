@@ -79,8 +79,16 @@ def exercise() -> None:
         for n, steps in ((1, 2), (2, 100_000)):  # serial, then parallel
             advance_batch(method, moments, rng.normal(size=(n, 4)), rng.normal(size=(n, 3)), 1e-4, steps, batch_torque)
             if method == "rk4":
-                advance_batch(method, moments, rng.normal(size=(n, 4)), rng.normal(size=(n, 3)), 1e-4, steps,
-                              batch_torque, layout="per_body")
+                advance_batch(
+                    method,
+                    moments,
+                    rng.normal(size=(n, 4)),
+                    rng.normal(size=(n, 3)),
+                    1e-4,
+                    steps,
+                    batch_torque,
+                    layout="per_body",
+                )
 
 
 def main() -> int:

@@ -111,8 +111,9 @@ class GyrostatTrajectory(Trajectory):
         from rigid_rot_sim.core.dynamics import body_to_world
         from rigid_rot_sim.core.wheels import total_momentum_body
 
-        momentum = total_momentum_body(self.principal_moments, self.wheels_principal, self.omega_principal,
-                                       self.wheel_speeds)
+        momentum = total_momentum_body(
+            self.principal_moments, self.wheels_principal, self.omega_principal, self.wheel_speeds
+        )
         return body_to_world(self.q_principal, momentum)
 
 
@@ -223,8 +224,19 @@ def simulate(
     """
     if wheels is not None or orbit is not None or wheel_speeds0 is not None or wheel_torque is not None:
         return simulate_gyrostat(
-            inertia, omega0, t_end, dt, method, q0, torque, save_every=save_every, wheels=wheels,
-            wheel_speeds0=wheel_speeds0, wheel_torque=wheel_torque, orbit=orbit, **options,
+            inertia,
+            omega0,
+            t_end,
+            dt,
+            method,
+            q0,
+            torque,
+            save_every=save_every,
+            wheels=wheels,
+            wheel_speeds0=wheel_speeds0,
+            wheel_torque=wheel_torque,
+            orbit=orbit,
+            **options,
         )
     body, is_principal = rigid_body(inertia)
     omega0 = validation.finite_vector("omega0", omega0)
@@ -241,7 +253,11 @@ def simulate(
         q0_p = body.attitude_to_principal(q0)
         omega0_p = body.vector_to_principal(omega0)
     integrator = integrator_class(
-        body.principal_moments, dt, principal_torque(body, torque, is_principal), q0=q0_p, omega0=omega0_p,
+        body.principal_moments,
+        dt,
+        principal_torque(body, torque, is_principal),
+        q0=q0_p,
+        omega0=omega0_p,
         **options,
     )
 
@@ -274,15 +290,31 @@ def simulate(
         q_body = body.attitude_from_principal(q_p)
         omega_body = body.vector_from_principal(omega_p)
     return Trajectory(
-        t=t, q=q_body, omega=omega_body, method=method, principal_moments=body.principal_moments, q_principal=q_p,
+        t=t,
+        q=q_body,
+        omega=omega_body,
+        method=method,
+        principal_moments=body.principal_moments,
+        q_principal=q_p,
         omega_principal=omega_p,
     )
 
 
 def simulate_gyrostat(
-    inertia: Any, omega0: Any, t_end: float, dt: float, method: str, q0: Any = (0.0, 0.0, 0.0, 1.0),
-    torque: Any = None, *, save_every: int = 1, wheels: Any = None, wheel_speeds0: Any = None,
-    wheel_torque: Any = None, orbit: Any = None, **options: Any,
+    inertia: Any,
+    omega0: Any,
+    t_end: float,
+    dt: float,
+    method: str,
+    q0: Any = (0.0, 0.0, 0.0, 1.0),
+    torque: Any = None,
+    *,
+    save_every: int = 1,
+    wheels: Any = None,
+    wheel_speeds0: Any = None,
+    wheel_torque: Any = None,
+    orbit: Any = None,
+    **options: Any,
 ) -> Trajectory:
     """:func:`~rigid_rot_sim.core.simulate.simulate` with reaction wheels and the gravity gradient.
 
@@ -332,8 +364,15 @@ def simulate_gyrostat(
         q0_p = body.attitude_to_principal(q0)
         omega0_p = body.vector_to_principal(omega0)
     integrator = integrator_class(
-        moments, dt, principal_torque(body, torque, is_principal), wheels=wheels_p,
-        orbit=NO_ORBIT if orbit is None else orbit, q0=q0_p, omega0=omega0_p, wheel_speeds0=speeds0, **options,
+        moments,
+        dt,
+        principal_torque(body, torque, is_principal),
+        wheels=wheels_p,
+        orbit=NO_ORBIT if orbit is None else orbit,
+        q0=q0_p,
+        omega0=omega0_p,
+        wheel_speeds0=speeds0,
+        **options,
     )
 
     n_full, last = step_grid(t_end, dt)
@@ -353,8 +392,11 @@ def simulate_gyrostat(
             pending += 1
         if k >= n_full:
             break
-        stop = min(n_full, row * save_every if row <= n_saves else n_full,
-                   events[pending][0] if pending < len(events) else n_full)
+        stop = min(
+            n_full,
+            row * save_every if row <= n_saves else n_full,
+            events[pending][0] if pending < len(events) else n_full,
+        )
         integrator.advance(stop - k)
         k = stop
         if row <= n_saves and k == row * save_every:
@@ -374,11 +416,25 @@ def simulate_gyrostat(
         q_body = body.attitude_from_principal(q_p)
         omega_body = body.vector_from_principal(omega_p)
     if wheels_p is None:  # gravity gradient only: a rigid body's trajectory
-        return Trajectory(t=t, q=q_body, omega=omega_body, method=method, principal_moments=moments,
-                          q_principal=q_p, omega_principal=omega_p)
+        return Trajectory(
+            t=t,
+            q=q_body,
+            omega=omega_body,
+            method=method,
+            principal_moments=moments,
+            q_principal=q_p,
+            omega_principal=omega_p,
+        )
     return GyrostatTrajectory(
-        t=t, q=q_body, omega=omega_body, method=method, principal_moments=moments, q_principal=q_p,
-        omega_principal=omega_p, wheel_speeds=speeds, wheels_principal=wheels_p,
+        t=t,
+        q=q_body,
+        omega=omega_body,
+        method=method,
+        principal_moments=moments,
+        q_principal=q_p,
+        omega_principal=omega_p,
+        wheel_speeds=speeds,
+        wheels_principal=wheels_p,
     )
 
 

@@ -50,12 +50,14 @@ def wheel_torque_events(wheels: WheelModel, wheel_torque: Any, dt: float) -> lis
         previous = start
         values = np.array(pair[1], dtype=float).reshape(-1)
         if values.size != wheels.count:
-            raise ValueError(f"wheel_torque[{i}]: {values.size} torque(s) for {wheels.count} wheel(s) "
-                             f"[{', '.join(wheels.names)}]")
+            raise ValueError(
+                f"wheel_torque[{i}]: {values.size} torque(s) for {wheels.count} wheel(s) [{', '.join(wheels.names)}]"
+            )
         if not np.all(np.isfinite(values)):
             raise ValueError(f"wheel_torque[{i}]: torques must be finite, got {values.tolist()}")
-        events.append((max(step_at_or_after(start, dt), 0), np.minimum(np.maximum(values, -wheels.max_torque),
-                                                                       wheels.max_torque)))
+        events.append(
+            (max(step_at_or_after(start, dt), 0), np.minimum(np.maximum(values, -wheels.max_torque), wheels.max_torque))
+        )
     return events
 
 
@@ -81,8 +83,10 @@ def checked_wheels(wheels: Any, moments: np.ndarray, body: Any) -> WheelModel | 
         )
     principal = dataclasses.replace(wheels, axes=np.ascontiguousarray(body.vector_to_principal(wheels.axes)))
     if wheels.count and not float(np.linalg.eigvalsh(hub_inertia(moments, principal))[0]) > 0.0:
-        raise ValueError("wheels: the inertia less the wheels' spin inertias (I - sum J g g^T) must be positive "
-                         "definite: the inertia includes the wheels")
+        raise ValueError(
+            "wheels: the inertia less the wheels' spin inertias (I - sum J g g^T) must be positive "
+            "definite: the inertia includes the wheels"
+        )
     return principal
 
 
@@ -97,6 +101,7 @@ def checked_wheel_speeds(wheels: WheelModel | None, wheel_speeds0: Any) -> np.nd
     beyond = ~np.isfinite(speeds) | (np.abs(speeds) > wheels.max_speed)
     if np.any(beyond):
         i = int(np.flatnonzero(beyond)[0])
-        raise ValueError(f"wheel_speeds0[{i}] = {speeds[i]} rad/s must be finite and within max_speed "
-                         f"{wheels.max_speed[i]:g} rad/s")
+        raise ValueError(
+            f"wheel_speeds0[{i}] = {speeds[i]} rad/s must be finite and within max_speed {wheels.max_speed[i]:g} rad/s"
+        )
     return speeds

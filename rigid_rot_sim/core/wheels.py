@@ -138,14 +138,27 @@ class WheelModel:
     def in_frame(self, rotation: np.ndarray) -> WheelModel:
         """The same wheels with axes ``rotation @ g`` (rotation: (3, 3), e.g. user body -> principal)."""
         axes = np.ascontiguousarray(self.axes @ np.asarray(rotation, dtype=float).T)
-        return WheelModel(self.names, axes, self.spin_inertia, self.max_torque, self.max_speed, self.coulomb,
-                          self.viscous, self.stiction_speed)
+        return WheelModel(
+            self.names,
+            axes,
+            self.spin_inertia,
+            self.max_torque,
+            self.max_speed,
+            self.coulomb,
+            self.viscous,
+            self.stiction_speed,
+        )
 
     def compiled(self) -> tuple:
         """The tuple the kernels take: (axes, J, max_speed, ramp, coulomb, viscous, stiction_speed)."""
         return (
-            np.ascontiguousarray(self.axes, dtype=float), self.spin_inertia, self.max_speed,
-            self.max_speed * SPEED_RAMP_FRACTION, self.coulomb, self.viscous, self.stiction_speed,
+            np.ascontiguousarray(self.axes, dtype=float),
+            self.spin_inertia,
+            self.max_speed,
+            self.max_speed * SPEED_RAMP_FRACTION,
+            self.coulomb,
+            self.viscous,
+            self.stiction_speed,
         )
 
 
@@ -159,8 +172,15 @@ def _array(values: Any, n: int, name: str, minimum: float, strict: bool) -> np.n
 
 
 def wheel_model(
-    inertia: Any, names: Any, axes: Any, spin_inertia: Any, max_torque: Any, max_speed: Any,
-    coulomb: Any = None, viscous: Any = None, stiction_speed: Any = None,
+    inertia: Any,
+    names: Any,
+    axes: Any,
+    spin_inertia: Any,
+    max_torque: Any,
+    max_speed: Any,
+    coulomb: Any = None,
+    viscous: Any = None,
+    stiction_speed: Any = None,
 ) -> WheelModel:
     """Validated :class:`WheelModel` for a body of inertia ``inertia`` (3x3, kg*m^2, wheels included).
 
@@ -177,17 +197,24 @@ def wheel_model(
     axes = np.ascontiguousarray(axes / norms[:, None])
     zeros = np.zeros(n)
     model = WheelModel(
-        names, axes,
+        names,
+        axes,
         _array(spin_inertia, n, "spin_inertia", 0.0, True),
         _array(max_torque, n, "max_torque", 0.0, True),
         _array(max_speed, n, "max_speed", 0.0, True),
         _array(zeros if coulomb is None else coulomb, n, "coulomb", 0.0, False),
         _array(zeros if viscous is None else viscous, n, "viscous", 0.0, False),
-        _array(np.full(n, DEFAULT_STICTION_SPEED) if stiction_speed is None else stiction_speed, n, "stiction_speed",
-               0.0, True),
+        _array(
+            np.full(n, DEFAULT_STICTION_SPEED) if stiction_speed is None else stiction_speed,
+            n,
+            "stiction_speed",
+            0.0,
+            True,
+        ),
     )
-    hub = np.asarray(inertia, dtype=float).reshape(3, 3) - (model.spin_inertia[:, None, None]
-                                                            * axes[:, :, None] * axes[:, None, :]).sum(axis=0)
+    hub = np.asarray(inertia, dtype=float).reshape(3, 3) - (
+        model.spin_inertia[:, None, None] * axes[:, :, None] * axes[:, None, :]
+    ).sum(axis=0)
     smallest = float(np.linalg.eigvalsh(0.5 * (hub + hub.T))[0])
     if not smallest > 0.0:
         raise ValueError(

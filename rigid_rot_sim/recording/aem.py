@@ -33,9 +33,9 @@ import datetime as _dt
 import math
 import os
 import re
+from collections.abc import Iterable, Sequence
 from dataclasses import dataclass, replace
 from pathlib import Path
-from typing import Iterable, Sequence
 
 from rigid_rot_sim.message_fields import quaternion_to_array, vector3_to_array
 from rigid_rot_sim.recording.reader import BagReader
@@ -54,8 +54,10 @@ __all__ = [
 #: Inertial frames of the SANA celestial-body reference frame registry accepted as REF_FRAME_A.
 INERTIAL_FRAMES = ("EME2000", "GCRF", "ICRF", "ICRF2", "ICRF3", "MOD", "TOD", "TEME")
 #: Spacecraft body frames (SANA spacecraft body reference frames): SC_BODY_<n> and the like.
-_BODY_FRAME = re.compile(r"^(SC_BODY|ACTUATOR|CSS|DSS|ESA|GYRO_FRAME|IMU_FRAME|INSTRUMENT|MTA|RW|SA|SENSOR|"
-                         r"STARTRACKER|TAM)_[0-9A-Z]+$")
+_BODY_FRAME = re.compile(
+    r"^(SC_BODY|ACTUATOR|CSS|DSS|ESA|GYRO_FRAME|IMU_FRAME|INSTRUMENT|MTA|RW|SA|SENSOR|"
+    r"STARTRACKER|TAM)_[0-9A-Z]+$"
+)
 _TEXT = re.compile(r"^[A-Z0-9_\-./]+$")
 _STATE_TYPE = "rigid_rot_msgs/msg/RigidBodyState"
 
@@ -74,13 +76,20 @@ class AemOptions:
     def checked(self) -> AemOptions:
         """Self, or ValueError naming the value the standard does not allow."""
         if self.ref_frame_a not in INERTIAL_FRAMES:
-            raise ValueError(f"REF_FRAME_A {self.ref_frame_a!r} is not an inertial frame of the CCSDS registry "
-                             f"(one of {', '.join(INERTIAL_FRAMES)})")
+            raise ValueError(
+                f"REF_FRAME_A {self.ref_frame_a!r} is not an inertial frame of the CCSDS registry "
+                f"(one of {', '.join(INERTIAL_FRAMES)})"
+            )
         if not _BODY_FRAME.match(self.ref_frame_b):
-            raise ValueError(f"REF_FRAME_B {self.ref_frame_b!r} is not a spacecraft body frame name of the CCSDS "
-                             "registry (e.g. SC_BODY_1)")
-        for key, value in (("OBJECT_NAME", self.object_name or "UNKNOWN"), ("OBJECT_ID", self.object_id),
-                           ("ORIGINATOR", self.originator)):
+            raise ValueError(
+                f"REF_FRAME_B {self.ref_frame_b!r} is not a spacecraft body frame name of the CCSDS "
+                "registry (e.g. SC_BODY_1)"
+            )
+        for key, value in (
+            ("OBJECT_NAME", self.object_name or "UNKNOWN"),
+            ("OBJECT_ID", self.object_id),
+            ("ORIGINATOR", self.originator),
+        ):
             if not _TEXT.match(value):
                 raise ValueError(f"{key} {value!r}: upper-case letters, digits and _-./ only (CCSDS 504.0-B-2 6.8.6)")
         return self
@@ -134,9 +143,16 @@ def _segments(samples: Sequence[AttitudeSample]) -> list[list[AttitudeSample]]:
     return segments
 
 
-def format_aem(samples: Sequence[AttitudeSample], *, epoch: str = DEFAULT_EPOCH, options: AemOptions = AemOptions(),
-               world_frame: str = "world", body_frame: str = "body", comments: Iterable[str] = (),
-               creation_date: _dt.datetime | None = None) -> str:
+def format_aem(
+    samples: Sequence[AttitudeSample],
+    *,
+    epoch: str = DEFAULT_EPOCH,
+    options: AemOptions = AemOptions(),
+    world_frame: str = "world",
+    body_frame: str = "body",
+    comments: Iterable[str] = (),
+    creation_date: _dt.datetime | None = None,
+) -> str:
     """The AEM (KVN text) of ``samples``; ValueError when there are none or an option is invalid."""
     options = options.checked()
     if not samples:
@@ -184,13 +200,20 @@ def read_attitude_samples(reader: BagReader) -> list[AttitudeSample]:
         q = quaternion_to_array(state.orientation)
         w = vector3_to_array(state.angular_velocity_body)
         t_ns = int(state.header.stamp.sec) * 1_000_000_000 + int(state.header.stamp.nanosec)
-        samples.append(AttitudeSample(t_ns, (float(q[0]), float(q[1]), float(q[2]), float(q[3])),
-                                      (float(w[0]), float(w[1]), float(w[2]))))
+        samples.append(
+            AttitudeSample(
+                t_ns, (float(q[0]), float(q[1]), float(q[2]), float(q[3])), (float(w[0]), float(w[1]), float(w[2]))
+            )
+        )
     return samples
 
 
-def write_aem(path: str | os.PathLike[str], out: str | os.PathLike[str] | None = None,
-              options: AemOptions = AemOptions(), creation_date: _dt.datetime | None = None) -> Path:
+def write_aem(
+    path: str | os.PathLike[str],
+    out: str | os.PathLike[str] | None = None,
+    options: AemOptions = AemOptions(),
+    creation_date: _dt.datetime | None = None,
+) -> Path:
     """Write the AEM of the recording at ``path`` to ``out`` (default: beside it, ``.aem``); its path."""
     reader = BagReader(path)
     scene_record = reader.metadata.get("scene", {})
@@ -204,9 +227,15 @@ def write_aem(path: str | os.PathLike[str], out: str | os.PathLike[str] | None =
     comments = [f"attitude history of the rigid_rot_sim recording {Path(path).name}"]
     if name:
         comments.append(f"scene {name}")
-    text = format_aem(samples, epoch=epoch, options=options, world_frame=world, body_frame=body,
-                      comments=comments, creation_date=creation_date)
+    text = format_aem(
+        samples,
+        epoch=epoch,
+        options=options,
+        world_frame=world,
+        body_frame=body,
+        comments=comments,
+        creation_date=creation_date,
+    )
     target = Path(out) if out is not None else Path(path).with_suffix(".aem")
     target.write_text(text, encoding="ascii")
     return target
-

@@ -48,7 +48,7 @@ class QosProfile:
     avoid_ros_namespace_conventions: bool = False
 
     @classmethod
-    def from_rclpy(cls, profile: Any) -> "QosProfile":
+    def from_rclpy(cls, profile: Any) -> QosProfile:
         """Convert an ``rclpy.qos.QoSProfile`` (duck-typed; rclpy is not imported here)."""
 
         def duration(value: Any) -> tuple[int, int]:
@@ -130,7 +130,7 @@ class BagTopic:
     message_count: int = 0  # also the sequence number of the next message
 
     @classmethod
-    def of_channel(cls, name: str, type_name: str, channel_id: int, metadata: dict[str, str]) -> "BagTopic":
+    def of_channel(cls, name: str, type_name: str, channel_id: int, metadata: dict[str, str]) -> BagTopic:
         """The topic of a channel registered with :func:`channel_metadata`'s ``metadata``."""
         return cls(name, type_name, channel_id, metadata["offered_qos_profiles"], metadata.get("topic_type_hash", ""))
 

@@ -20,17 +20,31 @@ import json
 import os
 import re
 import sys
+from collections.abc import Callable
 from dataclasses import dataclass
-from functools import lru_cache
+from functools import cache
 from pathlib import Path
-from typing import Any, Callable
+from typing import Any
 
 SEPARATOR = "=" * 80
 
 PRIMITIVE_TYPES = frozenset(
     {
-        "bool", "byte", "char", "float32", "float64", "int8", "uint8", "int16", "uint16",
-        "int32", "uint32", "int64", "uint64", "string", "wstring",
+        "bool",
+        "byte",
+        "char",
+        "float32",
+        "float64",
+        "int8",
+        "uint8",
+        "int16",
+        "uint16",
+        "int32",
+        "uint32",
+        "int64",
+        "uint64",
+        "string",
+        "wstring",
     }
 )
 
@@ -107,7 +121,7 @@ def _interface_file(type_name: str, suffix: str) -> Path | None:
     return None
 
 
-@lru_cache(maxsize=None)
+@cache
 def msg_text(type_name: str) -> str:
     """The .msg text of one type (not its dependencies); LookupError when not found."""
     type_name = normalize_type_name(type_name)
@@ -144,7 +158,7 @@ def field_types(text: str, package: str) -> list[str]:
     return found
 
 
-@lru_cache(maxsize=None)
+@cache
 def complete_definition(type_name: str) -> str:
     """The ``ros2msg`` schema text of ``type_name`` with all its dependencies."""
     top = normalize_type_name(type_name)
@@ -199,7 +213,7 @@ def hash_from_description(individual: dict) -> str:
     return calculate_type_hash(extract_full_type_description(type_name, lookup))
 
 
-@lru_cache(maxsize=None)
+@cache
 def type_hash(type_name: str) -> str:
     """The RIHS01 hash of a type, or ``""`` when neither installed nor computable."""
     type_name = normalize_type_name(type_name)
@@ -220,7 +234,7 @@ def message_type(type_name: str) -> MessageType:
     return MessageType(name=name, definition=complete_definition(name), hash=type_hash(name))
 
 
-@lru_cache(maxsize=None)
+@cache
 def dynamic_encoder(type_name: str) -> Callable[[Any], bytes]:
     """CDR encoder built from the complete definition (no generated Python type needed).
 
@@ -233,7 +247,7 @@ def dynamic_encoder(type_name: str) -> Callable[[Any], bytes]:
     return serialize_dynamic(name, complete_definition(name))[name]
 
 
-@lru_cache(maxsize=None)
+@cache
 def dynamic_decoder(type_name: str, definition: str) -> Callable[[bytes], Any]:
     """CDR decoder for a type from its complete ``ros2msg`` definition text."""
     from mcap_ros2._dynamic import generate_dynamic

@@ -16,8 +16,9 @@ read the channel; it is serialised from its definition, so no Python package is 
 from __future__ import annotations
 
 import json
+from collections.abc import Mapping
 from dataclasses import dataclass
-from typing import Any, Mapping
+from typing import Any
 
 EVENT_TYPE = "diagnostic_msgs/msg/DiagnosticStatus"
 EVENT_PREFIX = "rigid_rot_sim/"
@@ -84,4 +85,4 @@ def decode_event(status: Any) -> SimEvent:
     if not name.startswith(EVENT_PREFIX):
         raise ValueError(f"not a rigid_rot_sim event: name {name!r}")
     values = {str(kv.key): str(kv.value) for kv in status.values}
-    return SimEvent(kind=name[len(EVENT_PREFIX):], step=int(values.pop("step")), values=values)
+    return SimEvent(kind=name[len(EVENT_PREFIX) :], step=int(values.pop("step")), values=values)

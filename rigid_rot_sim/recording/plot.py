@@ -21,12 +21,11 @@ from pathlib import Path
 import matplotlib
 import numpy as np
 
-from rigid_rot_sim.scene.scene import parse_scene_text
-from rigid_rot_sim.message_fields import time_to_seconds
+from rigid_rot_sim.message_fields import quaternion_to_array, time_to_seconds, vector3_to_array
 from rigid_rot_sim.recording.events import EVENT_TYPE, decode_event
 from rigid_rot_sim.recording.reader import BagReader
-from rigid_rot_sim.message_fields import quaternion_to_array, vector3_to_array
 from rigid_rot_sim.recording.resim import SENSOR_TYPES, STATE_TYPE
+from rigid_rot_sim.scene.scene import parse_scene_text
 
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
@@ -77,7 +76,7 @@ def principal_frame(reader: BagReader, series: StateSeries) -> tuple[np.ndarray,
         w, big_l = series.omega_body, series.momentum_body
         # unknowns (Ixx, Iyy, Izz, Ixy, Ixz, Iyz): L = I w, three equations per state
         rows = []
-        for (wx, wy, wz) in w:
+        for wx, wy, wz in w:
             rows += [[wx, 0, 0, wy, wz, 0], [0, wy, 0, wx, 0, wz], [0, 0, wz, 0, wx, wy]]
         sol, *_ = np.linalg.lstsq(np.array(rows), big_l.reshape(-1), rcond=None)
         ixx, iyy, izz, ixy, ixz, iyz = sol
@@ -120,7 +119,9 @@ def plot_run(path: str | os.PathLike[str], out_dir: str | os.PathLike[str] | Non
     for i, axis in enumerate("xyz"):
         ax.plot(t, series.omega_body[:, i], color=_AXIS_COLOURS[i], label=f"ω_{axis}")
     ax.plot(t, np.linalg.norm(series.omega_body, axis=1), color="black", linestyle="--", linewidth=1, label="|ω|")
-    ax.set(xlabel="sim time (s)", ylabel="angular velocity, body frame (rad/s)", title=_title(reader, "Angular velocity"))
+    ax.set(
+        xlabel="sim time (s)", ylabel="angular velocity, body frame (rad/s)", title=_title(reader, "Angular velocity")
+    )
     ax.grid(True, alpha=0.3)
     ax.legend(loc="best", ncols=4)
     save(fig, "omega.png")
@@ -129,7 +130,11 @@ def plot_run(path: str | os.PathLike[str], out_dir: str | os.PathLike[str] | Non
     energy0 = series.energy[0]
     l_norm = np.linalg.norm(series.momentum_world, axis=1)
     driven = bool(np.any(series.torque_body != 0.0))
-    note = "torque applied: changes include the torques' work and impulse" if driven else "torque-free: any change is integrator error"
+    note = (
+        "torque applied: changes include the torques' work and impulse"
+        if driven
+        else "torque-free: any change is integrator error"
+    )
     fig, ax = plt.subplots(figsize=(9, 4.5))
     if energy0 != 0.0 and l_norm[0] != 0.0:
         energy_rel = (series.energy - energy0) / abs(energy0)
@@ -146,7 +151,9 @@ def plot_run(path: str | os.PathLike[str], out_dir: str | os.PathLike[str] | Non
         twin = ax.twinx()
         twin.plot(t, l_norm, color="tab:purple", label="|L| (kg*m^2/s)")
         twin.set_ylabel("|L| (kg*m^2/s)", color="tab:purple")
-        ax.set_title(_title(reader, "Energy and |L|") + "\nstarts at rest (relative change undefined); " + note.split(":")[0])
+        ax.set_title(
+            _title(reader, "Energy and |L|") + "\nstarts at rest (relative change undefined); " + note.split(":")[0]
+        )
         ax.legend(handles=ax.get_lines() + twin.get_lines(), loc="best")
     ax.set_xlabel("sim time (s)")
     ax.grid(True, alpha=0.3)
@@ -158,9 +165,14 @@ def plot_run(path: str | os.PathLike[str], out_dir: str | os.PathLike[str] | Non
         ax.step(t, series.torque_body[:, i], where="pre", color=_AXIS_COLOURS[i], label=f"τ_{axis}")
     command_times = _command_times(reader)
     for j, effective in enumerate(command_times):
-        ax.axvline(effective, color="grey", linewidth=0.6, linestyle=":", label="command takes effect" if j == 0 else None)
-    ax.set(xlabel="sim time (s)", ylabel="torque, body frame (N*m)",
-           title=_title(reader, "Torque applied") + f"\n{len(command_times)} torque commands recorded")
+        ax.axvline(
+            effective, color="grey", linewidth=0.6, linestyle=":", label="command takes effect" if j == 0 else None
+        )
+    ax.set(
+        xlabel="sim time (s)",
+        ylabel="torque, body frame (N*m)",
+        title=_title(reader, "Torque applied") + f"\n{len(command_times)} torque commands recorded",
+    )
     ax.grid(True, alpha=0.3)
     ax.legend(loc="best")
     save(fig, "torque.png")
@@ -174,19 +186,26 @@ def plot_run(path: str | os.PathLike[str], out_dir: str | os.PathLike[str] | Non
     if energy_twice > 0.0:
         u, v = np.meshgrid(np.linspace(0, 2 * np.pi, 40), np.linspace(0, np.pi, 20))
         a, b, c = np.sqrt(energy_twice / moments)
-        ax3.plot_wireframe(a * np.cos(u) * np.sin(v), b * np.sin(u) * np.sin(v), c * np.cos(v),
-                           color="lightgrey", linewidth=0.5)
+        ax3.plot_wireframe(
+            a * np.cos(u) * np.sin(v), b * np.sin(u) * np.sin(v), c * np.cos(v), color="lightgrey", linewidth=0.5
+        )
     points = ax3.scatter(omega_p[:, 0], omega_p[:, 1], omega_p[:, 2], c=t, cmap="viridis", s=4)
     ax3.plot(omega_p[:, 0], omega_p[:, 1], omega_p[:, 2], color="black", linewidth=0.4, alpha=0.5)
     span = float(np.max(np.abs(omega_p))) * 1.1 or 1.0
     if energy_twice > 0.0:
         span = max(span, float(np.max(np.sqrt(energy_twice / moments))) * 1.05)
-    ax3.set(xlim=(-span, span), ylim=(-span, span), zlim=(-span, span),
-            xlabel=f"ω1 (rad/s), I1 = {moments[0]:.4g}", ylabel=f"ω2 (rad/s), I2 = {moments[1]:.4g}",
-            zlabel=f"ω3 (rad/s), I3 = {moments[2]:.4g}")
+    ax3.set(
+        xlim=(-span, span),
+        ylim=(-span, span),
+        zlim=(-span, span),
+        xlabel=f"ω1 (rad/s), I1 = {moments[0]:.4g}",
+        ylabel=f"ω2 (rad/s), I2 = {moments[1]:.4g}",
+        zlabel=f"ω3 (rad/s), I3 = {moments[2]:.4g}",
+    )
     ax3.set_box_aspect((1, 1, 1))
-    ax3.set_title("on the energy ellipsoid ω·Iω = 2T0"
-                  + ("\n(initial energy; torques move ω off it)" if driven else ""))
+    ax3.set_title(
+        "on the energy ellipsoid ω·Iω = 2T0" + ("\n(initial energy; torques move ω off it)" if driven else "")
+    )
     # the same path seen along the principal axis ω stays closest to: the polhode's shape
     along = int(np.argmax(np.mean(np.abs(omega_p), axis=0)))
     i, j = [k for k in range(3) if k != along]
@@ -196,8 +215,11 @@ def plot_run(path: str | os.PathLike[str], out_dir: str | os.PathLike[str] | Non
     ax2.plot(omega_p[0, i], omega_p[0, j], marker="o", color="tab:red", label="start")
     ax2.plot(omega_p[-1, i], omega_p[-1, j], marker="s", color="tab:blue", label="end")
     ax2.set_aspect("equal", adjustable="datalim")
-    ax2.set(xlabel=f"ω{i + 1} (rad/s)", ylabel=f"ω{j + 1} (rad/s)",
-            title=f"seen along principal axis {along + 1} (I{along + 1} = {moments[along]:.4g} kg*m^2)")
+    ax2.set(
+        xlabel=f"ω{i + 1} (rad/s)",
+        ylabel=f"ω{j + 1} (rad/s)",
+        title=f"seen along principal axis {along + 1} (I{along + 1} = {moments[along]:.4g} kg*m^2)",
+    )
     ax2.grid(True, alpha=0.3)
     ax2.legend(loc="best")
     fig.colorbar(points, ax=ax2, shrink=0.8, label="sim time (s)")
@@ -215,8 +237,11 @@ def _sensor_errors(reader: BagReader):
     if "text" not in scene:
         return None
     models = parse_scene_text(scene["text"], source=scene.get("file", "<recorded scene>")).sensors
-    topics = {role: reader.find_topic(role, SENSOR_TYPES[role][0]) for role, (_, field) in SENSOR_TYPES.items()
-              if getattr(models, field) is not None}
+    topics = {
+        role: reader.find_topic(role, SENSOR_TYPES[role][0])
+        for role, (_, field) in SENSOR_TYPES.items()
+        if getattr(models, field) is not None
+    }
     topics = {role: topic for role, topic in topics.items() if topic is not None}
     state_topic = reader.find_topic("state", STATE_TYPE)
     if not topics or state_topic is None:
@@ -232,8 +257,9 @@ def _sensor_errors(reader: BagReader):
             if role == "imu":
                 error = vector3_to_array(msg.angular_velocity) - vector3_to_array(state.angular_velocity_body)
             else:  # body-frame error rotation q^-1 q_m, as a rotation vector
-                error = _rotation_vector(quaternion_to_array(state.orientation),
-                                         quaternion_to_array(msg.pose.pose.orientation))
+                error = _rotation_vector(
+                    quaternion_to_array(state.orientation), quaternion_to_array(msg.pose.pose.orientation)
+                )
             rows.append([time_to_seconds(msg.header.stamp), *error])
         data = np.array(rows).reshape(-1, 4)
         for i, axis in enumerate("xyz"):
@@ -245,8 +271,10 @@ def _sensor_errors(reader: BagReader):
         else:
             sigma = np.asarray(models.star_tracker.noise_equivalent_angle)
             note = "dashed: noise equivalent angle"
-            ax.set(ylabel="attitude error, body axes (rad)",
-                   title=f"Star tracker error ({len(data)} solutions at state stamps)")
+            ax.set(
+                ylabel="attitude error, body axes (rad)",
+                title=f"Star tracker error ({len(data)} solutions at state stamps)",
+            )
         for i in range(3):
             ax.axhline(sigma[i], color=_AXIS_COLOURS[i], linewidth=0.6, linestyle="--")
             ax.axhline(-sigma[i], color=_AXIS_COLOURS[i], linewidth=0.6, linestyle="--")

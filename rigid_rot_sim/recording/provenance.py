@@ -13,8 +13,14 @@ from rigid_rot_sim import __version__
 
 # Python distributions whose versions decide the numbers or the file format.
 DISTRIBUTIONS = (
-    "numpy", "scipy", "mcap", "mcap-ros2-support", "PyYAML",
-    "ros-rclpy", "ros-rmw-fastrtps-cpp", "ros-common-interfaces",
+    "numpy",
+    "scipy",
+    "mcap",
+    "mcap-ros2-support",
+    "PyYAML",
+    "ros-rclpy",
+    "ros-rmw-fastrtps-cpp",
+    "ros-common-interfaces",
 )
 
 
@@ -27,7 +33,7 @@ def _interface_package_version(package: str) -> str:
         return "not installed"
     start = text.find("<version>")
     end = text.find("</version>")
-    return text[start + len("<version>"):end].strip() if 0 <= start < end else "unknown"
+    return text[start + len("<version>") : end].strip() if 0 <= start < end else "unknown"
 
 
 _PACKAGE_DIR = Path(__file__).resolve().parents[1]
@@ -52,10 +58,20 @@ def core_fingerprint() -> str:
 def source_revision() -> str:
     """``git <sha>`` (``+modified`` with uncommitted changes) of the checkout, or ``unknown``."""
     try:
-        sha = subprocess.run(["git", "-C", str(_PACKAGE_DIR), "rev-parse", "--short=12", "HEAD"],
-                             capture_output=True, text=True, timeout=5, check=True).stdout.strip()
-        changed = subprocess.run(["git", "-C", str(_PACKAGE_DIR), "status", "--porcelain", "--untracked-files=no", "--", "."],
-                                 capture_output=True, text=True, timeout=5, check=True).stdout.strip()
+        sha = subprocess.run(
+            ["git", "-C", str(_PACKAGE_DIR), "rev-parse", "--short=12", "HEAD"],
+            capture_output=True,
+            text=True,
+            timeout=5,
+            check=True,
+        ).stdout.strip()
+        changed = subprocess.run(
+            ["git", "-C", str(_PACKAGE_DIR), "status", "--porcelain", "--untracked-files=no", "--", "."],
+            capture_output=True,
+            text=True,
+            timeout=5,
+            check=True,
+        ).stdout.strip()
     except (OSError, subprocess.SubprocessError):
         return "unknown"
     return f"git {sha}" + (" +modified" if changed else "")

@@ -13,9 +13,10 @@ import io
 import os
 import struct
 from collections import Counter
+from collections.abc import Iterable, Iterator
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any, Iterable, Iterator
+from typing import Any
 
 import yaml
 from mcap.exceptions import McapError
@@ -189,8 +190,11 @@ class BagReader:
                     topics=None if wanted is None else sorted(wanted), log_time_order=True
                 ):
                     yield RecordedMessage(
-                        channel.topic, schema.name if schema else "", message.log_time,
-                        message.publish_time, bytes(message.data),
+                        channel.topic,
+                        schema.name if schema else "",
+                        message.log_time,
+                        message.publish_time,
+                        bytes(message.data),
                     )
             return
         assert self._scan is not None
@@ -200,8 +204,11 @@ class BagReader:
             if channel is None or (wanted is not None and channel.topic not in wanted):
                 continue
             yield RecordedMessage(
-                channel.topic, self.topics[channel.topic].type_name, message.log_time,
-                message.publish_time, bytes(message.data),
+                channel.topic,
+                self.topics[channel.topic].type_name,
+                message.log_time,
+                message.publish_time,
+                bytes(message.data),
             )
 
     def decoded(self, topics: Iterable[str] | None = None) -> Iterator[tuple[RecordedMessage, Any]]:
@@ -340,11 +347,15 @@ def info(path: str | os.PathLike[str]) -> str:
         lines.append(f"Integrator: {integrator.get('method', '?')}, dt = {integrator.get('dt', '?')} s")
     digest = reader.metadata.get("digest", {})
     if digest:
-        lines.append(f"Digest:     {digest.get('digest', '?')} (run digest at the last ~/state, stamp {digest.get('stamp', '?')} s)")
+        lines.append(
+            f"Digest:     {digest.get('digest', '?')} (run digest at the last ~/state, stamp {digest.get('stamp', '?')} s)"
+        )
     versions = reader.metadata.get("versions", {})
     if versions:
-        lines.append(f"Recorded by rigid_rot_sim {versions.get('rigid_rot_sim', '?')} "
-                     f"(numpy {versions.get('numpy', '?')}, scipy {versions.get('scipy', '?')}, "
-                     f"rclpy {versions.get('ros-rclpy', '?')})")
+        lines.append(
+            f"Recorded by rigid_rot_sim {versions.get('rigid_rot_sim', '?')} "
+            f"(numpy {versions.get('numpy', '?')}, scipy {versions.get('scipy', '?')}, "
+            f"rclpy {versions.get('ros-rclpy', '?')})"
+        )
     lines.append(f"Metadata:   {', '.join(sorted(reader.metadata)) or 'none'}")
     return "\n".join(lines)

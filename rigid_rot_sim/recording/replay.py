@@ -19,8 +19,9 @@ import os
 import threading
 import time
 from collections import Counter
+from collections.abc import Iterable, Mapping
 from dataclasses import dataclass
-from typing import Any, Iterable, Mapping
+from typing import Any
 
 import yaml
 
@@ -122,7 +123,8 @@ def replay(
         for topic in chosen:
             info = reader.topics[topic]
             publishers[topic] = node.create_publisher(
-                message_class(info.type_name), remap.get(topic, topic),
+                message_class(info.type_name),
+                remap.get(topic, topic),
                 qos_from_metadata(info.channel_metadata.get("offered_qos_profiles", "")),
             )
         deadline = time.monotonic() + wait_for_subscribers

@@ -25,23 +25,28 @@ from typing import Any
 import numpy as np
 
 from rigid_rot_sim.core import quaternion as quat
-from rigid_rot_sim.scene.scene import parse_scene_text
-from rigid_rot_sim.run.digest import format_digest
-from rigid_rot_sim.run.sensors import SensorSuite
-from rigid_rot_sim.run.simulator import Simulator, StateSnapshot
 from rigid_rot_sim.message_fields import quaternion_to_array, time_to_seconds, vector3_to_array
 from rigid_rot_sim.recording.events import EVENT_TYPE, SimEvent, decode_event
 from rigid_rot_sim.recording.provenance import core_fingerprint
 from rigid_rot_sim.recording.reader import BagReader
+from rigid_rot_sim.run.digest import format_digest
+from rigid_rot_sim.run.sensors import SensorSuite
+from rigid_rot_sim.run.simulator import Simulator, StateSnapshot
+from rigid_rot_sim.scene.scene import parse_scene_text
 
 STATE_TYPE = "rigid_rot_msgs/msg/RigidBodyState"
 #: Sensor outputs: role -> (message type, the sensor's field of the scene's sensors section).
-SENSOR_TYPES = {"imu": ("sensor_msgs/msg/Imu", "gyro"),
-                "star_tracker": ("geometry_msgs/msg/PoseWithCovarianceStamped", "star_tracker")}
+SENSOR_TYPES = {
+    "imu": ("sensor_msgs/msg/Imu", "gyro"),
+    "star_tracker": ("geometry_msgs/msg/PoseWithCovarianceStamped", "star_tracker"),
+}
 
 _VECTOR_FIELDS = (
-    "angular_velocity_body", "angular_velocity_world", "angular_momentum_body",
-    "angular_momentum_world", "torque_body",
+    "angular_velocity_body",
+    "angular_velocity_world",
+    "angular_momentum_body",
+    "angular_momentum_world",
+    "torque_body",
 )
 _SCALAR_FIELDS = ("kinetic_energy", "potential_energy", "energy_drift", "angular_momentum_drift")
 
@@ -83,6 +88,7 @@ class ResimReport:
         if self.recorded_digest is None:
             return "not recorded (a recording made before the run digest)"
         return "equal" if self.digest == self.recorded_digest else "different"
+
     sensor_readings: int = 0
     sensor_mismatches: int = 0
 
@@ -95,8 +101,10 @@ class ResimReport:
             readings = f" and {self.sensor_readings} sensor readings" if self.sensor_readings else ""
             return f"BIT-EXACT: all {self.states} states{readings} reproduced bit for bit"
         if self.sensor_mismatches and self.max_attitude_error == self.max_omega_error == 0.0:
-            return (f"MISMATCH: {self.sensor_mismatches} of {self.sensor_readings} sensor readings differ "
-                    "(the states agree; a different numpy draws different noise?)")
+            return (
+                f"MISMATCH: {self.sensor_mismatches} of {self.sensor_readings} sensor readings differ "
+                "(the states agree; a different numpy draws different noise?)"
+            )
         same = self.method == self.recorded_method
         if same and self.core_changed:
             label = "DIFFERS (same integrator, but the numerical core changed since the recording)"
@@ -155,15 +163,21 @@ def _apply(sim: Simulator, event: SimEvent, override_method: str | None) -> None
     kind = event.kind
     if kind == "torque":
         sim.submit_torque(
-            event.values["source"], event.vector("torque"), event.values["frame"], event.number("effective_time"),
-            receipt_time=event.optional_float("receipt_time"), stamp=event.optional_float("stamp"),
+            event.values["source"],
+            event.vector("torque"),
+            event.values["frame"],
+            event.number("effective_time"),
+            receipt_time=event.optional_float("receipt_time"),
+            stamp=event.optional_float("stamp"),
         )
     elif kind == "wheel_torque":  # the torques as clamped then: they clamp to themselves
         torques = event.vector("torques", len(sim.scene.spacecraft.wheels))
         sim.submit_wheel_torques(event.values["source"], torques, effective_time=event.number("effective_time"))
     elif kind == "apply_torque":
         frame_id = sim.frames.body if event.values["frame"] == "body" else sim.frames.world
-        sim.apply_torque(event.vector("torque"), frame_id, event.number("duration"), effective_time=event.number("effective_time"))
+        sim.apply_torque(
+            event.vector("torque"), frame_id, event.number("duration"), effective_time=event.number("effective_time")
+        )
     elif kind == "set_state":
         sim.set_state(event.vector("orientation", 4), event.vector("angular_velocity"))
     elif kind == "reset":
@@ -251,12 +265,23 @@ def resimulate(path: str | os.PathLike[str], method: str | None = None) -> Resim
     recorded_core = reader.metadata.get("versions", {}).get("rigid_rot_sim.core_sha256")
     return ResimReport(
         core_changed=None if recorded_core is None else recorded_core != core_fingerprint(),
-        path=str(path), method=sim.method, recorded_method=recorded_method, dt=dt, states=states,
-        events=events, duration=0.0 if t_first is None else t_last - t_first,
-        max_attitude_error=max_att, max_omega_error=max_omega, max_momentum_error=max_l,
-        max_energy_error=max_e, identical=identical and states > 0, first_difference_t=first_difference,
-        digest=digest, recorded_digest=recorded_digest,
-        sensor_readings=readings, sensor_mismatches=mismatches,
+        path=str(path),
+        method=sim.method,
+        recorded_method=recorded_method,
+        dt=dt,
+        states=states,
+        events=events,
+        duration=0.0 if t_first is None else t_last - t_first,
+        max_attitude_error=max_att,
+        max_omega_error=max_omega,
+        max_momentum_error=max_l,
+        max_energy_error=max_e,
+        identical=identical and states > 0,
+        first_difference_t=first_difference,
+        digest=digest,
+        recorded_digest=recorded_digest,
+        sensor_readings=readings,
+        sensor_mismatches=mismatches,
     )
 
 
@@ -294,6 +319,8 @@ def _compare(recorded: Any, snapshot: StateSnapshot) -> tuple[bool, tuple[float,
     for name in _SCALAR_FIELDS:
         differs = differs or float(getattr(recorded, name)) != float(getattr(snapshot, name))
     omega = float(np.linalg.norm(vector3_to_array(recorded.angular_velocity_body) - snapshot.angular_velocity_body))
-    momentum = float(np.linalg.norm(vector3_to_array(recorded.angular_momentum_world) - snapshot.angular_momentum_world))
+    momentum = float(
+        np.linalg.norm(vector3_to_array(recorded.angular_momentum_world) - snapshot.angular_momentum_world)
+    )
     energy = abs(float(recorded.kinetic_energy) + float(recorded.potential_energy) - snapshot.energy)
     return differs, (attitude_angle(q_rec, snapshot.orientation), omega, momentum, energy)

@@ -34,7 +34,8 @@ import json
 import os
 import threading
 import time
-from typing import Any, Callable, Mapping
+from collections.abc import Callable, Mapping
+from typing import Any
 
 from rigid_rot_sim.recording.events import EVENT_TYPE, event_fields
 from rigid_rot_sim.recording.provenance import package_versions
@@ -132,9 +133,7 @@ class RunRecorder:
         self._clock_lock = threading.Lock()
         self._last_ns = 0
         self.writer.add_metadata("scene", {"file": scene_file, "text": scene_text})
-        self.writer.add_metadata(
-            "parameters", {name: json.dumps(value) for name, value in sorted(parameters.items())}
-        )
+        self.writer.add_metadata("parameters", {name: json.dumps(value) for name, value in sorted(parameters.items())})
         self.writer.add_metadata(
             "integrator",
             {
@@ -200,13 +199,18 @@ class RunRecorder:
         """Record already serialised CDR bytes (e.g. the bytes the node just published)."""
         self.writer.write(topic, data, self.log_time_ns() if log_time_ns is None else log_time_ns)
 
-    def record_tf(self, stamp_sec: int, stamp_nanosec: int, orientation: Any, world_frame: str, body_frame: str) -> None:
+    def record_tf(
+        self, stamp_sec: int, stamp_nanosec: int, orientation: Any, world_frame: str, body_frame: str
+    ) -> None:
         """Record the world -> body transform (rotation only) on ``/tf``."""
         x, y, z, w = (float(v) for v in orientation)
         fields = {
             "transforms": [
                 {
-                    "header": {"stamp": {"sec": int(stamp_sec), "nanosec": int(stamp_nanosec)}, "frame_id": world_frame},
+                    "header": {
+                        "stamp": {"sec": int(stamp_sec), "nanosec": int(stamp_nanosec)},
+                        "frame_id": world_frame,
+                    },
                     "child_frame_id": body_frame,
                     "transform": {
                         "translation": {"x": 0.0, "y": 0.0, "z": 0.0},
@@ -247,7 +251,7 @@ class RunRecorder:
 
     finish = close
 
-    def __enter__(self) -> "RunRecorder":
+    def __enter__(self) -> RunRecorder:
         return self
 
     def __exit__(self, *exc_info: object) -> None:

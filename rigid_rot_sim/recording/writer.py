@@ -27,8 +27,9 @@ from __future__ import annotations
 import contextlib
 import os
 import threading
+from collections.abc import Callable, Mapping
 from pathlib import Path
-from typing import Any, Callable, Mapping
+from typing import Any
 
 from mcap.writer import CompressionType, Writer
 
@@ -40,6 +41,7 @@ PROFILE = "ros2"
 SCHEMA_ENCODING = "ros2msg"
 LIBRARY = f"rigid_rot_sim/{__version__}"
 _COMPRESSIONS = {"zstd": CompressionType.ZSTD, "lz4": CompressionType.LZ4, "none": CompressionType.NONE}
+
 
 class RecorderError(RuntimeError):
     """The recording could not be started or had to stop; the message says why and where."""
@@ -220,9 +222,7 @@ class Recorder:
 
         return self.write(topic, serialize_message(msg), log_time_ns, publish_time_ns)
 
-    def write_fields(
-        self, topic: str, fields: Any, log_time_ns: int, publish_time_ns: int | None = None
-    ) -> bool:
+    def write_fields(self, topic: str, fields: Any, log_time_ns: int, publish_time_ns: int | None = None) -> bool:
         """Encode nested mappings to CDR from the topic's definition and write them.
 
         For types whose Python package is not installed (``tf2_msgs/msg/TFMessage``).
@@ -275,7 +275,7 @@ class Recorder:
 
     close = finish
 
-    def __enter__(self) -> "Recorder":
+    def __enter__(self) -> Recorder:
         return self
 
     def __exit__(self, *exc_info: object) -> None:

@@ -58,8 +58,9 @@ NODE_NAME = "attitude_controller"
 CONTROL_QOS = QoSProfile(depth=10, reliability=ReliabilityPolicy.RELIABLE)
 
 
-def attitude_torque(q: Sequence[float], omega: Sequence[float], target: Sequence[float], kp: float, kd: float,
-                    max_torque: float) -> tuple[float, float, float]:
+def attitude_torque(
+    q: Sequence[float], omega: Sequence[float], target: Sequence[float], kp: float, kd: float, max_torque: float
+) -> tuple[float, float, float]:
     """The quaternion-feedback torque (N*m, body frame) for attitude ``q`` and rate ``omega`` (rad/s, body)."""
     ex, ey, ez, ew = quat.multiply(quat.conjugate(target), q)
     sign = -1.0 if ew < 0.0 else 1.0
@@ -75,8 +76,10 @@ class AttitudeController(Node):
 
     def __init__(self, **kwargs: Any) -> None:
         super().__init__(NODE_NAME, **kwargs)
-        declare = lambda name, value, text: self.declare_parameter(  # noqa: E731
-            name, value, ParameterDescriptor(description=text)).value
+
+        def declare(name: str, value: Any, text: str) -> Any:
+            return self.declare_parameter(name, value, ParameterDescriptor(description=text)).value
+
         target = declare("target", [0.0, 0.0, 0.0, 1.0], "Target attitude [x, y, z, w], body -> world")
         self.kp = float(declare("kp", 0.04, "Proportional gain, N*m per unit of the error quaternion's vector part"))
         self.kd = float(declare("kd", 0.04, "Rate gain, N*m*s"))

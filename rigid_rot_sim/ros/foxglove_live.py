@@ -35,14 +35,17 @@ class FoxgloveLive:
         type_name = self._types.get(kind) or self._types.setdefault(kind, type_name_of(kind))
         self.server.log(topic, type_name, data, t_ns)
         if name == "state":
-            self.server.log_state(t_ns, vector3_to_array(msg.angular_velocity_body),
-                                  vector3_to_array(msg.angular_momentum_world))
+            self.server.log_state(
+                t_ns, vector3_to_array(msg.angular_velocity_body), vector3_to_array(msg.angular_momentum_world)
+            )
 
     def close(self) -> None:
         self.server.close()
 
 
-def start(address: str, sim: Simulator, view: BodyView, frames: Frames, namespace: str) -> tuple[FoxgloveLive | None, str]:
+def start(
+    address: str, sim: Simulator, view: BodyView, frames: Frames, namespace: str
+) -> tuple[FoxgloveLive | None, str]:
     """The live server on ``[HOST:]PORT`` and the start-up line's words; (None, why) without foxglove-sdk.
 
     ValueError for a malformed address; OSError when the port cannot be bound.

@@ -21,10 +21,10 @@ from rclpy.subscription import Subscription
 
 from rigid_rot_sim import conversions
 from rigid_rot_sim.core import limits
-from rigid_rot_sim.scene.scene import Scene
-from rigid_rot_sim.run.simulator import CommandRejected, Simulator
 from rigid_rot_sim.ros.outputs import Outputs
 from rigid_rot_sim.ros.qos import COMMAND_QOS
+from rigid_rot_sim.run.simulator import CommandRejected, Simulator
+from rigid_rot_sim.scene.scene import Scene
 
 #: Seconds between two warnings about rejected commands from the same source.
 REJECT_WARN_PERIOD = 2.0
@@ -79,7 +79,10 @@ class TorqueInputs:
             msg_type = WrenchStamped if spec.message_type == "WrenchStamped" else Vector3Stamped
             topic = node.resolve_topic_name(spec.topic)
             subscription = node.create_subscription(
-                msg_type, spec.topic, lambda msg, source=spec.topic, topic=topic: self.torque_callback(msg, source, topic), qos
+                msg_type,
+                spec.topic,
+                lambda msg, source=spec.topic, topic=topic: self.torque_callback(msg, source, topic),
+                qos,
             )
             self.subscriptions.append(subscription)
             if spec.message_type == "WrenchStamped":
@@ -95,8 +98,10 @@ class TorqueInputs:
         for spec, subscription in zip(self.topic_inputs, self.subscriptions):
             hold = "hold until replaced" if spec.timeout is None else f"zero {spec.timeout:g} s after the last command"
             depth = subscription.qos_profile.depth
-            built.append(f"torque input {subscription.topic_name} ({spec.message_type}, frame {spec.frame}, {hold}, "
-                         f"depth {depth})")
+            built.append(
+                f"torque input {subscription.topic_name} ({spec.message_type}, frame {spec.frame}, {hold}, "
+                f"depth {depth})"
+            )
         return built, []
 
     def torque_callback(self, msg: Any, source: str, topic: str) -> None:

@@ -65,8 +65,12 @@ def lockstep_from_parameters(node: Node, scene: Scene, dt: float) -> LockstepSpe
     on_timeout = value("lockstep.on_timeout")
     if on_timeout not in LOCKSTEP_ON_TIMEOUT:
         raise ValueError(f"lockstep.on_timeout must be one of {', '.join(LOCKSTEP_ON_TIMEOUT)}, got {on_timeout!r}")
-    section = {"period": period, "inputs": list(value("lockstep.inputs")), "timeout": float(value("lockstep.timeout")),
-               "on_timeout": on_timeout}
+    section = {
+        "period": period,
+        "inputs": list(value("lockstep.inputs")),
+        "timeout": float(value("lockstep.timeout")),
+        "on_timeout": on_timeout,
+    }
     return lockstep_spec(section, scene.topic_inputs, dt)
 
 
@@ -117,5 +121,10 @@ def timer_period(run: RunDriver, dt: float) -> float:
     return MAX_TICK if run.pacer.real_time_factor <= 0.0 else run.pacer.tick_period(dt)
 
 
-__all__ = ["LOCKSTEP_PARAMETERS", "NodeLockstep", "declare_lockstep_parameters", "lockstep_from_parameters",
-           "timer_period"]
+__all__ = [
+    "LOCKSTEP_PARAMETERS",
+    "NodeLockstep",
+    "declare_lockstep_parameters",
+    "lockstep_from_parameters",
+    "timer_period",
+]

@@ -76,17 +76,17 @@ from rclpy.node import Node
 from rclpy.signals import SignalHandlerOptions
 
 from rigid_rot_sim.core import limits
+from rigid_rot_sim.ros import parameters as params
 from rigid_rot_sim.ros import simulation_services
-from rigid_rot_sim.run.sensors import SensorSuite
 from rigid_rot_sim.ros.inputs import Rejections, TorqueInputs
 from rigid_rot_sim.ros.lockstep import NodeLockstep, declare_lockstep_parameters, lockstep_from_parameters, timer_period
-from rigid_rot_sim.ros.wheel_inputs import WheelTorqueInput
 from rigid_rot_sim.ros.outputs import Outputs
-from rigid_rot_sim.ros import parameters as params
 from rigid_rot_sim.ros.parameters import RunParameters, declare_parameters, declare_scene_parameter, read_settings
 from rigid_rot_sim.ros.qos import output_qos
 from rigid_rot_sim.ros.services import InertiaService, RunServices
+from rigid_rot_sim.ros.wheel_inputs import WheelTorqueInput
 from rigid_rot_sim.run.pacing import OutputSchedule, Pacer, Progress, RunDriver
+from rigid_rot_sim.run.sensors import SensorSuite
 from rigid_rot_sim.run.simulator import Simulator
 from rigid_rot_sim.scene.scene import OutputQos, Scene, load_scene
 from rigid_rot_sim.share import ensure_ament_prefix_path, resolve_scene
@@ -120,8 +120,9 @@ class SceneRun:
         state_qos = output_qos(OutputQos(settings[params.QOS_RELIABILITY], settings[params.QOS_DEPTH]))
         has_sensors = scene.sensors.gyro is not None or scene.sensors.star_tracker is not None
         self.sensors = SensorSuite(scene.sensors) if has_sensors else None
-        self.outputs = Outputs(node, scene, settings.rates(), state_qos, settings[params.GROUND_TRUTH_VARIANCE],
-                               self.sensors)
+        self.outputs = Outputs(
+            node, scene, settings.rates(), state_qos, settings[params.GROUND_TRUTH_VARIANCE], self.sensors
+        )
         schedule = OutputSchedule.from_rates(self.outputs.rates, sim.dt)
         pacer = Pacer(settings[params.REAL_TIME_FACTOR])
         self.driver = RunDriver(sim, schedule, pacer, settings[params.DURATION] or None, observers=[self.outputs])
@@ -135,8 +136,9 @@ class SceneRun:
             self.inputs.listeners.append(self.lockstep)  # wakes the run the moment a turn is answered
         self.services = RunServices(node, self.driver, scene, rejections, self.report_progress)
         self._action_destroyed = False
-        self.simulation_services = (simulation_services.SimulationServices(node, self.services)
-                                    if simulation_services.AVAILABLE else None)
+        self.simulation_services = (
+            simulation_services.SimulationServices(node, self.services) if simulation_services.AVAILABLE else None
+        )
         self.recording: NodeRecording | None = None
         if settings[params.RECORD_PATH]:
             self.recording = self._start_recording(node, settings[params.RECORD_PATH], settings[params.RECORD_LOG_TIME])
@@ -149,11 +151,15 @@ class SceneRun:
             # steady clock: the pacing never depends on /clock, which this node itself publishes
             in_lockstep = self.lockstep is not None
             period = timer_period(self.driver, sim.dt) if in_lockstep else self.driver.pacer.tick_period(sim.dt)
-            self.timer = node.create_timer(period, self.tick,
-                                           clock=SteadyClock(clock_type=ClockType.STEADY_TIME))
+            self.timer = node.create_timer(period, self.tick, clock=SteadyClock(clock_type=ClockType.STEADY_TIME))
             self.parameters = RunParameters(node, self.driver, self.timer)
-            self.logger.info(self._startup_line(settings[params.INTEGRATOR] == "auto", settings[params.RECORD_PATH],
-                                                settings[params.RECORD_LOG_TIME]))
+            self.logger.info(
+                self._startup_line(
+                    settings[params.INTEGRATOR] == "auto",
+                    settings[params.RECORD_PATH],
+                    settings[params.RECORD_LOG_TIME],
+                )
+            )
             for warning in sim.warnings():
                 self.logger.warning(warning)
             self.outputs.publish_latched(sim.t)
@@ -223,8 +229,11 @@ class SceneRun:
         else:
             left_out.append("simulation_interfaces services (package not installed)")
         if record_path:
-            built.append(f"recording to {record_path} (log time: {log_time})" if self.recording
-                         else "no recording (see the error above)")
+            built.append(
+                f"recording to {record_path} (log time: {log_time})"
+                if self.recording
+                else "no recording (see the error above)"
+            )
         else:
             left_out.append("recorder (nothing recorded)")
         if self.foxglove_words:
@@ -295,7 +304,8 @@ class RigidRotSimNode(Node):
         scene_path = declare_scene_parameter(self)
         if not scene_path:
             self.get_logger().info(
-                "no scene parameter: serving ~/compute_inertia only (rigid-rot run SCENE starts a simulation)")
+                "no scene parameter: serving ~/compute_inertia only (rigid-rot run SCENE starts a simulation)"
+            )
             return
         try:
             self.run = SceneRun(self, load_scene(resolve_scene(scene_path)))  # SceneError names the file, key, problem

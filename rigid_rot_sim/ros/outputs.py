@@ -18,8 +18,8 @@ which outputs are due at a step.
 
 from __future__ import annotations
 
-from collections.abc import Mapping
-from typing import Any, Callable, Protocol, Sequence
+from collections.abc import Callable, Mapping, Sequence
+from typing import Any, Protocol
 
 from geometry_msgs.msg import InertiaStamped, PoseWithCovarianceStamped, QuaternionStamped, Vector3Stamped
 from nav_msgs.msg import Odometry
@@ -27,21 +27,21 @@ from rclpy.node import Node
 from rclpy.publisher import Publisher
 from rclpy.qos import QoSProfile
 from rclpy.serialization import serialize_message
-from rigid_rot_msgs.msg import HeavyTopState, RejectedCommand, RigidBodyState, TorqueBreakdown
 from rosgraph_msgs.msg import Clock
 from sensor_msgs.msg import Imu, JointState
 from tf2_msgs.msg import TFMessage  # built into the venv by `make setup` (vendored), a ROS dependency
 from visualization_msgs.msg import MarkerArray
 
+from rigid_rot_msgs.msg import HeavyTopState, RejectedCommand, RigidBodyState, TorqueBreakdown
 from rigid_rot_sim import conversions
 from rigid_rot_sim.core.inertia import principal_frame_pose
+from rigid_rot_sim.ros.qos import CLOCK_QOS, LATCHED_QOS, REJECTED_QOS, TF_QOS, TF_STATIC_QOS
+from rigid_rot_sim.ros.qos import describe as describe_qos
 from rigid_rot_sim.run.body_view import body_view
 from rigid_rot_sim.run.observer import SimulationObserver
-from rigid_rot_sim.scene.scene import OUTPUT_NAMES, Frames, Scene
 from rigid_rot_sim.run.sensors import SensorSuite
 from rigid_rot_sim.run.simulator import StateSnapshot
-from rigid_rot_sim.ros.qos import CLOCK_QOS, LATCHED_QOS, REJECTED_QOS, TF_QOS, TF_STATIC_QOS, describe as describe_qos
-
+from rigid_rot_sim.scene.scene import OUTPUT_NAMES, Frames, Scene
 
 #: A message from the state and the outputs' settings (frames, ground-truth variance, body view).
 MessageBuilder = Callable[[StateSnapshot, "Outputs"], Any]
@@ -50,19 +50,26 @@ MessageBuilder = Callable[[StateSnapshot, "Outputs"], Any]
 OUTPUTS: dict[str, tuple[Any, MessageBuilder]] = {
     "state": (RigidBodyState, lambda s, o: conversions.snapshot_to_state(s, o.frames.world, o.frames.body)),
     "orientation": (QuaternionStamped, lambda s, o: conversions.snapshot_to_orientation(s, o.frames.world)),
-    "angular_velocity": (Vector3Stamped,
-                         lambda s, o: conversions.vector_stamped(s.angular_velocity_body, s.t, o.frames.body)),
-    "angular_momentum": (Vector3Stamped,
-                         lambda s, o: conversions.vector_stamped(s.angular_momentum_world, s.t, o.frames.world)),
+    "angular_velocity": (
+        Vector3Stamped,
+        lambda s, o: conversions.vector_stamped(s.angular_velocity_body, s.t, o.frames.body),
+    ),
+    "angular_momentum": (
+        Vector3Stamped,
+        lambda s, o: conversions.vector_stamped(s.angular_momentum_world, s.t, o.frames.world),
+    ),
     "top_state": (HeavyTopState, lambda s, o: conversions.snapshot_to_top_state(s, o.frames.world)),
-    "tf": (TFMessage,
-           lambda s, o: TFMessage(transforms=[conversions.transform_stamped(s, o.frames.world, o.frames.body)])),
+    "tf": (
+        TFMessage,
+        lambda s, o: TFMessage(transforms=[conversions.transform_stamped(s, o.frames.world, o.frames.body)]),
+    ),
     "clock": (Clock, lambda s, o: conversions.clock_message(s.t)),
     "imu": (Imu, lambda s, o: conversions.snapshot_to_imu(s, o.frames.body, o.ground_truth_variance)),
-    "odom": (Odometry,
-             lambda s, o: conversions.snapshot_to_odometry(s, o.frames.world, o.frames.body, o.ground_truth_variance)),
-    "markers": (MarkerArray,
-                lambda s, o: conversions.body_markers(o.body_view, s, o.frames.world, o.frames.body)),
+    "odom": (
+        Odometry,
+        lambda s, o: conversions.snapshot_to_odometry(s, o.frames.world, o.frames.body, o.ground_truth_variance),
+    ),
+    "markers": (MarkerArray, lambda s, o: conversions.body_markers(o.body_view, s, o.frames.world, o.frames.body)),
     "star_tracker": (PoseWithCovarianceStamped, None),  # a sensor's reading: SENSOR_OUTPUTS
     "wheels": (JointState, lambda s, o: conversions.snapshot_to_joint_state(s, o.frames.body)),
     "torque_breakdown": (TorqueBreakdown, lambda s, o: conversions.snapshot_to_torque_breakdown(s, o.frames.body)),
@@ -75,10 +82,18 @@ SensorBuilder = Callable[[SensorSuite, StateSnapshot, Frames, float], Any]
 #: Outputs that carry a sensor's reading when the scene has that sensor (``~/imu``: the gyro's,
 #: instead of the ideal rate): output name -> (sensor, builder). Each message is one reading.
 SENSOR_OUTPUTS: dict[str, tuple[str, SensorBuilder]] = {
-    "imu": ("gyro", lambda sensors, s, f, v: conversions.gyro_to_imu(
-        sensors.read_gyro(s), s.t, f.body, sensors.gyro.reading_variance or v)),
-    "star_tracker": ("star_tracker", lambda sensors, s, f, v: conversions.star_tracker_pose(
-        sensors.read_star_tracker(s), s.t, f.world, sensors.star_tracker.covariance)),
+    "imu": (
+        "gyro",
+        lambda sensors, s, f, v: conversions.gyro_to_imu(
+            sensors.read_gyro(s), s.t, f.body, sensors.gyro.reading_variance or v
+        ),
+    ),
+    "star_tracker": (
+        "star_tracker",
+        lambda sensors, s, f, v: conversions.star_tracker_pose(
+            sensors.read_star_tracker(s), s.t, f.world, sensors.star_tracker.covariance
+        ),
+    ),
 }
 
 
@@ -101,13 +116,23 @@ class Outputs(SimulationObserver):
     those built. ``state_qos``: the profile of the state-like outputs.
     """
 
-    def __init__(self, node: Node, scene: Scene, rates: Mapping[str, float], state_qos: QoSProfile,
-                 ground_truth_variance: float, sensors: SensorSuite | None = None) -> None:
+    def __init__(
+        self,
+        node: Node,
+        scene: Scene,
+        rates: Mapping[str, float],
+        state_qos: QoSProfile,
+        ground_truth_variance: float,
+        sensors: SensorSuite | None = None,
+    ) -> None:
         self.scene = scene
         self.sensors = sensors
         #: Output name -> the builder of its sensor reading (the outputs whose sensor the scene has).
-        self.readings = {name: builder for name, (sensor, builder) in SENSOR_OUTPUTS.items()
-                         if sensors is not None and sensor in sensors.names}
+        self.readings = {
+            name: builder
+            for name, (sensor, builder) in SENSOR_OUTPUTS.items()
+            if sensors is not None and sensor in sensors.names
+        }
         self.frames = scene.frames
         self.ground_truth_variance = ground_truth_variance
         self.body_view = body_view(scene)
@@ -129,10 +154,14 @@ class Outputs(SimulationObserver):
     def _offered(self) -> list[str]:
         """The outputs this scene can have (``top_state`` only with gravity, ``wheels`` only with reaction
         wheels, ``torque_breakdown`` only where a torque acts)."""
-        return [name for name in OUTPUT_NAMES if (name != "top_state" or self.scene.is_top)
-                and (name != "star_tracker" or name in self.readings)
-                and (name != "wheels" or bool(self.scene.spacecraft.wheels))
-                and (name != "torque_breakdown" or self.scene.torque_kind != "none")]
+        return [
+            name
+            for name in OUTPUT_NAMES
+            if (name != "top_state" or self.scene.is_top)
+            and (name != "star_tracker" or name in self.readings)
+            and (name != "wheels" or bool(self.scene.spacecraft.wheels))
+            and (name != "torque_breakdown" or self.scene.torque_kind != "none")
+        ]
 
     def _static_transforms(self) -> list[Any]:
         """With /tf: body -> principal-axes frame, where the principal axes are not the body axes."""

@@ -121,11 +121,13 @@ class ParamSpec(Generic[V]):
     def descriptor(self) -> ParameterDescriptor:
         descriptor = ParameterDescriptor(description=self.description, read_only=self.read_only)
         if self.range is not None and self.type is float:
-            descriptor.floating_point_range = [FloatingPointRange(from_value=float(self.range[0]),
-                                                                  to_value=float(self.range[1]), step=0.0)]
+            descriptor.floating_point_range = [
+                FloatingPointRange(from_value=float(self.range[0]), to_value=float(self.range[1]), step=0.0)
+            ]
         elif self.range is not None and self.type is int:
-            descriptor.integer_range = [IntegerRange(from_value=int(self.range[0]), to_value=int(self.range[1]),
-                                                     step=1)]
+            descriptor.integer_range = [
+                IntegerRange(from_value=int(self.range[0]), to_value=int(self.range[1]), step=1)
+            ]
         if self.choices:
             descriptor.additional_constraints = "one of: " + ", ".join(self.choices)
         return descriptor
@@ -193,57 +195,112 @@ def _set_rates(run: RunParameters, change: Change) -> None:
 # ---------------------------------------------------------------- the table
 
 INTEGRATOR = ParamSpec(
-    "integrator", str, lambda scene: scene.integrator.method,
+    "integrator",
+    str,
+    lambda scene: scene.integrator.method,
     "Integrator name from the registry, or 'auto' (the scene's choice)",
-    check=_check_integrator, apply=_set_integrator)
+    check=_check_integrator,
+    apply=_set_integrator,
+)
 DT = ParamSpec(
-    "dt", float, lambda scene: scene.integrator.dt, "Physics step, s of sim time",
-    range=limits.DT_RANGE, check=_check_integrator, apply=_set_integrator)
+    "dt",
+    float,
+    lambda scene: scene.integrator.dt,
+    "Physics step, s of sim time",
+    range=limits.DT_RANGE,
+    check=_check_integrator,
+    apply=_set_integrator,
+)
 REAL_TIME_FACTOR = ParamSpec(
-    "real_time_factor", float, lambda scene: scene.real_time_factor,
+    "real_time_factor",
+    float,
+    lambda scene: scene.real_time_factor,
     "Sim seconds per wall second; 0 = as fast as possible",
-    range=limits.REAL_TIME_FACTOR_RANGE, apply=_set_real_time_factor)
+    range=limits.REAL_TIME_FACTOR_RANGE,
+    apply=_set_real_time_factor,
+)
 DURATION = ParamSpec(
-    "duration", float, lambda scene: scene.duration or 0.0,
+    "duration",
+    float,
+    lambda scene: scene.duration or 0.0,
     "Sim time (s) after which the node stops and exits; 0 = unbounded",
-    range=limits.DURATION_RANGE, apply=_set_duration)
+    range=limits.DURATION_RANGE,
+    apply=_set_duration,
+)
 START_PAUSED = ParamSpec(
-    "start_paused", bool, lambda scene: False,
-    "Start paused at t = 0 (resume with ~/pause data=false, e.g. once a controller is up)", read_only=True)
+    "start_paused",
+    bool,
+    lambda scene: False,
+    "Start paused at t = 0 (resume with ~/pause data=false, e.g. once a controller is up)",
+    read_only=True,
+)
 RECORD_PATH = ParamSpec(
-    "record_path", str, lambda scene: scene.recording or "",
-    "MCAP file to record the run to; empty = no recording", read_only=True)
+    "record_path",
+    str,
+    lambda scene: scene.recording or "",
+    "MCAP file to record the run to; empty = no recording",
+    read_only=True,
+)
 RECORD_LOG_TIME = ParamSpec(
-    "record_log_time", str, lambda scene: "sim",
+    "record_log_time",
+    str,
+    lambda scene: "sim",
     "MCAP log time of the recording: 'sim' (sim time in ns, as ros2 bag record --use-sim-time; "
     "continued across resets) or 'wall' (wall clock)",
-    choices=LOG_TIME_BASES, read_only=True)
+    choices=LOG_TIME_BASES,
+    read_only=True,
+)
 FOXGLOVE = ParamSpec(
-    "foxglove", str, lambda scene: scene.foxglove or "",
+    "foxglove",
+    str,
+    lambda scene: scene.foxglove or "",
     "Foxglove live server address [HOST:]PORT (host default 127.0.0.1); empty = no server "
-    "(needs foxglove-sdk: pip install rigid_rot_sim[viewer])", read_only=True)
+    "(needs foxglove-sdk: pip install rigid_rot_sim[viewer])",
+    read_only=True,
+)
 WORLD_FRAME = ParamSpec(
-    "world_frame", str, lambda scene: scene.frames.world,
+    "world_frame",
+    str,
+    lambda scene: scene.frames.world,
     "Fixed frame of the attitude (header.frame_id of the outputs, /tf parent); "
-    "default: the scene's frames.world (odom)", read_only=True)
+    "default: the scene's frames.world (odom)",
+    read_only=True,
+)
 BODY_FRAME = ParamSpec(
-    "body_frame", str, lambda scene: scene.frames.body,
-    "Body frame (child frame of /tf, ~/state and ~/odom, frame of ~/imu); "
-    "default: the scene's frames.body (base_link)", read_only=True)
+    "body_frame",
+    str,
+    lambda scene: scene.frames.body,
+    "Body frame (child frame of /tf, ~/state and ~/odom, frame of ~/imu); default: the scene's frames.body (base_link)",
+    read_only=True,
+)
 GROUND_TRUTH_VARIANCE = ParamSpec(
-    "ground_truth_variance", float, lambda scene: 1e-12,
+    "ground_truth_variance",
+    float,
+    lambda scene: 1e-12,
     "Variance on the covariance diagonals of ~/imu and ~/odom (the values are exact; "
     "0 would read as 'unknown' to sensor_msgs consumers)",
-    range=(0.0, 1e6), read_only=True)
+    range=(0.0, 1e6),
+    read_only=True,
+)
 QOS_RELIABILITY = ParamSpec(
-    "qos.reliability", str, lambda scene: scene.qos.reliability,
+    "qos.reliability",
+    str,
+    lambda scene: scene.qos.reliability,
     "Reliability of the state-like outputs (~/state ... ~/top_state): reliable | best_effort "
     "(set at start-up; /tf, /tf_static, /clock keep their standard profiles)",
-    choices=QOS_RELIABILITIES, read_only=True)
+    choices=QOS_RELIABILITIES,
+    read_only=True,
+)
 QOS_DEPTH = ParamSpec(
-    "qos.depth", int, lambda scene: scene.qos.depth,
+    "qos.depth",
+    int,
+    lambda scene: scene.qos.depth,
     "Keep-last depth of the state-like outputs (set at start-up)",
-    range=(1, MAX_QOS_DEPTH), read_only=True)
+    range=(1, MAX_QOS_DEPTH),
+    read_only=True,
+)
+
+
 def _scene_rate(output: str) -> Callable[[Scene], float]:
     return lambda scene: scene.outputs[output]
 
@@ -251,33 +308,62 @@ def _scene_rate(output: str) -> Callable[[Scene], float]:
 #: ``rates.<output>``: one per scene output, keyed on the output's name.
 RATES: dict[str, ParamSpec[float]] = {
     output: ParamSpec(
-        f"rates.{output}", float, _scene_rate(output),
+        f"rates.{output}",
+        float,
+        _scene_rate(output),
         f"Publish rate of {output_topic(output)}, Hz of sim time (rounded to whole steps); "
         "0 = not built (set at start-up)",
-        range=limits.RATE_RANGE, check=_check_rates, apply=_set_rates)
+        range=limits.RATE_RANGE,
+        check=_check_rates,
+        apply=_set_rates,
+    )
     for output in OUTPUT_NAMES
 }
 MAX_TORQUE = ParamSpec(
-    "commands.max_torque", float, lambda scene: scene.commands.max_torque,
+    "commands.max_torque",
+    float,
+    lambda scene: scene.commands.max_torque,
     "Largest accepted |torque| (N*m) of a command or ~/apply_torque; 0 = no limit",
-    range=limits.MAX_TORQUE_RANGE, apply=_set_max_torque)
+    range=limits.MAX_TORQUE_RANGE,
+    apply=_set_max_torque,
+)
 COMMAND_DEPTH = ParamSpec(
-    "commands.qos_depth", int, lambda scene: scene.commands.qos_depth,
+    "commands.qos_depth",
+    int,
+    lambda scene: scene.commands.qos_depth,
     "Keep-last depth of the torque subscriptions (a larger burst loses its oldest commands)",
-    range=limits.COMMAND_DEPTH_RANGE, read_only=True)
+    range=limits.COMMAND_DEPTH_RANGE,
+    read_only=True,
+)
 
 #: Every parameter of a node with a scene, in declaration order (``scene`` itself: :data:`SCENE`).
 PARAMETERS: tuple[ParamSpec[Any], ...] = (
-    INTEGRATOR, DT, REAL_TIME_FACTOR, DURATION, START_PAUSED, RECORD_PATH, RECORD_LOG_TIME, FOXGLOVE,
-    WORLD_FRAME, BODY_FRAME, GROUND_TRUTH_VARIANCE, QOS_RELIABILITY, QOS_DEPTH,
-    *RATES.values(), MAX_TORQUE, COMMAND_DEPTH,
+    INTEGRATOR,
+    DT,
+    REAL_TIME_FACTOR,
+    DURATION,
+    START_PAUSED,
+    RECORD_PATH,
+    RECORD_LOG_TIME,
+    FOXGLOVE,
+    WORLD_FRAME,
+    BODY_FRAME,
+    GROUND_TRUTH_VARIANCE,
+    QOS_RELIABILITY,
+    QOS_DEPTH,
+    *RATES.values(),
+    MAX_TORQUE,
+    COMMAND_DEPTH,
 )
 
 #: Declared first, with or without a scene (default empty: no simulation); not in the table.
 SCENE = ParamSpec(
-    "scene", str, lambda scene: "",
+    "scene",
+    str,
+    lambda scene: "",
     "Scene YAML path, or the name of a shipped scene (e.g. free_tumble); empty: serve ~/compute_inertia only",
-    read_only=True)
+    read_only=True,
+)
 
 _DOUBLES = frozenset(spec.name for spec in PARAMETERS if spec.type is float)
 
@@ -293,8 +379,7 @@ def accept_integers_for_doubles(node: Node) -> None:
     """Convert INTEGER values set at run time for the table's float parameters (a pre-set callback)."""
 
     def convert(parameters: list[Parameter]) -> list[Parameter]:
-        return [_as_double(p) if p.type_ == Parameter.Type.INTEGER and p.name in _DOUBLES else p
-                for p in parameters]
+        return [_as_double(p) if p.type_ == Parameter.Type.INTEGER and p.name in _DOUBLES else p for p in parameters]
 
     node.add_pre_set_parameters_callback(convert)
 
@@ -393,8 +478,9 @@ class RunParameters:
     real-time factor.
     """
 
-    def __init__(self, node: Node, driver: RunDriver, timer: Timer,
-                 specs: Iterable[ParamSpec[Any]] = PARAMETERS) -> None:
+    def __init__(
+        self, node: Node, driver: RunDriver, timer: Timer, specs: Iterable[ParamSpec[Any]] = PARAMETERS
+    ) -> None:
         self.node = node
         self.driver = driver
         self.timer = timer

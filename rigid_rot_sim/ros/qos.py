@@ -55,7 +55,10 @@ def output_qos(settings: OutputQos) -> QoSProfile:
 
 def describe(profile: QoSProfile) -> str:
     """Short text of a profile for the start-up line, e.g. ``reliable, depth 10``."""
-    parts = ["reliable" if profile.reliability == ReliabilityPolicy.RELIABLE else "best effort", f"depth {profile.depth}"]
+    parts = [
+        "reliable" if profile.reliability == ReliabilityPolicy.RELIABLE else "best effort",
+        f"depth {profile.depth}",
+    ]
     if profile.durability == DurabilityPolicy.TRANSIENT_LOCAL:
         parts.append("transient local")
     return ", ".join(parts)

@@ -24,8 +24,9 @@ simulation runs on unrecorded.
 from __future__ import annotations
 
 import json
+from collections.abc import Sequence
 from pathlib import Path
-from typing import Any, Sequence
+from typing import Any
 
 from rclpy.impl.rcutils_logger import RcutilsLogger
 from rclpy.node import Node
@@ -55,8 +56,15 @@ class NodeRecording(SimulationObserver):
         self.logger = logger
 
     @classmethod
-    def start(cls, node: Node, sim: Simulator, outputs: Outputs, subscriptions: Sequence[Subscription], path: str,
-              log_time: str = "sim") -> NodeRecording | None:
+    def start(
+        cls,
+        node: Node,
+        sim: Simulator,
+        outputs: Outputs,
+        subscriptions: Sequence[Subscription],
+        path: str,
+        log_time: str = "sim",
+    ) -> NodeRecording | None:
         """Open ``path`` for ``node``'s run and register its topics; None (error logged) if it cannot.
 
         ``log_time`` is the time base of the MCAP log times: ``sim`` (the run's sim time) or
@@ -80,9 +88,13 @@ class NodeRecording(SimulationObserver):
 
         try:
             file = RunRecorder(
-                path, scene_text=scene_text, scene_file=str(scene.source), parameters=parameters,
+                path,
+                scene_text=scene_text,
+                scene_file=str(scene.source),
+                parameters=parameters,
                 integrator={"method": sim.method, "dt": sim.dt, "options": sim.options},
-                events_topic=node.resolve_topic_name("~/sim_events"), on_error=on_error,
+                events_topic=node.resolve_topic_name("~/sim_events"),
+                on_error=on_error,
                 sim_seconds=(lambda: sim.t) if log_time == "sim" else None,
                 sensors=None if outputs.sensors is None else {"seed": outputs.sensors.seed},
             )
@@ -92,10 +104,13 @@ class NodeRecording(SimulationObserver):
         publishers = outputs.publishers
         for name in [n for n in publishers if n not in _LATER] + [n for n in _LATER if n in publishers]:
             publisher = publishers[name]
-            file.add_topic(publisher.topic_name, publisher.msg_type, publisher.qos_profile,
-                           role=name if name in _ROLES else None)
+            file.add_topic(
+                publisher.topic_name, publisher.msg_type, publisher.qos_profile, role=name if name in _ROLES else None
+            )
         for subscription in subscriptions:
-            file.add_topic(subscription.topic_name, subscription.msg_type, _subscription_qos(subscription), role="torque")
+            file.add_topic(
+                subscription.topic_name, subscription.msg_type, _subscription_qos(subscription), role="torque"
+            )
         return cls(file, sim, log)
 
     @property
@@ -124,10 +139,15 @@ class NodeRecording(SimulationObserver):
 
     def command_accepted(self, step: int, command: TorqueCommand) -> None:
         self._event(
-            "torque", step,
+            "torque",
+            step,
             f"{command.source}: {list(command.torque)} N*m ({command.frame}) from t = {command.effective_time:.9g} s",
-            source=command.source, frame=command.frame, torque=tuple(float(v) for v in command.torque),
-            effective_time=float(command.effective_time), receipt_time=command.receipt_time, stamp=command.stamp,
+            source=command.source,
+            frame=command.frame,
+            torque=tuple(float(v) for v in command.torque),
+            effective_time=float(command.effective_time),
+            receipt_time=command.receipt_time,
+            stamp=command.stamp,
         )
 
     def wheel_command_accepted(
@@ -135,23 +155,33 @@ class NodeRecording(SimulationObserver):
     ) -> None:
         said = f"; clamped to max_torque: wheel(s) {list(clamped)}" if clamped else ""
         self._event(
-            "wheel_torque", step, f"{source}: wheel torques {list(torques)} N*m from t = {effective_time:.9g} s{said}",
-            source=source, torques=tuple(float(v) for v in torques), effective_time=float(effective_time),
+            "wheel_torque",
+            step,
+            f"{source}: wheel torques {list(torques)} N*m from t = {effective_time:.9g} s{said}",
+            source=source,
+            torques=tuple(float(v) for v in torques),
+            effective_time=float(effective_time),
             clamped=list(clamped),
         )
 
     def torque_applied(self, step: int, command: TorqueCommand) -> None:
         self._event(
-            "apply_torque", step,
+            "apply_torque",
+            step,
             f"apply_torque: {list(command.torque)} N*m ({command.frame}) for {command.duration:g} s from t = {command.effective_time:.9g} s",
-            frame=command.frame, torque=tuple(float(v) for v in command.torque),
-            duration=float(command.duration or 0.0), effective_time=float(command.effective_time),
+            frame=command.frame,
+            torque=tuple(float(v) for v in command.torque),
+            duration=float(command.duration or 0.0),
+            effective_time=float(command.effective_time),
         )
 
     def state_set(self, step: int, orientation: Sequence[float], angular_velocity: Sequence[float]) -> None:
         self._event(
-            "set_state", step, f"set_state at t = {self.sim.t:.9g} s",
-            orientation=tuple(float(v) for v in orientation), angular_velocity=tuple(float(v) for v in angular_velocity),
+            "set_state",
+            step,
+            f"set_state at t = {self.sim.t:.9g} s",
+            orientation=tuple(float(v) for v in orientation),
+            angular_velocity=tuple(float(v) for v in angular_velocity),
         )
 
     def reset(self, step: int) -> None:
@@ -159,8 +189,12 @@ class NodeRecording(SimulationObserver):
 
     def integrator_changed(self, step: int, method: str, dt: float, options: dict[str, Any]) -> None:
         self._event(
-            "integrator", step, f"integrator {method}, dt {dt:g} s from t = {self.sim.t:.9g} s",
-            method=method, dt=float(dt), options=dict(options),
+            "integrator",
+            step,
+            f"integrator {method}, dt {dt:g} s from t = {self.sim.t:.9g} s",
+            method=method,
+            dt=float(dt),
+            options=dict(options),
         )
 
     def lockstep_timeout(self, step: int, reason: str, action: str) -> None:
@@ -173,11 +207,14 @@ class NodeRecording(SimulationObserver):
         if self.file.error is None and self.file.active:
             digest = getattr(self, "last_state_digest", None)
             if digest is not None:
-                self.file.add_metadata("digest", {
-                    "digest": format_digest(digest[0]),
-                    "stamp": f"{digest[1]}.{digest[2]:09d}",
-                    "definition": "rigid_rot_sim.run.digest (FNV-1a 64 over the float64 words of every step's t, q, omega)",
-                })
+                self.file.add_metadata(
+                    "digest",
+                    {
+                        "digest": format_digest(digest[0]),
+                        "stamp": f"{digest[1]}.{digest[2]:09d}",
+                        "definition": "rigid_rot_sim.run.digest (FNV-1a 64 over the float64 words of every step's t, q, omega)",
+                    },
+                )
             self.file.close()
             path = self.file.path
             self.logger.info(

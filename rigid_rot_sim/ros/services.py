@@ -8,21 +8,22 @@ raises out of a callback. The actions (:meth:`RunServices.reset`, :meth:`~RunSer
 
 from __future__ import annotations
 
-from typing import Any, Callable
+from collections.abc import Callable
+from typing import Any
 
 from rclpy.callback_groups import MutuallyExclusiveCallbackGroup
 from rclpy.node import Node
-from rigid_rot_msgs.srv import ApplyTorque, ComputeInertia, SetState, Step, StepWithTorque
 from std_srvs.srv import SetBool, Trigger
 
+from rigid_rot_msgs.srv import ApplyTorque, ComputeInertia, SetState, Step, StepWithTorque
 from rigid_rot_sim import conversions
 from rigid_rot_sim.core import limits
 from rigid_rot_sim.core.inertia import mass_properties
+from rigid_rot_sim.ros.inputs import REJECT_WARN_PERIOD, Rejections
 from rigid_rot_sim.run.pacing import Progress, RunDriver
-from rigid_rot_sim.scene.scene import Scene
 from rigid_rot_sim.run.simulator import CommandRejected
 from rigid_rot_sim.run.step_requests import torque_for_steps
-from rigid_rot_sim.ros.inputs import REJECT_WARN_PERIOD, Rejections
+from rigid_rot_sim.scene.scene import Scene
 
 #: Most wall time (s) one ~/step request spends stepping; the reply says if it stopped short.
 STEP_REQUEST_WALL = 0.25
@@ -40,16 +41,20 @@ class InertiaService:
     def __init__(self, node: Node) -> None:
         self.logger = node.get_logger()
         self.callback_group = MutuallyExclusiveCallbackGroup()
-        self.service = node.create_service(ComputeInertia, "~/compute_inertia", self.compute_inertia_callback,
-                                           callback_group=self.callback_group)
+        self.service = node.create_service(
+            ComputeInertia, "~/compute_inertia", self.compute_inertia_callback, callback_group=self.callback_group
+        )
 
     def compute_inertia_callback(self, request, response):
         count = max(len(request.masses), len(request.positions))
         if count > limits.MAX_POINT_MASSES:  # refused before converting anything
-            return self._refuse(response, f"invalid request: {count} masses, more than the limit of {limits.MAX_POINT_MASSES}")
+            return self._refuse(
+                response, f"invalid request: {count} masses, more than the limit of {limits.MAX_POINT_MASSES}"
+            )
         if len(request.frame_id) > limits.MAX_NAME_LENGTH:
             return self._refuse(
-                response, f"invalid request: frame_id of {len(request.frame_id)} characters exceeds the limit of {limits.MAX_NAME_LENGTH}"
+                response,
+                f"invalid request: frame_id of {len(request.frame_id)} characters exceeds the limit of {limits.MAX_NAME_LENGTH}",
             )
         try:
             masses, positions, origin = conversions.compute_inertia_request_to_arrays(request)
@@ -77,8 +82,9 @@ class RunServices:
     ``report`` logs what a slice of stepping came to (a failure, the duration reached).
     """
 
-    def __init__(self, node: Node, run: RunDriver, scene: Scene, rejections: Rejections,
-                 report: Callable[[Progress], None]) -> None:
+    def __init__(
+        self, node: Node, run: RunDriver, scene: Scene, rejections: Rejections, report: Callable[[Progress], None]
+    ) -> None:
         self.logger = node.get_logger()
         self.run = run
         self.sim = run.sim
@@ -100,8 +106,14 @@ class RunServices:
     # ------------------------------------------------------------------ callbacks
 
     def set_state_callback(self, request, response):
-        return self.serve(response, "~/set_state", lambda: self.set_state(
-            conversions.quaternion_to_array(request.orientation), conversions.vector3_to_array(request.angular_velocity)))
+        return self.serve(
+            response,
+            "~/set_state",
+            lambda: self.set_state(
+                conversions.quaternion_to_array(request.orientation),
+                conversions.vector3_to_array(request.angular_velocity),
+            ),
+        )
 
     def reset_callback(self, request, response):
         return self.serve(response, "~/reset", self.reset)

@@ -62,15 +62,20 @@ class SimulateStepsAction:
         self.timer = node.create_timer(MIN_TICK, self.step_slice, clock=Clock(clock_type=ClockType.STEADY_TIME))
         self.timer.cancel()  # runs only while a goal is stepped
         self.server = ActionServer(
-            node, action_type, ACTION_NAME, execute_callback=self.execute,
-            goal_callback=self.on_goal, cancel_callback=lambda goal_handle: CancelResponse.ACCEPT,
+            node,
+            action_type,
+            ACTION_NAME,
+            execute_callback=self.execute,
+            goal_callback=self.on_goal,
+            cancel_callback=lambda goal_handle: CancelResponse.ACCEPT,
         )
 
     def on_goal(self, request: Any) -> GoalResponse:
         if self.goal is not None:
             self.node.get_logger().warning(
                 f"{ACTION_NAME}: goal of {request.steps} steps rejected: a goal of {self.goal.steps} steps "
-                f"is running ({self.goal.done} done)")
+                f"is running ({self.goal.done} done)"
+            )
             return GoalResponse.REJECT
         return GoalResponse.ACCEPT
 
@@ -131,7 +136,8 @@ class SimulateStepsAction:
             goal.done += progress.steps
             if sim.failure is not None:
                 goal.outcome.set_result(
-                    ("abort", self.failed, f"stopped after {goal.done} of {goal.steps} steps: {sim.failure}"))
+                    ("abort", self.failed, f"stopped after {goal.done} of {goal.steps} steps: {sim.failure}")
+                )
                 return
             if progress.steps:
                 feedback.completed_steps = goal.done

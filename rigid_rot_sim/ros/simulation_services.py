@@ -32,7 +32,8 @@ either name, their values being the same (constants are not part of the type has
 
 from __future__ import annotations
 
-from typing import Any, Callable
+from collections.abc import Callable
+from typing import Any
 
 try:
     from simulation_interfaces.msg import Result, SimulationState, SimulatorFeatures
@@ -63,7 +64,8 @@ def _constant(cls: type, name: str, prefix: str) -> int:
 
 if AVAILABLE:
     OK, FEATURE_UNSUPPORTED, INCORRECT_STATE, OPERATION_FAILED = (
-        _constant(Result, name, "RESULT_") for name in ("OK", "FEATURE_UNSUPPORTED", "INCORRECT_STATE", "OPERATION_FAILED")
+        _constant(Result, name, "RESULT_")
+        for name in ("OK", "FEATURE_UNSUPPORTED", "INCORRECT_STATE", "OPERATION_FAILED")
     )
     STOPPED, PLAYING, PAUSED, QUITTING = (
         _constant(SimulationState, name, "STATE_") for name in ("STOPPED", "PLAYING", "PAUSED", "QUITTING")
@@ -147,7 +149,9 @@ class SimulationServices:
         return PAUSED if run.sim.paused else PLAYING
 
     def get_state_callback(self, request, response):
-        return self._serve("~/get_simulation_state", response, lambda: setattr(response.state, "state", self.run_state()))
+        return self._serve(
+            "~/get_simulation_state", response, lambda: setattr(response.state, "state", self.run_state())
+        )
 
     # ------------------------------------------------------------------ changes
 
@@ -166,8 +170,9 @@ class SimulationServices:
         if target == current:
             raise _Refused(already, f"already {names[target]}")
         if self.run.finished:
-            raise _Refused(SetSimulationState.Response.STATE_TRANSITION_ERROR,
-                           "the run reached its duration and is stopping")
+            raise _Refused(
+                SetSimulationState.Response.STATE_TRANSITION_ERROR, "the run reached its duration and is stopping"
+            )
         if target == STOPPED:
             actions.reset()  # ~/reset
             actions.pause(True)  # ~/pause
@@ -186,8 +191,10 @@ class SimulationServices:
         run = self.run
         if run.finished or not run.sim.paused:
             state = "stopping (duration reached)" if run.finished else "playing"
-            raise _Refused(OPERATION_FAILED, f"stepping needs a paused simulation, it is {state}: "
-                           "pause it first (SetSimulationState PAUSED)")
+            raise _Refused(
+                OPERATION_FAILED,
+                f"stepping needs a paused simulation, it is {state}: pause it first (SetSimulationState PAUSED)",
+            )
         self.stepping_started()
         self.actions.step(steps)  # ~/step (ValueError: operation failed)
 
@@ -206,9 +213,11 @@ class SimulationServices:
         if scope & ~(time_bit | state_bit | spawned_bit):
             raise _Refused(FEATURE_UNSUPPORTED, f"unknown scope bits in {scope} (TIME 1, STATE 2, SPAWNED 4)")
         if scope & time_bit and not scope & state_bit:
-            raise _Refused(FEATURE_UNSUPPORTED,
-                           "time cannot be reset without the state (the scene's initial state belongs to t = 0): "
-                           "use scope TIME|STATE, DEFAULT or ALL")
+            raise _Refused(
+                FEATURE_UNSUPPORTED,
+                "time cannot be reset without the state (the scene's initial state belongs to t = 0): "
+                "use scope TIME|STATE, DEFAULT or ALL",
+            )
         if scope & time_bit:
             self.actions.reset()  # ~/reset
         elif scope & state_bit:

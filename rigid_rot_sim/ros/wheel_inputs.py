@@ -51,16 +51,19 @@ class WheelTorqueInput:
         built: list[str] = []
         left_out: list[str] = []
         if self.names:
-            built.append(f"{len(self.names)} reaction wheel(s) [{', '.join(self.names)}]: commands on {self.topic} "
-                         f"(WheelTorques, N*m), speeds on ~/wheels")
+            built.append(
+                f"{len(self.names)} reaction wheel(s) [{', '.join(self.names)}]: commands on {self.topic} "
+                f"(WheelTorques, N*m), speeds on ~/wheels"
+            )
         else:
             left_out.append("reaction wheels (none in the scene)")
         if self.spacecraft.wheel_schedule is not None:
             built.append(f"a wheel-torque schedule of {len(self.spacecraft.wheel_schedule.segments)} segment(s)")
         gg = self.spacecraft.gravity_gradient
         if gg is not None:
-            built.append(f"gravity gradient (circular orbit, radius {gg.radius:g} m, "
-                         f"inclination {gg.inclination:g} rad)")
+            built.append(
+                f"gravity gradient (circular orbit, radius {gg.radius:g} m, inclination {gg.inclination:g} rad)"
+            )
         return built, left_out
 
     def callback(self, msg: Any) -> None:
@@ -72,8 +75,10 @@ class WheelTorqueInput:
             for i in clamped:
                 if i not in self._clamped_said:
                     self._clamped_said.add(i)
-                    self.logger.warning(f"{self.topic}: wheel {self.names[i]!r} command clamped to its max_torque "
-                                        "(said once per wheel; every clamp is in the recorded events)")
+                    self.logger.warning(
+                        f"{self.topic}: wheel {self.names[i]!r} command clamped to its max_torque "
+                        "(said once per wheel; every clamp is in the recorded events)"
+                    )
         except CommandRejected as exc:
             self.rejections.reject(self.topic, exc.reason, msg.header.frame_id, (0.0, 0.0, 0.0))
         except Exception as exc:  # never out of a callback: rejected with the reason

@@ -75,7 +75,6 @@ MIDPOINT_SOLVER_LIMIT = 4.0
 EXPLICIT_ACCURACY_LIMIT = 0.5
 
 
-
 def _methods_with_stability(*kinds: str) -> tuple[str, ...]:
     """The registered methods whose ``stability`` class is one of ``kinds``, in registry order."""
     return tuple(name for name, cls in METHODS.items() if cls.stability in kinds)
@@ -239,7 +238,7 @@ def choose_integrator(principal_moments: Any, omega_max: float, dt: float, torqu
     return "taylor"
 
 
-def omega_bound(scene: "Scene", body: "RigidBody") -> float:
+def omega_bound(scene: Scene, body: RigidBody) -> float:
     """A bound on |ω| (rad/s) over a run of ``scene`` (exact where physics gives one).
 
     Free body: |L| / I_min (|L| is conserved). Gravity: energy conservation,

@@ -37,7 +37,12 @@ from rigid_rot_sim.run.clock import StepClock
 from rigid_rot_sim.scene.scene import Scene, TopicInput
 
 __all__ = [
-    "APPLY_TORQUE_SOURCE", "STAMP_HORIZON", "CommandRejected", "CommandSchedule", "EventKind", "TorqueCommand",
+    "APPLY_TORQUE_SOURCE",
+    "STAMP_HORIZON",
+    "CommandRejected",
+    "CommandSchedule",
+    "EventKind",
+    "TorqueCommand",
 ]
 
 Torque = tuple[float, float, float]
@@ -115,7 +120,9 @@ def clamp_wheel_torques(wheels: Any, source: str, torques: Any) -> tuple[tuple[f
     if not wheels:
         raise CommandRejected(source, "this scene has no reaction wheels")
     if len(values) != len(wheels):
-        raise CommandRejected(source, f"{len(values)} torque(s) for {len(wheels)} wheel(s) [{', '.join(w.name for w in wheels)}]")
+        raise CommandRejected(
+            source, f"{len(values)} torque(s) for {len(wheels)} wheel(s) [{', '.join(w.name for w in wheels)}]"
+        )
     clamped = []
     for value, wheel in zip(values, wheels):
         if not math.isfinite(value):
@@ -158,11 +165,18 @@ class CommandSchedule:
         if self.spacecraft.wheel_schedule is not None:
             for wheel_segment in self.spacecraft.wheel_schedule.segments:
                 torques = clamp_wheel_torques(self.spacecraft.wheels, WHEEL_SCHEDULE_SOURCE, wheel_segment.torques)[0]
-                self._push(self.clock.step_at_or_after(wheel_segment.start), EventKind.WHEELS,
-                           (wheel_segment.start, torques, WHEEL_SCHEDULE_SOURCE))
+                self._push(
+                    self.clock.step_at_or_after(wheel_segment.start),
+                    EventKind.WHEELS,
+                    (wheel_segment.start, torques, WHEEL_SCHEDULE_SOURCE),
+                )
         for index, schedule in enumerate(self.schedules):
             for segment in schedule.segments:
-                self._push(self.clock.step_at_or_after(segment.start), EventKind.SCHEDULE, (segment.start, index, segment.torque))
+                self._push(
+                    self.clock.step_at_or_after(segment.start),
+                    EventKind.SCHEDULE,
+                    (segment.start, index, segment.torque),
+                )
 
     # ------------------------------------------------------------------ checks
 
@@ -180,12 +194,14 @@ class CommandSchedule:
             )
         if frame_id and frame_id not in names:
             raise CommandRejected(
-                source, f"frame {frame_id!r} is neither the body frame {self.frames.body!r} nor the world frame {self.frames.world!r}"
+                source,
+                f"frame {frame_id!r} is neither the body frame {self.frames.body!r} nor the world frame {self.frames.world!r}",
             )
         if policy == "header":
             if not frame_id:
                 raise CommandRejected(
-                    source, f"empty header.frame_id: this input takes the frame from the header ({self.frames.body!r} or {self.frames.world!r})"
+                    source,
+                    f"empty header.frame_id: this input takes the frame from the header ({self.frames.body!r} or {self.frames.world!r})",
                 )
             return names[frame_id]
         if frame_id and names[frame_id] != policy:
@@ -204,12 +220,12 @@ class CommandSchedule:
         if what == "torque" and self.max_torque > 0.0:
             norm = math.hypot(*values)
             if norm > self.max_torque:
-                raise CommandRejected(
-                    source, f"|torque| = {norm:.6g} N*m exceeds max_torque = {self.max_torque:g} N*m"
-                )
+                raise CommandRejected(source, f"|torque| = {norm:.6g} N*m exceeds max_torque = {self.max_torque:g} N*m")
         return values  # type: ignore[return-value]
 
-    def submit_wheels(self, source: str, torques: Any, effective_time: float) -> tuple[int, tuple[float, ...], tuple[int, ...]]:
+    def submit_wheels(
+        self, source: str, torques: Any, effective_time: float
+    ) -> tuple[int, tuple[float, ...], tuple[int, ...]]:
         """Hold wheel motor torques (:func:`clamp_wheel_torques`) from ``effective_time`` (s): (step, clamped, which)."""
         clamped, which = clamp_wheel_torques(self.spacecraft.wheels, source, torques)
         effective_time = validation.finite_scalar("effective_time", effective_time)
@@ -257,8 +273,13 @@ class CommandSchedule:
     # ------------------------------------------------------------------ scheduling
 
     def submit(
-        self, source: str, torque: Any, frame: str, effective_time: float,
-        receipt_time: float | None = None, stamp: float | None = None,
+        self,
+        source: str,
+        torque: Any,
+        frame: str,
+        effective_time: float,
+        receipt_time: float | None = None,
+        stamp: float | None = None,
     ) -> TorqueCommand:
         """Hold ``torque`` (N*m, ``frame`` body or world) on input ``source`` from ``effective_time`` (s)."""
         self.input_spec(source)

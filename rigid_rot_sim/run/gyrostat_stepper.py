@@ -40,8 +40,9 @@ AUTO_METHOD = "dopri5"
 class GyrostatStepper(Stepper):
     """A :class:`Stepper` for scenes with reaction wheels or gravity gradient."""
 
-    def configure(self, method: str, dt: float, options: dict[str, Any], *, first: bool = False,
-                  dry_run: bool = False) -> None:
+    def configure(
+        self, method: str, dt: float, options: dict[str, Any], *, first: bool = False, dry_run: bool = False
+    ) -> None:
         dt = validation.positive_scalar("dt", dt)
         method = AUTO_METHOD if method == "auto" else method
         cls = get_gyrostat_method(method)
@@ -49,21 +50,36 @@ class GyrostatStepper(Stepper):
         if not hasattr(self, "_wheels"):
             wheels = spacecraft.wheel_model(self.scene.body.inertia_array)
             self._wheels_body = wheels
-            self._wheels = None if wheels is None else dataclasses.replace(
-                wheels, axes=np.ascontiguousarray(self.body.vector_to_principal(wheels.axes)))
+            self._wheels = (
+                None
+                if wheels is None
+                else dataclasses.replace(wheels, axes=np.ascontiguousarray(self.body.vector_to_principal(wheels.axes)))
+            )
             self._orbit = NO_ORBIT if spacecraft.gravity_gradient is None else spacecraft.gravity_gradient.model()
         if dry_run:
             cls(self.body.principal_moments, dt, wheels=self._wheels, orbit=self._orbit, **options)
             return
         if first:
-            state = (0.0, self.body.attitude_to_principal(np.array(self.scene.initial.orientation)), np.zeros(3),
-                     self._initial_speeds())
+            state = (
+                0.0,
+                self.body.attitude_to_principal(np.array(self.scene.initial.orientation)),
+                np.zeros(3),
+                self._initial_speeds(),
+            )
         else:
             assert isinstance(self.integrator, GyrostatIntegrator)
             state = (self.integrator.t, self.integrator.q, self.integrator.omega, self.integrator.wheel_speeds)
         integrator = cls(
-            self.body.principal_moments, dt, self.integrator.torque if self.integrator else None, wheels=self._wheels,
-            orbit=self._orbit, t0=state[0], q0=state[1], omega0=state[2], wheel_speeds0=state[3], **options,
+            self.body.principal_moments,
+            dt,
+            self.integrator.torque if self.integrator else None,
+            wheels=self._wheels,
+            orbit=self._orbit,
+            t0=state[0],
+            q0=state[1],
+            omega0=state[2],
+            wheel_speeds0=state[3],
+            **options,
         )
         if self.integrator is not None:
             integrator.set_wheel_commands(self.integrator.wheel_commands)  # type: ignore[attr-defined]
@@ -126,15 +142,19 @@ class GyrostatStepper(Stepper):
             momentum = total_momentum_body(moments, principal_wheels, integrator.omega, speeds)
             momentum_body = np.array(quat.rotate(body_from_principal, momentum))
             energy = float(gyrostat_energy(moments, principal_wheels, integrator.omega, speeds))
-            net = np.array([
-                u - friction_torque(c, b, s, w)
-                for u, c, b, s, w in zip(applied, wheels.coulomb, wheels.viscous, wheels.stiction_speed, speeds,
-                                         strict=True)
-            ])
+            net = np.array(
+                [
+                    u - friction_torque(c, b, s, w)
+                    for u, c, b, s, w in zip(
+                        applied, wheels.coulomb, wheels.viscous, wheels.stiction_speed, speeds, strict=True
+                    )
+                ]
+            )
             sources.append(("reaction_wheels", -(net @ wheels.axes)))
         if self._orbit.enabled:
-            gg = gravity_gradient_torque(self._orbit.compiled(), self.body.principal_moments, tuple(integrator.q),
-                                         integrator.t)
+            gg = gravity_gradient_torque(
+                self._orbit.compiled(), self.body.principal_moments, tuple(integrator.q), integrator.t
+            )
             sources.append(("gravity_gradient", np.array(quat.rotate(body_from_principal, gg))))
         total = np.sum([v for _, v in sources], axis=0) if sources else np.zeros(3)
         momentum_world = np.array(quat.rotate(q, momentum_body))
@@ -161,7 +181,6 @@ class GyrostatStepper(Stepper):
 def make_stepper(scene: Any, *args: Any) -> Stepper:
     """The stepper of ``scene``: a :class:`GyrostatStepper` for a spacecraft scene, else a :class:`Stepper`."""
     return (GyrostatStepper if scene.spacecraft else Stepper)(scene, *args)
-
 
 
 class WheelInputs:

@@ -122,8 +122,10 @@ class Lockstep(SimulationObserver):
         pace = ""
         if wall > 0:
             pace = f", {self.turns / wall:.0f} turns/s, {self.turns * self.spec.period / wall:.1f}x real time"
-        return (f"lockstep: {self.turns} turns in {wall:.3f} s of wall time since the first{pace}; "
-                f"{self.timeouts} timed out, {self.resends} states sent again")
+        return (
+            f"lockstep: {self.turns} turns in {wall:.3f} s of wall time since the first{pace}; "
+            f"{self.timeouts} timed out, {self.resends} states sent again"
+        )
 
     # ------------------------------------------------------------------ turns
 

@@ -18,8 +18,8 @@ from scipy.spatial.transform import Rotation
 
 from rigid_rot_sim.core import quaternion as quat
 from rigid_rot_sim.core.dynamics import RigidBody
-from rigid_rot_sim.scene.scene import Scene
 from rigid_rot_sim.core.torque import GravityTorque
+from rigid_rot_sim.scene.scene import Scene
 
 __all__ = ["Observables", "StateSnapshot"]
 
@@ -107,8 +107,9 @@ class Observables:
         """The largest gravity torque (N*m) on the body: weight times the centre-of-mass distance."""
         return self.weight * float(np.linalg.norm(self.com_body))
 
-    def snapshot(self, t: float, step: int, q_principal: Any, omega_principal: Any, torque_body: Any,
-                 digest: int = 0) -> StateSnapshot:
+    def snapshot(
+        self, t: float, step: int, q_principal: Any, omega_principal: Any, torque_body: Any, digest: int = 0
+    ) -> StateSnapshot:
         """The snapshot of the principal-frame state (``q``, ``ω``) under ``torque_body`` (N*m, user body frame);
         ``digest``: the run digest up to this step."""
         # plain floats and the quaternion helpers: this runs at every publication

@@ -18,7 +18,8 @@ overrides only what it uses.
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING, Any, Sequence
+from collections.abc import Sequence
+from typing import TYPE_CHECKING, Any
 
 if TYPE_CHECKING:  # the dataclasses only; nothing here depends on the simulator at run time
     from rigid_rot_sim.run.commands import TorqueCommand
@@ -28,7 +29,7 @@ if TYPE_CHECKING:  # the dataclasses only; nothing here depends on the simulator
 class SimulationObserver:
     """Receives a run's reports; every method is a no-op until overridden."""
 
-    def command_accepted(self, step: int, command: "TorqueCommand") -> None:
+    def command_accepted(self, step: int, command: TorqueCommand) -> None:
         """A topic (or resim) torque command was scheduled; it takes effect at ``command.step``."""
 
     def command_rejected(self, step: int, source: str, reason: str, frame_id: str, torque: Any) -> None:
@@ -40,7 +41,7 @@ class SimulationObserver:
         """Wheel motor torques (N*m, clamped, scene order) were scheduled on ``source`` for ``effective_time``
         (s); ``clamped`` lists the wheels whose command exceeded max_torque."""
 
-    def torque_applied(self, step: int, command: "TorqueCommand") -> None:
+    def torque_applied(self, step: int, command: TorqueCommand) -> None:
         """A torque for ``command.duration`` s was scheduled (the ``apply_torque`` request)."""
 
     def state_set(self, step: int, orientation: Sequence[float], angular_velocity: Sequence[float]) -> None:
@@ -64,7 +65,7 @@ class SimulationObserver:
         Told by the lockstep turns (:mod:`~rigid_rot_sim.run.lockstep`); states do not depend on it.
         """
 
-    def outputs_due(self, step: int, snapshot: "StateSnapshot", names: Sequence[str]) -> None:
+    def outputs_due(self, step: int, snapshot: StateSnapshot, names: Sequence[str]) -> None:
         """The outputs ``names`` (scene output names) are due at ``step``, with the state there.
 
         Told by the run driver (:mod:`~rigid_rot_sim.run.pacing`), never by the simulator.

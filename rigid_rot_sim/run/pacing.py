@@ -29,8 +29,9 @@ from __future__ import annotations
 
 import math
 import time
+from collections.abc import Callable, Iterable, Mapping, Sequence
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, Callable, Iterable, Mapping, Sequence
+from typing import TYPE_CHECKING
 
 if TYPE_CHECKING:  # annotations only
     from rigid_rot_sim.run.observer import SimulationObserver
@@ -113,7 +114,7 @@ class Pacer:
             return MIN_TICK
         return min(max(dt / self.real_time_factor, MIN_TICK), MAX_TICK)
 
-    def target_step(self, sim: "Simulator", now: float) -> tuple[int | None, float | None]:
+    def target_step(self, sim: Simulator, now: float) -> tuple[int | None, float | None]:
         """The step the run is due at ``now`` (None: unbounded) and the backlog dropped (wall s) or None.
 
         A backlog of more than ``MAX_BACKLOG_WALL`` is dropped: the run re-anchors half a
@@ -149,7 +150,7 @@ class OutputSchedule:
         return max(1, int(round(1.0 / (rate * dt))))
 
     @classmethod
-    def from_rates(cls, rates: Mapping[str, float], dt: float) -> "OutputSchedule":
+    def from_rates(cls, rates: Mapping[str, float], dt: float) -> OutputSchedule:
         """The schedule of the outputs with a rate > 0 (Hz of sim time) at step ``dt`` (s)."""
         return cls({name: cls.period_steps(rate, dt) for name, rate in rates.items() if rate > 0.0})
 
@@ -193,11 +194,11 @@ class RunDriver:
 
     def __init__(
         self,
-        sim: "Simulator",
+        sim: Simulator,
         schedule: OutputSchedule,
         pacer: Pacer,
         duration: float | None = None,
-        observers: Iterable["SimulationObserver"] = (),
+        observers: Iterable[SimulationObserver] = (),
     ) -> None:
         self.sim = sim
         self.schedule = schedule
@@ -234,8 +235,13 @@ class RunDriver:
         if dropped is not None:
             snapshot = sim.snapshot()
             behind = falling_behind_message(
-                self.pacer.real_time_factor, dropped, sim.method, sim.dt, self.step_cost.per_step,
-                math.hypot(*snapshot.angular_velocity_body.tolist()), math.hypot(*snapshot.torque_body.tolist()),
+                self.pacer.real_time_factor,
+                dropped,
+                sim.method,
+                sim.dt,
+                self.step_cost.per_step,
+                math.hypot(*snapshot.angular_velocity_body.tolist()),
+                math.hypot(*snapshot.torque_body.tolist()),
             )
         progress = self.run(target, now + MAX_TICK_WALL)
         progress.falling_behind = behind

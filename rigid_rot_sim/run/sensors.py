@@ -45,7 +45,8 @@ class SensorSuite:
         if self.gyro is None:
             raise ValueError("the scene has no sensors.gyro")
         reading, self.gyro_state = models.gyro_sample(
-            self.gyro, self.seed, self.turn_on_bias, self.gyro_state, snapshot.angular_velocity_body, snapshot.t)
+            self.gyro, self.seed, self.turn_on_bias, self.gyro_state, snapshot.angular_velocity_body, snapshot.t
+        )
         return reading
 
     def read_star_tracker(self, snapshot: StateSnapshot) -> np.ndarray:

@@ -43,18 +43,18 @@ and :meth:`Simulator.set_state` clear the failure and resume a run that the fail
 
 from __future__ import annotations
 
-from typing import Any
 from collections.abc import Callable
+from typing import Any
 
 from rigid_rot_sim.core import validation
+from rigid_rot_sim.core.dynamics import RigidBody
 from rigid_rot_sim.run import advice
 from rigid_rot_sim.run.clock import StepClock
 from rigid_rot_sim.run.commands import APPLY_TORQUE_SOURCE, CommandRejected, CommandSchedule, TorqueCommand
-from rigid_rot_sim.core.dynamics import RigidBody
+from rigid_rot_sim.run.gyrostat_stepper import WheelInputs, make_stepper
 from rigid_rot_sim.run.observables import Observables, StateSnapshot
 from rigid_rot_sim.run.observer import SimulationObserver
 from rigid_rot_sim.scene.scene import Scene
-from rigid_rot_sim.run.gyrostat_stepper import WheelInputs, make_stepper
 
 # CommandRejected, TorqueCommand, APPLY_TORQUE_SOURCE and StateSnapshot are what the Simulator's
 # methods raise, return and take: part of its API, importable from here.
@@ -94,7 +94,11 @@ class Simulator(WheelInputs):
         self.clock = StepClock(validation.positive_scalar("dt", scene.integrator.dt if dt is None else dt))
         self.commands = CommandSchedule(scene, self.clock)
         self.stepper = make_stepper(
-            scene, self.body, self.observables, self.clock, self.commands,
+            scene,
+            self.body,
+            self.observables,
+            self.clock,
+            self.commands,
             scene.integrator.method if method is None else method,
             dict(scene.integrator.options) if options is None else dict(options),
         )
@@ -128,7 +132,9 @@ class Simulator(WheelInputs):
         """The integrator's keyword options."""
         return self.stepper.options
 
-    def set_integrator(self, method: str | None = None, dt: float | None = None, options: dict[str, Any] | None = None) -> None:
+    def set_integrator(
+        self, method: str | None = None, dt: float | None = None, options: dict[str, Any] | None = None
+    ) -> None:
         """Switch method and/or step at the current state (ValueError, nothing changed, if invalid)."""
         step = self.clock.k
         self.stepper.reconfigure(method, dt, options)
@@ -141,7 +147,9 @@ class Simulator(WheelInputs):
 
     def warnings(self) -> list[str]:
         """Stability / accuracy warnings for the current method and step (:mod:`advice`)."""
-        return advice.step_warnings(self.method, self.body.principal_moments, advice.omega_bound(self.scene, self.body), self.dt)
+        return advice.step_warnings(
+            self.method, self.body.principal_moments, advice.omega_bound(self.scene, self.body), self.dt
+        )
 
     # ------------------------------------------------------------------ time (the step clock)
 
@@ -197,8 +205,14 @@ class Simulator(WheelInputs):
         return self.submit_torque(source, values, frame, effective, receipt_time=self.t, stamp=stamp)
 
     def submit_torque(
-        self, source: str, torque: Any, frame: str, effective_time: float, *,
-        receipt_time: float | None = None, stamp: float | None = None,
+        self,
+        source: str,
+        torque: Any,
+        frame: str,
+        effective_time: float,
+        *,
+        receipt_time: float | None = None,
+        stamp: float | None = None,
     ) -> TorqueCommand:
         """Schedule a command on input ``source`` for an explicit effective time (resim's entry).
 
@@ -212,7 +226,9 @@ class Simulator(WheelInputs):
             observer.command_accepted(step, command)
         return command
 
-    def apply_torque(self, torque: Any, frame_id: str, duration: float, effective_time: float | None = None) -> TorqueCommand:
+    def apply_torque(
+        self, torque: Any, frame_id: str, duration: float, effective_time: float | None = None
+    ) -> TorqueCommand:
         """Add ``torque`` (N*m, in ``frame_id``; empty = body frame) for ``duration`` s of sim time.
 
         Starts at the current step boundary (or at ``effective_time``, for resim) and acts

@@ -21,17 +21,17 @@ from typing import Any
 import numpy as np
 
 from rigid_rot_sim.core import limits, validation
-from rigid_rot_sim.run import advice
 from rigid_rot_sim.core import quaternion as quat
-from rigid_rot_sim.run.clock import StepClock
-from rigid_rot_sim.run.commands import CommandSchedule
-from rigid_rot_sim.run.digest import DIGEST_SEED, fold_steps
 from rigid_rot_sim.core.dynamics import RigidBody
 from rigid_rot_sim.core.integrators import get_method
 from rigid_rot_sim.core.integrators.base import Integrator, NonFiniteStateError
+from rigid_rot_sim.core.torque import ConstantTorque
+from rigid_rot_sim.run import advice
+from rigid_rot_sim.run.clock import StepClock
+from rigid_rot_sim.run.commands import CommandSchedule
+from rigid_rot_sim.run.digest import DIGEST_SEED, fold_steps
 from rigid_rot_sim.run.observables import Observables, StateSnapshot
 from rigid_rot_sim.scene.scene import Scene
-from rigid_rot_sim.core.torque import ConstantTorque
 
 __all__ = ["Stepper"]
 
@@ -60,8 +60,14 @@ class Stepper:
     """
 
     def __init__(
-        self, scene: Scene, body: RigidBody, observables: Observables, clock: StepClock, commands: CommandSchedule,
-        method: str, options: dict[str, Any],
+        self,
+        scene: Scene,
+        body: RigidBody,
+        observables: Observables,
+        clock: StepClock,
+        commands: CommandSchedule,
+        method: str,
+        options: dict[str, Any],
     ) -> None:
         self.scene = scene
         self.body = body
@@ -80,7 +86,9 @@ class Stepper:
 
     # ------------------------------------------------------------------ the integrator
 
-    def configure(self, method: str, dt: float, options: dict[str, Any], *, first: bool = False, dry_run: bool = False) -> None:
+    def configure(
+        self, method: str, dt: float, options: dict[str, Any], *, first: bool = False, dry_run: bool = False
+    ) -> None:
         """Switch to ``method`` (or ``auto``) at step ``dt`` (s); ValueError, nothing changed, if invalid.
 
         The state carries over; the clock starts a new epoch and pending commands move to
@@ -97,7 +105,12 @@ class Stepper:
             # commands give the method a ConstantTorque between boundaries: refuse now, not mid-run,
             # a method that cannot take one (the exact flow is torque-free)
             try:
-                cls(self.body.principal_moments, dt, ConstantTorque(np.ones(3)) if commanded else self.gravity, **options)
+                cls(
+                    self.body.principal_moments,
+                    dt,
+                    ConstantTorque(np.ones(3)) if commanded else self.gravity,
+                    **options,
+                )
             except ValueError as exc:
                 what = "this scene" if dry_run else "this scene's torque inputs"
                 raise ValueError(f"integrator {method!r} cannot run {what}: {exc}") from None
@@ -109,8 +122,13 @@ class Stepper:
             assert self.integrator is not None
             state = (self.integrator.t, self.integrator.q, self.integrator.omega)
         integrator = cls(
-            self.body.principal_moments, dt, self.integrator.torque if self.integrator else self.gravity,
-            t0=state[0], q0=state[1], omega0=state[2], **options,
+            self.body.principal_moments,
+            dt,
+            self.integrator.torque if self.integrator else self.gravity,
+            t0=state[0],
+            q0=state[1],
+            omega0=state[2],
+            **options,
         )
         self.integrator = integrator
         self.method = method
@@ -157,14 +175,14 @@ class Stepper:
         """The integrator's state at the clock's step, as the user sees it (:meth:`Observables.snapshot`)."""
         integrator = self.integrator
         assert integrator is not None
-        snapshot = self.observables.snapshot(self.clock.t, self.clock.k, integrator.q, integrator.omega, self.step_torque_body,
-                                             self.digest)
+        snapshot = self.observables.snapshot(
+            self.clock.t, self.clock.k, integrator.q, integrator.omega, self.step_torque_body, self.digest
+        )
         sources = command_torques(self.commands, snapshot.orientation)
         if self.gravity is not None:
             gravity = self.body.vector_from_principal(self.gravity(0.0, integrator.q, integrator.omega))
             sources.append(("gravity", np.asarray(gravity, dtype=float)))
         return dataclasses.replace(snapshot, torque_sources=tuple(sources))
-
 
     def set_command_torque(self) -> None:
         """Give the integrator the commanded torque for the next step (principal frame)."""

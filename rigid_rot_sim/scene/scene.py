@@ -32,22 +32,21 @@ from __future__ import annotations
 import datetime
 import math
 import os
-from collections.abc import Iterator, Mapping
+from collections.abc import Callable, Iterator, Mapping
 from dataclasses import dataclass
-from typing import Any, Callable
+from typing import Any
 
 import numpy as np
+
 from rigid_rot_sim.core import limits, validation
-from rigid_rot_sim.scene import names
-from rigid_rot_sim.scene.bounded_yaml import load_input, read_input
-from rigid_rot_sim.core.quaternion import zxz_to_quaternion
 from rigid_rot_sim.core.inertia import inertia_about_center_of_mass, mass_properties
 from rigid_rot_sim.core.integrators import get_method
 from rigid_rot_sim.core.integrators.gyrostat import get_gyrostat_method
+from rigid_rot_sim.core.quaternion import zxz_to_quaternion
 from rigid_rot_sim.core.sensors import GyroModel, StarTrackerModel
 from rigid_rot_sim.core.steps import step_at_or_after
-from rigid_rot_sim.scene.schema import validated
-from rigid_rot_sim.scene.spacecraft import Spacecraft, parse_spacecraft
+from rigid_rot_sim.scene import names
+from rigid_rot_sim.scene.bounded_yaml import load_input, read_input
 from rigid_rot_sim.scene.scene_schema import (
     DEFAULT_BODY_FRAME,
     DEFAULT_EPOCH,
@@ -59,6 +58,8 @@ from rigid_rot_sim.scene.scene_schema import (
     TORQUE_FRAMES,
     TORQUE_MESSAGE_TYPES,
 )
+from rigid_rot_sim.scene.schema import validated
+from rigid_rot_sim.scene.spacecraft import Spacecraft, parse_spacecraft
 
 __all__ = [
     "SceneError",
@@ -113,7 +114,7 @@ class Frames:
     world: str = DEFAULT_WORLD_FRAME
     body: str = DEFAULT_BODY_FRAME
 
-    def checked(self) -> "Frames":
+    def checked(self) -> Frames:
         """These frames, or ValueError when a name is empty or unusable (:func:`names.check_frame_id`)
         or both are equal."""
         for role, name in (("world", self.world), ("body", self.body)):
@@ -393,7 +394,6 @@ class Scene:
         return mass, com, tensor
 
 
-
 # ----------------------------------------------------------------------------- loading
 
 
@@ -440,7 +440,9 @@ def _scene(spec: Mapping[str, Any], source: str, text: str) -> Scene:
     if gravity is not None:
         if point_masses:
             if body.center_of_mass is None or math.hypot(*body.center_of_mass) == 0.0:
-                raise ValueError("body.point_masses: centre of mass is at the pivot (body origin): gravity exerts no torque")
+                raise ValueError(
+                    "body.point_masses: centre of mass is at the pivot (body origin): gravity exerts no torque"
+                )
         else:
             body = Body(inertia=body.inertia, given_as=body.given_as, mass=mass, center_of_mass=com)
     topics, schedules = _torque_inputs(spec.get("torque_inputs") or ())
@@ -473,7 +475,9 @@ def _scene(spec: Mapping[str, Any], source: str, text: str) -> Scene:
         real_time_factor=float(spec.get("real_time_factor", 1.0)),
         outputs=OutputRates(_sensor_rates(sensors, {name: float(rate) for name, rate in outputs.items()})),
         sensors=sensors,
-        qos=OutputQos(reliability=qos.get("reliability", OutputQos.reliability), depth=qos.get("depth", OutputQos.depth)),
+        qos=OutputQos(
+            reliability=qos.get("reliability", OutputQos.reliability), depth=qos.get("depth", OutputQos.depth)
+        ),
         recording=None if recording is None else recording.strip(),
         foxglove=None if foxglove is None else str(foxglove).strip(),
         commands=CommandSettings(
@@ -503,8 +507,12 @@ def lockstep_spec(spec: Mapping[str, Any] | None, topics: tuple[TopicInput, ...]
     steps = round(period / dt)
     if steps < 1 or abs(steps * dt - period) > 1e-9 * period:
         raise ValueError(f"lockstep.period: {period:g} s is not a whole number of steps of integrator.dt {dt:g} s")
-    return LockstepSpec(period=period, inputs=tuple(inputs), timeout=float(spec.get("timeout", LockstepSpec.timeout)),
-                        on_timeout=spec.get("on_timeout", LockstepSpec.on_timeout))
+    return LockstepSpec(
+        period=period,
+        inputs=tuple(inputs),
+        timeout=float(spec.get("timeout", LockstepSpec.timeout)),
+        on_timeout=spec.get("on_timeout", LockstepSpec.on_timeout),
+    )
 
 
 def _epoch(text: str) -> str:
@@ -518,7 +526,10 @@ def _epoch(text: str) -> str:
 
 def _frames(spec: Mapping[str, Any]) -> Frames:
     """Frame names ROS accepts (no whitespace or control characters), world and body different."""
-    given = {role: spec.get(role, default).strip() for role, default in (("world", DEFAULT_WORLD_FRAME), ("body", DEFAULT_BODY_FRAME))}
+    given = {
+        role: spec.get(role, default).strip()
+        for role, default in (("world", DEFAULT_WORLD_FRAME), ("body", DEFAULT_BODY_FRAME))
+    }
     for role, name in given.items():
         _at(f"frames.{role}", names.check_frame_id, name, "frame name")
     return _at("frames", Frames(**given).checked)
@@ -566,14 +577,18 @@ def _gravity(spec: Mapping[str, Any], point_masses: bool) -> tuple[Gravity, floa
     if point_masses:
         for name in ("mass", "center_of_mass"):
             if name in spec:
-                raise ValueError(f"gravity.{name}: unknown key (allowed: acceleration; the point masses give the {name})")
+                raise ValueError(
+                    f"gravity.{name}: unknown key (allowed: acceleration; the point masses give the {name})"
+                )
         return gravity, None, None
     for name, what in (("mass", "kg"), ("center_of_mass", "m, body frame")):
         if name not in spec:
             raise ValueError(f"gravity: needs {name} (the body's, {what})")
     com = _floats(spec["center_of_mass"])
     if math.hypot(*com) == 0.0:
-        raise ValueError("gravity.center_of_mass: must not be at the pivot (then gravity exerts no torque; drop gravity)")
+        raise ValueError(
+            "gravity.center_of_mass: must not be at the pivot (then gravity exerts no torque; drop gravity)"
+        )
     return gravity, float(spec["mass"]), com  # type: ignore[return-value]
 
 
@@ -601,12 +616,14 @@ def _torque_inputs(items: list[Mapping[str, Any]]) -> tuple[tuple[TopicInput, ..
         if any(t.topic == topic for t in topics):
             raise ValueError(f"{key}.topic: topic {topic!r} is listed twice")
         hold = item.get("hold", "hold")
-        topics.append(TopicInput(
-            topic=topic,
-            message_type=item.get("type", TopicInput.message_type),
-            frame=item.get("frame", TopicInput.frame),
-            timeout=float(hold["timeout"]) if isinstance(hold, Mapping) else None,
-        ))
+        topics.append(
+            TopicInput(
+                topic=topic,
+                message_type=item.get("type", TopicInput.message_type),
+                frame=item.get("frame", TopicInput.frame),
+                timeout=float(hold["timeout"]) if isinstance(hold, Mapping) else None,
+            )
+        )
     return tuple(topics), tuple(schedules)
 
 
@@ -615,8 +632,10 @@ def _schedule(spec: Mapping[str, Any], key: str) -> TorqueSchedule:
     for i, segment in enumerate(spec["segments"]):
         start = float(segment["start"])
         if segments and start <= segments[-1].start:
-            raise ValueError(f"{key}.segments[{i}].start: must be later than the previous segment's start "
-                             f"{segments[-1].start:g}, got {start:g}")
+            raise ValueError(
+                f"{key}.segments[{i}].start: must be later than the previous segment's start "
+                f"{segments[-1].start:g}, got {start:g}"
+            )
         segments.append(ScheduleSegment(start=start, torque=_floats(segment["torque"])))  # type: ignore[arg-type]
     return TorqueSchedule(frame=spec.get("frame", "body"), segments=tuple(segments))
 
@@ -639,10 +658,14 @@ def _sensors(spec: Mapping[str, Any]) -> Sensors:
     star_tracker = spec.get("star_tracker")
     return Sensors(
         seed=spec.get("seed"),
-        gyro=None if gyro is None else GyroModel(**{
-            name: _floats(value) if isinstance(value, list) else float(value) for name, value in gyro.items()
-        }),
-        star_tracker=None if star_tracker is None else StarTrackerModel(
+        gyro=None
+        if gyro is None
+        else GyroModel(
+            **{name: _floats(value) if isinstance(value, list) else float(value) for name, value in gyro.items()}
+        ),
+        star_tracker=None
+        if star_tracker is None
+        else StarTrackerModel(
             rate=float(star_tracker.get("rate", StarTrackerModel.rate)),
             noise_equivalent_angle=_floats(star_tracker["noise_equivalent_angle"]),  # type: ignore[arg-type]
         ),
@@ -651,14 +674,18 @@ def _sensors(spec: Mapping[str, Any]) -> Sensors:
 
 def _sensor_rates(sensors: Sensors, rates: dict[str, float]) -> dict[str, float]:
     """The output rates with ~/imu at the gyro's rate and ~/star_tracker at the star tracker's."""
-    for output, sensor, key in (("imu", sensors.gyro, "sensors.gyro.rate"),
-                                ("star_tracker", sensors.star_tracker, "sensors.star_tracker.rate")):
+    for output, sensor, key in (
+        ("imu", sensors.gyro, "sensors.gyro.rate"),
+        ("star_tracker", sensors.star_tracker, "sensors.star_tracker.rate"),
+    ):
         if sensor is None:
             if output == "star_tracker" and rates.get(output, 0.0) > 0.0:
                 raise ValueError("outputs.star_tracker: needs a sensors.star_tracker section (its noise)")
             continue
         if output in rates and rates[output] != sensor.rate:
-            raise ValueError(f"outputs.{output}: {rates[output]:g} Hz differs from {key} {sensor.rate:g} Hz "
-                             f"(give the rate once, in {key})")
+            raise ValueError(
+                f"outputs.{output}: {rates[output]:g} Hz differs from {key} {sensor.rate:g} Hz "
+                f"(give the rate once, in {key})"
+            )
         rates[output] = sensor.rate
     return rates

@@ -32,7 +32,8 @@ from __future__ import annotations
 import json
 import math
 import os
-from typing import Any, Callable, Iterable, Mapping, Sequence, TypeVar
+from collections.abc import Callable, Iterable, Mapping, Sequence
+from typing import Any, TypeVar
 
 from jsonschema import Draft202012Validator, validators
 from jsonschema.exceptions import ValidationError
@@ -88,7 +89,9 @@ def magnitude(description: str) -> dict[str, Any]:
     return number(description)
 
 
-def integer(description: str, *, minimum: int, maximum: int | None = None, default: int | None = None) -> dict[str, Any]:
+def integer(
+    description: str, *, minimum: int, maximum: int | None = None, default: int | None = None
+) -> dict[str, Any]:
     schema: dict[str, Any] = {"description": description, "type": "integer", "minimum": minimum}
     if maximum is not None:
         schema["maximum"] = maximum
@@ -110,7 +113,9 @@ def vector(description: str, size: int, item: Mapping[str, Any] | None = None) -
     return array(description, item if item is not None else magnitude("component"), min_items=size, max_items=size)
 
 
-def array(description: str, item: Mapping[str, Any], *, min_items: int = 0, max_items: int | None = None) -> dict[str, Any]:
+def array(
+    description: str, item: Mapping[str, Any], *, min_items: int = 0, max_items: int | None = None
+) -> dict[str, Any]:
     schema: dict[str, Any] = {"description": description, "type": "array", "items": dict(item)}
     if min_items:
         schema["minItems"] = min_items
@@ -220,7 +225,9 @@ def check(data: Any, schema: Mapping[str, Any], label: str, error_class: type[Va
 T = TypeVar("T")
 
 
-def validated(data: Any, schema: Mapping[str, Any], source: str, error_class: type[ValueError], build: Callable[[Any], T]) -> T:
+def validated(
+    data: Any, schema: Mapping[str, Any], source: str, error_class: type[ValueError], build: Callable[[Any], T]
+) -> T:
     """``build(data)`` once ``data`` passed ``schema``: the loaders' one path from parsed YAML to
     their dataclasses. A schema problem, or a ValueError of ``build`` (``"<key>: <problem>"``),
     is raised as one ``error_class`` line starting with the file name of ``source``."""
@@ -235,8 +242,10 @@ def validated(data: Any, schema: Mapping[str, Any], source: str, error_class: ty
 def _loose_type(kind: str, instance: Any) -> bool:
     """Whether ``instance`` is of JSON type ``kind``, nan, inf and huge integers counting as numbers."""
     if kind in ("number", "integer"):
-        return isinstance(instance, (int, float)) and not isinstance(instance, bool) and (
-            kind == "number" or isinstance(instance, int)
+        return (
+            isinstance(instance, (int, float))
+            and not isinstance(instance, bool)
+            and (kind == "number" or isinstance(instance, int))
         )
     python = {"string": str, "object": dict, "array": list, "boolean": bool, "null": type(None)}[kind]
     return isinstance(instance, python)
@@ -311,14 +320,27 @@ def _describe_type(kind: str, schema: Mapping[str, Any]) -> str:
         return f"a non-empty list of {item}" if count else f"a list of {item}"
     if kind == "string":
         return "a non-empty string" if schema.get("pattern") == r"\S" or schema.get("minLength") else "a string"
-    return {"number": "a number", "integer": "an integer", "object": "a mapping", "boolean": "a boolean", "null": "null"}[kind]
+    return {
+        "number": "a number",
+        "integer": "an integer",
+        "object": "a mapping",
+        "boolean": "a boolean",
+        "null": "null",
+    }[kind]
 
 
 def _plural(words: str) -> str:
-    for single, plural in (("a list of", "lists of"), ("a non-empty list of", "non-empty lists of"), ("a non-empty string", "non-empty strings"), ("a number", "numbers"),
-                           ("an integer", "integers"), ("a mapping", "mappings"), ("a string", "strings")):
+    for single, plural in (
+        ("a list of", "lists of"),
+        ("a non-empty list of", "non-empty lists of"),
+        ("a non-empty string", "non-empty strings"),
+        ("a number", "numbers"),
+        ("an integer", "integers"),
+        ("a mapping", "mappings"),
+        ("a string", "strings"),
+    ):
         if words.startswith(single):
-            return plural + words[len(single):]
+            return plural + words[len(single) :]
     return words
 
 
@@ -356,7 +378,10 @@ def _explain(error: ValidationError) -> tuple[list[Any], str]:
             float(instance)
         except OverflowError:  # a YAML integer too large for a float
             bound = schema.get("maximum", limits.MAX_MAGNITUDE)
-            return path, f"must be a number of magnitude <= {bound:g}, got an integer of {len(str(abs(instance)))} digits"
+            return (
+                path,
+                f"must be a number of magnitude <= {bound:g}, got an integer of {len(str(abs(instance)))} digits",
+            )
     if schema.get("type") == "integer" and "maximum" in schema:
         return path, f"must be an integer from {schema['minimum']} to {schema['maximum']}, got {_show(instance)}"
     if kind in ("minimum", "maximum") and schema.get("minimum") == -schema.get("maximum", math.nan):

@@ -84,9 +84,15 @@ class Spacecraft:
         if not self.wheels:
             return None
         return wheel_model(
-            inertia, self.wheel_names, [w.axis for w in self.wheels], [w.inertia for w in self.wheels],
-            [w.max_torque for w in self.wheels], [w.max_speed for w in self.wheels],
-            [w.coulomb for w in self.wheels], [w.viscous for w in self.wheels], [w.stiction_speed for w in self.wheels],
+            inertia,
+            self.wheel_names,
+            [w.axis for w in self.wheels],
+            [w.inertia for w in self.wheels],
+            [w.max_torque for w in self.wheels],
+            [w.max_speed for w in self.wheels],
+            [w.coulomb for w in self.wheels],
+            [w.viscous for w in self.wheels],
+            [w.stiction_speed for w in self.wheels],
         )
 
     def summary(self) -> str:
@@ -101,8 +107,9 @@ class Spacecraft:
         return ", ".join(parts)
 
 
-def parse_spacecraft(actuators: Mapping[str, Any] | None, environment: Mapping[str, Any] | None,
-                     inertia: Any) -> Spacecraft:
+def parse_spacecraft(
+    actuators: Mapping[str, Any] | None, environment: Mapping[str, Any] | None, inertia: Any
+) -> Spacecraft:
     """The validated spacecraft parts of a scene whose data passed the schema; ValueError naming the key."""
     actuators = actuators or {}
     environment = environment or {}
@@ -120,15 +127,20 @@ def parse_spacecraft(actuators: Mapping[str, Any] | None, environment: Mapping[s
             raise ValueError(f"{key}.axis: must be a non-zero vector, got {spec['axis']}")
         friction = spec.get("friction") or {}
         wheel = ReactionWheel(
-            name=name, axis=tuple(float(v) for v in axis / norm), inertia=float(spec["inertia"]),  # type: ignore[arg-type]
-            max_torque=float(spec["max_torque"]), max_speed=float(spec["max_speed"]),
-            initial_speed=float(spec.get("initial_speed", 0.0)), coulomb=float(friction.get("coulomb", 0.0)),
+            name=name,
+            axis=(float(axis[0] / norm), float(axis[1] / norm), float(axis[2] / norm)),
+            inertia=float(spec["inertia"]),
+            max_torque=float(spec["max_torque"]),
+            max_speed=float(spec["max_speed"]),
+            initial_speed=float(spec.get("initial_speed", 0.0)),
+            coulomb=float(friction.get("coulomb", 0.0)),
             viscous=float(friction.get("viscous", 0.0)),
             stiction_speed=float(friction.get("stiction_speed", DEFAULT_STICTION_SPEED)),
         )
         if abs(wheel.initial_speed) > wheel.max_speed:
-            raise ValueError(f"{key}.initial_speed: |{wheel.initial_speed:g}| rad/s exceeds "
-                             f"max_speed {wheel.max_speed:g} rad/s")
+            raise ValueError(
+                f"{key}.initial_speed: |{wheel.initial_speed:g}| rad/s exceeds max_speed {wheel.max_speed:g} rad/s"
+            )
         wheels.append(wheel)
     schedule = None
     schedule_spec = actuators.get("wheel_torque_schedule")
@@ -143,15 +155,19 @@ def parse_spacecraft(actuators: Mapping[str, Any] | None, environment: Mapping[s
                 raise ValueError(f"{key}.torques: {len(torques)} values for {len(wheels)} wheel(s)")
             start = float(segment["start"])
             if segments and start <= segments[-1].start:
-                raise ValueError(f"{key}.start: {start:g} s must be later than the previous segment's "
-                                 f"{segments[-1].start:g} s")
+                raise ValueError(
+                    f"{key}.start: {start:g} s must be later than the previous segment's {segments[-1].start:g} s"
+                )
             segments.append(WheelSegment(start, torques))
         schedule = WheelTorqueSchedule(tuple(segments))
     gravity_gradient = None
     gg = environment.get("gravity_gradient")
     if gg:
-        gravity_gradient = GravityGradient(float(gg.get("mu", 3.986004418e14)), float(gg["orbit"]["radius"]),
-                                           float(gg["orbit"].get("inclination", 0.0)))
+        gravity_gradient = GravityGradient(
+            float(gg.get("mu", 3.986004418e14)),
+            float(gg["orbit"]["radius"]),
+            float(gg["orbit"].get("inclination", 0.0)),
+        )
     spacecraft = Spacecraft(tuple(wheels), schedule, gravity_gradient)
     try:
         spacecraft.wheel_model(inertia)

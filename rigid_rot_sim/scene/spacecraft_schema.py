@@ -26,20 +26,27 @@ _WHEEL = mapping(
         "name": text("The wheel's name (JointState name; unique)."),
         "axis": vector("Spin axis [x, y, z], body frame; normalised on load.", 3),
         "inertia": number("Spin inertia J about the axis, kg*m^2.", exclusive_minimum=0.0),
-        "max_torque": number("Largest motor torque, N*m: a larger command is clamped (and said on ~/sim_events).",
-                             exclusive_minimum=0.0),
-        "max_speed": number("Largest wheel speed, rad/s: the motor never drives the wheel past it.",
-                            exclusive_minimum=0.0),
+        "max_torque": number(
+            "Largest motor torque, N*m: a larger command is clamped (and said on ~/sim_events).", exclusive_minimum=0.0
+        ),
+        "max_speed": number(
+            "Largest wheel speed, rad/s: the motor never drives the wheel past it.", exclusive_minimum=0.0
+        ),
         "initial_speed": number("Initial speed relative to the body, rad/s.", default=0.0),
-        "friction": nullable(mapping(
-            "Bearing friction, opposing the wheel's speed relative to the body.",
-            {
-                "coulomb": number("Coulomb friction torque, N*m.", minimum=0.0, default=0.0),
-                "viscous": number("Viscous friction coefficient, N*m*s/rad.", minimum=0.0, default=0.0),
-                "stiction_speed": number("Below this speed (rad/s) the Coulomb torque is linear in the speed.",
-                                         exclusive_minimum=0.0, default=1e-4),
-            },
-        )),
+        "friction": nullable(
+            mapping(
+                "Bearing friction, opposing the wheel's speed relative to the body.",
+                {
+                    "coulomb": number("Coulomb friction torque, N*m.", minimum=0.0, default=0.0),
+                    "viscous": number("Viscous friction coefficient, N*m*s/rad.", minimum=0.0, default=0.0),
+                    "stiction_speed": number(
+                        "Below this speed (rad/s) the Coulomb torque is linear in the speed.",
+                        exclusive_minimum=0.0,
+                        default=1e-4,
+                    ),
+                },
+            )
+        ),
     },
     required=["name", "axis", "inertia", "max_torque", "max_speed"],
 )
@@ -47,47 +54,66 @@ _WHEEL = mapping(
 _WHEEL_SEGMENT = mapping(
     "Motor torques that act from their start until the next segment's start.",
     {
-        "start": number("Start, s of sim time (later than the previous segment's).", minimum=0.0,
-                        maximum=_DURATION_MAX),
-        "torques": array("Motor torque of each wheel, N*m, in the order of reaction_wheels.", number("N*m."),
-                         min_items=1, max_items=MAX_WHEELS),
+        "start": number(
+            "Start, s of sim time (later than the previous segment's).", minimum=0.0, maximum=_DURATION_MAX
+        ),
+        "torques": array(
+            "Motor torque of each wheel, N*m, in the order of reaction_wheels.",
+            number("N*m."),
+            min_items=1,
+            max_items=MAX_WHEELS,
+        ),
     },
     required=["start", "torques"],
 )
 
-ACTUATORS: dict[str, Any] = nullable(mapping(
-    "Actuators of a spacecraft: reaction wheels and their motor-torque schedule.",
-    {
-        "reaction_wheels": array("The wheels, in the order of the wheel commands.", _WHEEL, min_items=1,
-                                 max_items=MAX_WHEELS),
-        "wheel_torque_schedule": nullable(mapping(
-            "Piecewise-constant motor torques written in the file (runs without ROS).",
-            {"segments": array("The segments, each {start, torques}.", _WHEEL_SEGMENT, min_items=1)},
-            required=["segments"],
-        )),
-    },
-))
+ACTUATORS: dict[str, Any] = nullable(
+    mapping(
+        "Actuators of a spacecraft: reaction wheels and their motor-torque schedule.",
+        {
+            "reaction_wheels": array(
+                "The wheels, in the order of the wheel commands.", _WHEEL, min_items=1, max_items=MAX_WHEELS
+            ),
+            "wheel_torque_schedule": nullable(
+                mapping(
+                    "Piecewise-constant motor torques written in the file (runs without ROS).",
+                    {"segments": array("The segments, each {start, torques}.", _WHEEL_SEGMENT, min_items=1)},
+                    required=["segments"],
+                )
+            ),
+        },
+    )
+)
 
-ENVIRONMENT: dict[str, Any] = nullable(mapping(
-    "The spacecraft's environment.",
-    {
-        "gravity_gradient": nullable(mapping(
-            "Gravity-gradient torque on a circular orbit in the world frame (node line along world x, at the "
-            "ascending node at t = 0).",
-            {
-                "mu": number("Gravitational parameter of the planet, m^3/s^2.", exclusive_minimum=0.0,
-                             maximum=1e22, default=EARTH_MU),
-                "orbit": mapping(
-                    "The circular orbit.",
+ENVIRONMENT: dict[str, Any] = nullable(
+    mapping(
+        "The spacecraft's environment.",
+        {
+            "gravity_gradient": nullable(
+                mapping(
+                    "Gravity-gradient torque on a circular orbit in the world frame (node line along world x, at the "
+                    "ascending node at t = 0).",
                     {
-                        "radius": number("Orbit radius, m.", exclusive_minimum=0.0),
-                        "inclination": number("Inclination, rad, in [0, pi].", minimum=0.0, maximum=3.141592653589793,
-                                              default=0.0),
+                        "mu": number(
+                            "Gravitational parameter of the planet, m^3/s^2.",
+                            exclusive_minimum=0.0,
+                            maximum=1e22,
+                            default=EARTH_MU,
+                        ),
+                        "orbit": mapping(
+                            "The circular orbit.",
+                            {
+                                "radius": number("Orbit radius, m.", exclusive_minimum=0.0),
+                                "inclination": number(
+                                    "Inclination, rad, in [0, pi].", minimum=0.0, maximum=3.141592653589793, default=0.0
+                                ),
+                            },
+                            required=["radius"],
+                        ),
                     },
-                    required=["radius"],
-                ),
-            },
-            required=["orbit"],
-        )),
-    },
-))
+                    required=["orbit"],
+                )
+            ),
+        },
+    )
+)

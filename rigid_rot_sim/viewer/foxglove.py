@@ -100,22 +100,36 @@ class BodyScene:
         head = min(self.view.head_size, 0.5 * length)
         return {
             "pose": {"position": _vector(tail), "orientation": _quaternion(_x_to(tip - tail))},
-            "shaft_length": length - head, "shaft_diameter": self.view.shaft_diameter,
-            "head_length": head, "head_diameter": 2.0 * self.view.shaft_diameter, "color": _color(color),
+            "shaft_length": length - head,
+            "shaft_diameter": self.view.shaft_diameter,
+            "head_length": head,
+            "head_diameter": 2.0 * self.view.shaft_diameter,
+            "color": _color(color),
         }
 
     def update(self, t_ns: int, omega_body: np.ndarray, momentum_world: np.ndarray) -> dict[str, Any]:
         """A ``foxglove.SceneUpdate`` (as JSON-ready dict) at sim time ``t_ns``."""
         view = self.view
         body = {
-            "timestamp": _time(t_ns), "frame_id": self.body_frame, "id": "body", "frame_locked": True,
+            "timestamp": _time(t_ns),
+            "frame_id": self.body_frame,
+            "id": "body",
+            "frame_locked": True,
             "lifetime": {"sec": 0, "nsec": 0},
-            "cubes": [{"pose": {"position": _vector(view.box_center), "orientation": _quaternion(view.box_orientation)},
-                       "size": _vector([max(side, 1e-3) for side in view.box_sides]), "color": _color(BOX_COLOR)}],
+            "cubes": [
+                {
+                    "pose": {"position": _vector(view.box_center), "orientation": _quaternion(view.box_orientation)},
+                    "size": _vector([max(side, 1e-3) for side in view.box_sides]),
+                    "color": _color(BOX_COLOR),
+                }
+            ],
             "arrows": [self._arrow(*view.omega_arrow(omega_body), OMEGA_COLOR)],
         }
         momentum = {
-            "timestamp": _time(t_ns), "frame_id": self.world_frame, "id": "angular_momentum", "frame_locked": False,
+            "timestamp": _time(t_ns),
+            "frame_id": self.world_frame,
+            "id": "angular_momentum",
+            "frame_locked": False,
             "lifetime": {"sec": 0, "nsec": 0},
             "arrows": [self._arrow(*view.momentum_arrow(momentum_world), MOMENTUM_COLOR)],
         }
@@ -129,9 +143,17 @@ class FoxgloveServer:
     ``listener.on_playback_control_request`` (foxglove-sdk's PlaybackControl capability).
     """
 
-    def __init__(self, host: str, port: int, scene: BodyScene, *, name: str = "rigid_rot_sim",
-                 scene_topic: str = "/rigid_rot_sim/body_scene", listener: Any = None,
-                 playback_range: tuple[int, int] | None = None) -> None:
+    def __init__(
+        self,
+        host: str,
+        port: int,
+        scene: BodyScene,
+        *,
+        name: str = "rigid_rot_sim",
+        scene_topic: str = "/rigid_rot_sim/body_scene",
+        listener: Any = None,
+        playback_range: tuple[int, int] | None = None,
+    ) -> None:
         import foxglove
         from foxglove import Schema
         from foxglove.websocket import Capability
@@ -142,11 +164,18 @@ class FoxgloveServer:
         self.scene = scene
         self.channels: dict[str, Any] = {}
         self.server: Any = foxglove.start_server(
-            name=name, host=host, port=port, capabilities=[Capability.Time], server_listener=listener,
-            context=self.context, playback_time_range=playback_range,
+            name=name,
+            host=host,
+            port=port,
+            capabilities=[Capability.Time],
+            server_listener=listener,
+            context=self.context,
+            playback_time_range=playback_range,
         )
         self.scene_channel = foxglove.Channel(
-            scene_topic, message_encoding="json", context=self.context,
+            scene_topic,
+            message_encoding="json",
+            context=self.context,
             schema=Schema(name=SCENE_SCHEMA_NAME, encoding="jsonschema", data=json.dumps(_SCENE_JSON_SCHEMA).encode()),
         )
 

@@ -56,14 +56,19 @@ class RecordingPlayer:
         self.times = [m.log_time_ns for m in self.messages]
         self.topics = reader.topics
         self.state_topic = reader.find_topic("state", _STATE_TYPE)
-        self._decode_state = (dynamic_decoder(_STATE_TYPE, self.topics[self.state_topic].definition)
-                              if self.state_topic else None)
+        self._decode_state = (
+            dynamic_decoder(_STATE_TYPE, self.topics[self.state_topic].definition) if self.state_topic else None
+        )
         self._lock = threading.Lock()
         self._controls = _Controls(speed=speed)
         self._stop = threading.Event()
         self.server = FoxgloveServer(
-            host, port, BodyScene(body_view(scene), scene.frames.world, scene.frames.body),
-            scene_topic="/rigid_rot_sim/body_scene", listener=self, playback_range=(self.times[0], self.times[-1]),
+            host,
+            port,
+            BodyScene(body_view(scene), scene.frames.world, scene.frames.body),
+            scene_topic="/rigid_rot_sim/body_scene",
+            listener=self,
+            playback_range=(self.times[0], self.times[-1]),
         )
 
     @property
@@ -88,16 +93,24 @@ class RecordingPlayer:
         if message.topic == self.state_topic and self._decode_state is not None:
             state = self._decode_state(message.data)
             stamp = state.header.stamp
-            self.server.log_state(int(stamp.sec) * 1_000_000_000 + int(stamp.nanosec),
-                                  vector3_to_array(state.angular_velocity_body),
-                                  vector3_to_array(state.angular_momentum_world))
+            self.server.log_state(
+                int(stamp.sec) * 1_000_000_000 + int(stamp.nanosec),
+                vector3_to_array(state.angular_velocity_body),
+                vector3_to_array(state.angular_momentum_world),
+            )
 
     def _broadcast(self, status: str, t_ns: int, speed: float, did_seek: bool, request_id: str | None) -> None:
         from foxglove.websocket import PlaybackState, PlaybackStatus
 
-        self.server.broadcast_playback_state(PlaybackState(
-            status=getattr(PlaybackStatus, status), current_time=int(t_ns), playback_speed=speed,
-            did_seek=did_seek, request_id=request_id))
+        self.server.broadcast_playback_state(
+            PlaybackState(
+                status=getattr(PlaybackStatus, status),
+                current_time=int(t_ns),
+                playback_speed=speed,
+                did_seek=did_seek,
+                request_id=request_id,
+            )
+        )
 
     def stop(self) -> None:
         """Make :meth:`play` return (from any thread, e.g. a signal handler)."""
@@ -110,8 +123,10 @@ class RecordingPlayer:
         ended = False
         while not self._stop.is_set():
             with self._lock:
-                controls, self._controls = self._controls, _Controls(
-                    playing=self._controls.playing, speed=self._controls.speed)
+                controls, self._controls = (
+                    self._controls,
+                    _Controls(playing=self._controls.playing, speed=self._controls.speed),
+                )
             if controls.seek_to is not None:
                 position = min(max(int(controls.seek_to), self.times[0]), self.times[-1])
                 index, ended = bisect.bisect_left(self.times, position), False

@@ -11,10 +11,17 @@ from rigid_rot_sim.analysis import stability as S
 from rigid_rot_sim.analysis.stability_cases import catalogue, nutation_rate
 from rigid_rot_sim.analysis.stability_report import run_suite
 from rigid_rot_sim.cli import main
-from rigid_rot_sim.run import advice
 from rigid_rot_sim.core.integrators import METHODS
+from rigid_rot_sim.run import advice
 
-FREE_CASES = ("thin rod 0.01", "thin rod 1e-06", "MuJoCo rod", "near-spherical 1e-9", "symmetric", "high spin 10 rad/step")
+FREE_CASES = (
+    "thin rod 0.01",
+    "thin rod 1e-06",
+    "MuJoCo rod",
+    "near-spherical 1e-9",
+    "symmetric",
+    "high spin 10 rad/step",
+)
 
 
 @pytest.fixture(scope="module")
@@ -111,7 +118,10 @@ def test_fast_wheel_case_is_run_by_the_gyrostat_methods_within_rk4_theory(suite)
     assert case["runs"]["dopri5"]["omega_error"] < 1e-4 * limit  # order 5 at rtol 1e-10
     for name, other in cases.items():
         if name != "fast wheel, slow body":
-            assert other["runs"]["dopri5"]["status"] == "refused" and "gyrostats only" in other["runs"]["dopri5"]["message"]
+            assert (
+                other["runs"]["dopri5"]["status"] == "refused"
+                and "gyrostats only" in other["runs"]["dopri5"]["message"]
+            )
 
 
 def test_fast_wheel_case_is_stiff_rk4_stability_is_set_by_the_nutation():

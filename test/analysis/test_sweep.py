@@ -6,8 +6,8 @@ import numpy as np
 import pyarrow.parquet as pq
 import pytest
 
-from rigid_rot_sim.analysis.sweep import COLUMNS, Chunk, _sample_draws, plan_chunks, run_chunk, sample_inputs
 from rigid_rot_sim.analysis.cluster import SweepResult, run_local, scheduler_address
+from rigid_rot_sim.analysis.sweep import COLUMNS, Chunk, _sample_draws, plan_chunks, run_chunk, sample_inputs
 from rigid_rot_sim.analysis.sweep_output import METADATA_KEY, write_outputs
 from rigid_rot_sim.analysis.sweep_spec import parse_sweep_text
 

@@ -15,8 +15,8 @@ import numpy as np
 import pyarrow.parquet as pq
 import pytest
 
-from rigid_rot_sim.analysis.sweep import COLUMNS
 from rigid_rot_sim.analysis.cluster import run_local, run_sweep
+from rigid_rot_sim.analysis.sweep import COLUMNS
 from rigid_rot_sim.analysis.sweep_spec import load_sweep_spec
 from rigid_rot_sim.cli import main
 
@@ -61,10 +61,23 @@ def dask_cluster(tmp_path):
     scheduler_file = tmp_path / "scheduler.json"
     log = open(tmp_path / "cluster.log", "w")
     try:
-        processes.append(subprocess.Popen(
-            [DASK, "scheduler", "--host", "127.0.0.1", "--port", "0", "--no-dashboard", "--scheduler-file", str(scheduler_file)],
-            stdout=log, stderr=subprocess.STDOUT,
-        ))
+        processes.append(
+            subprocess.Popen(
+                [
+                    DASK,
+                    "scheduler",
+                    "--host",
+                    "127.0.0.1",
+                    "--port",
+                    "0",
+                    "--no-dashboard",
+                    "--scheduler-file",
+                    str(scheduler_file),
+                ],
+                stdout=log,
+                stderr=subprocess.STDOUT,
+            )
+        )
 
         def address():
             try:
@@ -77,9 +90,23 @@ def dask_cluster(tmp_path):
         workers = {}
         for name in ("w1", "w2"):
             workers[name] = subprocess.Popen(
-                [DASK, "worker", address(), "--nthreads", "1", "--no-nanny", "--no-dashboard", "--name", name,
-                 "--host", "127.0.0.1", "--death-timeout", "60"],
-                stdout=log, stderr=subprocess.STDOUT,
+                [
+                    DASK,
+                    "worker",
+                    address(),
+                    "--nthreads",
+                    "1",
+                    "--no-nanny",
+                    "--no-dashboard",
+                    "--name",
+                    name,
+                    "--host",
+                    "127.0.0.1",
+                    "--death-timeout",
+                    "60",
+                ],
+                stdout=log,
+                stderr=subprocess.STDOUT,
             )
             processes.append(workers[name])
         with Client(address(), timeout=START_TIMEOUT) as client:
@@ -107,8 +134,22 @@ def write_spec(tmp_path, duration):
 
 def test_external_cluster_and_local_default_write_identical_parquet(tmp_path, dask_cluster, capsys):
     path = write_spec(tmp_path, 3.0)
-    assert main(["sweep", str(path), "--scheduler", dask_cluster.address, "--chunk-size", "5",
-                 "--out", str(tmp_path / "remote"), "--no-progress"]) == 0
+    assert (
+        main(
+            [
+                "sweep",
+                str(path),
+                "--scheduler",
+                dask_cluster.address,
+                "--chunk-size",
+                "5",
+                "--out",
+                str(tmp_path / "remote"),
+                "--no-progress",
+            ]
+        )
+        == 0
+    )
     assert main(["sweep", str(path), "--workers", "2", "--out", str(tmp_path / "local"), "--no-progress"]) == 0
     out = capsys.readouterr().out
     assert f"On the cluster at {dask_cluster.address}" in out and "On a local cluster: 2 worker(s)" in out
@@ -129,6 +170,7 @@ def test_killing_a_worker_mid_sweep_changes_no_result(tmp_path, dask_cluster):
     killed = {}
 
     with Client(dask_cluster.address, timeout=START_TIMEOUT) as client:
+
         def on_chunk_done(done, total):
             if killed:
                 return
@@ -143,9 +185,13 @@ def test_killing_a_worker_mid_sweep_changes_no_result(tmp_path, dask_cluster):
         end = time.perf_counter()
         assert killed, "w2 never had a task in flight to kill"
         assert victim.wait(timeout=30) == -signal.SIGKILL
-        wait_for(lambda: len(client.scheduler_info(n_workers=-1)["workers"]) == 1, START_TIMEOUT, "the scheduler to drop w2")
-    print(f"worker w2 killed after {killed['done']}/{killed['total']} chunks; sweep done {end - killed['at']:.1f} s "
-          f"later, {end - start:.1f} s in all")
+        wait_for(
+            lambda: len(client.scheduler_info(n_workers=-1)["workers"]) == 1, START_TIMEOUT, "the scheduler to drop w2"
+        )
+    print(
+        f"worker w2 killed after {killed['done']}/{killed['total']} chunks; sweep done {end - killed['at']:.1f} s "
+        f"later, {end - start:.1f} s in all"
+    )
     reference = run_local(spec, chunk_size=spec.samples)
     for name, kind in COLUMNS.items():
         a, b = result.columns[name], reference[name]
@@ -158,9 +204,19 @@ def test_ctrl_c_stops_a_sweep_on_the_local_cluster_and_its_workers(tmp_path):
 
     path = write_spec(tmp_path, 200.0)  # minutes of work: only an honoured SIGINT ends it soon
     process = subprocess.Popen(
-        [str(Path(sys.executable).parent / "rigid-rot"), "sweep", str(path), "--workers", "2", "--chunk-size", "2",
-         "--out", str(tmp_path / "out")],
-        stdout=subprocess.DEVNULL, stderr=subprocess.PIPE,
+        [
+            str(Path(sys.executable).parent / "rigid-rot"),
+            "sweep",
+            str(path),
+            "--workers",
+            "2",
+            "--chunk-size",
+            "2",
+            "--out",
+            str(tmp_path / "out"),
+        ],
+        stdout=subprocess.DEVNULL,
+        stderr=subprocess.PIPE,
         preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL),  # not inherited as ignored
     )
     try:
@@ -197,6 +253,7 @@ def test_tasks_run_their_kernels_on_one_thread(dask_cluster):
     from rigid_rot_sim.analysis.cluster import map_tasks
 
     with Client(dask_cluster.address, timeout=START_TIMEOUT) as client:
+
         def plain() -> list[int]:  # numba.get_num_threads as a bare task on the workers
             return client.gather([client.submit(numba.get_num_threads, pure=False) for _ in range(4)])
 
@@ -238,9 +295,18 @@ def test_local_workers_keep_glibcs_malloc_and_skip_the_profiler(monkeypatch):
         (nanny,) = client.cluster.workers.values()
         nanny_watch_s = nanny.memory_manager.memory_monitor_interval
         scheduler = client.cluster.scheduler
-        scheduler_ms = (scheduler.periodic_callbacks["monitor"].callback_time, scheduler.periodic_callbacks["tick"].callback_time)
+        scheduler_ms = (
+            scheduler.periodic_callbacks["monitor"].callback_time,
+            scheduler.periodic_callbacks["tick"].callback_time,
+        )
         nanny_tick_ms = nanny.periodic_callbacks["tick"].callback_time
         direct = client.direct_to_workers
-    assert settings == {"trim": None, "threads": "1", "profile": False, "memory_watch_s": 0.5,
-                        "system_monitor_ms": 2000.0, "tick_ms": 500.0}
+    assert settings == {
+        "trim": None,
+        "threads": "1",
+        "profile": False,
+        "memory_watch_s": 0.5,
+        "system_monitor_ms": 2000.0,
+        "tick_ms": 500.0,
+    }
     assert (nanny_watch_s, nanny_tick_ms, scheduler_ms, direct) == (0.5, 500.0, (2000.0, 500.0), True)

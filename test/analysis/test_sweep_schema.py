@@ -42,8 +42,10 @@ def test_shipped_specs_name_the_schema_for_editors(path):
         ("seed: 1\n", "w.yaml: scene: missing"),
         (GOOD + "quick: {samples: 0}\n", "w.yaml: quick.samples: must be >= 1, got 0"),
         (GOOD + "quick: {grid: {dt: [-1]}}\n", "w.yaml: quick.grid.dt[0]: must be > 0, got -1"),
-        (GOOD + "dispersions: {initial_omega: {sigma: [1, 2]}}\n",
-         "w.yaml: dispersions.initial_omega.sigma: must be a list of 3 numbers, got [1, 2]"),
+        (
+            GOOD + "dispersions: {initial_omega: {sigma: [1, 2]}}\n",
+            "w.yaml: dispersions.initial_omega.sigma: must be a list of 3 numbers, got [1, 2]",
+        ),
         (GOOD + "dispersions: {torque_noise: {interval: 1}}\n", "w.yaml: dispersions.torque_noise: needs sigma"),
         (GOOD + "nominal: {method: rk4}\n", "w.yaml: nominal: needs dt"),
         (GOOD + "seed: 1.5\n".replace("seed", "checkpoints"), "w.yaml: checkpoints: must be an integer, got 1.5"),
@@ -59,6 +61,7 @@ def test_errors_are_one_line_naming_the_key(text, expected):
 
 
 def test_quick_overrides_merge_into_the_grid():
-    spec = parse_sweep_text(GOOD + "grid: {method: [rk4, splitting], dt: [0.01]}\nquick: {samples: 2, grid: {dt: [0.1]}}\n",
-                            quick=True)
+    spec = parse_sweep_text(
+        GOOD + "grid: {method: [rk4, splitting], dt: [0.01]}\nquick: {samples: 2, grid: {dt: [0.1]}}\n", quick=True
+    )
     assert spec.samples == 2 and spec.dts == (0.1,) and spec.methods == ("rk4", "splitting")

@@ -61,10 +61,22 @@ BAD = [
         GOOD.replace("relative: 0.02}", "relative: 0.4, distribution: uniform}"),
         "bad.yaml: dispersions.principal_moments.relative: [0.4, 0.4, 0.4] (uniform) can break the triangle inequality",
     ),
-    ("not a batch method", GOOD.replace("method: [rk4]", "method: [rk4, exact]"), "bad.yaml: grid.method[1]: must be a batch method"),
+    (
+        "not a batch method",
+        GOOD.replace("method: [rk4]", "method: [rk4, exact]"),
+        "bad.yaml: grid.method[1]: must be a batch method",
+    ),
     ("non-positive dt", GOOD.replace("dt: [0.01]", "dt: [0.01, 0.0]"), "bad.yaml: grid.dt[1]: must be > 0"),
-    ("unknown scene", GOOD.replace("scene: free_tumble", "scene: no_such_scene"), "bad.yaml: scene: scene 'no_such_scene' not found"),
-    ("topic-driven scene", GOOD.replace("scene: free_tumble", "scene: torque_driven"), "bad.yaml: scene: torque_driven is driven by topic"),
+    (
+        "unknown scene",
+        GOOD.replace("scene: free_tumble", "scene: no_such_scene"),
+        "bad.yaml: scene: scene 'no_such_scene' not found",
+    ),
+    (
+        "topic-driven scene",
+        GOOD.replace("scene: free_tumble", "scene: torque_driven"),
+        "bad.yaml: scene: torque_driven is driven by topic",
+    ),
     ("unknown metric", GOOD + "metric: pointing\n", "bad.yaml: metric: unknown metric 'pointing'"),
     ("not YAML", "scene: [unclosed\n", "bad.yaml: not valid YAML"),
 ]

@@ -75,7 +75,9 @@ def test_scipy_errors_fall_with_tolerance(report):
     _, results, _ = report
     for result in results.values():
         for method in wp.SCIPY_METHODS:
-            errs = [p.omega_error for p in result.points if p.method == method and p.family == "scipy" and p.status == "ok"]
+            errs = [
+                p.omega_error for p in result.points if p.method == method and p.family == "scipy" and p.status == "ok"
+            ]
             # the quick sweep stops a slow method (Radau under load) after its first point
             assert errs, (result.problem, method)
             if len(errs) >= 2:

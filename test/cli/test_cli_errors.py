@@ -40,7 +40,10 @@ def test_node_start_up_errors_are_one_line_on_stderr(tmp_path, name):
     scene.write_text(BAD_SCENES[name])
     completed = subprocess.run(
         [str(BIN / "rigid_rot_sim_node"), "--ros-args", "-p", f"scene:={scene}"],
-        capture_output=True, text=True, timeout=60, stdin=subprocess.DEVNULL,
+        capture_output=True,
+        text=True,
+        timeout=60,
+        stdin=subprocess.DEVNULL,
     )
     assert_one_line_error(completed, f"rigid_rot_sim: error: {name}.yaml: ")
 
@@ -49,12 +52,18 @@ def test_parameter_outside_its_range_and_bad_ros_arguments_are_one_line(tmp_path
     scene = REPO / "config" / "scenes" / "free_tumble.yaml"
     completed = subprocess.run(
         [str(BIN / "rigid-rot"), "run", str(scene), "--ros-args", "-p", "real_time_factor:=5000.0"],
-        capture_output=True, text=True, timeout=60, stdin=subprocess.DEVNULL,
+        capture_output=True,
+        text=True,
+        timeout=60,
+        stdin=subprocess.DEVNULL,
     )
     assert_one_line_error(completed, "real_time_factor")
     completed = subprocess.run(
         [str(BIN / "rigid_rot_sim_node"), "--ros-args", "-p", "bad"],
-        capture_output=True, text=True, timeout=60, stdin=subprocess.DEVNULL,
+        capture_output=True,
+        text=True,
+        timeout=60,
+        stdin=subprocess.DEVNULL,
     )
     assert_one_line_error(completed, "bad ROS arguments")
 

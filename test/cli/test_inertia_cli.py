@@ -121,8 +121,25 @@ def test_table_shows_the_numbers_with_units(capsys):
 
 def test_mass_options_and_origin(capsys):
     # unit masses at x = 0 and x = 2: inertia about (0, 0, 1) by hand
-    code, out, _ = run_cli(capsys, "inertia", "--mass", "1", "0", "0", "0", "--mass", "1", "2", "0", "0",
-                           "--origin", "0", "0", "1", "--json")
+    code, out, _ = run_cli(
+        capsys,
+        "inertia",
+        "--mass",
+        "1",
+        "0",
+        "0",
+        "0",
+        "--mass",
+        "1",
+        "2",
+        "0",
+        "0",
+        "--origin",
+        "0",
+        "0",
+        "1",
+        "--json",
+    )
     assert code == 0
     data = json.loads(out)
     np.testing.assert_allclose(data["center_of_mass"], [1.0, 0.0, 0.0])
@@ -185,11 +202,13 @@ def test_bad_body_file_names_the_problem(capsys, tmp_path, text, expected_messag
 
 
 def test_console_script_is_installed_and_reports_bad_input():
-    ok = subprocess.run([str(RIGID_ROT), "inertia", str(SAMPLE_BODY), "--json"],
-                        capture_output=True, text=True, timeout=60)
+    ok = subprocess.run(
+        [str(RIGID_ROT), "inertia", str(SAMPLE_BODY), "--json"], capture_output=True, text=True, timeout=60
+    )
     assert ok.returncode == 0, ok.stderr
     assert json.loads(ok.stdout)["symmetry"] == "asymmetric"
-    bad = subprocess.run([str(RIGID_ROT), "inertia", "--mass", "0", "0", "0", "0"],
-                         capture_output=True, text=True, timeout=60)
+    bad = subprocess.run(
+        [str(RIGID_ROT), "inertia", "--mass", "0", "0", "0", "0"], capture_output=True, text=True, timeout=60
+    )
     assert bad.returncode == 2
     assert bad.stderr.strip() == "rigid-rot inertia: error: masses[0] must be > 0 kg, got 0.0"

@@ -1,6 +1,5 @@
 """rigid-rot bag info / bag repair / resim / plot on recordings (in-process, no DDS)."""
 
-import shutil
 import sys
 from pathlib import Path
 

@@ -19,12 +19,14 @@ def rigid_rot(*argv: str) -> subprocess.CompletedProcess:
 
 
 def test_torque_resolves_its_topic_in_the_ros_args_namespace_and_reports_no_subscriber_on_stderr():
-    done = rigid_rot("torque", "0", "0", "0.01", "--topic", "torque", "--wait", "0.3",
-                     "--ros-args", "-r", "__ns:=/nobody_here")
+    done = rigid_rot(
+        "torque", "0", "0", "0.01", "--topic", "torque", "--wait", "0.3", "--ros-args", "-r", "__ns:=/nobody_here"
+    )
     assert done.returncode == 1
     assert done.stdout == ""
     assert done.stderr.strip().splitlines() == [
-        "rigid-rot torque: no subscriber on /nobody_here/torque after 0.3 s (is the node running?)"]
+        "rigid-rot torque: no subscriber on /nobody_here/torque after 0.3 s (is the node running?)"
+    ]
 
 
 def test_replay_takes_ros_args(tmp_path):
@@ -49,7 +51,8 @@ def test_run_passes_its_options_then_the_ros_args_to_the_node():
     from rigid_rot_sim.cli.run import node_arguments
 
     args = build_parser("run").parse_args(
-        ["run", "free_tumble", "--record", "x.mcap", "--record-log-time", "wall", "--ros-args", "-p", "body_frame:=sat"])
+        ["run", "free_tumble", "--record", "x.mcap", "--record-log-time", "wall", "--ros-args", "-p", "body_frame:=sat"]
+    )
     argv = node_arguments(args)
     assert argv[:2] == ["rigid_rot_sim_node", "--ros-args"]
     assert "record_log_time:=wall" in argv and argv[-2:] == ["-p", "body_frame:=sat"]  # ours first, theirs win

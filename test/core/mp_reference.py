@@ -28,10 +28,13 @@ def _rot_x(a):
 
 def quat_to_matrix(q):
     x, y, z, w = q
-    return mp.matrix([
-        [1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)],
-        [2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)],
-        [2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)]])
+    return mp.matrix(
+        [
+            [1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)],
+            [2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)],
+            [2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)],
+        ]
+    )
 
 
 def matrix_to_quat(r):
@@ -61,8 +64,12 @@ def _rotvec_quat(v, t):
 def _qmul(p, q):
     px, py, pz, pw = p
     qx, qy, qz, qw = q
-    return [pw * qx + px * qw + py * qz - pz * qy, pw * qy - px * qz + py * qw + pz * qx,
-            pw * qz + px * qy - py * qx + pz * qw, pw * qw - px * qx - py * qy - pz * qz]
+    return [
+        pw * qx + px * qw + py * qz - pz * qy,
+        pw * qy - px * qz + py * qw + pz * qx,
+        pw * qz + px * qy - py * qx + pz * qw,
+        pw * qw - px * qx - py * qy - pz * qz,
+    ]
 
 
 class Reference:
@@ -110,8 +117,8 @@ class Reference:
         a1 = mp.sqrt((two_e * i3 - l2) / (i1 * (i3 - i1)))
         a2 = mp.sqrt((two_e * i3 - l2) / (i2 * (i3 - i2)))
         a3 = mp.sqrt((l2 - two_e * i1) / (i3 * (i3 - i1)))
-        self.lam = mp.sqrt((i3 - i2) * (i3 - i1) * a3 ** 2 / (i1 * i2))
-        self.m = i1 * (i2 - i1) * a1 ** 2 / (i3 * (i3 - i2) * a3 ** 2)
+        self.lam = mp.sqrt((i3 - i2) * (i3 - i1) * a3**2 / (i1 * i2))
+        self.m = i1 * (i2 - i1) * a1**2 / (i3 * (i3 - i2) * a3**2)
         self.n = -i3 * (i2 - i1) / (i1 * (i3 - i2))
         s3 = mp.sign(wp[2])
         self.sigma = mp.sign(i3 - i2) * s3
@@ -168,7 +175,10 @@ def ode_residual(ref: Reference, t: float) -> float:
         q_minus, w_minus = ref.state(mp.mpf(t) - h)
         dw = [(w_plus[k] - w_minus[k]) / (2 * h) for k in range(3)]
         dq = [(q_plus[k] - q_minus[k]) / (2 * h) for k in range(4)]
-        euler = [i[0] * dw[0] - (i[1] - i[2]) * w[1] * w[2], i[1] * dw[1] - (i[2] - i[0]) * w[2] * w[0],
-                 i[2] * dw[2] - (i[0] - i[1]) * w[0] * w[1]]
+        euler = [
+            i[0] * dw[0] - (i[1] - i[2]) * w[1] * w[2],
+            i[1] * dw[1] - (i[2] - i[0]) * w[2] * w[0],
+            i[2] * dw[2] - (i[0] - i[1]) * w[0] * w[1],
+        ]
         kinematics = _qmul(q, [w[0] / 2, w[1] / 2, w[2] / 2, 0])
         return float(max(max(abs(e) for e in euler), max(abs(dq[k] - kinematics[k]) for k in range(4))))

@@ -188,8 +188,14 @@ def test_unknown_layout_is_refused():
 
 @pytest.mark.parametrize(
     "method, layout",
-    [("rk4", "soa"), ("rk4", "per_body"), ("implicit_midpoint", "soa"), ("splitting", "soa"),
-     ("exact_split", "soa"), ("exact", "soa")],
+    [
+        ("rk4", "soa"),
+        ("rk4", "per_body"),
+        ("implicit_midpoint", "soa"),
+        ("splitting", "soa"),
+        ("exact_split", "soa"),
+        ("exact", "soa"),
+    ],
 )
 @pytest.mark.parametrize("n", [7, 4 * batch._SOA_CHUNK + 3])  # serial; parallel, over SIMD chunks and a partial one
 def test_recording_gives_the_bits_of_calls_cut_at_the_records(method, layout, n):
@@ -200,13 +206,15 @@ def test_recording_gives_the_bits_of_calls_cut_at_the_records(method, layout, n)
     q = rng.normal(size=(n, 4))  # not normalised: the first cut normalises it
     torque = None if method == "exact" else 0.1 * rng.normal(size=(n, 3))
     record_steps = [3, 4, 40, 120]
-    q_rec, w_rec, w_at = batch.advance_batch_recording(method, moments, q, omega, 0.02, record_steps, torque,
-                                                       layout=layout)
+    q_rec, w_rec, w_at = batch.advance_batch_recording(
+        method, moments, q, omega, 0.02, record_steps, torque, layout=layout
+    )
     q_cut, w_cut = q, omega
     begun = 0
     for k, end in enumerate(record_steps):
-        q_cut, w_cut = batch.advance_batch(method, moments, q_cut, w_cut, 0.02, end - begun, torque, normalize_q=k == 0,
-                                           layout=layout)
+        q_cut, w_cut = batch.advance_batch(
+            method, moments, q_cut, w_cut, 0.02, end - begun, torque, normalize_q=k == 0, layout=layout
+        )
         assert np.array_equal(w_at[k], w_cut), k
         begun = end
     assert w_at.shape == (len(record_steps), n, 3)
@@ -227,6 +235,7 @@ def test_recording_reports_a_failure_as_advance_batch(layout):
     with pytest.raises(NonFiniteStateError) as plain:
         batch.advance_batch("rk4", MOMENTS, np.tile(IDENTITY, (n, 1)), omega, 2.0, 50, layout=layout)
     with pytest.raises(NonFiniteStateError) as recording:
-        batch.advance_batch_recording("rk4", MOMENTS, np.tile(IDENTITY, (n, 1)), omega, 2.0, [10, 20, 50],
-                                      layout=layout)
+        batch.advance_batch_recording(
+            "rk4", MOMENTS, np.tile(IDENTITY, (n, 1)), omega, 2.0, [10, 20, 50], layout=layout
+        )
     assert str(recording.value) == str(plain.value)

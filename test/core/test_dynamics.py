@@ -42,7 +42,11 @@ def test_euler_rhs_component_form():
     i1, i2, i3 = MOMENTS
     w = np.array([0.3, -1.2, 0.7])
     n = np.array([0.1, 0.2, -0.4])
-    expected = [((i2 - i3) * w[1] * w[2] + n[0]) / i1, ((i3 - i1) * w[2] * w[0] + n[1]) / i2, ((i1 - i2) * w[0] * w[1] + n[2]) / i3]
+    expected = [
+        ((i2 - i3) * w[1] * w[2] + n[0]) / i1,
+        ((i3 - i1) * w[2] * w[0] + n[1]) / i2,
+        ((i1 - i2) * w[0] * w[1] + n[2]) / i3,
+    ]
     assert np.allclose(dynamics.euler_rhs(MOMENTS, w, n), expected, rtol=1e-15)
     assert np.allclose(dynamics.euler_rhs(MOMENTS, w), np.array(expected) - n / MOMENTS, rtol=1e-15)
 

@@ -124,9 +124,7 @@ def test_symmetric_textbook_solution():
     axis_world = Rotation.from_quat(sol.quaternion(t)).apply([0.0, 0.0, 1.0])
     l_hat = l_world / np.linalg.norm(l_world)
     axis0 = axis_world[0]
-    expected = (
-        Rotation.from_rotvec(np.outer(t * np.linalg.norm(l_world) / i1, l_hat)).apply(axis0)
-    )
+    expected = Rotation.from_rotvec(np.outer(t * np.linalg.norm(l_world) / i1, l_hat)).apply(axis0)
     np.testing.assert_allclose(axis_world, expected, rtol=0, atol=1e-12)
 
 
@@ -155,7 +153,7 @@ def test_stationary_spins(omega0):
     sol = torque_free_solution((1.0, 2.0, 3.0), omega0, Q0)
     t = np.array([0.0, 7.0, 1000.0])
     np.testing.assert_allclose(sol.omega(t), np.broadcast_to(omega0, (3, 3)), rtol=0, atol=1e-15)
-    expected = (Rotation.from_rotvec(np.outer(t, Rotation.from_quat(Q0).apply(omega0))) * Rotation.from_quat(Q0))
+    expected = Rotation.from_rotvec(np.outer(t, Rotation.from_quat(Q0).apply(omega0))) * Rotation.from_quat(Q0)
     assert np.max(rotation_distance(sol.quaternion(t), expected.as_quat())) < 1e-12
 
 
@@ -221,8 +219,12 @@ def test_within_ulps_of_the_separatrix(ulps):
 
 
 def test_scalar_and_array_evaluation_agree():
-    for moments, omega0 in [((1.0, 2.0, 3.0), (1.0, 0.1, 0.5)), ((3.0, 4.0, 6.0), (1.0, 0.3, 0.5)),
-                            ((2.0, 2.0, 3.0), (0.3, 0.4, 0.5)), ((2.0, 2.0, 2.0), (0.3, 0.4, 0.5))]:
+    for moments, omega0 in [
+        ((1.0, 2.0, 3.0), (1.0, 0.1, 0.5)),
+        ((3.0, 4.0, 6.0), (1.0, 0.3, 0.5)),
+        ((2.0, 2.0, 3.0), (0.3, 0.4, 0.5)),
+        ((2.0, 2.0, 2.0), (0.3, 0.4, 0.5)),
+    ]:
         sol = torque_free_solution(moments, omega0, Q0)
         q_arr, w_arr = sol.state(np.array([123.25]))
         q, w = sol.state(123.25)

@@ -110,7 +110,6 @@ def test_double_double_complete_integrals(m, n):
         assert abs((x_h + mpmath.mpf(x_l) - excess) / excess) < 1e-31
 
 
-
 def _dd_value(pair):
     return mpmath.mpf(pair[0]) + mpmath.mpf(pair[1])
 
@@ -151,6 +150,7 @@ def test_double_double_rc_and_third_kind_excess():
                 errors.append(abs(_dd_value(third_kind_excess_dd(*as_dd, n, 0.0)) - exact))
                 values.append(abs(exact))
             assert max(errors) <= 0.5 * math.ulp(float(max(values))), (m, n)
+
 
 if __name__ == "__main__":  # the figures of the report: PYTHONPATH=. python test/core/test_exact_ulps.py
     for case in CASES:

@@ -6,7 +6,6 @@ import numpy as np
 import pytest
 from scipy.spatial.transform import Rotation
 
-from rigid_rot_sim.core.quaternion import quaternion_to_zxz
 from rigid_rot_sim.core.heavy_top import (
     HeavyTop,
     heavy_top_reference,
@@ -14,6 +13,7 @@ from rigid_rot_sim.core.heavy_top import (
     separatrix_state,
 )
 from rigid_rot_sim.core.integrators import METHODS
+from rigid_rot_sim.core.quaternion import quaternion_to_zxz
 
 TOP = HeavyTop(mass=0.5, gravity=9.81, com_distance=0.04, com_moments=(4e-4, 4e-4, 6e-4))
 # a tilted, spinning top with some nutation: theta0 = 0.5 rad, theta'0 = 0.3 rad/s

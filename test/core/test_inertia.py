@@ -24,9 +24,7 @@ def assert_proper_principal_frame(props):
     np.testing.assert_allclose(axes.T @ axes, np.eye(3), atol=1e-12)
     assert np.linalg.det(axes) == pytest.approx(1.0, abs=1e-12)
     scale = max(float(props.principal_moments[-1]), 1e-300)
-    np.testing.assert_allclose(
-        axes @ np.diag(props.principal_moments) @ axes.T, props.inertia_com, atol=1e-12 * scale
-    )
+    np.testing.assert_allclose(axes @ np.diag(props.principal_moments) @ axes.T, props.inertia_com, atol=1e-12 * scale)
     assert np.all(np.diff(props.principal_moments) >= 0.0)
     assert np.all(props.principal_moments >= 0.0)
 
@@ -65,8 +63,7 @@ def test_dumbbell_has_reduced_mass_moment_about_its_axis():
     props = mass_properties([m1, m2], [start, start + length * direction])
     reduced = m1 * m2 / (m1 + m2)
     np.testing.assert_allclose(props.center_of_mass, start + m2 / (m1 + m2) * length * direction, atol=1e-15)
-    np.testing.assert_allclose(props.principal_moments, [0.0, reduced * length**2, reduced * length**2],
-                               atol=1e-13)
+    np.testing.assert_allclose(props.principal_moments, [0.0, reduced * length**2, reduced * length**2], atol=1e-13)
     assert props.symmetry == "linear"
     # the zero moment belongs to the dumbbell's axis
     assert abs(props.principal_axes[:, 0] @ direction) == pytest.approx(1.0, abs=1e-12)
@@ -78,8 +75,9 @@ def test_planar_lamina_obeys_perpendicular_axis_theorem():
     m, a, b = 0.5, 0.4, 0.1
     points = [[sx * a, sy * b, 0.0] for sx in (-1, 1) for sy in (-1, 1)]
     props = mass_properties(np.full(4, m), points)
-    np.testing.assert_allclose(props.inertia_com, np.diag([4 * m * b**2, 4 * m * a**2, 4 * m * (a**2 + b**2)]),
-                               atol=1e-15)
+    np.testing.assert_allclose(
+        props.inertia_com, np.diag([4 * m * b**2, 4 * m * a**2, 4 * m * (a**2 + b**2)]), atol=1e-15
+    )
     i1, i2, i3 = props.principal_moments
     assert i3 == pytest.approx(i1 + i2, rel=1e-14)
     assert abs(props.principal_axes[2, 2]) == pytest.approx(1.0)  # I3 about the plane's normal
@@ -105,8 +103,7 @@ def test_equilateral_triangle_is_symmetric_with_i3_twice_i1():
     points = np.column_stack([radius * np.cos(angles), radius * np.sin(angles), np.zeros(3)])
     props = mass_properties([1.0, 1.0, 1.0], points)
     # I about the normal = 3 m r^2; in-plane moments equal, each half of it
-    np.testing.assert_allclose(props.principal_moments, [1.5 * radius**2, 1.5 * radius**2, 3 * radius**2],
-                               rtol=1e-13)
+    np.testing.assert_allclose(props.principal_moments, [1.5 * radius**2, 1.5 * radius**2, 3 * radius**2], rtol=1e-13)
     assert props.symmetry == "symmetric"
 
 

@@ -465,7 +465,9 @@ def test_float_torque_matches_the_torque_models():
     assert float_torque(ConstantTorque(np.zeros(3)))[0] is None
 
 
-@pytest.mark.parametrize("name, options", [("implicit_midpoint", {}), ("splitting", {"order": 2}), ("splitting", {"order": 6})])
+@pytest.mark.parametrize(
+    "name, options", [("implicit_midpoint", {}), ("splitting", {"order": 2}), ("splitting", {"order": 6})]
+)
 def test_random_bodies_keep_their_invariants(name, options):
     """Any physical body and initial rate: |L| (and T for implicit_midpoint) to round-off."""
     rng = np.random.default_rng(11)

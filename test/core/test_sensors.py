@@ -21,8 +21,8 @@ from rigid_rot_sim.core.sensors import (
     gyro_batch,
     gyro_sample,
     gyro_turn_on_bias,
-    star_tracker_sample,
     standard_normals,
+    star_tracker_sample,
 )
 
 
@@ -35,14 +35,18 @@ def overlapping_allan_deviation(rates: np.ndarray, period: float, clusters: np.n
     theta = np.concatenate(([0.0], np.cumsum(rates) * period))
     result = []
     for m in clusters:
-        second_difference = theta[2 * m:] - 2.0 * theta[m:-m] + theta[: len(theta) - 2 * m]
+        second_difference = theta[2 * m :] - 2.0 * theta[m:-m] + theta[: len(theta) - 2 * m]
         result.append(math.sqrt(np.mean(second_difference**2) / (2.0 * (m * period) ** 2)))
     return np.array(result)
 
 
 def test_peak_constants_are_the_maximum_of_the_gauss_markov_allan_variance():
-    found = minimize_scalar(lambda x: -gauss_markov_allan_variance(x, 1.0, 1.0), bounds=(0.5, 5.0),
-                            method="bounded", options={"xatol": 1e-10})
+    found = minimize_scalar(
+        lambda x: -gauss_markov_allan_variance(x, 1.0, 1.0),
+        bounds=(0.5, 5.0),
+        method="bounded",
+        options={"xatol": 1e-10},
+    )
     assert found.x == pytest.approx(GAUSS_MARKOV_PEAK_TAU, rel=1e-6)
     assert math.sqrt(-found.fun) == pytest.approx(GAUSS_MARKOV_PEAK_ADEV, rel=1e-9)
     assert FLICKER_FLOOR == pytest.approx(0.664, abs=5e-4)  # sqrt(2 ln 2 / pi)
@@ -59,8 +63,9 @@ CORRELATION_TIME = 300.0  # s: the bias floor (568 s) far above 1 s, where the A
 @pytest.fixture(scope="module")
 def long_run():
     """1e6 s of a gyro at rest sampled at 2 Hz (2e6 readings per axis), seeded."""
-    model = GyroModel(rate=2.0, angle_random_walk=ARW, bias_instability=BIAS_INSTABILITY,
-                      bias_correlation_time=CORRELATION_TIME)
+    model = GyroModel(
+        rate=2.0, angle_random_walk=ARW, bias_instability=BIAS_INSTABILITY, bias_correlation_time=CORRELATION_TIME
+    )
     readings = gyro_batch(model, seed=20, omega=np.zeros((2_000_000, 3)))
     return model, readings
 
@@ -94,8 +99,10 @@ def test_allan_deviation_floor_is_the_bias_instability(long_run):
     assert bias_part == pytest.approx(0.664 * BIAS_INSTABILITY, rel=0.10)
     # and the whole curve follows the model: white ARW plus the Gauss-Markov variance
     clusters = np.array([20, 200, 2000, 6000])
-    expected = np.sqrt(ARW**2 / (clusters * model.period)
-                       + gauss_markov_allan_variance(clusters * model.period, model.bias_sigma, CORRELATION_TIME))
+    expected = np.sqrt(
+        ARW**2 / (clusters * model.period)
+        + gauss_markov_allan_variance(clusters * model.period, model.bias_sigma, CORRELATION_TIME)
+    )
     np.testing.assert_allclose(_pooled_adev(readings, model.period, clusters), expected, rtol=0.10)
 
 
@@ -143,8 +150,15 @@ def test_quantization_gives_whole_lsbs_within_half_an_lsb_of_the_rate():
     assert np.all(np.abs(reading - omega) <= lsb / 2 + 1e-15)
 
 
-NOISY = GyroModel(angle_random_walk=1e-3, bias_instability=1e-4, bias_correlation_time=10.0, turn_on_bias_sigma=1e-3,
-                  scale_factor=(1e-4, 1e-4, 1e-4), quantization=1e-7, saturation=10.0)
+NOISY = GyroModel(
+    angle_random_walk=1e-3,
+    bias_instability=1e-4,
+    bias_correlation_time=10.0,
+    turn_on_bias_sigma=1e-3,
+    scale_factor=(1e-4, 1e-4, 1e-4),
+    quantization=1e-7,
+    saturation=10.0,
+)
 
 
 def test_same_seed_same_bits_different_seed_different_bits():
@@ -186,8 +200,9 @@ def test_star_tracker_error_has_the_noise_equivalent_angle_per_body_axis():
     np.testing.assert_array_equal(model.covariance, np.diag(nea**2))
     truth = Rotation.from_rotvec([0.4, -1.1, 2.0])
     q = truth.as_quat()
-    errors = np.array([(truth.inv() * Rotation.from_quat(star_tracker_sample(model, 8, k, q))).as_rotvec()
-                       for k in range(20_000)])  # body-frame error: q^-1 q_m
+    errors = np.array(
+        [(truth.inv() * Rotation.from_quat(star_tracker_sample(model, 8, k, q))).as_rotvec() for k in range(20_000)]
+    )  # body-frame error: q^-1 q_m
     assert errors.std(axis=0) == pytest.approx(nea, rel=0.03)
     assert np.abs(np.corrcoef(errors.T) - np.eye(3)).max() < 0.03
     sample = star_tracker_sample(model, 8, 5, q)

@@ -71,14 +71,17 @@ def test_grid_rule():
     assert n == 0 and last == pytest.approx(0.03)
 
 
-@pytest.mark.parametrize("t_end, save_every, expected_t", [
-    (1.0, 1, np.linspace(0.0, 1.0, 11)),
-    (1.0, 5, [0.0, 0.5, 1.0]),
-    (1.0, 3, [0.0, 0.3, 0.6, 0.9, 1.0]),
-    (1.05, 1, [*np.linspace(0.0, 1.0, 11), 1.05]),
-    (0.0, 1, [0.0]),
-    (0.04, 1, [0.0, 0.04]),
-])
+@pytest.mark.parametrize(
+    "t_end, save_every, expected_t",
+    [
+        (1.0, 1, np.linspace(0.0, 1.0, 11)),
+        (1.0, 5, [0.0, 0.5, 1.0]),
+        (1.0, 3, [0.0, 0.3, 0.6, 0.9, 1.0]),
+        (1.05, 1, [*np.linspace(0.0, 1.0, 11), 1.05]),
+        (0.0, 1, [0.0]),
+        (0.04, 1, [0.0, 0.04]),
+    ],
+)
 def test_samples_land_on_the_grid_and_on_t_end(t_end, save_every, expected_t):
     traj = simulate(MOMENTS, OMEGA0, t_end, 0.1, "rk4", save_every=save_every)
     assert np.allclose(traj.t, expected_t, rtol=0, atol=1e-12)
@@ -91,7 +94,14 @@ def test_samples_land_on_the_grid_and_on_t_end(t_end, save_every, expected_t):
 @pytest.mark.parametrize("method", sorted(METHODS))
 def test_last_partial_step_reaches_t_end(method):
     """t_end = 1.234 with dt = 0.1: 12 steps and one of 0.034 s; the state is the exact one at t_end."""
-    traj = simulate(MOMENTS, OMEGA0, 1.234, 0.1 if METHODS[method].orders[0] >= 4 or not METHODS[method].fixed_step else 0.001, method, q0=Q0)
+    traj = simulate(
+        MOMENTS,
+        OMEGA0,
+        1.234,
+        0.1 if METHODS[method].orders[0] >= 4 or not METHODS[method].fixed_step else 0.001,
+        method,
+        q0=Q0,
+    )
     exact = torque_free_solution(MOMENTS, OMEGA0, Q0)
     tol = {1: 1e-2, 2: 1e-5}.get(METHODS[method].orders[0], 1e-6)
     assert traj.t[-1] == 1.234
@@ -130,7 +140,9 @@ def test_full_tensor_outputs_are_in_the_user_body_frame(method):
     omega0 = np.array([0.7, -0.3, 0.4])
     traj = simulate(TENSOR, omega0, 3.0, 0.01, method, q0=Q0, save_every=10)
     body = RigidBody.from_inertia(TENSOR)
-    exact = torque_free_solution(body.principal_moments, body.vector_to_principal(omega0), body.attitude_to_principal(Q0))
+    exact = torque_free_solution(
+        body.principal_moments, body.vector_to_principal(omega0), body.attitude_to_principal(Q0)
+    )
     omega_ref = body.vector_from_principal(exact.omega(traj.t))
     q_ref = body.attitude_from_principal(exact.quaternion(traj.t))
     tol = 1e-4 if method in ("splitting", "implicit_midpoint") else 1e-8  # order 2 at dt = 0.01
@@ -212,8 +224,13 @@ def test_non_finite_state_is_reported_with_step_and_time():
 
 @pytest.mark.parametrize(
     "module_name",
-    ["rigid_rot_sim.core.simulate", "rigid_rot_sim.core.integrators", "rigid_rot_sim.scene.bounded_yaml",
-     "rigid_rot_sim.scene.names", "rigid_rot_sim.run.pacing"],
+    [
+        "rigid_rot_sim.core.simulate",
+        "rigid_rot_sim.core.integrators",
+        "rigid_rot_sim.scene.bounded_yaml",
+        "rigid_rot_sim.scene.names",
+        "rigid_rot_sim.run.pacing",
+    ],
 )
 def test_docstring_examples_run(module_name):
     import doctest
@@ -252,7 +269,8 @@ def test_cached_body_is_shared_read_only_and_keyed_by_value():
 
 def test_repeated_calls_give_the_same_bits():
     first = simulate(TENSOR, OMEGA0, t_end=2.0, dt=0.5, method="taylor", q0=Q0, torque=(0.1, 0.0, -0.2))
-    second = simulate(TENSOR.tolist(), list(OMEGA0), t_end=2.0, dt=0.5, method="taylor", q0=list(Q0),
-                      torque=[0.1, 0.0, -0.2])
+    second = simulate(
+        TENSOR.tolist(), list(OMEGA0), t_end=2.0, dt=0.5, method="taylor", q0=list(Q0), torque=[0.1, 0.0, -0.2]
+    )
     for a, b in ((first.q, second.q), (first.omega, second.omega), (first.L_world, second.L_world)):
         assert np.array_equal(a, b)

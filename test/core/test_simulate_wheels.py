@@ -23,8 +23,9 @@ TILT = Rotation.from_rotvec([0.3, -0.5, 0.7]).as_matrix()
 
 
 def three_wheels():
-    return wheel_model(np.diag(MOMENTS), ["a", "b", "c"], [[1, 0, 0], [0, 1, 0], [1, 1, 1]], [0.1, 0.2, 0.15],
-                       [0.2] * 3, [600.0] * 3)
+    return wheel_model(
+        np.diag(MOMENTS), ["a", "b", "c"], [[1, 0, 0], [0, 1, 0], [1, 1, 1]], [0.1, 0.2, 0.15], [0.2] * 3, [600.0] * 3
+    )
 
 
 @pytest.mark.parametrize("method", METHODS)
@@ -39,8 +40,9 @@ def test_single_wheel_on_a_principal_axis_follows_the_closed_form(method, tilted
     inertia = frame @ np.diag(MOMENTS) @ frame.T
     axis = frame[:, 2]
     wheels = wheel_model(inertia, ["z"], [axis], [spin], [0.1], [1000.0])
-    traj = simulate(inertia, 0.0 * axis + w0 * axis, t_end, 0.01, method, wheels=wheels, wheel_speeds0=[speed0],
-                    wheel_torque=[u])
+    traj = simulate(
+        inertia, 0.0 * axis + w0 * axis, t_end, 0.01, method, wheels=wheels, wheel_speeds0=[speed0], wheel_torque=[u]
+    )
     assert traj.wheel_speeds.shape == (1002, 1) and traj.t[-1] == t_end
     t = traj.t
     i3 = MOMENTS[2]
@@ -76,8 +78,17 @@ def test_total_world_momentum_and_energy_are_conserved_with_free_frictionless_wh
 def test_motor_torques_are_internal_the_world_momentum_stays(method):
     """A schedule of motor torques moves momentum between body and wheels, never out of the system."""
     schedule = [(0.0, [0.2, -0.1, 0.05]), (3.005, [-0.2, 0.0, 0.1]), (7.0, [0.0, 0.0, 0.0])]
-    traj = simulate(MOMENTS, (0.1, 0.3, -0.2), 10.0, 0.01, method, wheels=three_wheels(),
-                    wheel_speeds0=(5.0, -2.0, 3.0), wheel_torque=schedule, save_every=10)
+    traj = simulate(
+        MOMENTS,
+        (0.1, 0.3, -0.2),
+        10.0,
+        0.01,
+        method,
+        wheels=three_wheels(),
+        wheel_speeds0=(5.0, -2.0, 3.0),
+        wheel_torque=schedule,
+        save_every=10,
+    )
     h = traj.L_world
     assert np.max(np.linalg.norm(h - h[0], axis=1)) < 1e-9 * np.linalg.norm(h[0])
     assert abs(traj.wheel_speeds[-1, 0] - traj.wheel_speeds[0, 0]) > 1.0  # the wheels did turn
@@ -88,9 +99,15 @@ def test_simulate_equals_the_simulator_on_the_shipped_wheel_slew_bit_for_bit(met
     scene = load_scene(SCENES / "wheel_slew.yaml")
     spacecraft = scene.spacecraft
     traj = simulate(
-        scene.body.inertia_array, scene.initial.angular_velocity, scene.duration, scene.integrator.dt, method,
-        scene.initial.orientation, wheels=spacecraft.wheel_model(scene.body.inertia_array),
-        wheel_speeds0=[w.initial_speed for w in spacecraft.wheels], wheel_torque=spacecraft.wheel_schedule.segments,
+        scene.body.inertia_array,
+        scene.initial.angular_velocity,
+        scene.duration,
+        scene.integrator.dt,
+        method,
+        scene.initial.orientation,
+        wheels=spacecraft.wheel_model(scene.body.inertia_array),
+        wheel_speeds0=[w.initial_speed for w in spacecraft.wheels],
+        wheel_torque=spacecraft.wheel_schedule.segments,
         save_every=250,
     )
     sim = Simulator(scene, method=method)
@@ -131,8 +148,9 @@ def test_gravity_gradient_pitch_libration_through_simulate():
     expected = n * math.sqrt(3 * (moments[1] - moments[0]) / moments[2])
     theta0 = 1e-3
     t_end = 4 * 2 * math.pi / expected
-    traj = simulate(moments, (0.0, 0.0, n), t_end, 2.0, "rk4", (0.0, 0.0, math.sin(theta0 / 2), math.cos(theta0 / 2)),
-                    orbit=orbit)
+    traj = simulate(
+        moments, (0.0, 0.0, n), t_end, 2.0, "rk4", (0.0, 0.0, math.sin(theta0 / 2), math.cos(theta0 / 2)), orbit=orbit
+    )
     assert traj.wheel_speeds is None
     pitch = np.unwrap(2 * np.arctan2(traj.q[:, 2], traj.q[:, 3])) - n * traj.t
     sign = np.signbit(pitch)
@@ -212,10 +230,17 @@ def test_simulate_steps_like_the_simulator_with_a_tensor_friction_and_gravity_gr
     scene = parse_scene_text(SPACECRAFT % method)
     spacecraft = scene.spacecraft
     traj = simulate(
-        scene.body.inertia_array, scene.initial.angular_velocity, 10.0, scene.integrator.dt, method,
-        scene.initial.orientation, wheels=spacecraft.wheel_model(scene.body.inertia_array),
-        wheel_speeds0=[w.initial_speed for w in spacecraft.wheels], wheel_torque=spacecraft.wheel_schedule.segments,
-        orbit=spacecraft.gravity_gradient.model(), save_every=7,
+        scene.body.inertia_array,
+        scene.initial.angular_velocity,
+        10.0,
+        scene.integrator.dt,
+        method,
+        scene.initial.orientation,
+        wheels=spacecraft.wheel_model(scene.body.inertia_array),
+        wheel_speeds0=[w.initial_speed for w in spacecraft.wheels],
+        wheel_torque=spacecraft.wheel_schedule.segments,
+        orbit=spacecraft.gravity_gradient.model(),
+        save_every=7,
     )
     sim = Simulator(scene)
     assert not sim.stepper.body.is_principal

@@ -280,8 +280,13 @@ def test_dense_output_matches_reference_at_every_api_step():
     torque = ConstantTorque([0.1, -0.05, 0.02])
     integrator = Taylor(MOMENTS, 0.1, torque, omega0=OMEGA0, q0=Q0, tol=1e-12)
     sol = solve_ivp(
-        reference_rhs(MOMENTS, torque), (0.0, 5.0), np.concatenate([OMEGA0, Q0]), method="DOP853",
-        rtol=1e-13, atol=1e-14, dense_output=True,
+        reference_rhs(MOMENTS, torque),
+        (0.0, 5.0),
+        np.concatenate([OMEGA0, Q0]),
+        method="DOP853",
+        rtol=1e-13,
+        atol=1e-14,
+        dense_output=True,
     )
     worst_omega = worst_q = 0.0
     for n in range(1, 51):

@@ -24,8 +24,13 @@ MOMENTS = np.array([10.0, 12.0, 15.0])
 
 def three_wheels(**kwargs):
     return wheel_model(
-        np.diag(MOMENTS), ["a", "b", "c"], [[1, 0, 0], [0, 1, 0], [1, 1, 1]], [0.1, 0.2, 0.15], [0.2] * 3,
-        [600.0] * 3, **kwargs,
+        np.diag(MOMENTS),
+        ["a", "b", "c"],
+        [[1, 0, 0], [0, 1, 0], [1, 1, 1]],
+        [0.1, 0.2, 0.15],
+        [0.2] * 3,
+        [600.0] * 3,
+        **kwargs,
     )
 
 
@@ -109,8 +114,9 @@ def test_coulomb_and_viscous_friction_as_documented(cls):
     spin, c, b, stiction = 0.5, 0.05, 0.002, 0.01
     i3 = MOMENTS[2]
     gain = i3 / (spin * (i3 - spin))
-    wheels = wheel_model(np.diag(MOMENTS), ["z"], [[0, 0, 1]], [spin], [0.1], [1000.0], coulomb=[c],
-                         stiction_speed=[stiction])
+    wheels = wheel_model(
+        np.diag(MOMENTS), ["z"], [[0, 0, 1]], [spin], [0.1], [1000.0], coulomb=[c], stiction_speed=[stiction]
+    )
     g = cls(MOMENTS, 0.01, wheels=wheels, wheel_speeds0=(10.0,))
     g.advance(100)
     assert g.wheel_speeds[0] == pytest.approx(10.0 - c * gain * g.t, rel=1e-10)

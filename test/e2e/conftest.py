@@ -93,14 +93,18 @@ class _Launcher:
         self.env = env
         self.processes: list[NodeProcess] = []
 
-    def __call__(self, *args: str, name: str = "node", module: str = "rigid_rot_sim.ros.node",
-                 env: dict[str, str] | None = None) -> NodeProcess:
+    def __call__(
+        self, *args: str, name: str = "node", module: str = "rigid_rot_sim.ros.node", env: dict[str, str] | None = None
+    ) -> NodeProcess:
         """Start ``python -m <module> <args>`` (e.g. ``"--ros-args", "-p", "x:=1"``)."""
         log_path = self.log_dir / f"{name}-{len(self.processes)}.log"
         command = [sys.executable, "-m", module, *args]
         with open(log_path, "wb") as log:
             process = subprocess.Popen(
-                command, stdout=log, stderr=subprocess.STDOUT, stdin=subprocess.DEVNULL,
+                command,
+                stdout=log,
+                stderr=subprocess.STDOUT,
+                stdin=subprocess.DEVNULL,
                 env={**self.env, **(env or {})},
             )
         node = NodeProcess(process, log_path, command)
@@ -176,8 +180,9 @@ def _wait_for_service(client, timeout: float = NODE_START_TIMEOUT, process: Node
     )
 
 
-def _wait_for_topic(node, name: str, timeout: float = NODE_START_TIMEOUT,
-                   process: NodeProcess | None = None) -> list[str]:
+def _wait_for_topic(
+    node, name: str, timeout: float = NODE_START_TIMEOUT, process: NodeProcess | None = None
+) -> list[str]:
     """Wait until a publisher of topic ``name`` is discovered; its type names."""
     deadline = time.monotonic() + timeout
     while time.monotonic() < deadline:
@@ -252,7 +257,9 @@ class Collector:
             if process is not None:
                 process.check_alive()
             self.executor.spin_once(timeout_sec=0.05)
-        raise AssertionError(f"timed out after {timeout} s waiting for {what}" + (f"\n{process.log()}" if process else ""))
+        raise AssertionError(
+            f"timed out after {timeout} s waiting for {what}" + (f"\n{process.log()}" if process else "")
+        )
 
     def call(self, srv_type, name: str, request, timeout: float = 10.0, process=None, idempotent: bool = False):
         """Call service ``name`` (relative: of the default node ``/rigid_rot_sim``) and return the reply.
@@ -270,7 +277,9 @@ class Collector:
         while not any(f.done() for f in futures):
             now = time.monotonic()
             if now > deadline:
-                raise AssertionError(f"timed out waiting for reply of {name}" + (f"\n{process.log()}" if process else ""))
+                raise AssertionError(
+                    f"timed out waiting for reply of {name}" + (f"\n{process.log()}" if process else "")
+                )
             if idempotent and now > resend:
                 futures.append(client.call_async(request))
                 resend = now + RESEND_PERIOD

@@ -23,5 +23,7 @@ def wait_until_recorded(bag, topic: str, count: int, process, timeout: float = W
     deadline = time.monotonic() + timeout
     while recorded_count(bag, topic) < count:
         process.check_alive()
-        assert time.monotonic() < deadline, f"{topic}: {recorded_count(bag, topic)} of {count} recorded\n{process.log()}"
+        assert time.monotonic() < deadline, (
+            f"{topic}: {recorded_count(bag, topic)} of {count} recorded\n{process.log()}"
+        )
         time.sleep(0.1)

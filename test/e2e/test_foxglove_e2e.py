@@ -17,6 +17,7 @@ import numpy as np
 import pytest
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
+import foxglove  # noqa: E402,F401  (the viewer extra: make setup installs it, so these tests always run)
 from e2e_helpers import WAIT  # noqa: E402
 from foxglove_client import FoxgloveClient  # noqa: E402
 
@@ -26,8 +27,6 @@ from rigid_rot_sim.recording.reader import BagReader  # noqa: E402
 from rigid_rot_sim.run.body_view import body_view  # noqa: E402
 from rigid_rot_sim.scene.scene import load_scene  # noqa: E402
 from rigid_rot_sim.share import resolve_scene  # noqa: E402
-
-import foxglove  # noqa: E402,F401  (the viewer extra: make setup installs it, so these tests always run)
 
 STATE_TYPE = "rigid_rot_msgs/msg/RigidBodyState"
 PORT = re.compile(r"Foxglove live server ws://127\.0\.0\.1:(\d+)")
@@ -65,19 +64,38 @@ def _check_scene_entity(update: dict, state, view) -> None:
 
 def test_live_server_streams_what_the_node_publishes(tmp_path, launch_node, ros_node, collector):
     from rclpy.qos import QoSProfile, ReliabilityPolicy
+
     from rigid_rot_msgs.msg import RigidBodyState
 
     bag = tmp_path / "live.mcap"
-    node = launch_node("--ros-args", "-p", "scene:=free_tumble", "-p", "foxglove:=127.0.0.1:0",
-                       "-p", "rates.markers:=10.0", "-p", f"record_path:={bag}")
+    node = launch_node(
+        "--ros-args",
+        "-p",
+        "scene:=free_tumble",
+        "-p",
+        "foxglove:=127.0.0.1:0",
+        "-p",
+        "rates.markers:=10.0",
+        "-p",
+        f"record_path:={bag}",
+    )
     port = _port_from_log(node)
     dds: list[bytes] = []
-    ros_node.create_subscription(RigidBodyState, "/rigid_rot_sim/state", dds.append,
-                                 QoSProfile(depth=1000, reliability=ReliabilityPolicy.RELIABLE), raw=True)
+    ros_node.create_subscription(
+        RigidBodyState,
+        "/rigid_rot_sim/state",
+        dds.append,
+        QoSProfile(depth=1000, reliability=ReliabilityPolicy.RELIABLE),
+        raw=True,
+    )
     client = FoxgloveClient(f"ws://127.0.0.1:{port}")
     try:
-        client.until(lambda: client.channel_of("/rigid_rot_sim/state") and client.channel_of("/rigid_rot_sim/body_scene"),
-                     WAIT, "the state and scene channels", node.check_alive)
+        client.until(
+            lambda: client.channel_of("/rigid_rot_sim/state") and client.channel_of("/rigid_rot_sim/body_scene"),
+            WAIT,
+            "the state and scene channels",
+            node.check_alive,
+        )
         state_channel = client.channel_of("/rigid_rot_sim/state")
         assert (state_channel["encoding"], state_channel["schemaName"]) == ("cdr", STATE_TYPE)
         assert state_channel["schemaEncoding"] == "ros2msg"
@@ -134,8 +152,9 @@ def test_box_has_the_bodys_principal_moments():
     moments, _ = principal_frame(tensor)
     a, b, c = equivalent_box(moments, mass=12.0)
     m = 12.0
-    np.testing.assert_allclose([m * (b**2 + c**2) / 12, m * (a**2 + c**2) / 12, m * (a**2 + b**2) / 12], moments,
-                               rtol=1e-12)
+    np.testing.assert_allclose(
+        [m * (b**2 + c**2) / 12, m * (a**2 + c**2) / 12, m * (a**2 + b**2) / 12], moments, rtol=1e-12
+    )
 
 
 def test_view_serves_a_recording(tmp_path):
@@ -144,8 +163,15 @@ def test_view_serves_a_recording(tmp_path):
 
     bag = tmp_path / "run.mcap"
     record_like_the_node(bag, "free_tumble", 400, 10, {}, method="rk4")
-    command = [str(Path(sys.executable).parent / "rigid-rot"), "view", str(bag), "--foxglove", "127.0.0.1:0",
-               "--speed", "0.5"]
+    command = [
+        str(Path(sys.executable).parent / "rigid-rot"),
+        "view",
+        str(bag),
+        "--foxglove",
+        "127.0.0.1:0",
+        "--speed",
+        "0.5",
+    ]
     process = subprocess.Popen(command, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
     try:
         line = process.stdout.readline()

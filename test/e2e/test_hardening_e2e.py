@@ -5,17 +5,18 @@ import signal
 import time
 
 import pytest
-from rigid_rot_msgs.srv import Step
 from std_srvs.srv import SetBool
-
 from test_node_e2e import scene_args  # same directory; the collector fixture is in conftest.py
+
+from rigid_rot_msgs.srv import Step
 
 
 @pytest.mark.parametrize("signum", [signal.SIGTERM, signal.SIGINT])
 def test_signal_stops_the_node_while_it_steps(launch_node, collector, signum):
     node = launch_node(*scene_args("thin_rod", integrator="taylor", start_paused="true"), name="stepping")
-    assert collector.call(SetBool, "pause", SetBool.Request(data=True), timeout=30.0, process=node,
-                          idempotent=True).success
+    assert collector.call(
+        SetBool, "pause", SetBool.Request(data=True), timeout=30.0, process=node, idempotent=True
+    ).success
     client = collector.node.create_client(Step, "/rigid_rot_sim/step")
     replies = 0
     for _ in range(3):  # the largest requests, back to back: the node is busy stepping most of the time

@@ -35,6 +35,7 @@ def inertia_client(client_node, inertia_node, wait_for_service):
 
 def make_request(masses, positions, origin=(0.0, 0.0, 0.0), frame_id="base_link"):
     from geometry_msgs.msg import Point
+
     from rigid_rot_msgs.srv import ComputeInertia
 
     request = ComputeInertia.Request()
@@ -116,7 +117,10 @@ def test_cli_asks_the_service_and_agrees_with_the_library(inertia_node, ros_env)
     rigid_rot = Path(sys.executable).parent / "rigid-rot"
     result = subprocess.run(
         [str(rigid_rot), "inertia", str(SAMPLE_BODY), "--service", SERVICE, "--compare", "--timeout", "30"],
-        capture_output=True, text=True, timeout=120, env=ros_env,
+        capture_output=True,
+        text=True,
+        timeout=120,
+        env=ros_env,
     )
     assert result.returncode == 0, result.stdout + result.stderr
     assert f"computed by {SERVICE}" in result.stdout
@@ -128,9 +132,22 @@ def test_cli_takes_ros_args_for_its_client_node(inertia_node, ros_env):
     rigid_rot = Path(sys.executable).parent / "rigid-rot"
     namespace, relative = SERVICE.rsplit("/", 1)
     result = subprocess.run(
-        [str(rigid_rot), "inertia", str(SAMPLE_BODY), "--service", relative, "--timeout", "30",
-         "--ros-args", "-r", f"__ns:={namespace}"],
-        capture_output=True, text=True, timeout=120, env=ros_env,
+        [
+            str(rigid_rot),
+            "inertia",
+            str(SAMPLE_BODY),
+            "--service",
+            relative,
+            "--timeout",
+            "30",
+            "--ros-args",
+            "-r",
+            f"__ns:={namespace}",
+        ],
+        capture_output=True,
+        text=True,
+        timeout=120,
+        env=ros_env,
     )
     assert result.returncode == 0, result.stdout + result.stderr
     assert "total mass" in result.stdout

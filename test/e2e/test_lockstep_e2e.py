@@ -37,11 +37,27 @@ TIMEOUT = 120.0
 
 def _closed_loop(launch_node, collector, record=None):
     """One lockstep run of closed_loop_lockstep with the shipped controller: {stamp_ns: state bytes}."""
-    controller = launch_node("--ros-args", "-p", f"target:={TARGET}", "-p", f"state_topic:={STATE}",
-                             "-p", f"torque_topic:={TORQUE}", name="controller",
-                             module="rigid_rot_sim.ros.controller")
-    args = ["--ros-args", *NS_ARGS, "-p", "scene:=closed_loop_lockstep", "-p", f"duration:={DURATION}",
-            "-p", "start_paused:=true"]
+    controller = launch_node(
+        "--ros-args",
+        "-p",
+        f"target:={TARGET}",
+        "-p",
+        f"state_topic:={STATE}",
+        "-p",
+        f"torque_topic:={TORQUE}",
+        name="controller",
+        module="rigid_rot_sim.ros.controller",
+    )
+    args = [
+        "--ros-args",
+        *NS_ARGS,
+        "-p",
+        "scene:=closed_loop_lockstep",
+        "-p",
+        f"duration:={DURATION}",
+        "-p",
+        "start_paused:=true",
+    ]
     if record:
         args += ["-p", f"record_path:={record}"]
     node = launch_node(*args, name="sim")
@@ -56,10 +72,17 @@ def _closed_loop(launch_node, collector, record=None):
 
     subscription = collector.node.create_subscription(RigidBodyState, STATE, on_state, QOS)
     # the controller and this process listen before the run starts: every state reaches both
-    collector.spin_until(lambda: collector.node.count_publishers(STATE) >= 1
-                         and collector.node.count_subscribers(STATE) >= 2
-                         and collector.node.count_subscribers(TORQUE) >= 1
-                         and collector.node.count_publishers(TORQUE) >= 1, TIMEOUT, node, "the loop's graph")
+    collector.spin_until(
+        lambda: (
+            collector.node.count_publishers(STATE) >= 1
+            and collector.node.count_subscribers(STATE) >= 2
+            and collector.node.count_subscribers(TORQUE) >= 1
+            and collector.node.count_publishers(TORQUE) >= 1
+        ),
+        TIMEOUT,
+        node,
+        "the loop's graph",
+    )
     reply = collector.call(SetBool, f"{NODE}/pause", SetBool.Request(data=False), process=node, idempotent=True)
     assert reply.success, reply.message
     last = round(DURATION * 1e9)
@@ -128,8 +151,20 @@ def _answer(collector, publisher, stamp, torque_z=0.001):
 
 
 def _manual_loop(launch_node, collector, *overrides):
-    node = launch_node("--ros-args", *NS_ARGS, "-p", "scene:=closed_loop_lockstep", "-p", "duration:=0.0",
-                       "-p", "lockstep.timeout:=1.0", "-p", "start_paused:=true", *overrides, name="sim")
+    node = launch_node(
+        "--ros-args",
+        *NS_ARGS,
+        "-p",
+        "scene:=closed_loop_lockstep",
+        "-p",
+        "duration:=0.0",
+        "-p",
+        "lockstep.timeout:=1.0",
+        "-p",
+        "start_paused:=true",
+        *overrides,
+        name="sim",
+    )
     states = collector.subscribe(RigidBodyState, STATE, QOS)
     rejected = collector.subscribe(RejectedCommand, f"{NODE}/rejected", QOS)
     publisher = collector.node.create_publisher(WrenchStamped, TORQUE, QoSProfile(depth=10))
@@ -155,15 +190,20 @@ def test_a_command_for_another_turn_is_rejected_and_a_silent_controller_pauses_t
     count = len(states)
     deadline = time.monotonic() + 1.5
     collector.spin_until(lambda: time.monotonic() > deadline, 5.0, node)
-    assert all(s.header.stamp.nanosec <= 20_000_000 and s.header.stamp.sec == 0 for s in states[count - 1:])
+    assert all(s.header.stamp.nanosec <= 20_000_000 and s.header.stamp.sec == 0 for s in states[count - 1 :])
 
 
 def test_with_hold_a_silent_controller_only_slows_the_run(launch_node, collector):
-    node, states, _, publisher = _manual_loop(launch_node, collector, "-p", "lockstep.on_timeout:=hold",
-                                              "-p", "lockstep.timeout:=0.2")
+    node, states, _, publisher = _manual_loop(
+        launch_node, collector, "-p", "lockstep.on_timeout:=hold", "-p", "lockstep.timeout:=0.2"
+    )
     _answer(collector, publisher, states[0].header.stamp)
-    collector.spin_until(lambda: any(s.header.stamp.nanosec >= 80_000_000 for s in states), TIMEOUT, node,
-                         "turns going on without answers")
+    collector.spin_until(
+        lambda: any(s.header.stamp.nanosec >= 80_000_000 for s in states),
+        TIMEOUT,
+        node,
+        "turns going on without answers",
+    )
     assert "holding" in node.log()
     # the held torque acts on: the body turns about z
     assert states[-1].angular_velocity_body.z > 0.0

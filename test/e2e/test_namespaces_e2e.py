@@ -31,33 +31,56 @@ def write_scene(directory: Path, body_frame: str) -> Path:
 
 def test_two_namespaced_nodes_run_side_by_side_without_cross_talk(launch_node, collector, tmp_path):
     from geometry_msgs.msg import WrenchStamped
-    from rigid_rot_msgs.msg import RigidBodyState
-    from rigid_rot_msgs.srv import Step
     from std_srvs.srv import SetBool
     from tf2_msgs.msg import TFMessage
 
+    from rigid_rot_msgs.msg import RigidBodyState
+    from rigid_rot_msgs.srv import Step
     from rigid_rot_sim.ros.qos import COMMAND_QOS, STATE_QOS, TF_QOS
 
     nodes = {
         # /clock comes from one simulator only; `rates.clock:=0` (an integer) also checks that
         # double parameters take integers on the command line
-        "sat1": launch_node("--ros-args", "-r", "__ns:=/sat1", "-p", f"scene:={write_scene(tmp_path, 'sat1_body')}",
-                            name="sat1"),
-        "sat2": launch_node("--ros-args", "-r", "__ns:=/sat2", "-p", f"scene:={write_scene(tmp_path, 'sat2_body')}",
-                            "-p", "rates.clock:=0", name="sat2"),
+        "sat1": launch_node(
+            "--ros-args", "-r", "__ns:=/sat1", "-p", f"scene:={write_scene(tmp_path, 'sat1_body')}", name="sat1"
+        ),
+        "sat2": launch_node(
+            "--ros-args",
+            "-r",
+            "__ns:=/sat2",
+            "-p",
+            f"scene:={write_scene(tmp_path, 'sat2_body')}",
+            "-p",
+            "rates.clock:=0",
+            name="sat2",
+        ),
     }
     states = {ns: collector.subscribe(RigidBodyState, f"/{ns}/rigid_rot_sim/state", STATE_QOS) for ns in nodes}
     tf = collector.subscribe(TFMessage, "/tf", TF_QOS)
     publisher = collector.node.create_publisher(WrenchStamped, "/sat1/rigid_rot_sim/torque", COMMAND_QOS)
-    collector.spin_until(lambda: all(states.values()) and publisher.get_subscription_count() > 0, WAIT, None,
-                         "states of both nodes and sat1's torque subscription")
+    collector.spin_until(
+        lambda: all(states.values()) and publisher.get_subscription_count() > 0,
+        WAIT,
+        None,
+        "states of both nodes and sat1's torque subscription",
+    )
     for ns, process in nodes.items():  # each node subscribes to its own torque topic only (graph data: awaited)
-        collector.spin_until(lambda: collector.node.count_subscribers(f"/{ns}/rigid_rot_sim/torque") >= 1,
-                             WAIT, process, f"/{ns}/rigid_rot_sim/torque's subscriber")
+        collector.spin_until(
+            lambda: collector.node.count_subscribers(f"/{ns}/rigid_rot_sim/torque") >= 1,
+            WAIT,
+            process,
+            f"/{ns}/rigid_rot_sim/torque's subscriber",
+        )
         assert collector.node.count_subscribers(f"/{ns}/rigid_rot_sim/torque") == 1
     collector.spin_until(  # node names reach the graph with the participants' data, a little after the endpoints
-        lambda: {("rigid_rot_sim", "/sat1"), ("rigid_rot_sim", "/sat2")} <= set(collector.node.get_node_names_and_namespaces()),
-        WAIT, None, "both nodes in the graph")
+        lambda: (
+            {("rigid_rot_sim", "/sat1"), ("rigid_rot_sim", "/sat2")}
+            <= set(collector.node.get_node_names_and_namespaces())
+        ),
+        WAIT,
+        None,
+        "both nodes in the graph",
+    )
 
     # each body is a child of the shared world frame on /tf, with its own attitude
     def tf_children() -> dict[str, set[float]]:
@@ -71,8 +94,12 @@ def test_two_namespaced_nodes_run_side_by_side_without_cross_talk(launch_node, c
         state_stamps = {stamp(m) for m in states[ns]}
         return bool(tf_children().get(f"{ns}_body", set()) & state_stamps)
 
-    collector.spin_until(lambda: tf_matches_state("sat1") and tf_matches_state("sat2"), WAIT, None,
-                         "a /tf transform of each body at a stamp of its own ~/state")
+    collector.spin_until(
+        lambda: tf_matches_state("sat1") and tf_matches_state("sat2"),
+        WAIT,
+        None,
+        "a /tf transform of each body at a stamp of its own ~/state",
+    )
     assert {"sat1_body", "sat2_body"} <= set(tf_children())
     for ns in nodes:
         by_stamp = {stamp(m): m.orientation for m in states[ns]}
@@ -95,13 +122,12 @@ def test_two_namespaced_nodes_run_side_by_side_without_cross_talk(launch_node, c
     assert all(m.child_frame_id == "sat1_body" for m in states["sat1"])
 
     # services are per node: pausing sat1 leaves sat2 running
-    paused = collector.call(SetBool, "/sat1/rigid_rot_sim/pause", SetBool.Request(data=True), process=nodes["sat1"],
-                            idempotent=True)
+    paused = collector.call(
+        SetBool, "/sat1/rigid_rot_sim/pause", SetBool.Request(data=True), process=nodes["sat1"], idempotent=True
+    )
     assert paused.success, paused.message
-    assert collector.call(Step, "/sat1/rigid_rot_sim/step", Step.Request(steps=1),
-                          process=nodes["sat1"]).success
-    refused = collector.call(Step, "/sat2/rigid_rot_sim/step", Step.Request(steps=1),
-                             process=nodes["sat2"])
+    assert collector.call(Step, "/sat1/rigid_rot_sim/step", Step.Request(steps=1), process=nodes["sat1"]).success
+    refused = collector.call(Step, "/sat2/rigid_rot_sim/step", Step.Request(steps=1), process=nodes["sat2"])
     assert not refused.success and "not paused" in refused.message
     later = stamp(states["sat2"][-1]) + 0.5
     collector.spin_until(lambda: stamp(states["sat2"][-1]) >= later, WAIT, nodes["sat2"], "sat2 to run on")

@@ -16,11 +16,10 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-
 from e2e_helpers import WAIT, wait_until_recorded  # beside this file
 
-from rigid_rot_sim.scene.scene import load_scene
 from rigid_rot_sim.run.simulator import Simulator
+from rigid_rot_sim.scene.scene import load_scene
 
 SCENES = Path(__file__).resolve().parents[2] / "config" / "scenes"
 NODE = "/rigid_rot_sim"
@@ -67,6 +66,7 @@ def recorded(bag: Path, topic: str) -> dict[float, object]:
 
 def same_fields(received, from_file, names: tuple[str, ...]) -> bool:
     """The named fields of a received message equal those decoded from the recording, bit for bit."""
+
     def value(msg, name):
         field = getattr(msg, name)
         return tuple(getattr(field, axis) for axis in "xyzw" if hasattr(field, axis)) or field
@@ -76,23 +76,28 @@ def same_fields(received, from_file, names: tuple[str, ...]) -> bool:
 
 def test_torque_commands_change_omega_exactly_as_the_core_predicts(launch_node, collector, tmp_path):
     from geometry_msgs.msg import WrenchStamped
-    from rigid_rot_msgs.msg import RigidBodyState
-
     from std_srvs.srv import SetBool
 
+    from rigid_rot_msgs.msg import RigidBodyState
     from rigid_rot_sim.conversions import seconds_to_time
     from rigid_rot_sim.ros.qos import COMMAND_QOS, STATE_QOS
 
     # started paused at t = 0; resumed once the node has received (and recorded) every command
     bag = tmp_path / "commands.mcap"
-    node = launch_node(*scene_args("torque_driven", real_time_factor=2.0, integrator="rk4", start_paused="true",
-                                   record_path=bag), name="torque_driven")
+    node = launch_node(
+        *scene_args("torque_driven", real_time_factor=2.0, integrator="rk4", start_paused="true", record_path=bag),
+        name="torque_driven",
+    )
     states = collector.subscribe(RigidBodyState, f"{NODE}/state", STATE_QOS)
     publisher = collector.node.create_publisher(WrenchStamped, f"{NODE}/torque", COMMAND_QOS)
     collector.spin_until(lambda: publisher.get_subscription_count() > 0, WAIT, node, "the torque subscription")
     # stamped commands ahead of the node's sim time: their effect is fixed by the stamps
     t1 = 1.0
-    commands = [(t1, (0.0, 0.0, 0.004), "base_link"), (t1 + 0.2, (0.002, 0.0, 0.0), "odom"), (t1 + 0.45, (0.0, -0.001, 0.0), "base_link")]
+    commands = [
+        (t1, (0.0, 0.0, 0.004), "base_link"),
+        (t1 + 0.2, (0.002, 0.0, 0.0), "odom"),
+        (t1 + 0.45, (0.0, -0.001, 0.0), "base_link"),
+    ]
     for when, torque, frame in commands:
         msg = WrenchStamped()
         msg.header.stamp = seconds_to_time(when)
@@ -127,13 +132,21 @@ def test_torque_commands_change_omega_exactly_as_the_core_predicts(launch_node, 
 
 def test_torque_free_run_conserves_momentum_and_energy_and_exits_cleanly(launch_node, collector, tmp_path):
     from rigid_rot_msgs.msg import RigidBodyState
-
     from rigid_rot_sim.ros.qos import STATE_QOS
 
     # started paused, resumed once this test's subscription is matched; the run is recorded
     bag = tmp_path / "flip.mcap"
-    node = launch_node(*scene_args("intermediate_axis_flip", real_time_factor=10.0, duration=40.0, start_paused="true",
-                                   record_path=bag, **{"rates.state": 20.0}), name="flip")
+    node = launch_node(
+        *scene_args(
+            "intermediate_axis_flip",
+            real_time_factor=10.0,
+            duration=40.0,
+            start_paused="true",
+            record_path=bag,
+            **{"rates.state": 20.0},
+        ),
+        name="flip",
+    )
     received = collector.subscribe(RigidBodyState, f"{NODE}/state", STATE_QOS)
     resume_when_matched(collector, node, f"{NODE}/state", received)
     collector.spin_until(lambda: not node.alive(), WAIT, None, "the node to finish its 40 s run")
@@ -148,7 +161,9 @@ def test_torque_free_run_conserves_momentum_and_energy_and_exits_cleanly(launch_
     reference = Simulator(load_scene(SCENES / "intermediate_axis_flip.yaml"))
     l0 = np.linalg.norm(reference.snapshot().angular_momentum_world)
     e0 = reference.snapshot().kinetic_energy
-    momentum = np.array([[m.angular_momentum_world.x, m.angular_momentum_world.y, m.angular_momentum_world.z] for m in states])
+    momentum = np.array(
+        [[m.angular_momentum_world.x, m.angular_momentum_world.y, m.angular_momentum_world.z] for m in states]
+    )
     energy = np.array([m.kinetic_energy for m in states])
     # auto picks the exact flow: conserved to rounding
     assert np.max(np.abs(np.linalg.norm(momentum, axis=1) / l0 - 1.0)) < 1e-12
@@ -162,14 +177,15 @@ def test_torque_free_run_conserves_momentum_and_energy_and_exits_cleanly(launch_
 
 def test_heavy_top_nutation_stays_between_the_turning_points(launch_node, collector, tmp_path):
     from rigid_rot_msgs.msg import HeavyTopState
-
     from rigid_rot_sim.core.heavy_top import HeavyTop, heavy_top_reference
     from rigid_rot_sim.ros.qos import STATE_QOS
 
     scene = load_scene(SCENES / "heavy_top.yaml")
     bag = tmp_path / "top.mcap"
-    node = launch_node(*scene_args("heavy_top", real_time_factor=2.0, duration=4.0, start_paused="true", record_path=bag),
-                       name="heavy_top")
+    node = launch_node(
+        *scene_args("heavy_top", real_time_factor=2.0, duration=4.0, start_paused="true", record_path=bag),
+        name="heavy_top",
+    )
     received = collector.subscribe(HeavyTopState, f"{NODE}/top_state", STATE_QOS)
     resume_when_matched(collector, node, f"{NODE}/top_state", received)
     collector.spin_until(lambda: not node.alive(), WAIT, None, "the 4 s heavy-top run")
@@ -181,8 +197,12 @@ def test_heavy_top_nutation_stays_between_the_turning_points(launch_node, collec
 
     mass, l = scene.body.mass, scene.body.center_of_mass[2]
     pivot = np.diag(scene.body.inertia_array)
-    top = HeavyTop(mass=mass, gravity=scene.gravity.acceleration, com_distance=l,
-                   com_moments=[pivot[0] - mass * l * l, pivot[1] - mass * l * l, pivot[2]])
+    top = HeavyTop(
+        mass=mass,
+        gravity=scene.gravity.acceleration,
+        com_distance=l,
+        com_moments=[pivot[0] - mass * l * l, pivot[1] - mass * l * l, pivot[2]],
+    )
     reference = heavy_top_reference(top, scene.initial.orientation, scene.initial.angular_velocity)
     theta_min, theta_max = reference.theta_range
     top_states = [published[t] for t in sorted(published)]
@@ -199,10 +219,10 @@ def test_heavy_top_nutation_stays_between_the_turning_points(launch_node, collec
 def test_bad_commands_and_requests_are_rejected_and_pause_step_reset_work(launch_node, collector):
     from builtin_interfaces.msg import Duration
     from geometry_msgs.msg import Vector3, WrenchStamped
-    from rigid_rot_msgs.msg import RejectedCommand, RigidBodyState
-    from rigid_rot_msgs.srv import ApplyTorque, SetState, Step
     from std_srvs.srv import SetBool, Trigger
 
+    from rigid_rot_msgs.msg import RejectedCommand, RigidBodyState
+    from rigid_rot_msgs.srv import ApplyTorque, SetState, Step
     from rigid_rot_sim.ros.qos import COMMAND_QOS, REJECTED_QOS, STATE_QOS
 
     node = launch_node(*scene_args("torque_driven", real_time_factor=1.0, integrator="rk4"), name="services")
@@ -212,7 +232,11 @@ def test_bad_commands_and_requests_are_rejected_and_pause_step_reset_work(launch
     collector.spin_until(lambda: states and publisher.get_subscription_count() > 0, WAIT, node, "the node")
 
     bad = []
-    for frame, torque, force in (("base_link", (math.nan, 0.0, 0.0), 0.0), ("map", (0.0, 0.0, 1.0), 0.0), ("base_link", (0.0, 0.0, 1.0), 5.0)):
+    for frame, torque, force in (
+        ("base_link", (math.nan, 0.0, 0.0), 0.0),
+        ("map", (0.0, 0.0, 1.0), 0.0),
+        ("base_link", (0.0, 0.0, 1.0), 5.0),
+    ):
         msg = WrenchStamped()
         msg.header.frame_id = frame
         msg.wrench.torque.x, msg.wrench.torque.y, msg.wrench.torque.z = torque
@@ -237,7 +261,12 @@ def test_bad_commands_and_requests_are_rejected_and_pause_step_reset_work(launch
             continue
     assert {r.source for r in rejected} == {f"{NODE}/torque"}
 
-    response = collector.call(ApplyTorque, "apply_torque", ApplyTorque.Request(torque=Vector3(z=1.0), frame_id="map", duration=Duration(sec=1)), process=node)
+    response = collector.call(
+        ApplyTorque,
+        "apply_torque",
+        ApplyTorque.Request(torque=Vector3(z=1.0), frame_id="map", duration=Duration(sec=1)),
+        process=node,
+    )
     assert not response.success and "neither" in response.message
     response = collector.call(Step, "step", Step.Request(steps=10), process=node)
     assert not response.success and "not paused" in response.message
@@ -253,7 +282,12 @@ def test_bad_commands_and_requests_are_rejected_and_pause_step_reset_work(launch
     assert collector.call(SetBool, "pause", SetBool.Request(data=True), process=node, idempotent=True).success
     first = collector.call(Step, "step", Step.Request(steps=1), process=node)
     assert first.success
-    applied = collector.call(ApplyTorque, "apply_torque", ApplyTorque.Request(torque=Vector3(z=0.004), duration=Duration(nanosec=50_000_000)), process=node)
+    applied = collector.call(
+        ApplyTorque,
+        "apply_torque",
+        ApplyTorque.Request(torque=Vector3(z=0.004), duration=Duration(nanosec=50_000_000)),
+        process=node,
+    )
     assert applied.success, applied.message
     stepped = collector.call(Step, "step", Step.Request(steps=100), process=node)
     assert stepped.success
@@ -261,13 +295,17 @@ def test_bad_commands_and_requests_are_rejected_and_pause_step_reset_work(launch
     # 0.004 N*m for 0.05 s on I3 = 0.04 kg*m^2
     assert stepped.state.angular_velocity_body.z == pytest.approx(0.005, rel=1e-9)
     again = collector.call(Step, "step", Step.Request(steps=1), process=node)
-    assert stamp(again.state) == pytest.approx(stamp(stepped.state) + 0.001, abs=1e-9)  # still paused: nothing ran between
+    assert stamp(again.state) == pytest.approx(
+        stamp(stepped.state) + 0.001, abs=1e-9
+    )  # still paused: nothing ran between
 
     # a reset while paused publishes the t = 0 state once; nothing else is published on ~/state
     # while paused, so the reliable subscription receives it
     n = len(states)
     assert collector.call(Trigger, "reset", Trigger.Request(), process=node).success
-    collector.spin_until(lambda: any(stamp(m) == 0.0 for m in states[n:]), WAIT, node, "the t = 0 state after the reset")
+    collector.spin_until(
+        lambda: any(stamp(m) == 0.0 for m in states[n:]), WAIT, node, "the t = 0 state after the reset"
+    )
     after_reset = next(m for m in states[n:] if stamp(m) == 0.0)
     assert after_reset.angular_velocity_body.z == 0.0
     assert stamp(collector.call(Step, "step", Step.Request(steps=1), process=node).state) == pytest.approx(0.001)
@@ -280,15 +318,19 @@ def test_shell_commands_run_and_torque(launch_node, collector, ros_env, tmp_path
     import sys
 
     from rigid_rot_msgs.msg import RigidBodyState
-
     from rigid_rot_sim.ros.qos import STATE_QOS
 
     node = launch_node(*scene_args("torque_driven", real_time_factor=1.0, integrator="rk4"), name="cli_target")
     states = collector.subscribe(RigidBodyState, f"{NODE}/state", STATE_QOS)
     collector.spin_until(lambda: len(states) > 0, WAIT, node, "the node's state")
     cli = [str(Path(sys.executable).with_name("rigid-rot"))]
-    sent = subprocess.run(cli + ["torque", "0", "0", "0.004", "--frame", "base_link"], env=ros_env,
-                          capture_output=True, text=True, timeout=30)
+    sent = subprocess.run(
+        cli + ["torque", "0", "0", "0.004", "--frame", "base_link"],
+        env=ros_env,
+        capture_output=True,
+        text=True,
+        timeout=30,
+    )
     assert sent.returncode == 0, sent.stdout + sent.stderr
     assert "1 command(s) [0.0, 0.0, 0.004]" in sent.stdout
     # held 0.5 s of sim time (the scene's timeout): omega_z = 0.004 * 0.5 / 0.04 = 0.05 rad/s
@@ -299,8 +341,13 @@ def test_shell_commands_run_and_torque(launch_node, collector, ros_env, tmp_path
     assert states[-1].angular_velocity_body.z == pytest.approx(0.05, rel=1e-9)
     node.stop()
 
-    demo = subprocess.run(cli + ["run", "free_tumble", "--duration", "1.5", "--echo", "0.5"], env=ros_env,
-                          capture_output=True, text=True, timeout=60)
+    demo = subprocess.run(
+        cli + ["run", "free_tumble", "--duration", "1.5", "--echo", "0.5"],
+        env=ros_env,
+        capture_output=True,
+        text=True,
+        timeout=60,
+    )
     assert demo.returncode == 0, demo.stdout + demo.stderr
     # the echo prints what it received: at least one state (how many depends on the machine's load)
     lines = [line for line in demo.stdout.splitlines() if line.startswith("t=")]

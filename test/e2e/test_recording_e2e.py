@@ -40,8 +40,14 @@ def write_scene(directory: Path, real_time_factor: float = 1.0, hold: object = "
     scene["integrator"] = {"method": "rk4", "dt": 0.001}
     scene["real_time_factor"] = real_time_factor
     scene["torque_inputs"][0]["hold"] = hold
-    scene["outputs"] = {"state": 50, "orientation": 50, "angular_velocity": 0, "angular_momentum": 0,
-                        "tf": 25, "clock": 50}
+    scene["outputs"] = {
+        "state": 50,
+        "orientation": 50,
+        "angular_velocity": 0,
+        "angular_momentum": 0,
+        "tf": 25,
+        "clock": 50,
+    }
     path = directory / "scene.yaml"
     path.write_text(yaml.safe_dump(scene, sort_keys=False))
     return path
@@ -54,11 +60,13 @@ def node_args(scene: Path, record: Path, *extra: str) -> list[str]:
 def first_state_time(ros_node, process, timeout: float = WAIT) -> float:
     """Sim time (s) of the first ~/state message the test process receives."""
     from rclpy.executors import SingleThreadedExecutor
+
     from rigid_rot_msgs.msg import RigidBodyState
 
     got: list[float] = []
     subscription = ros_node.create_subscription(
-        RigidBodyState, STATE_TOPIC, lambda m: got.append(m.header.stamp.sec + m.header.stamp.nanosec * 1e-9), 10)
+        RigidBodyState, STATE_TOPIC, lambda m: got.append(m.header.stamp.sec + m.header.stamp.nanosec * 1e-9), 10
+    )
     executor = SingleThreadedExecutor(context=ros_node.context)
     executor.add_node(ros_node)
     try:
@@ -103,8 +111,8 @@ COMMANDS = [
     ((0.0, 0.0, 0.004), "base_link", 0.0, (0.0, 0.0, 0.0)),
     ((0.002, 0.0, 0.0), "odom", 0.0, (0.0, 0.0, 0.0)),
     ((0.0, 0.001, 0.0), "no_such_frame", 0.0, (0.0, 0.0, 0.0)),  # rejected: unknown frame
-    ((0.0, 0.0, 0.001), "base_link", 0.0, (1.0, 0.0, 0.0)),           # rejected: non-zero force
-    ((float("nan"), 0.0, 0.0), "base_link", 0.0, (0.0, 0.0, 0.0)),    # rejected: non-finite
+    ((0.0, 0.0, 0.001), "base_link", 0.0, (1.0, 0.0, 0.0)),  # rejected: non-zero force
+    ((float("nan"), 0.0, 0.0), "base_link", 0.0, (0.0, 0.0, 0.0)),  # rejected: non-finite
     ((0.0, -0.003, 0.001), "base_link", 0.0, (0.0, 0.0, 0.0)),
 ]
 
@@ -133,9 +141,9 @@ def test_rosbags_deserialises_every_message_and_counts_match(recorded_run):
         summary_counts = {c.topic: c.msgcount for c in reader.connections}
         types = {c.topic: c.msgtype for c in reader.connections}
     assert {t: n for t, n in summary_counts.items() if n} == counts
-    assert counts[TORQUE_TOPIC] == len(COMMANDS)                 # every command, as received
-    assert counts["/rigid_rot_sim/rejected"] == 3                # with the reason of each rejection
-    assert counts["/rigid_rot_sim/sim_events"] == 3              # the accepted ones, with effective times
+    assert counts[TORQUE_TOPIC] == len(COMMANDS)  # every command, as received
+    assert counts["/rigid_rot_sim/rejected"] == 3  # with the reason of each rejection
+    assert counts["/rigid_rot_sim/sim_events"] == 3  # the accepted ones, with effective times
     assert counts[STATE_TOPIC] > 10 and counts["/tf"] > 5 and counts["/rigid_rot_sim/mass_properties"] == 1
     assert types["/tf"] == "tf2_msgs/msg/TFMessage"
     assert types["/rigid_rot_sim/rejected"] == "rigid_rot_msgs/msg/RejectedCommand"
@@ -245,12 +253,16 @@ def reset(ros_node, process, wait_for_service, call_service) -> None:
 def wait_for_sim_time(ros_node, process, t: float, timeout: float = 60.0) -> None:
     """Spin until a ~/state stamped at or after t (s) arrives."""
     from rclpy.executors import SingleThreadedExecutor
+
     from rigid_rot_msgs.msg import RigidBodyState
 
     latest = [-1.0]
     subscription = ros_node.create_subscription(
-        RigidBodyState, STATE_TOPIC,
-        lambda m: latest.__setitem__(0, max(latest[0], m.header.stamp.sec + m.header.stamp.nanosec * 1e-9)), 10)
+        RigidBodyState,
+        STATE_TOPIC,
+        lambda m: latest.__setitem__(0, max(latest[0], m.header.stamp.sec + m.header.stamp.nanosec * 1e-9)),
+        10,
+    )
     executor = SingleThreadedExecutor(context=ros_node.context)
     executor.add_node(ros_node)
     try:
@@ -279,9 +291,16 @@ def test_replayed_commands_reproduce_the_states_of_the_original_run(
     first_state_time(ros_node, node)
     t_pause = set_paused(ros_node, node, True, wait_for_service, call_service)
     stamps = tuple(round(t_pause + 1.0 + 0.4 * i, 1) for i in range(3))
-    send_commands(ros_node, [((0.0, 0.0, 0.004), "base_link", stamps[0], (0.0, 0.0, 0.0)),
-                             ((0.003, 0.0, 0.0), "odom", stamps[1], (0.0, 0.0, 0.0)),
-                             ((0.0, -0.002, 0.0), "base_link", stamps[2], (0.0, 0.0, 0.0))], node, original)
+    send_commands(
+        ros_node,
+        [
+            ((0.0, 0.0, 0.004), "base_link", stamps[0], (0.0, 0.0, 0.0)),
+            ((0.003, 0.0, 0.0), "odom", stamps[1], (0.0, 0.0, 0.0)),
+            ((0.0, -0.002, 0.0), "base_link", stamps[2], (0.0, 0.0, 0.0)),
+        ],
+        node,
+        original,
+    )
     set_paused(ros_node, node, False, wait_for_service, call_service)
     end = stamps[-1] + 0.6
     wait_for_sim_time(ros_node, node, end)
@@ -292,8 +311,13 @@ def test_replayed_commands_reproduce_the_states_of_the_original_run(
     set_paused(ros_node, node, True, wait_for_service, call_service)
     reset(ros_node, node, wait_for_service, call_service)  # back to t = 0, still paused
     rigid_rot = Path(sys.executable).with_name("rigid-rot")
-    done = subprocess.run([str(rigid_rot), "replay", str(original), "--wait", "20"],
-                          capture_output=True, text=True, timeout=120, env=os.environ)
+    done = subprocess.run(
+        [str(rigid_rot), "replay", str(original), "--wait", "20"],
+        capture_output=True,
+        text=True,
+        timeout=120,
+        env=os.environ,
+    )
     assert done.returncode == 0 and "replayed 3 messages" in done.stdout, done.stdout + done.stderr
     deadline = time.monotonic() + WAIT
     while len(_events(replayed, complete=False)) < 4:  # reset + 3 commands, received before resuming
@@ -308,8 +332,10 @@ def test_replayed_commands_reproduce_the_states_of_the_original_run(
         return [(e.values["effective_time"], e.values["receipt_time"]) for e in _events(bag) if e.kind == "torque"]
 
     # both took effect at the stamps (as the headers carry them: whole ns), having arrived before them
-    in_headers = [time_to_seconds(SimpleNamespace(sec=sec, nanosec=ns)) for sec, ns in
-                  (divmod(round(stamp * 1e9), 1_000_000_000) for stamp in stamps)]
+    in_headers = [
+        time_to_seconds(SimpleNamespace(sec=sec, nanosec=ns))
+        for sec, ns in (divmod(round(stamp * 1e9), 1_000_000_000) for stamp in stamps)
+    ]
     assert [float(e) for e, _ in command_events(original)] == in_headers, command_events(original)
     assert [float(e) for e, _ in command_events(replayed)] == in_headers, command_events(replayed)
     a, b = _states_by_stamp(original), _states_by_stamp(replayed, after_reset=True)
@@ -356,19 +382,35 @@ def test_rigid_rot_run_record_writes_a_complete_bag_with_sim_time_log_times(tmp_
     bag = tmp_path / "cli.mcap"
     rigid_rot = Path(sys.executable).with_name("rigid-rot")
     done = subprocess.run(
-        [str(rigid_rot), "run", str(write_scene(tmp_path)), "--duration", "0.5", "--realtime-factor", "0",
-         "--record", str(bag)],
-        capture_output=True, text=True, timeout=60, env=os.environ,
+        [
+            str(rigid_rot),
+            "run",
+            str(write_scene(tmp_path)),
+            "--duration",
+            "0.5",
+            "--realtime-factor",
+            "0",
+            "--record",
+            str(bag),
+        ],
+        capture_output=True,
+        text=True,
+        timeout=60,
+        env=os.environ,
     )
     assert done.returncode == 0, done.stdout + done.stderr
     reader = BagReader(bag)
     assert reader.complete and reader.metadata["log_time"] == {"base": "sim"}
-    stamps = {round(msg.header.stamp.sec + msg.header.stamp.nanosec * 1e-9, 6) for _, msg in reader.decoded([STATE_TOPIC])}
+    stamps = {
+        round(msg.header.stamp.sec + msg.header.stamp.nanosec * 1e-9, 6) for _, msg in reader.decoded([STATE_TOPIC])
+    }
     assert stamps == {round(0.02 * i, 6) for i in range(26)}  # 50 Hz over 0.5 s, both ends included
     checked: dict[str, int] = {}
     log_times = []
     with open(bag, "rb") as stream:  # the mcap library's own reader, in log-time order
-        for _, channel, message, decoded in make_reader(stream, decoder_factories=[DecoderFactory()]).iter_decoded_messages():
+        for _, channel, message, decoded in make_reader(
+            stream, decoder_factories=[DecoderFactory()]
+        ).iter_decoded_messages():
             log_times.append(message.log_time)
             if channel.topic in (STATE_TOPIC, "/rigid_rot_sim/orientation"):
                 stamp = decoded.header.stamp
@@ -378,7 +420,11 @@ def test_rigid_rot_run_record_writes_a_complete_bag_with_sim_time_log_times(tmp_
                 stamp = decoded.transforms[0].header.stamp
             else:
                 continue
-            assert message.log_time == stamp.sec * 1_000_000_000 + stamp.nanosec, (channel.topic, message.log_time, stamp)
+            assert message.log_time == stamp.sec * 1_000_000_000 + stamp.nanosec, (
+                channel.topic,
+                message.log_time,
+                stamp,
+            )
             checked[channel.topic] = checked.get(channel.topic, 0) + 1
     # /tf at 25 Hz: 13, plus the final state at 0.5 s (every output ends on it)
     assert checked[STATE_TOPIC] == 26 and checked["/clock"] == 26 and checked["/tf"] == 14
@@ -409,7 +455,10 @@ def test_disk_full_mid_run_stops_the_recording_and_the_simulation_runs_on(tmp_pa
     with open(log_path, "wb") as log:
         process = subprocess.Popen(
             [sys.executable, "-m", "rigid_rot_sim.ros.node", *node_args(write_scene(tmp_path), bag)],
-            stdout=log, stderr=subprocess.STDOUT, env=ros_env, preexec_fn=limit_file_size,
+            stdout=log,
+            stderr=subprocess.STDOUT,
+            env=ros_env,
+            preexec_fn=limit_file_size,
         )
 
     class Proc:  # what first_state_time needs of a NodeProcess

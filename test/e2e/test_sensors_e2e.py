@@ -61,4 +61,3 @@ def test_sensor_topics_over_dds_are_recorded_and_resimulate_bit_exact(tmp_path: 
     assert report.identical, report.format()
     assert report.sensor_readings == counts[IMU] + counts[STAR_TRACKER] >= 13
     assert "sensor readings" in report.verdict and "seed" in reader.metadata["sensors"]
-

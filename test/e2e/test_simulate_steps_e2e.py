@@ -27,8 +27,18 @@ SUCCEEDED, CANCELED, ABORTED = 4, 5, 6  # action_msgs/msg/GoalStatus
 
 @pytest.fixture
 def sim_node(launch_node):
-    return launch_node("--ros-args", "-p", f"scene:={SCENES / 'torque_driven.yaml'}", "-p", "real_time_factor:=0.0",
-                       "-p", "start_paused:=true", "-p", "integrator:=rk4", name="simulate_steps")
+    return launch_node(
+        "--ros-args",
+        "-p",
+        f"scene:={SCENES / 'torque_driven.yaml'}",
+        "-p",
+        "real_time_factor:=0.0",
+        "-p",
+        "start_paused:=true",
+        "-p",
+        "integrator:=rk4",
+        name="simulate_steps",
+    )
 
 
 def _reply(collector, request, process, what: str, resend: float = 5.0, timeout: float = 60.0):
@@ -67,9 +77,13 @@ def test_simulate_steps_goal_feedback_cancel_and_refusals(sim_node, collector):
 
     def send(steps: int):
         """A goal's handle. Sent once: a lost reply is waited for, not resent (a goal is not idempotent)."""
-        return _reply(collector, lambda: client.send_goal_async(SimulateSteps.Goal(steps=steps),
-                                                                feedback_callback=feedback.append),
-                      sim_node, f"a goal of {steps} steps", resend=math.inf)
+        return _reply(
+            collector,
+            lambda: client.send_goal_async(SimulateSteps.Goal(steps=steps), feedback_callback=feedback.append),
+            sim_node,
+            f"a goal of {steps} steps",
+            resend=math.inf,
+        )
 
     def result(goal):
         return _reply(collector, goal.get_result_async, sim_node, "a goal's result")
@@ -86,19 +100,22 @@ def test_simulate_steps_goal_feedback_cancel_and_refusals(sim_node, collector):
     done = result(goal)
     assert done.status == SUCCEEDED and done.result.result.result == Result.RESULT_OK
     # 500 steps after the warm-up's 1 (or a few): the newest state (reliable, keep last) is at t >= 0.5 s
-    collector.spin_until(lambda: states[count:] and stamp(states[-1]) >= 0.5 - 1e-9, 30.0, sim_node,
-                         "the state at the goal's end")
+    collector.spin_until(
+        lambda: states[count:] and stamp(states[-1]) >= 0.5 - 1e-9, 30.0, sim_node, "the state at the goal's end"
+    )
     stamps = [stamp(msg) for msg in states[count:]]
     assert all(a < b for a, b in zip(stamps, stamps[1:], strict=False))
     assert all(abs(t * 100 - round(t * 100)) < 1e-6 for t in stamps)  # due every 10th step (100 Hz at dt 1 ms)
-    state = collector.call(GetSimulationState, "get_simulation_state", GetSimulationState.Request(),
-                           process=sim_node, idempotent=True)
+    state = collector.call(
+        GetSimulationState, "get_simulation_state", GetSimulationState.Request(), process=sim_node, idempotent=True
+    )
     assert state.state.state == SimulationState.STATE_PAUSED
 
     # the feedback topic is the standard type, with the upstream hash
     infos = collector.node.get_publishers_info_by_topic(f"{ACTION}/_action/feedback")  # (and earlier tests' nodes)
     assert infos and {str(info.topic_type_hash) for info in infos} == {
-        UPSTREAM_1_5_1_ACTION["action/SimulateSteps_FeedbackMessage"]}
+        UPSTREAM_1_5_1_ACTION["action/SimulateSteps_FeedbackMessage"]
+    }
 
     # cancel a long goal once its feedback arrives; a second goal meanwhile is rejected
     feedback.clear()
@@ -115,8 +132,10 @@ def test_simulate_steps_goal_feedback_cancel_and_refusals(sim_node, collector):
 
     # while playing: aborted with RESULT_OPERATION_FAILED and the reason
     set_state = SetSimulationState.Request(state=SimulationState(state=SimulationState.STATE_PLAYING))
-    assert collector.call(SetSimulationState, "set_simulation_state", set_state,
-                          process=sim_node).result.result == Result.RESULT_OK
+    assert (
+        collector.call(SetSimulationState, "set_simulation_state", set_state, process=sim_node).result.result
+        == Result.RESULT_OK
+    )
     refused = result(send(5))
     assert refused.status == ABORTED and refused.result.result.result == Result.RESULT_OPERATION_FAILED
     assert "paused" in refused.result.result.error_message
@@ -129,8 +148,9 @@ def test_step_with_torque_replies_with_the_state_after_its_steps(sim_node, colle
     from rigid_rot_msgs.srv import Step, StepWithTorque
 
     # a refused request changes nothing, so it may be resent until answered (a fresh server: see _reply)
-    refused = collector.call(StepWithTorque, "step_with_torque", StepWithTorque.Request(steps=0), process=sim_node,
-                             idempotent=True)
+    refused = collector.call(
+        StepWithTorque, "step_with_torque", StepWithTorque.Request(steps=0), process=sim_node, idempotent=True
+    )
     assert not refused.success and "steps must be >= 1" in refused.message
     request = StepWithTorque.Request(torque=Vector3(z=0.004), frame_id="base_link", steps=100)
     reply = collector.call(StepWithTorque, "step_with_torque", request, process=sim_node)

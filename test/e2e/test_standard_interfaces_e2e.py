@@ -34,13 +34,20 @@ def scene_file(tmp_path_factory) -> Path:
 @pytest.fixture(scope="module")
 def sim_node(launch_node_module, scene_file):
     return launch_node_module(
-        "--ros-args", "-p", f"scene:={scene_file}", "-p", "real_time_factor:=1.0",
-        "-p", f"world_frame:={WORLD}", "-p", f"body_frame:={BODY}", name="standard",
+        "--ros-args",
+        "-p",
+        f"scene:={scene_file}",
+        "-p",
+        "real_time_factor:=1.0",
+        "-p",
+        f"world_frame:={WORLD}",
+        "-p",
+        f"body_frame:={BODY}",
+        name="standard",
     )
 
 
 def test_simulation_interfaces_services_refuse_bad_requests_and_serve_good_ones(sim_node, collector):
-    from rigid_rot_msgs.srv import Step
     from simulation_interfaces.msg import Result, SimulationState, SimulatorFeatures
     from simulation_interfaces.srv import (
         GetSimulationState,
@@ -49,6 +56,8 @@ def test_simulation_interfaces_services_refuse_bad_requests_and_serve_good_ones(
         SetSimulationState,
         StepSimulation,
     )
+
+    from rigid_rot_msgs.srv import Step
 
     def call(srv_type, name, request):
         return collector.call(srv_type, name, request, process=sim_node)
@@ -59,8 +68,9 @@ def test_simulation_interfaces_services_refuse_bad_requests_and_serve_good_ones(
         return response.state.state
 
     def set_state(state: int):
-        return call(SetSimulationState, "set_simulation_state",
-                    SetSimulationState.Request(state=SimulationState(state=state))).result
+        return call(
+            SetSimulationState, "set_simulation_state", SetSimulationState.Request(state=SimulationState(state=state))
+        ).result
 
     def now() -> float:
         """Sim time (s) after one more step of the node's own ~/step (which returns the state)."""
@@ -69,8 +79,11 @@ def test_simulation_interfaces_services_refuse_bad_requests_and_serve_good_ones(
         return stamp(response.state)
 
     features = call(GetSimulatorFeatures, "get_simulator_features", GetSimulatorFeatures.Request()).features
-    assert {SimulatorFeatures.STEP_SIMULATION_MULTIPLE, SimulatorFeatures.SIMULATION_RESET,
-            SimulatorFeatures.SIMULATION_STATE_PAUSE} <= set(features.features)
+    assert {
+        SimulatorFeatures.STEP_SIMULATION_MULTIPLE,
+        SimulatorFeatures.SIMULATION_RESET,
+        SimulatorFeatures.SIMULATION_STATE_PAUSE,
+    } <= set(features.features)
     assert SimulatorFeatures.SPAWNING not in features.features and "ResetSimulation" in features.custom_info
     assert run_state() == SimulationState.STATE_PLAYING
 
@@ -95,7 +108,9 @@ def test_simulation_interfaces_services_refuse_bad_requests_and_serve_good_ones(
     assert now() == pytest.approx(t0 + 26 * 0.01, abs=1e-9)  # dt 0.01 s; still paused between the calls
 
     # reset: bad (time without state) then good (state only at the current time, then everything)
-    time_only = call(ResetSimulation, "reset_simulation", ResetSimulation.Request(scope=ResetSimulation.Request.SCOPE_TIME)).result
+    time_only = call(
+        ResetSimulation, "reset_simulation", ResetSimulation.Request(scope=ResetSimulation.Request.SCOPE_TIME)
+    ).result
     assert time_only.result == Result.RESULT_FEATURE_UNSUPPORTED and "without the state" in time_only.error_message
     t1 = now()
     state_only = ResetSimulation.Request(scope=ResetSimulation.Request.SCOPE_STATE)
@@ -108,7 +123,9 @@ def test_simulation_interfaces_services_refuse_bad_requests_and_serve_good_ones(
     assert stamp(fresh) == pytest.approx(0.01, abs=1e-12)  # back to t = 0, then one step
     # torque-free motion is autonomous: one step from the initial state gives the same ω at any time
     for axis in "xyz":
-        assert getattr(stepped.angular_velocity_body, axis) == pytest.approx(getattr(fresh.angular_velocity_body, axis), rel=1e-9)
+        assert getattr(stepped.angular_velocity_body, axis) == pytest.approx(
+            getattr(fresh.angular_velocity_body, axis), rel=1e-9
+        )
 
     # stop = pause + reset; playing again runs
     assert set_state(SimulationState.STATE_STOPPED).result == Result.RESULT_OK
@@ -120,9 +137,9 @@ def test_simulation_interfaces_services_refuse_bad_requests_and_serve_good_ones(
 
 def test_imu_and_odom_carry_the_state_of_the_same_stamp_in_the_parameter_frames(sim_node, collector):
     from nav_msgs.msg import Odometry
-    from rigid_rot_msgs.msg import RigidBodyState
     from sensor_msgs.msg import Imu
 
+    from rigid_rot_msgs.msg import RigidBodyState
     from rigid_rot_sim.ros.qos import STATE_QOS
 
     states = collector.subscribe(RigidBodyState, f"{NODE}/state", STATE_QOS)
@@ -132,7 +149,9 @@ def test_imu_and_odom_carry_the_state_of_the_same_stamp_in_the_parameter_frames(
     def common_stamps():
         return ({stamp(m) for m in states} & {stamp(m) for m in imus} & {stamp(m) for m in odoms}) - {0.0}
 
-    collector.spin_until(lambda: len(common_stamps()) >= 3, 30.0, sim_node, "~/state, ~/imu and ~/odom at common stamps")
+    collector.spin_until(
+        lambda: len(common_stamps()) >= 3, 30.0, sim_node, "~/state, ~/imu and ~/odom at common stamps"
+    )
     by_stamp = {stamp(m): m for m in states}
     imu_by_stamp = {stamp(m): m for m in imus}
     odom_by_stamp = {stamp(m): m for m in odoms}

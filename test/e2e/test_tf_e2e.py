@@ -27,7 +27,9 @@ def stamp(msg) -> float:
 
 def endpoints(collector, topic: str, process) -> list:
     """The publishers of ``topic`` in the graph (a node of an earlier test may linger briefly)."""
-    collector.spin_until(lambda: collector.node.get_publishers_info_by_topic(topic), WAIT, process, f"a publisher on {topic}")
+    collector.spin_until(
+        lambda: collector.node.get_publishers_info_by_topic(topic), WAIT, process, f"a publisher on {topic}"
+    )
     return collector.node.get_publishers_info_by_topic(topic)
 
 
@@ -55,7 +57,9 @@ def test_tf_and_tf_static_are_live_with_the_upstream_type_hash_and_match_the_ori
     def common_stamps() -> set[float]:
         return {stamp(t) for m in tf for t in m.transforms} & {stamp(q) for q in orientation}
 
-    collector.spin_until(lambda: len(common_stamps()) >= 3 and static, WAIT, node, "/tf and ~/orientation at common stamps")
+    collector.spin_until(
+        lambda: len(common_stamps()) >= 3 and static, WAIT, node, "/tf and ~/orientation at common stamps"
+    )
     by_stamp = {stamp(q): q for q in orientation}
     compared = 0
     for message in tf:
@@ -87,12 +91,25 @@ def test_tf_and_tf_static_are_live_with_the_upstream_type_hash_and_match_the_ori
 def test_no_tf_static_when_the_body_axes_are_principal_and_qos_parameters_apply(launch_node, collector):
     from rigid_rot_msgs.msg import RigidBodyState
 
-    node = launch_node("--ros-args", "-p", "scene:=free_tumble", "-p", "qos.reliability:=best_effort",
-                       "-p", "qos.depth:=500", name="no_static")
+    node = launch_node(
+        "--ros-args",
+        "-p",
+        "scene:=free_tumble",
+        "-p",
+        "qos.reliability:=best_effort",
+        "-p",
+        "qos.depth:=500",
+        name="no_static",
+    )
     collector.spin_until(
-        lambda: any(i.qos_profile.reliability == ReliabilityPolicy.BEST_EFFORT
-                    for i in collector.node.get_publishers_info_by_topic("/rigid_rot_sim/state")),
-        WAIT, node, "a best-effort publisher of ~/state")
+        lambda: any(
+            i.qos_profile.reliability == ReliabilityPolicy.BEST_EFFORT
+            for i in collector.node.get_publishers_info_by_topic("/rigid_rot_sim/state")
+        ),
+        WAIT,
+        node,
+        "a best-effort publisher of ~/state",
+    )
     states = collector.subscribe(RigidBodyState, "/rigid_rot_sim/state", STATE_BEST_EFFORT)
     collector.spin_until(lambda: states, WAIT, node, "a best-effort state")
     assert all(i.qos_profile.reliability == ReliabilityPolicy.RELIABLE for i in endpoints(collector, "/tf", node))

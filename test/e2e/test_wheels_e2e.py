@@ -28,15 +28,25 @@ SCENE = {
     "name": "wheels_e2e",
     "body": {"principal_moments": list(MOMENTS)},
     "initial": {"angular_velocity": [0.0, 0.0, OMEGA_Z0]},
-    "actuators": {"reaction_wheels": [
-        {"name": n, "axis": a, "inertia": SPIN, "max_torque": 0.2, "max_speed": 600.0}
-        for n, a in (("rw_x", [1, 0, 0]), ("rw_y", [0, 1, 0]), ("rw_z", [0, 0, 1]))
-    ]},
+    "actuators": {
+        "reaction_wheels": [
+            {"name": n, "axis": a, "inertia": SPIN, "max_torque": 0.2, "max_speed": 600.0}
+            for n, a in (("rw_x", [1, 0, 0]), ("rw_y", [0, 1, 0]), ("rw_z", [0, 0, 1]))
+        ]
+    },
     "environment": {"gravity_gradient": {"mu": 3.986004418e14, "orbit": {"radius": 6778137.0, "inclination": 0.5}}},
     "integrator": {"method": "rk4", "dt": 0.01},
     "real_time_factor": 1.0,
-    "outputs": {"state": 20, "orientation": 0, "angular_velocity": 0, "angular_momentum": 0, "tf": 0, "clock": 20,
-                "wheels": 20, "torque_breakdown": 20},
+    "outputs": {
+        "state": 20,
+        "orientation": 0,
+        "angular_velocity": 0,
+        "angular_momentum": 0,
+        "tf": 0,
+        "clock": 20,
+        "wheels": 20,
+        "torque_breakdown": 20,
+    },
 }
 
 
@@ -66,11 +76,16 @@ def wheel_run(tmp_path_factory, launch_node_module, ros_node_module):
     bag = directory / "run.mcap"
     node = launch_node_module("--ros-args", "-p", f"scene:={scene}", "-p", f"record_path:={bag}", name="wheels")
     wait_until_recorded(bag, "/rigid_rot_sim/state", 2, node)
-    publish_wheels(ros_node_module, node, bag, [
-        ([0.0, 0.0, 0.05], 1.0),   # spins rw_z up, the body down about z
-        ([0.1], 0.2),              # rejected: one value for three wheels
-        ([0.0, 0.0, 5.0], 1.0),    # clamped to rw_z's max_torque 0.2 N*m
-    ])
+    publish_wheels(
+        ros_node_module,
+        node,
+        bag,
+        [
+            ([0.0, 0.0, 0.05], 1.0),  # spins rw_z up, the body down about z
+            ([0.1], 0.2),  # rejected: one value for three wheels
+            ([0.0, 0.0, 5.0], 1.0),  # clamped to rw_z's max_torque 0.2 N*m
+        ],
+    )
     wait_until_recorded(bag, "/rigid_rot_sim/sim_events", 2, node)
     log = node.log()
     assert node.stop() == 0, node.log()

@@ -14,9 +14,41 @@ from pathlib import Path
 
 SCENES = Path(__file__).resolve().parents[2] / "config" / "scenes"
 
-NUMBERS = [0.0, -0.0, 1e-300, 5e-324, 1e-3, 1.0, -1.0, 3.5, 1e6, -1e6, 1e12, 1e13, 1e30, 1e200, 1e308, -1e308,
-           math.inf, -math.inf, math.nan]
-FRAMES = ["", "base_link", "odom", "body", "world", "map", "Body", " body", "body\n", "ünïcode", "x" * 300, "f" * 100_000]
+NUMBERS = [
+    0.0,
+    -0.0,
+    1e-300,
+    5e-324,
+    1e-3,
+    1.0,
+    -1.0,
+    3.5,
+    1e6,
+    -1e6,
+    1e12,
+    1e13,
+    1e30,
+    1e200,
+    1e308,
+    -1e308,
+    math.inf,
+    -math.inf,
+    math.nan,
+]
+FRAMES = [
+    "",
+    "base_link",
+    "odom",
+    "body",
+    "world",
+    "map",
+    "Body",
+    " body",
+    "body\n",
+    "ünïcode",
+    "x" * 300,
+    "f" * 100_000,
+]
 
 
 def number(rng: random.Random) -> float:
@@ -56,19 +88,21 @@ def step_count(rng: random.Random) -> int:
 
 def parameter(rng: random.Random) -> tuple[str, object]:
     """A (name, value) to set at run time: wrong types, out-of-range values, read-only names."""
-    return rng.choice([
-        ("dt", rng.choice([0.0, -1.0, 1e-8, 20.0, 0.002, 0.0005, math.nan, math.inf, "x", 3])),
-        ("real_time_factor", rng.choice([-1.0, 0.0, 1.0, 5.0, 5000.0, math.nan])),
-        ("integrator", rng.choice(["rk4", "taylor", "exact", "magic", "", "x" * 1000, "euler", 5])),
-        ("duration", rng.choice([-1.0, 0.0, 1e10, math.inf])),
-        ("rates.state", rng.choice([0.0, 50.0, 2e6, -3.0])),
-        ("rates.top_state", rng.choice([0.0, 10.0])),
-        ("use_sim_time", rng.choice([True, False, "yes"])),
-        ("commands.max_torque", rng.choice([0.0, 0.5, 1e6, -1.0, 1e13])),
-        ("commands.qos_depth", rng.choice([1, 100, 0])),
-        ("scene", "/etc/passwd"),
-        ("record_path", "/tmp/x.mcap"),
-    ])
+    return rng.choice(
+        [
+            ("dt", rng.choice([0.0, -1.0, 1e-8, 20.0, 0.002, 0.0005, math.nan, math.inf, "x", 3])),
+            ("real_time_factor", rng.choice([-1.0, 0.0, 1.0, 5.0, 5000.0, math.nan])),
+            ("integrator", rng.choice(["rk4", "taylor", "exact", "magic", "", "x" * 1000, "euler", 5])),
+            ("duration", rng.choice([-1.0, 0.0, 1e10, math.inf])),
+            ("rates.state", rng.choice([0.0, 50.0, 2e6, -3.0])),
+            ("rates.top_state", rng.choice([0.0, 10.0])),
+            ("use_sim_time", rng.choice([True, False, "yes"])),
+            ("commands.max_torque", rng.choice([0.0, 0.5, 1e6, -1.0, 1e13])),
+            ("commands.qos_depth", rng.choice([1, 100, 0])),
+            ("scene", "/etc/passwd"),
+            ("record_path", "/tmp/x.mcap"),
+        ]
+    )
 
 
 # ------------------------------------------------------------------------------ scene files
@@ -101,11 +135,34 @@ def _replace_value(rng: random.Random, text: str) -> str:
         return text
     i = rng.choice(candidates)
     key, _, _ = lines[i].partition(":")
-    value = rng.choice([
-        "9" * rng.choice([20, 310, 400]), "1.0e+300", "-1.0e+300", ".nan", ".inf", "-5", "0", "1.0e-8", "20", "5000",
-        "2.0e+6", "[]", "{}", "null", "~", "true", "'x'", "[1, 2]", "!!python/object:os.system {}", "&a 1",
-        "~/tor-que", "9torque", "/a//b", "'" + "z" * 5000 + "'",
-    ])
+    value = rng.choice(
+        [
+            "9" * rng.choice([20, 310, 400]),
+            "1.0e+300",
+            "-1.0e+300",
+            ".nan",
+            ".inf",
+            "-5",
+            "0",
+            "1.0e-8",
+            "20",
+            "5000",
+            "2.0e+6",
+            "[]",
+            "{}",
+            "null",
+            "~",
+            "true",
+            "'x'",
+            "[1, 2]",
+            "!!python/object:os.system {}",
+            "&a 1",
+            "~/tor-que",
+            "9torque",
+            "/a//b",
+            "'" + "z" * 5000 + "'",
+        ]
+    )
     lines[i] = f"{key}: {value}"
     return "\n".join(lines) + "\n"
 

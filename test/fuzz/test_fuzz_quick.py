@@ -9,11 +9,11 @@ import warnings
 
 import numpy as np
 import pytest
-
 from generators import inertia_request, mutated_scene, number, parameter, set_state_request, step_count, torque_command
+
 from rigid_rot_sim.core.inertia import mass_properties
-from rigid_rot_sim.scene.scene import SceneError, parse_scene_text
 from rigid_rot_sim.run.simulator import CommandRejected, Simulator
+from rigid_rot_sim.scene.scene import SceneError, parse_scene_text
 
 
 def snapshot_finite(snapshot) -> bool:
@@ -71,11 +71,19 @@ def test_random_commands_and_requests_keep_every_snapshot_finite(method, max_tor
         try:
             if action < 0.5:
                 command = torque_command(rng)
-                sim.receive_torque(rng.choice(["~/torque", "~/world"]), command["torque"], command["frame_id"],
-                                   command["stamp"], command["force"])
+                sim.receive_torque(
+                    rng.choice(["~/torque", "~/world"]),
+                    command["torque"],
+                    command["frame_id"],
+                    command["stamp"],
+                    command["force"],
+                )
             elif action < 0.6:
-                sim.apply_torque([number(rng) for _ in range(3)], rng.choice(["", "base_link", "odom", "body", "world", "map"]),
-                                 rng.choice([0.01, 1.0, -1.0, math.inf, math.nan]))
+                sim.apply_torque(
+                    [number(rng) for _ in range(3)],
+                    rng.choice(["", "base_link", "odom", "body", "world", "map"]),
+                    rng.choice([0.01, 1.0, -1.0, math.inf, math.nan]),
+                )
             elif action < 0.7:
                 request = set_state_request(rng)
                 sim.set_state(request["orientation"], request["angular_velocity"])
@@ -100,20 +108,26 @@ def test_random_inertia_requests_are_finite_or_refused():
                 props = mass_properties(request["masses"], request["positions"], request["origin"])
             except ValueError:
                 continue
-        for value in (props.total_mass, props.center_of_mass, props.inertia_origin, props.inertia_com,
-                      props.principal_moments, props.principal_axes):
+        for value in (
+            props.total_mass,
+            props.center_of_mass,
+            props.inertia_origin,
+            props.inertia_com,
+            props.principal_moments,
+            props.principal_axes,
+        ):
             assert np.all(np.isfinite(value))
 
 
 def test_node_survives_random_commands_requests_and_parameters(harness):
     from geometry_msgs.msg import Point, Vector3, WrenchStamped
     from rclpy.parameter import Parameter
+    from std_srvs.srv import SetBool
+    from test_node_hardening import finite_state
+
     from rigid_rot_msgs.msg import RigidBodyState
     from rigid_rot_msgs.srv import ComputeInertia, SetState, Step
-    from std_srvs.srv import SetBool
-
     from rigid_rot_sim.ros.qos import COMMAND_QOS, STATE_QOS
-    from test_node_hardening import finite_state
 
     rng = random.Random(11)
     h = harness("torque_driven", real_time_factor=0.0, integrator="rk4", **{"commands.max_torque": 0.0})
@@ -133,9 +147,11 @@ def test_node_survives_random_commands_requests_and_parameters(harness):
         kind = round_ % 4
         if kind == 0:
             request = inertia_request(rng)
-            call = ComputeInertia.Request(masses=[float(m) for m in request["masses"]],
-                                          positions=[Point(x=p[0], y=p[1], z=p[2]) for p in request["positions"]],
-                                          frame_id=request["frame_id"])
+            call = ComputeInertia.Request(
+                masses=[float(m) for m in request["masses"]],
+                positions=[Point(x=p[0], y=p[1], z=p[2]) for p in request["positions"]],
+                frame_id=request["frame_id"],
+            )
             h.call(ComputeInertia, "compute_inertia", call)
         elif kind == 1:
             request = set_state_request(rng)

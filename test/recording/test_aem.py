@@ -24,14 +24,33 @@ from rigid_rot_sim.recording.aem import AemOptions, AttitudeSample, format_aem, 
 from rigid_rot_sim.recording.reader import BagReader  # noqa: E402
 
 #: Table 4-2, in order: (keyword, mandatory).
-HEADER = [("CCSDS_AEM_VERS", True), ("COMMENT", False), ("CLASSIFICATION", False), ("CREATION_DATE", True),
-          ("ORIGINATOR", True), ("MESSAGE_ID", False)]
+HEADER = [
+    ("CCSDS_AEM_VERS", True),
+    ("COMMENT", False),
+    ("CLASSIFICATION", False),
+    ("CREATION_DATE", True),
+    ("ORIGINATOR", True),
+    ("MESSAGE_ID", False),
+]
 #: Table 4-3, in order (META_START/META_STOP delimit it).
-METADATA = [("COMMENT", False), ("OBJECT_NAME", True), ("OBJECT_ID", True), ("CENTER_NAME", False),
-            ("REF_FRAME_A", True), ("REF_FRAME_B", True), ("TIME_SYSTEM", True), ("START_TIME", True),
-            ("USEABLE_START_TIME", False), ("USEABLE_STOP_TIME", False), ("STOP_TIME", True),
-            ("ATTITUDE_TYPE", True), ("EULER_ROT_SEQ", False), ("ANGVEL_FRAME", False),
-            ("INTERPOLATION_METHOD", False), ("INTERPOLATION_DEGREE", False)]
+METADATA = [
+    ("COMMENT", False),
+    ("OBJECT_NAME", True),
+    ("OBJECT_ID", True),
+    ("CENTER_NAME", False),
+    ("REF_FRAME_A", True),
+    ("REF_FRAME_B", True),
+    ("TIME_SYSTEM", True),
+    ("START_TIME", True),
+    ("USEABLE_START_TIME", False),
+    ("USEABLE_STOP_TIME", False),
+    ("STOP_TIME", True),
+    ("ATTITUDE_TYPE", True),
+    ("EULER_ROT_SEQ", False),
+    ("ANGVEL_FRAME", False),
+    ("INTERPOLATION_METHOD", False),
+    ("INTERPOLATION_DEGREE", False),
+]
 #: Table 4-4: values per data line after the epoch.
 DATA_VALUES = {"QUATERNION": 4, "QUATERNION/ANGVEL": 7, "QUATERNION/DERIVATIVE": 8}
 EPOCH = re.compile(r"^\d{4}-\d{2}-\d{2}T\d{2}:\d{2}:\d{2}(\.\d+)?Z?$")  # 6.8.9, calendar form
@@ -40,7 +59,7 @@ NUMBER = re.compile(r"^[+-]?(\d+\.\d+|\d\.\d+[eE][+-]?\d+)$")  # 6.8.4.1 fixed /
 
 def _keyword_line(line: str) -> tuple[str, str]:
     if line.startswith("COMMENT"):
-        return "COMMENT", line[len("COMMENT"):].strip()
+        return "COMMENT", line[len("COMMENT") :].strip()
     keyword, equals, value = line.partition("=")
     assert equals, f"not a KVN line: {line!r}"
     keyword, value = keyword.strip(), value.strip()
@@ -118,11 +137,14 @@ def _recorded_states(path: Path) -> list:
     return [state for _, state in reader.decoded([topic])]
 
 
-@pytest.mark.parametrize("scene, commands, angvel", [
-    ("free_tumble", {}, False),
-    ("free_tumble", {}, True),
-    ("torque_driven", COMMANDS, True),  # a slew by torque commands
-])
+@pytest.mark.parametrize(
+    "scene, commands, angvel",
+    [
+        ("free_tumble", {}, False),
+        ("free_tumble", {}, True),
+        ("torque_driven", COMMANDS, True),  # a slew by torque commands
+    ],
+)
 def test_export_round_trips_the_recording(tmp_path, scene, commands, angvel):
     bag = tmp_path / "run.mcap"
     record_like_the_node(bag, scene, 600, 10, commands, method="rk4")
@@ -157,11 +179,13 @@ def test_quaternion_is_the_standards_a_to_b():
     text = format_aem([AttitudeSample(0, tuple(q), (0.0, 0.0, 0.0))])
     q1, q2, q3, qc = read_aem(text)["segments"][0]["rows"][0][1]
     assert (q1, q2, q3) == (0.0, 0.0, pytest.approx(math.sqrt(0.5))) and qc == pytest.approx(math.sqrt(0.5))
-    m_ba = np.array([
-        [q1**2 - q2**2 - q3**2 + qc**2, 2 * (q1 * q2 + q3 * qc), 2 * (q1 * q3 - q2 * qc)],
-        [2 * (q1 * q2 - q3 * qc), -q1**2 + q2**2 - q3**2 + qc**2, 2 * (q2 * q3 + q1 * qc)],
-        [2 * (q1 * q3 + q2 * qc), 2 * (q2 * q3 - q1 * qc), -q1**2 - q2**2 + q3**2 + qc**2],
-    ])
+    m_ba = np.array(
+        [
+            [q1**2 - q2**2 - q3**2 + qc**2, 2 * (q1 * q2 + q3 * qc), 2 * (q1 * q3 - q2 * qc)],
+            [2 * (q1 * q2 - q3 * qc), -(q1**2) + q2**2 - q3**2 + qc**2, 2 * (q2 * q3 + q1 * qc)],
+            [2 * (q1 * q3 + q2 * qc), 2 * (q2 * q3 - q1 * qc), -(q1**2) - q2**2 + q3**2 + qc**2],
+        ]
+    )
     np.testing.assert_allclose(m_ba @ [1.0, 0.0, 0.0], [0.0, -1.0, 0.0], atol=1e-15)
 
 
@@ -177,16 +201,20 @@ def test_time_going_back_starts_a_new_segment_and_repeats_are_dropped():
 
 
 def test_epoch_from_the_scene_and_day_rollover(tmp_path):
-    text = format_aem([AttitudeSample(1_500_000_000, (0.0, 0.0, 0.0, 1.0), (0.0, 0.0, 0.0))],
-                      epoch="2026-12-31T23:59:59.25")
+    text = format_aem(
+        [AttitudeSample(1_500_000_000, (0.0, 0.0, 0.0, 1.0), (0.0, 0.0, 0.0))], epoch="2026-12-31T23:59:59.25"
+    )
     assert read_aem(text)["segments"][0]["rows"][0][0] == "2027-01-01T00:00:00.750000000"
 
 
-@pytest.mark.parametrize("options, message", [
-    (AemOptions(ref_frame_a="odom"), "REF_FRAME_A"),
-    (AemOptions(ref_frame_b="base_link"), "REF_FRAME_B"),
-    (AemOptions(object_id="a b"), "OBJECT_ID"),
-])
+@pytest.mark.parametrize(
+    "options, message",
+    [
+        (AemOptions(ref_frame_a="odom"), "REF_FRAME_A"),
+        (AemOptions(ref_frame_b="base_link"), "REF_FRAME_B"),
+        (AemOptions(object_id="a b"), "OBJECT_ID"),
+    ],
+)
 def test_invalid_options_are_refused(options, message):
     with pytest.raises(ValueError, match=message):
         format_aem([AttitudeSample(0, (0.0, 0.0, 0.0, 1.0), (0.0, 0.0, 0.0))], options=options)
@@ -200,6 +228,7 @@ def test_cli_writes_the_file_and_refuses_bad_input_in_one_line(tmp_path):
     assert done.returncode == 0, done.stderr
     parsed = read_aem((tmp_path / "run.aem").read_text(encoding="ascii"))
     assert parsed["segments"][0]["meta"]["OBJECT_NAME"] == "FREE_TUMBLE"
-    bad = subprocess.run(exe + ["export", "aem", str(bag), "--ref-frame-a", "odom"], capture_output=True, text=True,
-                         timeout=120)
+    bad = subprocess.run(
+        exe + ["export", "aem", str(bag), "--ref-frame-a", "odom"], capture_output=True, text=True, timeout=120
+    )
     assert bad.returncode == 2 and bad.stderr.count("\n") == 1 and "REF_FRAME_A" in bad.stderr

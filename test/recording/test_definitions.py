@@ -68,8 +68,10 @@ def test_tf_message_roundtrips_through_the_dynamic_encoder():
     transform = {
         "header": {"stamp": {"sec": 3, "nanosec": 250}, "frame_id": "world"},
         "child_frame_id": "body",
-        "transform": {"translation": {"x": 0.0, "y": 0.0, "z": 0.0},
-                      "rotation": {"x": 0.5, "y": -0.5, "z": 0.5, "w": 0.5}},
+        "transform": {
+            "translation": {"x": 0.0, "y": 0.0, "z": 0.0},
+            "rotation": {"x": 0.5, "y": -0.5, "z": 0.5, "w": 0.5},
+        },
     }
     decoded = decode(encode({"transforms": [transform]}))
     (out,) = decoded.transforms

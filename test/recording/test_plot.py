@@ -1,7 +1,5 @@
 """Plots of a recorded run: four readable PNGs, and a clear error when there is nothing to plot."""
 
-from pathlib import Path
-
 import numpy as np
 import pytest
 

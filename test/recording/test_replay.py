@@ -14,9 +14,9 @@ from rclpy.executors import SingleThreadedExecutor  # noqa: E402
 from rclpy.serialization import deserialize_message  # noqa: E402
 from test_resim import COMMANDS, record_like_the_node  # noqa: E402
 
+from rigid_rot_sim.recording.bag_metadata import DURABILITY_TRANSIENT_LOCAL, QosProfile, offered_qos_yaml  # noqa: E402
 from rigid_rot_sim.recording.reader import BagReader  # noqa: E402
 from rigid_rot_sim.recording.replay import qos_from_metadata, replay, select_topics  # noqa: E402
-from rigid_rot_sim.recording.bag_metadata import DURABILITY_TRANSIENT_LOCAL, QosProfile, offered_qos_yaml  # noqa: E402
 from rigid_rot_sim.recording.writer import Recorder  # noqa: E402
 
 
@@ -55,8 +55,9 @@ def test_replay_publishes_the_recorded_bytes_with_the_recorded_gaps(tmp_path, ro
     spinner = threading.Thread(target=executor.spin, daemon=True)
     spinner.start()
     try:
-        report = replay(bag, rate=2.0, remap={"/robot/torque_cmd": "/sim/torque"}, node=publisher_node,
-                        wait_for_subscribers=10.0)
+        report = replay(
+            bag, rate=2.0, remap={"/robot/torque_cmd": "/sim/torque"}, node=publisher_node, wait_for_subscribers=10.0
+        )
         deadline = time.monotonic() + 5.0
         while len(received) < len(gaps) and time.monotonic() < deadline:
             time.sleep(0.01)
@@ -86,7 +87,11 @@ def test_qos_is_rebuilt_from_the_recorded_profile():
     from rclpy.qos import DurabilityPolicy, ReliabilityPolicy
 
     qos = qos_from_metadata(offered_qos_yaml([QosProfile(depth=3, durability=DURABILITY_TRANSIENT_LOCAL)]))
-    assert (qos.depth, qos.durability, qos.reliability) == (3, DurabilityPolicy.TRANSIENT_LOCAL, ReliabilityPolicy.RELIABLE)
+    assert (qos.depth, qos.durability, qos.reliability) == (
+        3,
+        DurabilityPolicy.TRANSIENT_LOCAL,
+        ReliabilityPolicy.RELIABLE,
+    )
     jazzy_form = "- history: keep_last\n  depth: 5\n  reliability: best_effort\n  durability: volatile\n"
     qos = qos_from_metadata(jazzy_form)
     assert (qos.depth, qos.reliability) == (5, ReliabilityPolicy.BEST_EFFORT)

@@ -7,20 +7,21 @@ import pytest
 
 pytest.importorskip("rigid_rot_msgs.msg")
 from geometry_msgs.msg import WrenchStamped  # noqa: E402
-from rigid_rot_msgs.msg import RigidBodyState  # noqa: E402
 
+from rigid_rot_msgs.msg import RigidBodyState  # noqa: E402
 from rigid_rot_sim import conversions  # noqa: E402
-from rigid_rot_sim.scene.scene import load_scene  # noqa: E402
-from rigid_rot_sim.run.simulator import CommandRejected, Simulator  # noqa: E402
-from rigid_rot_sim.ros.recording import NodeRecording  # noqa: E402
 from rigid_rot_sim.recording.resim import attitude_angle, resimulate  # noqa: E402
 from rigid_rot_sim.recording.session import RunRecorder  # noqa: E402
+from rigid_rot_sim.ros.recording import NodeRecording  # noqa: E402
+from rigid_rot_sim.run.simulator import CommandRejected, Simulator  # noqa: E402
+from rigid_rot_sim.scene.scene import load_scene  # noqa: E402
 
 SCENES = Path(__file__).resolve().parents[2] / "config" / "scenes"
 
 
-def record_like_the_node(path: Path, scene_name: str, steps: int, publish_every: int, commands: dict, method="rk4",
-                         log_time="sim"):
+def record_like_the_node(
+    path: Path, scene_name: str, steps: int, publish_every: int, commands: dict, method="rk4", log_time="sim"
+):
     """Drive a Simulator as the node does (advance, publish, receive commands) and record it.
 
     ``commands`` maps a step index to (torque, frame_id, stamp): received at that step.
@@ -31,8 +32,11 @@ def record_like_the_node(path: Path, scene_name: str, steps: int, publish_every:
     sim = Simulator(scene, method=method)
     torque_topic = "/rigid_rot_sim/torque"
     with RunRecorder(
-        path, scene_text=scene_path.read_text(), scene_file=str(scene_path),
-        parameters={"integrator": scene.integrator.method}, events_topic="/rigid_rot_sim/sim_events",
+        path,
+        scene_text=scene_path.read_text(),
+        scene_file=str(scene_path),
+        parameters={"integrator": scene.integrator.method},
+        events_topic="/rigid_rot_sim/sim_events",
         integrator={"method": sim.method, "dt": sim.dt, "options": sim.options},
         sim_seconds=(lambda: sim.t) if log_time == "sim" else None,
     ) as run:
@@ -65,7 +69,7 @@ def record_like_the_node(path: Path, scene_name: str, steps: int, publish_every:
 
 COMMANDS = {
     0: ((0.0, 0.0, 0.002), "base_link", 0.0),
-    100: ((0.001, -0.002, 0.0), "odom", 0.1234567),   # future stamp: effective later
+    100: ((0.001, -0.002, 0.0), "odom", 0.1234567),  # future stamp: effective later
     300: ((0.0, 0.003, 0.0), "base_link", 0.0),
     450: ((0.0, 0.0, 0.0), "base_link", 0.0),
 }

@@ -42,8 +42,9 @@ finally:
 
 
 def start_recording(path):
-    process = subprocess.Popen([sys.executable, "-c", RECORDING_SCRIPT, str(path)],
-                               stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    process = subprocess.Popen(
+        [sys.executable, "-c", RECORDING_SCRIPT, str(path)], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True
+    )
     assert process.stdout.readline().strip() == "recording", process.stderr.read()
     return process
 

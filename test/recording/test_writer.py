@@ -10,8 +10,8 @@ from mcap.reader import make_reader
 from rosbags.highlevel import AnyReader
 
 from rigid_rot_sim.recording import definitions
-from rigid_rot_sim.recording.reader import BagReader, scan
 from rigid_rot_sim.recording.bag_metadata import DURABILITY_TRANSIENT_LOCAL, QosProfile
+from rigid_rot_sim.recording.reader import BagReader, scan
 from rigid_rot_sim.recording.writer import Recorder, RecorderError
 
 rclpy_serialization = pytest.importorskip("rclpy.serialization")
@@ -22,8 +22,10 @@ TF = {
         {
             "header": {"stamp": {"sec": 1, "nanosec": 0}, "frame_id": "world"},
             "child_frame_id": "body",
-            "transform": {"translation": {"x": 0.0, "y": 0.0, "z": 0.0},
-                          "rotation": {"x": 0.0, "y": 0.0, "z": 0.0, "w": 1.0}},
+            "transform": {
+                "translation": {"x": 0.0, "y": 0.0, "z": 0.0},
+                "rotation": {"x": 0.0, "y": 0.0, "z": 0.0, "w": 1.0},
+            },
         }
     ]
 }
@@ -33,10 +35,14 @@ def record_synthetic(path: Path, n: int = 300) -> None:
     with Recorder(path) as recorder:
         recorder.add_topic("/sim/torque", "geometry_msgs/msg/WrenchStamped")
         recorder.add_topic("/tf", "tf2_msgs/msg/TFMessage", QosProfile(depth=100))
-        recorder.add_topic("/sim/mass_properties", "geometry_msgs/msg/InertiaStamped",
-                           QosProfile(depth=1, durability=DURABILITY_TRANSIENT_LOCAL))
+        recorder.add_topic(
+            "/sim/mass_properties",
+            "geometry_msgs/msg/InertiaStamped",
+            QosProfile(depth=1, durability=DURABILITY_TRANSIENT_LOCAL),
+        )
         recorder.add_metadata("scene", {"file": "free_tumble.yaml", "yaml": "body: {}\n"})
         from geometry_msgs.msg import InertiaStamped
+
         recorder.write_message("/sim/mass_properties", InertiaStamped(), 1_000)
         for i in range(n):
             msg = WrenchStamped()
@@ -78,8 +84,11 @@ def test_summary_statistics_indexes_and_channel_metadata_are_present(tmp_path):
         assert summary.chunk_indexes and all(ci.message_index_offsets for ci in summary.chunk_indexes)
         assert {m.name for m in summary.metadata_indexes} == {"scene", "rosbag2"}
         schemas = {s.name: s for s in summary.schemas.values()}
-        assert set(schemas) == {"geometry_msgs/msg/WrenchStamped", "tf2_msgs/msg/TFMessage",
-                                "geometry_msgs/msg/InertiaStamped"}
+        assert set(schemas) == {
+            "geometry_msgs/msg/WrenchStamped",
+            "tf2_msgs/msg/TFMessage",
+            "geometry_msgs/msg/InertiaStamped",
+        }
         assert all(s.encoding == "ros2msg" for s in schemas.values())
         for channel in summary.channels.values():
             assert channel.message_encoding == "cdr"
@@ -153,8 +162,9 @@ def test_write_error_mid_run_stops_recording_and_the_caller_keeps_running(tmp_pa
     import sys
 
     path = tmp_path / "limited.mcap"
-    done = subprocess.run([sys.executable, "-c", FILE_SIZE_LIMIT_SCRIPT, str(path)],
-                          capture_output=True, text=True, timeout=60)
+    done = subprocess.run(
+        [sys.executable, "-c", FILE_SIZE_LIMIT_SCRIPT, str(path)], capture_output=True, text=True, timeout=60
+    )
     assert done.returncode == 0, done.stderr
     count_line, message = done.stdout.strip().splitlines()[:2]
     n_errors, steps = map(int, count_line.split())
@@ -198,9 +208,20 @@ def test_rosbag2_metadata_has_every_key_the_version_8_decoder_reads(tmp_path):
     path = tmp_path / "keys.mcap"
     record_synthetic(path, n=3)
     bag = yaml.safe_load(BagReader(path).metadata["rosbag2"]["serialized_metadata"])
-    assert {"version", "storage_identifier", "duration", "starting_time", "message_count",
-            "topics_with_message_count", "relative_file_paths", "compression_format",
-            "compression_mode", "files", "custom_data", "ros_distro"} <= set(bag)
+    assert {
+        "version",
+        "storage_identifier",
+        "duration",
+        "starting_time",
+        "message_count",
+        "topics_with_message_count",
+        "relative_file_paths",
+        "compression_format",
+        "compression_mode",
+        "files",
+        "custom_data",
+        "ros_distro",
+    } <= set(bag)
     assert bag["storage_identifier"] == "mcap" and bag["relative_file_paths"] == ["keys.mcap"]
     assert set(bag["duration"]) == {"nanoseconds"} and set(bag["starting_time"]) == {"nanoseconds_since_epoch"}
     (file_info,) = bag["files"]

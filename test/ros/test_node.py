@@ -18,10 +18,10 @@ from builtin_interfaces.msg import Duration  # noqa: E402
 from geometry_msgs.msg import Vector3, WrenchStamped  # noqa: E402
 from rclpy.executors import SingleThreadedExecutor  # noqa: E402
 from rclpy.parameter import Parameter  # noqa: E402
-from rigid_rot_msgs.msg import RejectedCommand, RigidBodyState  # noqa: E402
-from rigid_rot_msgs.srv import ApplyTorque, ComputeInertia, SetState, Step  # noqa: E402
 from std_srvs.srv import SetBool, Trigger  # noqa: E402
 
+from rigid_rot_msgs.msg import RejectedCommand, RigidBodyState  # noqa: E402
+from rigid_rot_msgs.srv import ApplyTorque, ComputeInertia, SetState, Step  # noqa: E402
 from rigid_rot_sim.ros.node import RigidRotSimNode  # noqa: E402
 from rigid_rot_sim.ros.qos import COMMAND_QOS, REJECTED_QOS, STATE_QOS  # noqa: E402
 
@@ -116,8 +116,15 @@ def test_torque_free_scene_builds_no_subscription_and_picks_exact(harness):
     assert not any("torque" in topic for topic in subscriptions)
     assert h.spin_until(lambda: "/rigid_rot_sim/state" in h.published_topics())
     topics = h.published_topics()
-    for topic in ("/rigid_rot_sim/state", "/rigid_rot_sim/orientation", "/rigid_rot_sim/angular_velocity",
-                  "/rigid_rot_sim/angular_momentum", "/rigid_rot_sim/mass_properties", "/rigid_rot_sim/rejected", "/clock"):
+    for topic in (
+        "/rigid_rot_sim/state",
+        "/rigid_rot_sim/orientation",
+        "/rigid_rot_sim/angular_velocity",
+        "/rigid_rot_sim/angular_momentum",
+        "/rigid_rot_sim/mass_properties",
+        "/rigid_rot_sim/rejected",
+        "/clock",
+    ):
         assert topic in topics, topic
     assert "/rigid_rot_sim/top_state" not in topics
     assert h.node.run.recording is None
@@ -167,7 +174,9 @@ def test_params_file_overrides_the_scene(context, tmp_path):
     )
     node = RigidRotSimNode(context=context, cli_args=["--ros-args", "--params-file", str(params)])
     try:
-        assert node.run.sim.method == "rk4" and node.run.sim.dt == 0.0005 and node.run.driver.pacer.real_time_factor == 0.0
+        assert (
+            node.run.sim.method == "rk4" and node.run.sim.dt == 0.0005 and node.run.driver.pacer.real_time_factor == 0.0
+        )
         assert node.run.driver.schedule.periods["state"] == 10 and "clock" not in node.run.driver.schedule.periods
     finally:
         node.destroy_node()
@@ -263,16 +272,19 @@ def test_rep105_frames_by_default_on_every_output_and_recorded_tf(harness, tmp_p
     from geometry_msgs.msg import InertiaStamped, QuaternionStamped, Vector3Stamped
     from tf2_msgs.msg import TFMessage
 
-    from rigid_rot_sim.ros.qos import LATCHED_QOS, TF_QOS
     from rigid_rot_sim.recording.reader import BagReader
+    from rigid_rot_sim.ros.qos import LATCHED_QOS, TF_QOS
 
     bag = tmp_path / "frames.mcap"
     h = harness("free_tumble", real_time_factor=0.0, duration=0.2, record_path=str(bag))
     got: dict[str, list] = {}
-    for topic, msg_type, qos in (("state", RigidBodyState, STATE_QOS), ("orientation", QuaternionStamped, STATE_QOS),
-                                 ("angular_velocity", Vector3Stamped, STATE_QOS),
-                                 ("angular_momentum", Vector3Stamped, STATE_QOS),
-                                 ("mass_properties", InertiaStamped, LATCHED_QOS)):
+    for topic, msg_type, qos in (
+        ("state", RigidBodyState, STATE_QOS),
+        ("orientation", QuaternionStamped, STATE_QOS),
+        ("angular_velocity", Vector3Stamped, STATE_QOS),
+        ("angular_momentum", Vector3Stamped, STATE_QOS),
+        ("mass_properties", InertiaStamped, LATCHED_QOS),
+    ):
         got[topic] = []
         h.client.create_subscription(msg_type, f"/rigid_rot_sim/{topic}", got[topic].append, qos)
     got["tf"] = []
@@ -288,11 +300,15 @@ def test_rep105_frames_by_default_on_every_output_and_recorded_tf(harness, tmp_p
     assert got["mass_properties"][0].header.frame_id == "base_link"
     transform = got["tf"][0].transforms[0]
     assert (transform.header.frame_id, transform.child_frame_id) == ("odom", "base_link")
-    assert "/rigid_rot_sim/imu" not in h.published_topics() and "imu" not in h.node.run.outputs.publishers  # not asked for
+    assert (
+        "/rigid_rot_sim/imu" not in h.published_topics() and "imu" not in h.node.run.outputs.publishers
+    )  # not asked for
     h.node.run.sim.pause(False)
     assert h.spin_until(lambda: h.node.finished)
     h.node.run.recording.close()
-    frames = {(m.transforms[0].header.frame_id, m.transforms[0].child_frame_id) for _, m in BagReader(bag).decoded(["/tf"])}
+    frames = {
+        (m.transforms[0].header.frame_id, m.transforms[0].child_frame_id) for _, m in BagReader(bag).decoded(["/tf"])
+    }
     assert frames == {("odom", "base_link")}
 
 
@@ -300,37 +316,65 @@ def test_frame_parameters_override_the_scene_and_bad_names_are_refused(context):
     scene = str(SCENES / "heavy_top.yaml")  # frames {world: world, body: top} in the file
     node = RigidRotSimNode(context=context, parameter_overrides=[Parameter("scene", value=scene)])
     try:
-        assert (node.run.scene.frames.world, node.run.scene.frames.body) == ("world", "top") and node.run.sim.frames == node.run.scene.frames
+        assert (node.run.scene.frames.world, node.run.scene.frames.body) == (
+            "world",
+            "top",
+        ) and node.run.sim.frames == node.run.scene.frames
     finally:
         node.destroy_node()
-    node = RigidRotSimNode(context=context, parameter_overrides=[
-        Parameter("scene", value=scene), Parameter("world_frame", value="map"), Parameter("body_frame", value="base_link")])
+    node = RigidRotSimNode(
+        context=context,
+        parameter_overrides=[
+            Parameter("scene", value=scene),
+            Parameter("world_frame", value="map"),
+            Parameter("body_frame", value="base_link"),
+        ],
+    )
     try:
-        assert (node.run.scene.frames.world, node.run.scene.frames.body) == ("map", "base_link") and node.run.sim.frames == node.run.scene.frames
+        assert (node.run.scene.frames.world, node.run.scene.frames.body) == (
+            "map",
+            "base_link",
+        ) and node.run.sim.frames == node.run.scene.frames
     finally:
         node.destroy_node()
     for world, body, reason in (("map", "map", "must differ"), ("", "base_link", "non-empty")):
         with pytest.raises(ValueError, match=reason):
-            RigidRotSimNode(context=context, parameter_overrides=[
-                Parameter("scene", value=scene), Parameter("world_frame", value=world), Parameter("body_frame", value=body)])
+            RigidRotSimNode(
+                context=context,
+                parameter_overrides=[
+                    Parameter("scene", value=scene),
+                    Parameter("world_frame", value=world),
+                    Parameter("body_frame", value=body),
+                ],
+            )
     with pytest.raises(ValueError, match="record_log_time must be one of sim, wall"):
-        RigidRotSimNode(context=context, parameter_overrides=[Parameter("scene", value=scene),
-                                                              Parameter("record_log_time", value="gps")])
+        RigidRotSimNode(
+            context=context,
+            parameter_overrides=[Parameter("scene", value=scene), Parameter("record_log_time", value="gps")],
+        )
 
 
 def test_recording_without_the_mcap_package_is_disabled_with_a_message(context, tmp_path, monkeypatch, capfd):
     import sys
 
-    for name in [n for n in sys.modules if n in ("mcap", "rigid_rot_sim.ros.recording")
-                 or n.startswith(("mcap.", "rigid_rot_sim.recording."))]:
+    for name in [
+        n
+        for n in sys.modules
+        if n in ("mcap", "rigid_rot_sim.ros.recording") or n.startswith(("mcap.", "rigid_rot_sim.recording."))
+    ]:
         parent, _, child = name.rpartition(".")
         if parent in sys.modules and hasattr(sys.modules[parent], child):
             # undone after the test: the package attribute points at the original module again
             monkeypatch.setattr(sys.modules[parent], child, sys.modules[name])
         monkeypatch.delitem(sys.modules, name)
     monkeypatch.setitem(sys.modules, "mcap", None)  # import mcap -> ImportError, as when it is not installed
-    node = RigidRotSimNode(context=context, parameter_overrides=[
-        Parameter("scene", value=str(SCENES / "free_tumble.yaml")), Parameter("record_path", value=str(tmp_path / "x.mcap"))])
+    node = RigidRotSimNode(
+        context=context,
+        parameter_overrides=[
+            Parameter("scene", value=str(SCENES / "free_tumble.yaml")),
+            Parameter("record_path", value=str(tmp_path / "x.mcap")),
+        ],
+    )
     try:
         assert node.run.recording is None and node.run.sim is not None and not (tmp_path / "x.mcap").exists()
         assert "recording disabled: mcap is not installed" in capfd.readouterr().err
@@ -346,8 +390,11 @@ def test_without_simulation_interfaces_the_node_runs_without_the_standard_servic
 
     monkeypatch.setattr(simulation_services, "AVAILABLE", False)  # as on an install without the package
     # a node name of its own, so that no other test's node can answer the graph query below
-    node = RigidRotSimNode(context=context, cli_args=["--ros-args", "-r", "__node:=rigid_rot_plain"],
-                           parameter_overrides=[Parameter("scene", value=str(SCENES / "free_tumble.yaml"))])
+    node = RigidRotSimNode(
+        context=context,
+        cli_args=["--ros-args", "-r", "__node:=rigid_rot_plain"],
+        parameter_overrides=[Parameter("scene", value=str(SCENES / "free_tumble.yaml"))],
+    )
     probe = rclpy.create_node("probe_plain", context=context)
     executor = SingleThreadedExecutor(context=context)
     executor.add_node(node)
@@ -362,7 +409,9 @@ def test_without_simulation_interfaces_the_node_runs_without_the_standard_servic
         while not {"/rigid_rot_plain/step", "/rigid_rot_plain/apply_torque"} <= set(services()):
             assert time.monotonic() < deadline, services()
             executor.spin_once(timeout_sec=0.05)
-        assert not any(name.endswith(("_simulation", "_simulation_state", "_simulator_features")) for name in services())
+        assert not any(
+            name.endswith(("_simulation", "_simulation_state", "_simulator_features")) for name in services()
+        )
     finally:
         executor.shutdown()
         probe.destroy_node()
@@ -372,7 +421,8 @@ def test_without_simulation_interfaces_the_node_runs_without_the_standard_servic
 def test_integer_values_for_double_parameters_are_stored_as_floats(context, tmp_path):
     """`ros2 param set /rigid_rot_sim real_time_factor 2` (an INTEGER over SetParameters), `-p x:=1`
     and a params file with integers all give DOUBLE parameters."""
-    from rcl_interfaces.msg import Parameter as ParameterMsg, ParameterType, ParameterValue
+    from rcl_interfaces.msg import Parameter as ParameterMsg
+    from rcl_interfaces.msg import ParameterType, ParameterValue
     from rcl_interfaces.srv import SetParameters
 
     params = tmp_path / "params.yaml"
@@ -390,24 +440,36 @@ def test_integer_values_for_double_parameters_are_stored_as_floats(context, tmp_
         for name, value in (("real_time_factor", 0.0), ("duration", 5.0), ("rates.state", 50.0), ("dt", 1.0)):
             stored = node.get_parameter(name)
             assert stored.type_ == Parameter.Type.DOUBLE and stored.value == value and isinstance(stored.value, float)
-        assert node.run.driver.pacer.real_time_factor == 0.0 and node.run.driver.duration == 5.0 and node.run.sim.dt == 1.0
+        assert (
+            node.run.driver.pacer.real_time_factor == 0.0 and node.run.driver.duration == 5.0 and node.run.sim.dt == 1.0
+        )
         # what `ros2 param set` sends: the SetParameters service of the node, an INTEGER value
         service = client.create_client(SetParameters, "/rigid_rot_sim/set_parameters")
         assert service.wait_for_service(timeout_sec=30.0)
-        request = SetParameters.Request(parameters=[
-            ParameterMsg(name="real_time_factor", value=ParameterValue(type=ParameterType.PARAMETER_INTEGER, integer_value=2))
-        ])
+        request = SetParameters.Request(
+            parameters=[
+                ParameterMsg(
+                    name="real_time_factor", value=ParameterValue(type=ParameterType.PARAMETER_INTEGER, integer_value=2)
+                )
+            ]
+        )
         future = service.call_async(request)
         executor.spin_until_future_complete(future, timeout_sec=30.0)
         (result,) = future.result().results
         assert result.successful, result.reason
         stored = node.get_parameter("real_time_factor")
-        assert stored.type_ == Parameter.Type.DOUBLE and stored.value == 2.0 and node.run.driver.pacer.real_time_factor == 2.0
+        assert (
+            stored.type_ == Parameter.Type.DOUBLE
+            and stored.value == 2.0
+            and node.run.driver.pacer.real_time_factor == 2.0
+        )
         # the ranges still apply, and other types are still refused
         assert not node.set_parameters([Parameter("real_time_factor", value=5000)])[0].successful
         assert not node.set_parameters([Parameter("dt", value="fast")])[0].successful
         assert node.set_parameters([Parameter("rates.state", value=20)])[0].successful
-        assert node.get_parameter("rates.state").value == 20.0 and node.run.driver.schedule.periods["state"] == 1  # dt = 1 s
+        assert (
+            node.get_parameter("rates.state").value == 20.0 and node.run.driver.schedule.periods["state"] == 1
+        )  # dt = 1 s
     finally:
         executor.shutdown()
         client.destroy_node()
@@ -439,8 +501,13 @@ def test_output_qos_from_parameters_and_scene(harness, context, tmp_path):
     finally:
         node.destroy_node()
     with pytest.raises(ValueError, match="qos.reliability must be one of reliable, best_effort, got 'sometimes'"):
-        RigidRotSimNode(context=context, parameter_overrides=[
-            Parameter("scene", value="free_tumble"), Parameter("qos.reliability", value="sometimes")])
+        RigidRotSimNode(
+            context=context,
+            parameter_overrides=[
+                Parameter("scene", value="free_tumble"),
+                Parameter("qos.reliability", value="sometimes"),
+            ],
+        )
 
 
 def test_tf_static_carries_the_principal_frame_only_where_it_differs(harness):
@@ -455,8 +522,9 @@ def test_tf_static_carries_the_principal_frame_only_where_it_differs(harness):
     t = transform.transform.translation
     assert [t.x, t.y, t.z] == list(h.node.run.scene.body.center_of_mass)
     # by topic, not by node name: a node of an earlier test with the same name may linger in the graph
-    assert h.spin_until(lambda: any(info.node_name == "rigid_rot_sim"
-                                    for info in h.client.get_publishers_info_by_topic("/tf_static")))
+    assert h.spin_until(
+        lambda: any(info.node_name == "rigid_rot_sim" for info in h.client.get_publishers_info_by_topic("/tf_static"))
+    )
     h.close()
     top = harness("heavy_top", real_time_factor=0.0)  # principal moments about the pivot, centre of mass on z
     (shifted,) = top.node.run.outputs.static_transforms
@@ -467,17 +535,24 @@ def test_tf_static_carries_the_principal_frame_only_where_it_differs(harness):
     assert plain.node.run.outputs.static_transforms == [] and "tf_static" not in plain.node.run.outputs.publishers
 
 
-@pytest.mark.parametrize("override,expected", [
-    ("qos.depth:=2.5", "'qos.depth' to '2.5' of type 'DOUBLE', expecting type 'INTEGER'"),
-    ("qos.reliability:=sometimes", "qos.reliability must be one of reliable, best_effort, got 'sometimes'"),
-    ("dt:=fast", "'dt' to 'fast' of type 'STRING', expecting type 'DOUBLE'"),
-])
+@pytest.mark.parametrize(
+    "override,expected",
+    [
+        ("qos.depth:=2.5", "'qos.depth' to '2.5' of type 'DOUBLE', expecting type 'INTEGER'"),
+        ("qos.reliability:=sometimes", "qos.reliability must be one of reliable, best_effort, got 'sometimes'"),
+        ("dt:=fast", "'dt' to 'fast' of type 'STRING', expecting type 'DOUBLE'"),
+    ],
+)
 def test_bad_start_up_parameters_exit_2_with_one_line(override, expected):
     import subprocess
     import sys
 
-    done = subprocess.run([sys.executable, "-m", "rigid_rot_sim.ros.node", "--ros-args", "-p", "scene:=free_tumble",
-                           "-p", override], capture_output=True, text=True, timeout=120)
+    done = subprocess.run(
+        [sys.executable, "-m", "rigid_rot_sim.ros.node", "--ros-args", "-p", "scene:=free_tumble", "-p", override],
+        capture_output=True,
+        text=True,
+        timeout=120,
+    )
     output = (done.stdout + done.stderr).strip()
     assert done.returncode == 2 and expected in output and "Traceback" not in output, output
 

@@ -5,23 +5,26 @@ import math
 import time
 
 import pytest
-
 import rclpy  # noqa: E402  (test/conftest.py has set the session's ROS_DOMAIN_ID)
 from builtin_interfaces.msg import Duration  # noqa: E402
 from geometry_msgs.msg import Point, Vector3, WrenchStamped  # noqa: E402
 from rclpy.clock_type import ClockType  # noqa: E402
 from rclpy.parameter import Parameter  # noqa: E402
+from std_srvs.srv import SetBool, Trigger  # noqa: E402
+from test_node import SCENES, Harness, context, harness  # noqa: E402,F401  (fixtures)
+
 from rigid_rot_msgs.msg import RejectedCommand, RigidBodyState  # noqa: E402
 from rigid_rot_msgs.srv import ApplyTorque, ComputeInertia, SetState, Step  # noqa: E402
-from std_srvs.srv import SetBool, Trigger  # noqa: E402
-
 from rigid_rot_sim.core import limits  # noqa: E402
 from rigid_rot_sim.ros.node import RigidRotSimNode  # noqa: E402
 from rigid_rot_sim.ros.qos import COMMAND_QOS, REJECTED_QOS, STATE_QOS  # noqa: E402
-from test_node import SCENES, Harness, context, harness  # noqa: E402,F401  (fixtures)
 
 STATE_FIELDS = (
-    "angular_velocity_body", "angular_velocity_world", "angular_momentum_body", "angular_momentum_world", "torque_body",
+    "angular_velocity_body",
+    "angular_velocity_world",
+    "angular_momentum_body",
+    "angular_momentum_world",
+    "torque_body",
 )
 
 
@@ -123,7 +126,10 @@ def test_use_sim_time_is_accepted_with_a_warning_and_the_timer_stays_steady(cont
     assert h.spin_until(lambda: h.node.run.sim.step_index > k + 20)  # the steady-clock timer still paces the run
     node = RigidRotSimNode(
         context=context,
-        parameter_overrides=[Parameter("scene", value=str(SCENES / "free_tumble.yaml")), Parameter("use_sim_time", value=True)],
+        parameter_overrides=[
+            Parameter("scene", value=str(SCENES / "free_tumble.yaml")),
+            Parameter("use_sim_time", value=True),
+        ],
     )
     try:
         assert node.get_parameter("use_sim_time").value is True

@@ -16,11 +16,14 @@ def test_a_publish_interrupted_on_the_wire_is_already_recorded(tmp_path):
     context = rclpy.Context()
     rclpy.init(context=context)
     try:
-        node = RigidRotSimNode(context=context, parameter_overrides=[
-            rclpy.parameter.Parameter("scene", value="free_tumble"),
-            rclpy.parameter.Parameter("record_path", value=str(bag)),
-            rclpy.parameter.Parameter("real_time_factor", value=0.0),
-        ])
+        node = RigidRotSimNode(
+            context=context,
+            parameter_overrides=[
+                rclpy.parameter.Parameter("scene", value="free_tumble"),
+                rclpy.parameter.Parameter("record_path", value=str(bag)),
+                rclpy.parameter.Parameter("real_time_factor", value=0.0),
+            ],
+        )
         state_publisher = node.run.outputs.publishers["state"]
         sent = []
 

@@ -15,13 +15,20 @@ from rigid_rot_sim.scene.scene import OUTPUT_NAMES, load_scene  # noqa: E402
 from rigid_rot_sim.share import resolve_scene  # noqa: E402
 
 PACKAGE = Path(parameters.__file__).resolve().parents[1]
-TYPES = {bool: ParameterType.PARAMETER_BOOL, int: ParameterType.PARAMETER_INTEGER,
-         float: ParameterType.PARAMETER_DOUBLE, str: ParameterType.PARAMETER_STRING}
+TYPES = {
+    bool: ParameterType.PARAMETER_BOOL,
+    int: ParameterType.PARAMETER_INTEGER,
+    float: ParameterType.PARAMETER_DOUBLE,
+    str: ParameterType.PARAMETER_STRING,
+}
 #: String literals in ros/ and cli/ equal to a parameter name that are NOT that parameter:
 #: the recording's integrator record and event kind, and argparse's names for the CLI options.
 NOT_PARAMETERS = {
-    ("ros/recording.py", "dt"), ("ros/recording.py", "integrator"),
-    ("cli/run.py", "scene"), ("cli/run.py", "real_time_factor"), ("cli/run.py", "record_log_time"),
+    ("ros/recording.py", "dt"),
+    ("ros/recording.py", "integrator"),
+    ("cli/run.py", "scene"),
+    ("cli/run.py", "real_time_factor"),
+    ("cli/run.py", "record_log_time"),
 }
 
 

@@ -7,13 +7,12 @@ import yaml
 
 pytest.importorskip("rigid_rot_msgs.msg")
 from rigid_rot_msgs.msg import RigidBodyState  # noqa: E402
-
 from rigid_rot_sim import conversions  # noqa: E402
-from rigid_rot_sim.scene.scene import load_scene  # noqa: E402
-from rigid_rot_sim.run.simulator import Simulator  # noqa: E402
-from rigid_rot_sim.ros.recording import NodeRecording  # noqa: E402
 from rigid_rot_sim.recording.resim import resimulate  # noqa: E402
 from rigid_rot_sim.recording.session import RunRecorder  # noqa: E402
+from rigid_rot_sim.ros.recording import NodeRecording  # noqa: E402
+from rigid_rot_sim.run.simulator import Simulator  # noqa: E402
+from rigid_rot_sim.scene.scene import load_scene  # noqa: E402
 
 SCENE = Path(__file__).resolve().parents[2] / "config" / "scenes" / "torque_driven.yaml"
 
@@ -21,9 +20,14 @@ SCENE = Path(__file__).resolve().parents[2] / "config" / "scenes" / "torque_driv
 def test_every_event_kind_is_recorded_and_replayed_bit_for_bit(tmp_path):
     bag = tmp_path / "events.mcap"
     sim = Simulator(load_scene(SCENE), method="rk4")
-    run = RunRecorder(bag, scene_text=SCENE.read_text(), scene_file=str(SCENE), parameters={},
-                      integrator={"method": sim.method, "dt": sim.dt, "options": sim.options},
-                      events_topic="/rigid_rot_sim/sim_events")
+    run = RunRecorder(
+        bag,
+        scene_text=SCENE.read_text(),
+        scene_file=str(SCENE),
+        parameters={},
+        integrator={"method": sim.method, "dt": sim.dt, "options": sim.options},
+        events_topic="/rigid_rot_sim/sim_events",
+    )
     run.add_topic("/rigid_rot_sim/state", RigidBodyState, role="state")
     sim.add_observer(NodeRecording(run, sim, None))
 
@@ -33,10 +37,10 @@ def test_every_event_kind_is_recorded_and_replayed_bit_for_bit(tmp_path):
     script = [
         (50, lambda: sim.receive_torque("~/torque", (0.0, 0.0, 0.003), "base_link", 0.0)),
         (120, lambda: sim.apply_torque((0.001, 0.0, 0.0), "odom", 0.05)),
-        (200, lambda: sim.set_integrator(dt=0.0005)),           # a dt change mid-run
+        (200, lambda: sim.set_integrator(dt=0.0005)),  # a dt change mid-run
         (300, lambda: sim.set_state((0.1, 0.0, 0.0, 1.0), (0.2, -0.1, 0.3))),
         (400, lambda: sim.submit_torque("~/torque", (0.0, 0.002, 0.0), "body", sim.t + 0.01)),
-        (500, lambda: sim.set_integrator(method="lie_rk4")),   # an integrator change mid-run
+        (500, lambda: sim.set_integrator(method="lie_rk4")),  # an integrator change mid-run
         (600, sim.reset),
         (650, lambda: sim.receive_torque("~/torque", (0.001, 0.001, 0.0), "odom", 0.0)),
     ]
@@ -60,13 +64,19 @@ def test_every_event_kind_is_recorded_and_replayed_bit_for_bit(tmp_path):
 
 
 def test_rejected_commands_record_no_event(tmp_path):
-    from rigid_rot_sim.run.simulator import CommandRejected
     from rigid_rot_sim.recording.reader import BagReader
+    from rigid_rot_sim.run.simulator import CommandRejected
 
     bag = tmp_path / "rejected.mcap"
     sim = Simulator(load_scene(SCENE), method="rk4")
-    with RunRecorder(bag, scene_text=SCENE.read_text(), scene_file=str(SCENE), parameters={},
-                     integrator={"method": sim.method, "dt": sim.dt}, events_topic="/e/sim_events") as run:
+    with RunRecorder(
+        bag,
+        scene_text=SCENE.read_text(),
+        scene_file=str(SCENE),
+        parameters={},
+        integrator={"method": sim.method, "dt": sim.dt},
+        events_topic="/e/sim_events",
+    ) as run:
         sim.add_observer(NodeRecording(run, sim, None))
         with pytest.raises(CommandRejected):
             sim.receive_torque("~/torque", (float("inf"), 0.0, 0.0), "base_link", 0.0)
@@ -84,7 +94,7 @@ def test_tf_and_the_latched_tf_static_are_recorded_as_published(tmp_path):
     assert reader.topics["/tf_static"].type_name == "tf2_msgs/msg/TFMessage"
     (offered,) = yaml.safe_load(reader.topics["/tf_static"].channel_metadata["offered_qos_profiles"])
     assert offered["durability"] == 1 and offered["depth"] == 1  # transient local, as published
-    (_, static), = reader.decoded(["/tf_static"])
+    ((_, static),) = reader.decoded(["/tf_static"])
     assert static.transforms[0].child_frame_id == "base_link_principal"
 
 
@@ -97,12 +107,15 @@ def _record_half_a_second(bag: Path, check_node=None) -> None:
     context = rclpy.Context()
     rclpy.init(context=context)
     try:
-        node = RigidRotSimNode(context=context, parameter_overrides=[
-            rclpy.parameter.Parameter("scene", value="from_point_masses"),
-            rclpy.parameter.Parameter("record_path", value=str(bag)),
-            rclpy.parameter.Parameter("real_time_factor", value=0.0),
-            rclpy.parameter.Parameter("duration", value=0.5),
-        ])
+        node = RigidRotSimNode(
+            context=context,
+            parameter_overrides=[
+                rclpy.parameter.Parameter("scene", value="from_point_masses"),
+                rclpy.parameter.Parameter("record_path", value=str(bag)),
+                rclpy.parameter.Parameter("real_time_factor", value=0.0),
+                rclpy.parameter.Parameter("duration", value=0.5),
+            ],
+        )
         if check_node is not None:
             check_node(node)
         while not node.finished:

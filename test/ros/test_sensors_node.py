@@ -15,17 +15,17 @@ from rigid_rot_sim.recording.resim import resimulate
 from rigid_rot_sim.ros.node import RigidRotSimNode
 
 NEA = (2e-5, 2e-5, 1.5e-4)
-SCENE = f"""
+SCENE = """
 name: sensed
-body: {{principal_moments: [1.0, 1.5, 2.0]}}
-initial: {{angular_velocity: [0.3, -0.2, 0.5]}}
-integrator: {{method: rk4, dt: 0.001}}
+body: {principal_moments: [1.0, 1.5, 2.0]}
+initial: {angular_velocity: [0.3, -0.2, 0.5]}
+integrator: {method: rk4, dt: 0.001}
 duration: 0.3
-outputs: {{state: 100, angular_velocity: 0, angular_momentum: 0, orientation: 0, tf: 0, clock: 0}}
+outputs: {state: 100, angular_velocity: 0, angular_momentum: 0, orientation: 0, tf: 0, clock: 0}
 sensors:
-  gyro: {{rate: 200, angle_random_walk: 1.0e-3, bias_instability: 1.0e-4, bias_correlation_time: 5.0,
-          turn_on_bias_sigma: 1.0e-3, scale_factor: [1.0e-4, -1.0e-4, 0.0], quantization: 1.0e-6, saturation: 8.0}}
-  star_tracker: {{rate: 20, noise_equivalent_angle: [2.0e-5, 2.0e-5, 1.5e-4]}}
+  gyro: {rate: 200, angle_random_walk: 1.0e-3, bias_instability: 1.0e-4, bias_correlation_time: 5.0,
+          turn_on_bias_sigma: 1.0e-3, scale_factor: [1.0e-4, -1.0e-4, 0.0], quantization: 1.0e-6, saturation: 8.0}
+  star_tracker: {rate: 20, noise_equivalent_angle: [2.0e-5, 2.0e-5, 1.5e-4]}
 """
 IMU, STAR_TRACKER, STATE = "/rigid_rot_sim/imu", "/rigid_rot_sim/star_tracker", "/rigid_rot_sim/state"
 
@@ -39,9 +39,14 @@ def recorded(tmp_path):
     context = rclpy.Context()
     rclpy.init(context=context)
     try:
-        node = RigidRotSimNode(context=context, parameter_overrides=[
-            Parameter("scene", value=str(scene)), Parameter("record_path", value=str(bag)),
-            Parameter("real_time_factor", value=0.0)])
+        node = RigidRotSimNode(
+            context=context,
+            parameter_overrides=[
+                Parameter("scene", value=str(scene)),
+                Parameter("record_path", value=str(bag)),
+                Parameter("real_time_factor", value=0.0),
+            ],
+        )
         sensors = node.run.outputs.sensors
         assert sensors.names == ["gyro", "star_tracker"] and set(node.run.outputs.publishers) >= {"imu", "star_tracker"}
         for _ in range(2):
@@ -91,8 +96,9 @@ def test_readings_are_noisy_ground_truth_exact_star_tracker_covariance_is_nea_sq
         assert imu.orientation_covariance[0] == -1.0  # a gyro gives no attitude
         # one reading's noise: N^2 rate + sigma_b^2, sigma_b = 0.664 B / 0.61736 (docs/sensors.md)
         variance = (1e-3) ** 2 * 200 + (0.664 * 1e-4 / 0.61736) ** 2
-        np.testing.assert_allclose(np.array(imu.angular_velocity_covariance).reshape(3, 3), np.eye(3) * variance,
-                                   rtol=1e-4)
+        np.testing.assert_allclose(
+            np.array(imu.angular_velocity_covariance).reshape(3, 3), np.eye(3) * variance, rtol=1e-4
+        )
         assert imu.header.frame_id == "base_link"
     errors = np.array(errors)
     assert len(errors) > 20 and np.all(errors != 0.0)

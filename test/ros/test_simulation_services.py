@@ -28,5 +28,10 @@ def test_the_installed_package_gives_the_standard_values():
     assert (s.STOPPED, s.PLAYING, s.PAUSED, s.QUITTING) == (0, 1, 2, 3)
     request = ResetSimulation.Request
     if hasattr(request, "SCOPE_TIME"):
-        assert (request.SCOPE_DEFAULT, request.SCOPE_TIME, request.SCOPE_STATE, request.SCOPE_SPAWNED,
-                request.SCOPE_ALL) == (s.SCOPE_DEFAULT, s.SCOPE_TIME, s.SCOPE_STATE, s.SCOPE_SPAWNED, s.SCOPE_ALL)
+        assert (
+            request.SCOPE_DEFAULT,
+            request.SCOPE_TIME,
+            request.SCOPE_STATE,
+            request.SCOPE_SPAWNED,
+            request.SCOPE_ALL,
+        ) == (s.SCOPE_DEFAULT, s.SCOPE_TIME, s.SCOPE_STATE, s.SCOPE_SPAWNED, s.SCOPE_ALL)

@@ -46,8 +46,13 @@ class _Accepted(SimulationObserver):
 def _state_bits(state) -> bytes:
     """Every float of a RigidBodyState and its stamp, as their exact bits."""
     fields = [state.orientation.x, state.orientation.y, state.orientation.z, state.orientation.w]
-    for vector in (state.angular_velocity_body, state.angular_velocity_world, state.angular_momentum_body,
-                   state.angular_momentum_world, state.torque_body):
+    for vector in (
+        state.angular_velocity_body,
+        state.angular_velocity_world,
+        state.angular_momentum_body,
+        state.angular_momentum_world,
+        state.torque_body,
+    ):
         fields += [vector.x, vector.y, vector.z]
     fields += [state.kinetic_energy, state.energy_drift, state.angular_momentum_drift]
     stamp = struct.pack("<iI", state.header.stamp.sec, state.header.stamp.nanosec)
@@ -96,8 +101,9 @@ def test_step_with_torque_equals_a_topic_command_then_step_bit_for_bit(harness, 
 
     atomic = harness("torque_driven", **spin)
     atomic.node.run.sim.set_state([0.1, -0.2, 0.3, 0.9], [0.4, -1.1, 2.3])
-    response = atomic.call(StepWithTorque, "step_with_torque",
-                           StepWithTorque.Request(torque=torque, frame_id=frame, steps=300))
+    response = atomic.call(
+        StepWithTorque, "step_with_torque", StepWithTorque.Request(torque=torque, frame_id=frame, steps=300)
+    )
     response = _complete(atomic, response, 0, 300)
     assert atomic.node.run.sim.step_index == topic_steps == 300
     assert _state_bits(response.state) == _state_bits(by_topic.state)
@@ -151,8 +157,14 @@ def test_simulate_steps_action_feedback_per_step_cancel_and_refusal(harness, mon
 
     published = []  # every feedback the server sends (DDS may drop older ones: keep-last depth 10)
     send = ServerGoalHandle.publish_feedback
-    monkeypatch.setattr(ServerGoalHandle, "publish_feedback", lambda self, message: (
-        published.append((message.completed_steps, message.remaining_steps)), send(self, message))[1])
+    monkeypatch.setattr(
+        ServerGoalHandle,
+        "publish_feedback",
+        lambda self, message: (
+            published.append((message.completed_steps, message.remaining_steps)),
+            send(self, message),
+        )[1],
+    )
     h = harness("free_tumble", real_time_factor=0.0, start_paused=True)
     features = h.call(GetSimulatorFeatures, "get_simulator_features", GetSimulatorFeatures.Request()).features
     assert SimulatorFeatures.STEP_SIMULATION_ACTION in features.features
@@ -198,8 +210,11 @@ def test_a_run_driven_by_step_with_torque_resimulates_bit_exact(harness, tmp_pat
     h = harness("torque_driven", real_time_factor=0.0, start_paused=True, integrator="rk4", record_path=str(bag))
     h.node.run.sim.set_state([0.1, -0.2, 0.3, 0.9], [0.4, -1.1, 2.3])
     start = 0
-    for torque, frame, steps in [(Vector3(z=0.004), "base_link", 200), (Vector3(x=-0.002, y=0.003), "odom", 150),
-                                 (Vector3(y=0.001), "", 77)]:
+    for torque, frame, steps in [
+        (Vector3(z=0.004), "base_link", 200),
+        (Vector3(x=-0.002, y=0.003), "odom", 150),
+        (Vector3(y=0.001), "", 77),
+    ]:
         request = StepWithTorque.Request(torque=torque, frame_id=frame, steps=steps)
         _complete(h, h.call(StepWithTorque, "step_with_torque", request), start, steps)
         start += steps

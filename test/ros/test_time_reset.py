@@ -19,8 +19,12 @@ def test_reset_publishes_the_backward_clock(context):  # noqa: F811
     try:
         clocks = []
         # a best-effort subscriber, as rclpy's TimeSource and tf2 listeners' nodes use
-        h.client.create_subscription(Clock, "/clock", lambda m: clocks.append(_seconds(m.clock)),
-                                     QoSProfile(depth=1, reliability=ReliabilityPolicy.BEST_EFFORT))
+        h.client.create_subscription(
+            Clock,
+            "/clock",
+            lambda m: clocks.append(_seconds(m.clock)),
+            QoSProfile(depth=1, reliability=ReliabilityPolicy.BEST_EFFORT),
+        )
         assert h.spin_until(lambda: clocks and clocks[-1] > 0.5)
         assert h.call(SetBool, "pause", SetBool.Request(data=True)).success  # so that t = 0 is the last /clock
         before = h.node.run.sim.t

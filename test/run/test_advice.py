@@ -109,8 +109,6 @@ def test_bad_input_names_argument(args, name):
         advice.choose_integrator(*args)
 
 
-
-
 def test_implicit_midpoint_warns_beyond_measured_newton_limit():
     moments, spin = (1.0, 2.0, 3.0), 10.0
     nu = advice.gyroscopic_frequency(moments, spin)

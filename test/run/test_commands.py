@@ -159,8 +159,14 @@ def test_admit_resolves_the_frame_and_the_effective_time():
     [
         (lambda c: c.admit("hold_in", [0, math.nan, 0], "", None, None), "non-finite torque.y = nan"),
         (lambda c: c.admit("hold_in", [0, 0, 1e30], "", None, None), "torque.z = 1e+30 beyond the limit"),
-        (lambda c: c.admit("hold_in", [0, 0, 1], "odom", None, None), "neither the body frame 'base' nor the world frame 'map'"),
-        (lambda c: c.admit("hold_in", [0, 0, 1], "map", None, None), "frame 'map' given, but this input is expressed in 'base'"),
+        (
+            lambda c: c.admit("hold_in", [0, 0, 1], "odom", None, None),
+            "neither the body frame 'base' nor the world frame 'map'",
+        ),
+        (
+            lambda c: c.admit("hold_in", [0, 0, 1], "map", None, None),
+            "frame 'map' given, but this input is expressed in 'base'",
+        ),
         (lambda c: c.admit("timeout_in", [0, 0, 1], "", None, None), "empty header.frame_id"),
         (lambda c: c.admit("hold_in", [0, 0, 1], "x" * 1000, None, None), "frame_id of 1000 characters"),
         (lambda c: c.admit("hold_in", [0, 0, 1], "", None, [1, 0, 0]), "non-zero force"),

@@ -39,9 +39,11 @@ def test_one_bit_anywhere_changes_the_digest():
 
 
 def test_the_simulator_digest_covers_every_step_whatever_the_chunks():
-    scene = parse_scene_text("body: {principal_moments: [1.0, 2.0, 3.0]}\n"
-                             "initial: {angular_velocity: [0.1, 1.0, 0.01]}\n"
-                             "integrator: {method: rk4, dt: 0.01}\n")
+    scene = parse_scene_text(
+        "body: {principal_moments: [1.0, 2.0, 3.0]}\n"
+        "initial: {angular_velocity: [0.1, 1.0, 0.01]}\n"
+        "integrator: {method: rk4, dt: 0.01}\n"
+    )
     one, chunked = Simulator(scene), Simulator(scene)
     steps = []
     for _ in range(10):

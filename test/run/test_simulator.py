@@ -9,8 +9,8 @@ import pytest
 
 from rigid_rot_sim.core.integrators import METHODS
 from rigid_rot_sim.run.observer import SimulationObserver
-from rigid_rot_sim.scene.scene import load_scene, parse_scene_text
 from rigid_rot_sim.run.simulator import APPLY_TORQUE_SOURCE, CommandRejected, Simulator
+from rigid_rot_sim.scene.scene import load_scene, parse_scene_text
 
 SCENES = Path(__file__).resolve().parents[2] / "config" / "scenes"
 
@@ -37,10 +37,14 @@ def omega(sim):
 
 
 def states_equal(a, b) -> bool:
-    return all(
-        np.array_equal(getattr(a, name), getattr(b, name))
-        for name in ("orientation", "angular_velocity_body", "angular_momentum_world", "torque_body")
-    ) and a.t == b.t and a.kinetic_energy == b.kinetic_energy
+    return (
+        all(
+            np.array_equal(getattr(a, name), getattr(b, name))
+            for name in ("orientation", "angular_velocity_body", "angular_momentum_world", "torque_body")
+        )
+        and a.t == b.t
+        and a.kinetic_energy == b.kinetic_energy
+    )
 
 
 def test_time_is_step_count_times_dt():
@@ -112,7 +116,13 @@ def test_wall_clock_stamp_is_rejected():
     [
         ("hold_in", [0.0, math.nan, 0.0], "", None, "non-finite torque.y = nan"),
         ("hold_in", [0.0, 0.0, math.inf], "", None, "non-finite torque.z = inf"),
-        ("hold_in", [0.0, 0.0, 1.0], "map", None, "frame 'map' is neither the body frame 'body' nor the world frame 'world'"),
+        (
+            "hold_in",
+            [0.0, 0.0, 1.0],
+            "map",
+            None,
+            "frame 'map' is neither the body frame 'body' nor the world frame 'world'",
+        ),
         ("hold_in", [0.0, 0.0, 1.0], "world", None, "frame 'world' given, but this input is expressed in 'body'"),
         ("timeout_in", [0.0, 0.0, 1.0], "", None, "empty header.frame_id"),
         ("hold_in", [0.0, 0.0, 1.0], "body", [0.0, 1.0, 0.0], "non-zero force"),
@@ -150,8 +160,12 @@ def test_inputs_add_up():
 def _run_sequence(sim, chunks, feed):
     """Drive ``sim`` through 300 steps in the given chunk pattern, feeding commands at fixed steps."""
     snapshots = {}
-    schedule = {0: ("hold_in", [0.1, 0.0, 0.3], "", 0.0), 50: ("timeout_in", [0.0, -0.2, 0.0], "body", 0.75),
-                120: ("world_in", [0.05, 0.0, 0.0], "world", 0.0), 200: ("hold_in", [0.0, 0.0, 0.0], "", 2.5)}
+    schedule = {
+        0: ("hold_in", [0.1, 0.0, 0.3], "", 0.0),
+        50: ("timeout_in", [0.0, -0.2, 0.0], "body", 0.75),
+        120: ("world_in", [0.05, 0.0, 0.0], "world", 0.0),
+        200: ("hold_in", [0.0, 0.0, 0.0], "", 2.5),
+    }
     while sim.step_index < 300:
         k = sim.step_index
         if k in schedule:
@@ -340,7 +354,15 @@ def test_changing_dt_keeps_time_continuous_and_recomputes_pending_steps():
     assert sim.method == "rk4"
 
 
-@pytest.mark.parametrize("scene,expected", [("free_tumble", "exact"), ("torque_driven", "taylor"), ("heavy_top", "exact_split"), ("spacecraft_slew", "taylor")])
+@pytest.mark.parametrize(
+    "scene,expected",
+    [
+        ("free_tumble", "exact"),
+        ("torque_driven", "taylor"),
+        ("heavy_top", "exact_split"),
+        ("spacecraft_slew", "taylor"),
+    ],
+)
 def test_auto_choice_follows_the_scene(scene, expected):
     assert Simulator(load_scene(SCENES / f"{scene}.yaml")).method == expected
 
@@ -445,12 +467,20 @@ def test_each_outside_change_is_reported_once_with_the_step_before_it():
     assert sim.observers == [observer]
     exercise(sim)
     assert observer.names() == [
-        "command_accepted", "command_accepted", "command_accepted", "torque_applied",
-        "integrator_changed", "state_set", "integrator_changed", "reset",
+        "command_accepted",
+        "command_accepted",
+        "command_accepted",
+        "torque_applied",
+        "integrator_changed",
+        "state_set",
+        "integrator_changed",
+        "reset",
     ]
     held, stamped, submitted, applied, finer, state, dop853, reset = observer.calls
     assert held[1] == 3 and held[2].source == "hold_in" and held[2].torque == (0.0, 0.0, 0.2)
-    assert held[2].frame == "body" and held[2].receipt_time == held[2].effective_time == 3 * 0.01 and held[2].stamp is None
+    assert (
+        held[2].frame == "body" and held[2].receipt_time == held[2].effective_time == 3 * 0.01 and held[2].stamp is None
+    )
     assert stamped[1] == 5 and stamped[2].frame == "world" and stamped[2].stamp == stamped[2].effective_time
     assert stamped[2].step == 9 and stamped[2].receipt_time == 5 * 0.01  # 0.034 s ahead: the 4th boundary after
     assert submitted[1] == 5 and submitted[2].receipt_time is None and submitted[2].effective_time == 5 * 0.01 + 0.02
@@ -474,8 +504,14 @@ def test_the_reports_re_simulate_the_run_bit_for_bit():
         replay.advance_to(step)
         if name == "command_accepted":
             (command,) = args
-            replay.submit_torque(command.source, command.torque, command.frame, command.effective_time,
-                                 receipt_time=command.receipt_time, stamp=command.stamp)
+            replay.submit_torque(
+                command.source,
+                command.torque,
+                command.frame,
+                command.effective_time,
+                receipt_time=command.receipt_time,
+                stamp=command.stamp,
+            )
         elif name == "torque_applied":
             (command,) = args
             replay.apply_torque(command.torque, command.frame, command.duration, effective_time=command.effective_time)

@@ -10,8 +10,8 @@ import numpy as np
 import pytest
 
 from rigid_rot_sim.core import limits
-from rigid_rot_sim.scene.scene import CommandSettings, load_scene, parse_scene_text
 from rigid_rot_sim.run.simulator import CommandRejected, Simulator
+from rigid_rot_sim.scene.scene import CommandSettings, load_scene, parse_scene_text
 
 SCENES = Path(__file__).resolve().parents[2] / "config" / "scenes"
 

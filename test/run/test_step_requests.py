@@ -21,8 +21,10 @@ integrator: {method: rk4, dt: 0.001}
 
 def _bits(sim: Simulator) -> bytes:
     snap = sim.snapshot()
-    return b"".join(np.asarray(a, dtype=float).tobytes() for a in (
-        [snap.t], snap.orientation, snap.angular_velocity_body, snap.angular_momentum_world, snap.torque_body))
+    return b"".join(
+        np.asarray(a, dtype=float).tobytes()
+        for a in ([snap.t], snap.orientation, snap.angular_velocity_body, snap.angular_momentum_world, snap.torque_body)
+    )
 
 
 def _paused(method: str = "rk4") -> Simulator:

@@ -121,8 +121,13 @@ def test_reset_restores_the_wheel_speeds_and_drops_wheel_commands():
         (("method: rk4", "method: taylor"), "cannot run wheels"),
         (("inertia: 0.5", "inertia: 20.0"), "positive definite"),
         (("initial_speed: 10", "initial_speed: 2000"), "exceeds max_speed"),
-        (("body: {principal_moments: [10, 12, 15]}",
-          "body: {principal_moments: [10, 12, 15]}\ngravity: {mass: 1.0, center_of_mass: [0, 0, 0.1]}"), "heavy top"),
+        (
+            (
+                "body: {principal_moments: [10, 12, 15]}",
+                "body: {principal_moments: [10, 12, 15]}\ngravity: {mass: 1.0, center_of_mass: [0, 0, 0.1]}",
+            ),
+            "heavy top",
+        ),
     ],
 )
 def test_invalid_spacecraft_scenes_are_refused_with_the_key(change, message):

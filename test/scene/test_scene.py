@@ -81,8 +81,12 @@ def test_defaults_of_a_minimal_scene():
 def test_output_qos_is_read_and_validated():
     scene = parse(MINIMAL + "qos: {reliability: best_effort, depth: 500}\n", "q.yaml")
     assert (scene.qos.reliability, scene.qos.depth) == ("best_effort", 500)
-    for bad, key in (("{reliability: sometimes}", "qos.reliability"), ("{depth: 0}", "qos.depth"),
-                     ("{depth: 2.5}", "qos.depth"), ("{history: all}", "qos")):
+    for bad, key in (
+        ("{reliability: sometimes}", "qos.reliability"),
+        ("{depth: 0}", "qos.depth"),
+        ("{depth: 2.5}", "qos.depth"),
+        ("{history: all}", "qos"),
+    ):
         with pytest.raises(SceneError, match=f"q.yaml: {key}"):
             parse(MINIMAL + f"qos: {bad}\n", "q.yaml")
 
@@ -93,25 +97,59 @@ def test_output_qos_is_read_and_validated():
         ("name: x\n", "bad.yaml: body: missing"),
         (MINIMAL + "colour: red\n", "bad.yaml: colour: unknown key"),
         ("body: {principal_moments: [1.0, 2.0, -3.0]}\n", "bad.yaml: body.principal_moments[2] must be > 0"),
-        ("body: {principal_moments: [1.0, 2.0, 4.0]}\n", "bad.yaml: body.principal_moments = [1.0, 2.0, 4.0] violates the triangle"),
+        (
+            "body: {principal_moments: [1.0, 2.0, 4.0]}\n",
+            "bad.yaml: body.principal_moments = [1.0, 2.0, 4.0] violates the triangle",
+        ),
         ("body: {principal_moments: [1.0, 2.0]}\n", "bad.yaml: body.principal_moments: must be a list of 3 numbers"),
-        ("body: {principal_moments: [1, 2, 3], inertia_tensor: [[1,0,0],[0,1,0],[0,0,1]]}\n", "bad.yaml: body: must give exactly one"),
-        ("body: {inertia_tensor: [[2, 0.5, 0], [0, 2, 0], [0, 0, 2]]}\n", "bad.yaml: body.inertia_tensor must be symmetric"),
+        (
+            "body: {principal_moments: [1, 2, 3], inertia_tensor: [[1,0,0],[0,1,0],[0,0,1]]}\n",
+            "bad.yaml: body: must give exactly one",
+        ),
+        (
+            "body: {inertia_tensor: [[2, 0.5, 0], [0, 2, 0], [0, 0, 2]]}\n",
+            "bad.yaml: body.inertia_tensor must be symmetric",
+        ),
         (
             "body: {point_masses: {masses: [1, 1], positions: [[1, 0, 0], [-1, 0, 0]]}}\n",
             "bad.yaml: body.point_masses: the masses are collinear",
         ),
-        ("body: {point_masses: {masses: [1, -1], positions: [[1, 0, 0], [0, 1, 0]]}}\n", "bad.yaml: body.point_masses: masses[1]"),
-        (MINIMAL + "initial: {orientation: [0, 0, 0, 0]}\n", "bad.yaml: initial.orientation must be a non-zero quaternion"),
-        (MINIMAL + "initial: {orientation: [0, 0, 0, 1], euler_zxz: [0, 0, 0]}\n", "bad.yaml: initial: give orientation or euler_zxz"),
-        (MINIMAL + "initial: {angular_velocity: [0, .nan, 0]}\n", "bad.yaml: initial.angular_velocity[1]: must be finite"),
-        (MINIMAL + "torque_inputs: [{topic: a, frame: map}]\n", "bad.yaml: torque_inputs[0].frame: must be one of body, world, header"),
-        (MINIMAL + "torque_inputs: [{topic: a, type: Twist}]\n", "bad.yaml: torque_inputs[0].type: must be one of WrenchStamped"),
-        (MINIMAL + "torque_inputs: [{topic: a, hold: {timeout: 0}}]\n", "bad.yaml: torque_inputs[0].hold.timeout: must be > 0"),
-        (MINIMAL + "torque_inputs: [{topic: a, hold: forever}]\n", "bad.yaml: torque_inputs[0].hold: must be 'hold'"),
-        (MINIMAL + "torque_inputs: [{topic: a}, {topic: a}]\n", "bad.yaml: torque_inputs[1].topic: topic 'a' is listed twice"),
         (
-            MINIMAL + "torque_inputs: [{schedule: {segments: [{start: 1, torque: [0, 0, 1]}, {start: 1, torque: [0, 0, 0]}]}}]\n",
+            "body: {point_masses: {masses: [1, -1], positions: [[1, 0, 0], [0, 1, 0]]}}\n",
+            "bad.yaml: body.point_masses: masses[1]",
+        ),
+        (
+            MINIMAL + "initial: {orientation: [0, 0, 0, 0]}\n",
+            "bad.yaml: initial.orientation must be a non-zero quaternion",
+        ),
+        (
+            MINIMAL + "initial: {orientation: [0, 0, 0, 1], euler_zxz: [0, 0, 0]}\n",
+            "bad.yaml: initial: give orientation or euler_zxz",
+        ),
+        (
+            MINIMAL + "initial: {angular_velocity: [0, .nan, 0]}\n",
+            "bad.yaml: initial.angular_velocity[1]: must be finite",
+        ),
+        (
+            MINIMAL + "torque_inputs: [{topic: a, frame: map}]\n",
+            "bad.yaml: torque_inputs[0].frame: must be one of body, world, header",
+        ),
+        (
+            MINIMAL + "torque_inputs: [{topic: a, type: Twist}]\n",
+            "bad.yaml: torque_inputs[0].type: must be one of WrenchStamped",
+        ),
+        (
+            MINIMAL + "torque_inputs: [{topic: a, hold: {timeout: 0}}]\n",
+            "bad.yaml: torque_inputs[0].hold.timeout: must be > 0",
+        ),
+        (MINIMAL + "torque_inputs: [{topic: a, hold: forever}]\n", "bad.yaml: torque_inputs[0].hold: must be 'hold'"),
+        (
+            MINIMAL + "torque_inputs: [{topic: a}, {topic: a}]\n",
+            "bad.yaml: torque_inputs[1].topic: topic 'a' is listed twice",
+        ),
+        (
+            MINIMAL
+            + "torque_inputs: [{schedule: {segments: [{start: 1, torque: [0, 0, 1]}, {start: 1, torque: [0, 0, 0]}]}}]\n",
             "bad.yaml: torque_inputs[0].schedule.segments[1].start: must be later",
         ),
         (
@@ -127,7 +165,10 @@ def test_output_qos_is_read_and_validated():
             MINIMAL + "gravity: {mass: 1.0, center_of_mass: [0, 0, 1]}\ntorque_inputs: [{topic: a}]\n",
             "bad.yaml: torque_inputs: not supported in a gravity",
         ),
-        (MINIMAL + "integrator: {method: magic}\n", "bad.yaml: integrator.method: unknown integrator 'magic'; valid methods:"),
+        (
+            MINIMAL + "integrator: {method: magic}\n",
+            "bad.yaml: integrator.method: unknown integrator 'magic'; valid methods:",
+        ),
         (MINIMAL + "integrator: {dt: -0.1}\n", "bad.yaml: integrator.dt: must be >= 1e-07"),
         (MINIMAL + "duration: 0\n", "bad.yaml: duration: must be > 0"),
         (MINIMAL + "real_time_factor: -1\n", "bad.yaml: real_time_factor: must be >= 0"),
@@ -156,18 +197,23 @@ def _axis_quaternion(axis, angle):
 def _hamilton(p, q):
     px, py, pz, pw = p
     qx, qy, qz, qw = q
-    return np.array([
-        pw * qx + px * qw + py * qz - pz * qy,
-        pw * qy - px * qz + py * qw + pz * qx,
-        pw * qz + px * qy - py * qx + pz * qw,
-        pw * qw - px * qx - py * qy - pz * qz,
-    ])
+    return np.array(
+        [
+            pw * qx + px * qw + py * qz - pz * qy,
+            pw * qy - px * qz + py * qw + pz * qx,
+            pw * qz + px * qy - py * qx + pz * qw,
+            pw * qw - px * qx - py * qy - pz * qz,
+        ]
+    )
 
 
 def test_euler_zxz_is_intrinsic_z_x_z():
     phi, theta, psi = 0.3, 1.1, -2.0
     scene = parse(MINIMAL + f"initial: {{euler_zxz: [{phi}, {theta}, {psi}]}}\n")
-    expected = _hamilton(_hamilton(_axis_quaternion((0, 0, 1), phi), _axis_quaternion((1, 0, 0), theta)), _axis_quaternion((0, 0, 1), psi))
+    expected = _hamilton(
+        _hamilton(_axis_quaternion((0, 0, 1), phi), _axis_quaternion((1, 0, 0), theta)),
+        _axis_quaternion((0, 0, 1), psi),
+    )
     q = np.array(scene.initial.orientation)
     assert min(np.max(np.abs(q - expected)), np.max(np.abs(q + expected))) < 1e-15
 
@@ -211,7 +257,12 @@ def test_topic_inputs_schedules_and_options_are_kept():
     scene = parse(text)
     first, second = scene.topic_inputs
     assert (first.topic, first.message_type, first.frame, first.timeout) == ("/cmd", "Vector3Stamped", "world", 0.25)
-    assert (second.topic, second.message_type, second.frame, second.timeout) == ("~/torque", "WrenchStamped", "body", None)
+    assert (second.topic, second.message_type, second.frame, second.timeout) == (
+        "~/torque",
+        "WrenchStamped",
+        "body",
+        None,
+    )
     (schedule,) = scene.schedules
     assert schedule.frame == "world"
     assert schedule.change_steps(0.002) == (250, 1000)

@@ -18,7 +18,9 @@ ALIAS_BOMB = "a: &a [x, x, x, x, x, x, x, x, x]\n" + "".join(
     f"*{chr(97 + i)}, *{chr(97 + i)}, *{chr(97 + i)}, *{chr(97 + i)}]\n"
     for i in range(9)
 )
-STRING_BOMB = 'a: &a "' + "x" * 1000 + '"\nb: &b [*a, *a, *a, *a, *a, *a, *a, *a, *a, *a]\nc: [*b, *b, *b, *b, *b, *b, *b, *b]\n'
+STRING_BOMB = (
+    'a: &a "' + "x" * 1000 + '"\nb: &b [*a, *a, *a, *a, *a, *a, *a, *a, *a, *a]\nc: [*b, *b, *b, *b, *b, *b, *b, *b]\n'
+)
 
 
 def refused(text: str, source: str = "bad.yaml") -> str:
@@ -41,7 +43,10 @@ def refused(text: str, source: str = "bad.yaml") -> str:
         (MINIMAL + "description: " + "[" * 5000 + "]" * 5000 + "\n", "nested deeper than 16 levels"),
         (MINIMAL + "x:\n" + "".join("  " * i + f"k{i}:\n" for i in range(1, 40)), "nested deeper than 16 levels"),
         # OverflowError before: integers too large for a float
-        ("body: {principal_moments: [1, 2, " + "9" * 400 + "]}\n", "body.principal_moments[2]: must be a number of magnitude"),
+        (
+            "body: {principal_moments: [1, 2, " + "9" * 400 + "]}\n",
+            "body.principal_moments[2]: must be a number of magnitude",
+        ),
         (MINIMAL + "real_time_factor: " + "1" * 330 + "\n", "real_time_factor: must be a number of magnitude"),
         # rclpy InvalidParameterValueException before: outside the parameters' ranges
         (MINIMAL + "integrator: {dt: 20}\n", "integrator.dt: must be <= 10"),
@@ -59,14 +64,26 @@ def refused(text: str, source: str = "bad.yaml") -> str:
         (MINIMAL + ALIAS_BOMB, "YAML aliases (*a) are not accepted"),
         (MINIMAL + STRING_BOMB, "YAML aliases (*a) are not accepted"),
         # magnitudes that overflowed in numpy (RuntimeWarning) before
-        ("body: {principal_moments: [1.0e+300, 1.0e+300, 1.0e+300]}\n", "body.principal_moments[0]: must be of magnitude <= 1e+12"),
-        ("body: {inertia_tensor: [[1.0e+300, 0, 0], [0, 1, 0], [0, 0, 1]]}\n", "body.inertia_tensor[0][0]: must be of magnitude"),
-        (MINIMAL + "initial: {angular_velocity: [1.0e+200, 0, 0]}\n", "initial.angular_velocity[0]: must be of magnitude"),
+        (
+            "body: {principal_moments: [1.0e+300, 1.0e+300, 1.0e+300]}\n",
+            "body.principal_moments[0]: must be of magnitude <= 1e+12",
+        ),
+        (
+            "body: {inertia_tensor: [[1.0e+300, 0, 0], [0, 1, 0], [0, 0, 1]]}\n",
+            "body.inertia_tensor[0][0]: must be of magnitude",
+        ),
+        (
+            MINIMAL + "initial: {angular_velocity: [1.0e+200, 0, 0]}\n",
+            "initial.angular_velocity[0]: must be of magnitude",
+        ),
         # new settings
         (MINIMAL + "commands: {max_torque: -1}\n", "commands.max_torque: must be >= 0"),
         (MINIMAL + "commands: {qos_depth: 0}\n", "commands.qos_depth: must be an integer from 1 to 10000"),
         (MINIMAL + "frames: {world: 'a b', body: body}\n", "frames.world: frame name 'a b' contains whitespace"),
-        (MINIMAL + "integrator: {method: taylor, options: {tol: " + "9" * 400 + "}}\n", "integrator.options.tol: must be a number"),
+        (
+            MINIMAL + "integrator: {method: taylor, options: {tol: " + "9" * 400 + "}}\n",
+            "integrator.options.tol: must be a number",
+        ),
     ],
 )
 def test_scene_beyond_a_limit_is_one_short_scene_error(text, expected):
@@ -77,9 +94,13 @@ def test_scene_beyond_a_limit_is_one_short_scene_error(text, expected):
 def test_many_point_masses_are_refused_quickly():
     # 25 s to load before, hanging Ctrl-C; now the list limit stops it at the parser's events
     n = 100_000
-    text = "body:\n  point_masses:\n    masses: [" + ", ".join(["1"] * n) + "]\n    positions: [" + ", ".join(
-        ["[1, 2, 3]"] * n
-    ) + "]\n"
+    text = (
+        "body:\n  point_masses:\n    masses: ["
+        + ", ".join(["1"] * n)
+        + "]\n    positions: ["
+        + ", ".join(["[1, 2, 3]"] * n)
+        + "]\n"
+    )
     message = refused(text)
     assert f"more than the limit of {limits.MAX_SCENE_BYTES} bytes" in message, message
 
@@ -147,8 +168,22 @@ def test_topic_name_rules_agree_with_rclpy():
     def rclpy_validate(name):
         validate_full_topic_name(expand_topic_name(name, "rigid_rot_sim", "/"))
 
-    names = ["~/torque", "torque", "/abs/torque", "~/tor-que", "9torque", "/a//b", "a/", "~torque", "a b", "/9a",
-             "~/a//b", "x/9", "_a/_b", "~/"]
+    names = [
+        "~/torque",
+        "torque",
+        "/abs/torque",
+        "~/tor-que",
+        "9torque",
+        "/a//b",
+        "a/",
+        "~torque",
+        "a b",
+        "/9a",
+        "~/a//b",
+        "x/9",
+        "_a/_b",
+        "~/",
+    ]
     for name in names:
         try:
             check_topic_name(name)

@@ -97,20 +97,41 @@ def test_shipped_scenes_name_the_schema_for_editors(path):
     [
         ("", "s.yaml: must be a mapping, got None"),
         ("body: 5\n", "s.yaml: body: must be a mapping, got 5"),
-        ("body: {}\n", "s.yaml: body: must give exactly one of principal_moments, inertia_tensor, point_masses, got none"),
-        ("body: {inertia_tensor: [[1, 0, 0], [0, 1, 0]]}\n", "s.yaml: body.inertia_tensor: must be a list of 3 lists of 3 numbers"),
-        ("body: {inertia_tensor: [[1, 0, 0], [0, 1, 0], [0, 0, .inf]]}\n", "s.yaml: body.inertia_tensor[2][2]: must be finite, got inf"),
+        (
+            "body: {}\n",
+            "s.yaml: body: must give exactly one of principal_moments, inertia_tensor, point_masses, got none",
+        ),
+        (
+            "body: {inertia_tensor: [[1, 0, 0], [0, 1, 0]]}\n",
+            "s.yaml: body.inertia_tensor: must be a list of 3 lists of 3 numbers",
+        ),
+        (
+            "body: {inertia_tensor: [[1, 0, 0], [0, 1, 0], [0, 0, .inf]]}\n",
+            "s.yaml: body.inertia_tensor[2][2]: must be finite, got inf",
+        ),
         ("body: {point_masses: {masses: [1]}}\n", "s.yaml: body.point_masses: needs positions"),
         (MINIMAL + "torque_inputs: [{type: Twist}]\n", "s.yaml: torque_inputs[0]: needs topic"),
-        (MINIMAL + "torque_inputs: [{topic: a, hold: 5}]\n", "s.yaml: torque_inputs[0].hold: must be 'hold' or {timeout: seconds}, got 5"),
+        (
+            MINIMAL + "torque_inputs: [{topic: a, hold: 5}]\n",
+            "s.yaml: torque_inputs[0].hold: must be 'hold' or {timeout: seconds}, got 5",
+        ),
         (MINIMAL + "gravity: 5\n", "s.yaml: gravity: must be null, 'none' or a mapping, got 5"),
-        (MINIMAL + "gravity: {acceleration: -1, mass: 1, center_of_mass: [0, 0, 1]}\n", "s.yaml: gravity.acceleration: must be > 0, got -1"),
+        (
+            MINIMAL + "gravity: {acceleration: -1, mass: 1, center_of_mass: [0, 0, 1]}\n",
+            "s.yaml: gravity.acceleration: must be > 0, got -1",
+        ),
         (MINIMAL + "qos: {depth: 2.0}\n", "s.yaml: qos.depth: must be an integer from 1 to 100000, got 2.0"),
         (MINIMAL + "duration: abc\n", "s.yaml: duration: must be a number or null, got 'abc'"),
         (MINIMAL + "recording: '  '\n", "s.yaml: recording: must be a non-empty string or null, got '  '"),
         (MINIMAL + "description: '" + "x" * 5000 + "'\n", "s.yaml: description: longer than 4096 characters (limit)"),
-        (MINIMAL + "integrator: {options: {tol: [1]}}\n", "s.yaml: integrator.options.tol: must be a number, a non-empty string"),
-        (MINIMAL + "torque_inputs: [" + ", ".join(["{topic: a}"] * 40) + "]\n", "s.yaml: torque_inputs: more than 32 items (limit)"),
+        (
+            MINIMAL + "integrator: {options: {tol: [1]}}\n",
+            "s.yaml: integrator.options.tol: must be a number, a non-empty string",
+        ),
+        (
+            MINIMAL + "torque_inputs: [" + ", ".join(["{topic: a}"] * 40) + "]\n",
+            "s.yaml: torque_inputs: more than 32 items (limit)",
+        ),
         (MINIMAL + "1: 2\n", "s.yaml: 1: unknown key (allowed: name, description, frames, body,"),
     ],
 )
@@ -122,8 +143,10 @@ def test_schema_errors_are_one_line_naming_the_key(text, expected):
 
 
 def test_null_sections_mean_their_defaults():
-    scene = parse_scene_text(MINIMAL + "frames: ~\ninitial: ~\ntorque_inputs: ~\ngravity: none\nintegrator: ~\nduration: ~\n"
-                             "outputs: ~\nqos: ~\nrecording: ~\ncommands: ~\ndescription: ~\n")
+    scene = parse_scene_text(
+        MINIMAL + "frames: ~\ninitial: ~\ntorque_inputs: ~\ngravity: none\nintegrator: ~\nduration: ~\n"
+        "outputs: ~\nqos: ~\nrecording: ~\ncommands: ~\ndescription: ~\n"
+    )
     default = parse_scene_text(MINIMAL)
     assert dataclasses.replace(scene, text="") == dataclasses.replace(default, text="")
 

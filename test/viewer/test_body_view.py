@@ -38,8 +38,11 @@ def test_box_moments_equal_the_bodys(moments):
 def test_without_a_mass_the_box_has_the_proportions_and_the_nominal_size():
     sides = equivalent_box((1.0, 2.0, 2.5))
     assert sides.max() == pytest.approx(NOMINAL_BOX_SIZE)
-    np.testing.assert_allclose(sides / sides.max(), equivalent_box((1.0, 2.0, 2.5), 3.0) / equivalent_box(
-        (1.0, 2.0, 2.5), 3.0).max(), rtol=1e-12)
+    np.testing.assert_allclose(
+        sides / sides.max(),
+        equivalent_box((1.0, 2.0, 2.5), 3.0) / equivalent_box((1.0, 2.0, 2.5), 3.0).max(),
+        rtol=1e-12,
+    )
 
 
 def test_markers_box_is_the_bodys_inertia_in_the_principal_frame():
@@ -51,8 +54,9 @@ def test_markers_box_is_the_bodys_inertia_in_the_principal_frame():
     sides = np.array([box.scale.x, box.scale.y, box.scale.z])
     from scipy.spatial.transform import Rotation
 
-    rotation = Rotation.from_quat([box.pose.orientation.x, box.pose.orientation.y, box.pose.orientation.z,
-                                   box.pose.orientation.w]).as_matrix()
+    rotation = Rotation.from_quat(
+        [box.pose.orientation.x, box.pose.orientation.y, box.pose.orientation.z, box.pose.orientation.w]
+    ).as_matrix()
     # the box's inertia tensor, turned into the body frame, is the body's tensor about its centre of mass
     np.testing.assert_allclose(rotation @ np.diag(_box_moments(sides, mass)) @ rotation.T, tensor, atol=1e-12)
     np.testing.assert_allclose([box.pose.position.x, box.pose.position.y, box.pose.position.z], com, atol=1e-15)
@@ -69,8 +73,9 @@ def test_scene_entity_arrow_points_along_the_vector():
     view = body_view(scene)
     moments, _ = principal_frame(scene.mass_properties_about_com()[2])
     assert max(view.box_sides) == pytest.approx(NOMINAL_BOX_SIZE)  # no mass given
-    update = foxglove.BodyScene(view, "odom", "base_link").update(1_500_000_000, np.array([0.0, -2.0, 0.0]),
-                                                                  np.array([-1.0, 0.0, 0.0]))
+    update = foxglove.BodyScene(view, "odom", "base_link").update(
+        1_500_000_000, np.array([0.0, -2.0, 0.0]), np.array([-1.0, 0.0, 0.0])
+    )
     body, momentum = update["entities"]
     assert body["timestamp"] == {"sec": 1, "nsec": 500_000_000}
     arrow = momentum["arrows"][0]
@@ -82,8 +87,15 @@ def test_scene_entity_arrow_points_along_the_vector():
     assert arrow["shaft_length"] + arrow["head_length"] == pytest.approx(view.momentum_scale)
 
 
-@pytest.mark.parametrize("text, expected", [("8765", ("127.0.0.1", 8765)), ("0.0.0.0:9000", ("0.0.0.0", 9000)),
-                                            ("localhost:0", ("localhost", 0)), ("[::1]:8765", ("::1", 8765))])
+@pytest.mark.parametrize(
+    "text, expected",
+    [
+        ("8765", ("127.0.0.1", 8765)),
+        ("0.0.0.0:9000", ("0.0.0.0", 9000)),
+        ("localhost:0", ("localhost", 0)),
+        ("[::1]:8765", ("::1", 8765)),
+    ],
+)
 def test_addresses(text, expected):
     assert foxglove.parse_address(text) == expected
 

@@ -78,9 +78,7 @@ class DOP853Integrator(Integrator):
         self._torque, _ = float_torque(self.torque)
         self._moments = tuple(self.moments.tolist())
         y0 = np.concatenate((self.q, self.omega))
-        return DOP853(
-            self._rhs, self.t, y0, math.inf, rtol=self.rtol, atol=self.atol, max_step=self.max_step
-        )
+        return DOP853(self._rhs, self.t, y0, math.inf, rtol=self.rtol, atol=self.atol, max_step=self.max_step)
 
     def advance(self, n: int) -> None:
         """Take ``n`` steps of ``dt``: one pass of the solver to the last of them."""

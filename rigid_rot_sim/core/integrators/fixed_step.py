@@ -29,8 +29,9 @@ The status codes are in ``status.py`` and the torque evaluation (:func:`~rigid_r
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
-from typing import Any, Callable, ClassVar
+from typing import Any, ClassVar
 
 import numpy as np
 
@@ -114,7 +115,15 @@ class FixedStepIntegrator(Integrator):
         start_k = self._anchor_k
         if data.kind != TORQUE_CALLABLE:
             state, done, status, bad = loop.compiled(
-                method, self._anchor_t, start_k, self.dt, n, self._state, self._moments, self._torque_compiled, save_every,
+                method,
+                self._anchor_t,
+                start_k,
+                self.dt,
+                n,
+                self._state,
+                self._moments,
+                self._torque_compiled,
+                save_every,
                 saved,
             )
         else:
@@ -154,4 +163,3 @@ class FixedStepIntegrator(Integrator):
             self._anchor_k += steps
             self.t = self._anchor_t + self._anchor_k * self.dt
             self.n_steps += steps
-

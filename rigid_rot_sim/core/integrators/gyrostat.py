@@ -86,25 +86,29 @@ def rk4_advance(t_anchor, k0, dt, n, y, moments, wheels, hub_inverse, external, 
 # Dormand-Prince 5(4): nodes, stages, 5th-order weights, error weights and the dense-output
 # polynomial of scipy's RK45 (Dormand & Prince 1980; Shampine 1986 continuous extension).
 _C = np.array([0.0, 1 / 5, 3 / 10, 4 / 5, 8 / 9, 1.0])
-_A = np.array([
-    [0.0, 0.0, 0.0, 0.0, 0.0],
-    [1 / 5, 0.0, 0.0, 0.0, 0.0],
-    [3 / 40, 9 / 40, 0.0, 0.0, 0.0],
-    [44 / 45, -56 / 15, 32 / 9, 0.0, 0.0],
-    [19372 / 6561, -25360 / 2187, 64448 / 6561, -212 / 729, 0.0],
-    [9017 / 3168, -355 / 33, 46732 / 5247, 49 / 176, -5103 / 18656],
-])
+_A = np.array(
+    [
+        [0.0, 0.0, 0.0, 0.0, 0.0],
+        [1 / 5, 0.0, 0.0, 0.0, 0.0],
+        [3 / 40, 9 / 40, 0.0, 0.0, 0.0],
+        [44 / 45, -56 / 15, 32 / 9, 0.0, 0.0],
+        [19372 / 6561, -25360 / 2187, 64448 / 6561, -212 / 729, 0.0],
+        [9017 / 3168, -355 / 33, 46732 / 5247, 49 / 176, -5103 / 18656],
+    ]
+)
 _B = np.array([35 / 384, 0.0, 500 / 1113, 125 / 192, -2187 / 6784, 11 / 84])
 _E = np.array([-71 / 57600, 0.0, 71 / 16695, -71 / 1920, 17253 / 339200, -22 / 525, 1 / 40])
-_P = np.array([
-    [1.0, -8048581381 / 2820520608, 8663915743 / 2820520608, -12715105075 / 11282082432],
-    [0.0, 0.0, 0.0, 0.0],
-    [0.0, 131558114200 / 32700410799, -68118460800 / 10900136933, 87487479700 / 32700410799],
-    [0.0, -1754552775 / 470086768, 14199869525 / 1410260304, -10690763975 / 1880347072],
-    [0.0, 127303824393 / 49829197408, -318862633887 / 49829197408, 701980252875 / 199316789632],
-    [0.0, -282668133 / 205662961, 2019193451 / 616988883, -1453857185 / 822651844],
-    [0.0, 40617522 / 29380423, -110615467 / 29380423, 69997945 / 29380423],
-])
+_P = np.array(
+    [
+        [1.0, -8048581381 / 2820520608, 8663915743 / 2820520608, -12715105075 / 11282082432],
+        [0.0, 0.0, 0.0, 0.0],
+        [0.0, 131558114200 / 32700410799, -68118460800 / 10900136933, 87487479700 / 32700410799],
+        [0.0, -1754552775 / 470086768, 14199869525 / 1410260304, -10690763975 / 1880347072],
+        [0.0, 127303824393 / 49829197408, -318862633887 / 49829197408, 701980252875 / 199316789632],
+        [0.0, -282668133 / 205662961, 2019193451 / 616988883, -1453857185 / 822651844],
+        [0.0, 40617522 / 29380423, -110615467 / 29380423, 69997945 / 29380423],
+    ]
+)
 
 # solver[...] slots carried between calls
 _T, _H, _T_OLD, _H_OLD, _FSAL = range(5)
@@ -112,8 +116,24 @@ _T, _H, _T_OLD, _H_OLD, _FSAL = range(5)
 
 @compiled
 def dopri5_advance(
-    t_anchor, k0, dt, n, y_out, solver, y_int, y_old, stages, rtol, atol,
-    moments, wheels, hub_inverse, external, orbit, commands, applied,
+    t_anchor,
+    k0,
+    dt,
+    n,
+    y_out,
+    solver,
+    y_int,
+    y_old,
+    stages,
+    rtol,
+    atol,
+    moments,
+    wheels,
+    hub_inverse,
+    external,
+    orbit,
+    commands,
+    applied,
 ):
     """Report steps k0 + 1 .. k0 + n (times ``t_anchor + k dt``) into ``y_out``: (reports done, status).
 
@@ -146,8 +166,9 @@ def dopri5_advance(
                     for r in range(s):
                         acc += _A[s, r] * ks[r, i]
                     stage[i] = y_int[i] + h * acc
-                gyrostat_rhs(t + _C[s] * h, stage, moments, wheels, hub_inverse, external, orbit, commands, ks[s],
-                             applied)
+                gyrostat_rhs(
+                    t + _C[s] * h, stage, moments, wheels, hub_inverse, external, orbit, commands, ks[s], applied
+                )
             for i in range(m):
                 acc = 0.0
                 for r in range(6):
@@ -168,7 +189,7 @@ def dopri5_advance(
                 solver[_H] = 0.2 * h  # retry smaller: a step size underflow ends it
                 continue
             if err >= 1.0:
-                solver[_H] = h * max(0.2, 0.9 * err ** -0.2)
+                solver[_H] = h * max(0.2, 0.9 * err**-0.2)
                 continue
             for i in range(m):
                 y_old[i] = y_int[i]
@@ -178,7 +199,7 @@ def dopri5_advance(
             solver[_T_OLD] = t
             solver[_H_OLD] = h
             solver[_T] = t + h
-            solver[_H] = h * (10.0 if err == 0.0 else min(10.0, 0.9 * err ** -0.2))
+            solver[_H] = h * (10.0 if err == 0.0 else min(10.0, 0.9 * err**-0.2))
         if solver[_T] == target:
             for i in range(m):
                 stage[i] = y_int[i]
@@ -218,9 +239,18 @@ class GyrostatIntegrator(Integrator):
     fixed_step: ClassVar[bool] = True
 
     def __init__(
-        self, moments: Any, dt: float, torque: Any = None, *, wheels: WheelModel | None = None,
-        orbit: OrbitModel = NO_ORBIT, wheel_speeds0: Any = None, t0: float = 0.0, q0: Any = (0.0, 0.0, 0.0, 1.0),
-        omega0: Any = (0.0, 0.0, 0.0), **options: Any,
+        self,
+        moments: Any,
+        dt: float,
+        torque: Any = None,
+        *,
+        wheels: WheelModel | None = None,
+        orbit: OrbitModel = NO_ORBIT,
+        wheel_speeds0: Any = None,
+        t0: float = 0.0,
+        q0: Any = (0.0, 0.0, 0.0, 1.0),
+        omega0: Any = (0.0, 0.0, 0.0),
+        **options: Any,
     ) -> None:
         self.wheels = wheels if wheels is not None else WheelModel((), np.zeros((0, 3)), *([np.zeros(0)] * 6))
         self.orbit = orbit
@@ -272,10 +302,14 @@ class GyrostatIntegrator(Integrator):
         from rigid_rot_sim.core.wheels import applied_motor_torque
 
         ramp = self._wheel_data[3]
-        return np.array([
-            applied_motor_torque(float(u), float(w), float(limit), float(r))
-            for u, w, limit, r in zip(self.wheel_commands, self.wheel_speeds, self.wheels.max_speed, ramp, strict=True)
-        ])
+        return np.array(
+            [
+                applied_motor_torque(float(u), float(w), float(limit), float(r))
+                for u, w, limit, r in zip(
+                    self.wheel_commands, self.wheel_speeds, self.wheels.max_speed, ramp, strict=True
+                )
+            ]
+        )
 
     def _external(self) -> np.ndarray:
         torque = self.torque
@@ -325,8 +359,18 @@ class GyrostatRK4(GyrostatIntegrator):
         external = self._start_run()
         applied = np.zeros(self.wheels.count)
         done, status = rk4_advance(
-            self._anchor_t, self._anchor_k, self.dt, n, self._y, self.moments, self._wheel_data, self._hub_inverse,
-            external, self._orbit_data, self.wheel_commands, applied,
+            self._anchor_t,
+            self._anchor_k,
+            self.dt,
+            n,
+            self._y,
+            self.moments,
+            self._wheel_data,
+            self._hub_inverse,
+            external,
+            self._orbit_data,
+            self.wheel_commands,
+            applied,
         )
         self._commit(done)
         if status != OK:
@@ -369,9 +413,24 @@ class GyrostatDopri5(GyrostatIntegrator):
         external = self._start_run()
         applied = np.zeros(self.wheels.count)
         done, status = dopri5_advance(
-            self._anchor_t, self._anchor_k, self.dt, n, self._y, self._solver, self._y_int, self._y_old, self._stages,
-            self.rtol, self.atol, self.moments, self._wheel_data, self._hub_inverse, external, self._orbit_data,
-            self.wheel_commands, applied,
+            self._anchor_t,
+            self._anchor_k,
+            self.dt,
+            n,
+            self._y,
+            self._solver,
+            self._y_int,
+            self._y_old,
+            self._stages,
+            self.rtol,
+            self.atol,
+            self.moments,
+            self._wheel_data,
+            self._hub_inverse,
+            external,
+            self._orbit_data,
+            self.wheel_commands,
+            applied,
         )
         self._commit(done)
         if status != OK:

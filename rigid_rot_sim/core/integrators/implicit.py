@@ -54,8 +54,17 @@ def _half_cayley(qn: Floats, h: float, W1: float, W2: float, W3: float) -> Quate
 
 @register_jitable
 def _newton(
-    t: float, qn: Quaternion, w1: float, w2: float, w3: float, h: float, moments: Floats, torque: TorqueData,
-    W1: float, W2: float, W3: float,
+    t: float,
+    qn: Quaternion,
+    w1: float,
+    w2: float,
+    w3: float,
+    h: float,
+    moments: Floats,
+    torque: TorqueData,
+    W1: float,
+    W2: float,
+    W3: float,
 ) -> tuple[float, float, float, bool]:
     """Solve ``2 (W - omega_n) = h alpha(t + h/2, q_mid, W)`` from W; returns (W1, W2, W3, converged)."""
     i1, i2, i3 = moments

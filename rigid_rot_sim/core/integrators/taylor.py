@@ -69,7 +69,6 @@ import math
 from typing import Any, ClassVar
 
 import numpy as np
-
 from numba.extending import register_jitable
 
 from rigid_rot_sim.core.integrators.base import Integrator, NonFiniteStateError, UnsupportedTorqueError
@@ -306,7 +305,12 @@ class Taylor(Integrator):
     def _forcing(self, t0: float) -> np.ndarray:
         """Coefficients of b(t0 + s) in powers of s, pre-divided by (k + 1): shape (n, 7)."""
         rows = taylor_forcing(
-            t0, self._binom, self._poly, self._const_forcing, self._inverse_orders, self.series_order,
+            t0,
+            self._binom,
+            self._poly,
+            self._const_forcing,
+            self._inverse_orders,
+            self.series_order,
             self._forcing_buffer,
         )
         return self._forcing_buffer[:rows].copy()
@@ -345,10 +349,26 @@ class Taylor(Integrator):
         counters = self._counters  # API steps done, internal steps, status
         counters[:] = 0
         taylor_advance(
-            n, self.dt, state, series, self._x_end, landing_first, self.tol is not None,
-            -1.0 if self.tol is None else self.tol, self.max_step, self.series_order,
-            self._coeffs, self._pairs, self._terms, self._term_values, self._inverse_orders,
-            self._forcing_buffer, self._binom, self._poly, self._const_forcing, counters,
+            n,
+            self.dt,
+            state,
+            series,
+            self._x_end,
+            landing_first,
+            self.tol is not None,
+            -1.0 if self.tol is None else self.tol,
+            self.max_step,
+            self.series_order,
+            self._coeffs,
+            self._pairs,
+            self._terms,
+            self._term_values,
+            self._inverse_orders,
+            self._forcing_buffer,
+            self._binom,
+            self._poly,
+            self._const_forcing,
+            counters,
         )
         done, substeps, status = (int(v) for v in counters)
         self.n_substeps += substeps
@@ -383,10 +403,24 @@ class Taylor(Integrator):
         x_end = np.zeros(_STATE_SIZE)
         self._series = None  # the coefficient buffer is reused here
         h, p, status = taylor_substep(
-            t0, np.asarray(x0, dtype=float), h_cap, h_fallback, self.tol is not None,
-            -1.0 if self.tol is None else self.tol, self.series_order, rho, self._coeffs, self._pairs, self._terms,
-            self._term_values, self._inverse_orders, self._forcing_buffer, self._binom, self._poly,
-            self._const_forcing, x_end,
+            t0,
+            np.asarray(x0, dtype=float),
+            h_cap,
+            h_fallback,
+            self.tol is not None,
+            -1.0 if self.tol is None else self.tol,
+            self.series_order,
+            rho,
+            self._coeffs,
+            self._pairs,
+            self._terms,
+            self._term_values,
+            self._inverse_orders,
+            self._forcing_buffer,
+            self._binom,
+            self._poly,
+            self._const_forcing,
+            x_end,
         )
         if status != _OK:
             raise NonFiniteStateError(f"{self.name}: non-finite state or Taylor coefficients at t = {t0:.9g} s")
@@ -440,8 +474,26 @@ def taylor_evaluate(coeffs, p, s, out):
 
 
 @register_jitable
-def taylor_substep(t0, x0, h_cap, h_fallback, controlled, tol, series_order, rho_box, coeffs, pairs, terms,
-                   term_values, inverse_orders, forcing, binom, poly, const_forcing, x_end):
+def taylor_substep(
+    t0,
+    x0,
+    h_cap,
+    h_fallback,
+    controlled,
+    tol,
+    series_order,
+    rho_box,
+    coeffs,
+    pairs,
+    terms,
+    term_values,
+    inverse_orders,
+    forcing,
+    binom,
+    poly,
+    const_forcing,
+    x_end,
+):
     """One Taylor step of length <= h_cap from (t0, x0): (h, order, status); x(t0 + h) into x_end.
 
     ``rho_box[0]`` holds the convergence radius estimate (< 0: none) and is updated.
@@ -568,8 +620,28 @@ def _step_from_series(h_cap, h_fallback, controlled, tol, series_order, p, omega
 
 
 @register_jitable
-def _taylor_advance(n, dt, state, series, x_end, landing_first, controlled, tol, max_step, series_order, coeffs,
-                    pairs, terms, term_values, inverse_orders, forcing, binom, poly, const_forcing, counters):
+def _taylor_advance(
+    n,
+    dt,
+    state,
+    series,
+    x_end,
+    landing_first,
+    controlled,
+    tol,
+    max_step,
+    series_order,
+    coeffs,
+    pairs,
+    terms,
+    term_values,
+    inverse_orders,
+    forcing,
+    binom,
+    poly,
+    const_forcing,
+    counters,
+):
     """n API steps: state = (omega, q, t, rho, t of a failure) updated in place; series = (t, h, order, valid)
     of the last internal step, whose end state is x_end; counters = (done, substeps, status)."""
     rho_box = np.empty(1)
@@ -594,8 +666,24 @@ def _taylor_advance(n, dt, state, series, x_end, landing_first, controlled, tol,
                 remaining = target - t
                 land = max(0.0, min(remaining, max_step))  # >= 0 despite rounding
                 h, p, status = taylor_substep(
-                    t, x, land if landing else max_step, land, controlled, tol, series_order, rho_box, coeffs,
-                    pairs, terms, term_values, inverse_orders, forcing, binom, poly, const_forcing, x_end,
+                    t,
+                    x,
+                    land if landing else max_step,
+                    land,
+                    controlled,
+                    tol,
+                    series_order,
+                    rho_box,
+                    coeffs,
+                    pairs,
+                    terms,
+                    term_values,
+                    inverse_orders,
+                    forcing,
+                    binom,
+                    poly,
+                    const_forcing,
+                    x_end,
                 )
                 if status != _OK:
                     state[8], state[9] = rho_box[0], t
