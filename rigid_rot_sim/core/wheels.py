@@ -42,7 +42,13 @@ refuses a wheel set that leaves no body). The kinetic energy is
 and (4), (5) give ``dT/dt = omega . tau + sum_i Omega_i (u_i - f_i)``: with frictionless
 wheels, no motor torque and no external torque, T and the world-frame momentum
 ``R(q) H`` are conserved (the tests check both to the method's order); the attitude
-obeys ``dq/dt = 1/2 q (x) (omega, 0)`` as for the bare body.
+obeys ``dq/dt = 1/2 q (x) (omega, 0)`` as for the bare body. Each wheel's angle theta_i
+(rad, about g_i, relative to the body) is the integral of its relative speed,
+
+    dtheta_i/dt = Omega_i                                                          (8)
+
+unwrapped (continuous, never reduced to [-pi, pi]: a joint position a controller differentiates
+must not jump); it drives nothing, so the integrators carry it without error control.
 
 Limits, as documented in the scene schema:
 
@@ -331,8 +337,10 @@ def applied_motor_torque(command, speed, max_speed, ramp):
 
 @register_jitable
 def gyrostat_rhs(t, y, moments, wheels, hub_inverse, external, orbit, commands, dy, applied):
-    """d/dt of ``y = (q, omega, Omega)`` into ``dy`` (eqs. (4), (5), dq/dt = 1/2 q (x) omega).
+    """d/dt of ``y = (q, omega, Omega[, theta])`` into ``dy`` (eqs. (4), (5), dq/dt = 1/2 q (x) omega).
 
+    When ``y`` also carries the n wheel angles ``theta`` (rad, relative to the body: length 7 + 2n),
+    ``dtheta_i/dt = Omega_i`` (eq. (8)); the angles feed back into nothing.
     ``moments`` (3,) principal moments (wheels included); ``wheels`` :meth:`WheelModel.compiled`
     in the principal frame; ``hub_inverse`` (3, 3) the inverse of ``I - sum J g g^T``;
     ``external`` (3,) a constant external torque (N*m); ``orbit`` :meth:`OrbitModel.compiled`;
@@ -373,6 +381,9 @@ def gyrostat_rhs(t, y, moments, wheels, hub_inverse, external, orbit, commands, 
     dy[4], dy[5], dy[6] = a1, a2, a3
     for i in range(n):
         dy[7 + i] = dy[7 + i] / spin[i] - (axes[i, 0] * a1 + axes[i, 1] * a2 + axes[i, 2] * a3)
+    if y.shape[0] >= 7 + 2 * n:
+        for i in range(n):
+            dy[7 + n + i] = y[7 + i]
 
 
 # ---------------------------------------------------------------------- invariants (numpy)

@@ -3,7 +3,7 @@
 :class:`GyrostatStepper` is the :class:`~rigid_rot_sim.run.stepper.Stepper` of a scene with
 ``actuators.reaction_wheels`` or ``environment.gravity_gradient``: it runs a method of
 :data:`~rigid_rot_sim.core.integrators.gyrostat.GYROSTAT_METHODS` (``auto``: ``dopri5``),
-carries the wheel speeds with the body's state, gives the integrator the wheel motor
+carries the wheel speeds and angles with the body's state, gives the integrator the wheel motor
 torques of the :class:`~rigid_rot_sim.run.commands.CommandSchedule` at every boundary, and
 reports the total angular momentum (body + wheels), the energy of eq. (6) of
 :mod:`rigid_rot_sim.core.wheels` and every torque on the body by source.
@@ -65,10 +65,17 @@ class GyrostatStepper(Stepper):
                 self.body.attitude_to_principal(np.array(self.scene.initial.orientation)),
                 np.zeros(3),
                 self._initial_speeds(),
+                None,
             )
         else:
             assert isinstance(self.integrator, GyrostatIntegrator)
-            state = (self.integrator.t, self.integrator.q, self.integrator.omega, self.integrator.wheel_speeds)
+            state = (
+                self.integrator.t,
+                self.integrator.q,
+                self.integrator.omega,
+                self.integrator.wheel_speeds,
+                self.integrator.wheel_angles,
+            )
         integrator = cls(
             self.body.principal_moments,
             dt,
@@ -79,6 +86,7 @@ class GyrostatStepper(Stepper):
             q0=state[1],
             omega0=state[2],
             wheel_speeds0=state[3],
+            wheel_angles0=state[4],
             **options,
         )
         if self.integrator is not None:
@@ -97,6 +105,7 @@ class GyrostatStepper(Stepper):
         assert isinstance(self.integrator, GyrostatIntegrator)
         self.integrator.set_wheel_commands(np.zeros(len(self.scene.spacecraft.wheels)))
         self.integrator.wheel_speeds = self._initial_speeds()
+        self.integrator.wheel_angles = np.zeros(len(self.scene.spacecraft.wheels))  # a reset zeroes the angles
         super().restart()
 
     def set_command_torque(self) -> None:
@@ -106,11 +115,11 @@ class GyrostatStepper(Stepper):
 
     def _saved_state(self) -> tuple:
         assert isinstance(self.integrator, GyrostatIntegrator)
-        return (*super()._saved_state(), self.integrator.wheel_speeds.copy())
+        return (*super()._saved_state(), self.integrator.wheel_speeds.copy(), self.integrator.wheel_angles.copy())
 
     def _restore(self, saved: tuple) -> None:
         assert isinstance(self.integrator, GyrostatIntegrator)
-        self.integrator.set_state(*saved[:3], wheel_speeds=saved[4])
+        self.integrator.set_state(*saved[:3], wheel_speeds=saved[4], wheel_angles=saved[5])
         self.integrator.n_steps = saved[3]
 
     def _torque_bound(self) -> float:
@@ -170,12 +179,13 @@ class GyrostatStepper(Stepper):
             angular_momentum_drift=_relative_change(math.hypot(*momentum_world), reference_momentum),
             wheel_names=self.scene.spacecraft.wheel_names,
             wheel_speeds=speeds,
+            wheel_angles=integrator.wheel_angles.copy(),
             wheel_torques=applied,
             torque_sources=tuple(sources),
         )
 
     def set_body_state(self, q: np.ndarray, omega: np.ndarray) -> None:
-        super().set_body_state(q, omega)  # the wheels keep their speeds relative to the body
+        super().set_body_state(q, omega)  # the wheels keep their speeds and angles relative to the body
 
 
 def make_stepper(scene: Any, *args: Any) -> Stepper:

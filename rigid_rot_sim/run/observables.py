@@ -59,6 +59,8 @@ class StateSnapshot:
     #: Reaction wheels (scene order): speeds relative to the body (rad/s) and the motor torques acting (N*m).
     wheel_names: tuple[str, ...] | None = None
     wheel_speeds: np.ndarray | None = None
+    #: Reaction wheel angles relative to the body (rad, unwrapped: continuous, 0 at the start and after a reset).
+    wheel_angles: np.ndarray | None = None
     wheel_torques: np.ndarray | None = None
     #: Every torque acting on the body at this state, by source, N*m, user body frame (their sum is ``torque_body``).
     torque_sources: tuple[tuple[str, np.ndarray], ...] | None = None
