@@ -59,7 +59,7 @@ def exercise() -> None:
         PolynomialTorque(np.array([[0.1, 0.0, 0.0], [0.0, 0.01, 0.0]])),
         GravityTorque(np.array([0.0, 0.0, 0.1]), 1.0),
     ]
-    for name, cls in METHODS.items():
+    for cls in METHODS.values():
         for torque in torques:
             try:
                 integrator = cls(moments, 1e-3, torque, omega0=(1.0, 0.1, 0.5))
@@ -105,7 +105,8 @@ def stamp_path() -> Path:
 
     from rigid_rot_sim.core.jit import _CORE, sources_fingerprint
 
-    directory = Path(config.CACHE_DIR) if config.CACHE_DIR else _CORE / "__pycache__"
+    cache_dir = str(getattr(config, "CACHE_DIR", "") or "")  # NUMBA_CACHE_DIR, read by numba at import
+    directory = Path(cache_dir) if cache_dir else _CORE / "__pycache__"
     return directory / f"rigid_rot_sim-kernels-{sources_fingerprint()[:16]}.stamp"
 
 

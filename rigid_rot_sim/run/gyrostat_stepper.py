@@ -59,6 +59,7 @@ class GyrostatStepper(Stepper):
         if dry_run:
             cls(self.body.principal_moments, dt, wheels=self._wheels, orbit=self._orbit, **options)
             return
+        state: tuple[Any, ...]
         if first:
             state = (
                 0.0,
@@ -119,7 +120,7 @@ class GyrostatStepper(Stepper):
 
     def _restore(self, saved: tuple) -> None:
         assert isinstance(self.integrator, GyrostatIntegrator)
-        self.integrator.set_state(*saved[:3], wheel_speeds=saved[4], wheel_angles=saved[5])
+        self.integrator.set_state(saved[0], saved[1], saved[2], wheel_speeds=saved[4], wheel_angles=saved[5])
         self.integrator.n_steps = saved[3]
 
     def _torque_bound(self) -> float:
@@ -148,6 +149,7 @@ class GyrostatStepper(Stepper):
         if wheels is not None:
             # eqs. (1) and (6) of core.wheels, in the principal frame the integrator works in
             moments, principal_wheels = self.body.principal_moments, self._wheels
+            assert principal_wheels is not None  # built with the body-frame wheels
             momentum = total_momentum_body(moments, principal_wheels, integrator.omega, speeds)
             momentum_body = np.array(quat.rotate(body_from_principal, momentum))
             energy = float(gyrostat_energy(moments, principal_wheels, integrator.omega, speeds))

@@ -48,7 +48,20 @@ _MAX_STEPS_PER_OUTPUT = 1_000_000
 
 
 @compiled
-def rk4_advance(t_anchor, k0, dt, n, y, moments, wheels, hub_inverse, external, orbit, commands, applied):
+def rk4_advance(
+    t_anchor: float,
+    k0: int,
+    dt: float,
+    n: int,
+    y: np.ndarray,
+    moments: np.ndarray,
+    wheels: tuple[np.ndarray, ...],
+    hub_inverse: np.ndarray,
+    external: np.ndarray,
+    orbit: np.ndarray,
+    commands: np.ndarray,
+    applied: np.ndarray,
+) -> tuple[int, int]:
     """Steps k0 .. k0 + n - 1 of RK4 from ``y`` (updated in place): (steps done, status).
 
     ``applied`` receives the motor torques (N*m) that acted at the start of the last step.
@@ -120,25 +133,25 @@ _T, _H, _T_OLD, _H_OLD, _FSAL = range(5)
 
 @compiled
 def dopri5_advance(
-    t_anchor,
-    k0,
-    dt,
-    n,
-    y_out,
-    solver,
-    y_int,
-    y_old,
-    stages,
-    rtol,
-    atol,
-    moments,
-    wheels,
-    hub_inverse,
-    external,
-    orbit,
-    commands,
-    applied,
-):
+    t_anchor: float,
+    k0: int,
+    dt: float,
+    n: int,
+    y_out: np.ndarray,
+    solver: np.ndarray,
+    y_int: np.ndarray,
+    y_old: np.ndarray,
+    stages: np.ndarray,
+    rtol: float,
+    atol: float,
+    moments: np.ndarray,
+    wheels: tuple[np.ndarray, ...],
+    hub_inverse: np.ndarray,
+    external: np.ndarray,
+    orbit: np.ndarray,
+    commands: np.ndarray,
+    applied: np.ndarray,
+) -> tuple[int, int]:
     """Report steps k0 + 1 .. k0 + n (times ``t_anchor + k dt``) into ``y_out``: (reports done, status).
 
     ``solver`` (5,) = (t, h, t_old, h_old, fsal valid), ``y_int`` the solver's state at t,
@@ -246,6 +259,8 @@ class GyrostatIntegrator(Integrator):
     """
 
     fixed_step: ClassVar[bool] = True
+    #: The body torque the method last saw (set by each method before the base initialiser runs).
+    _torque_seen: Any
 
     def __init__(
         self,
@@ -331,7 +346,10 @@ class GyrostatIntegrator(Integrator):
         if torque is not self._torque_seen:
             self._torque_seen = torque
             self._restart()
-        return np.zeros(3) if torque is None else np.ascontiguousarray(torque.value, dtype=float)
+        if torque is None:
+            return np.zeros(3)
+        assert isinstance(torque, ConstantTorque)  # _check_torque refused anything else
+        return np.ascontiguousarray(torque.value, dtype=float)
 
     def _commit(self, steps: int) -> None:
         if steps:
