@@ -28,6 +28,9 @@ import pytest
 import yaml
 
 from rigid_rot_sim.message_fields import time_to_seconds
+from rigid_rot_sim.recording.events import decode_event
+from rigid_rot_sim.recording.reader import BagReader
+from rigid_rot_sim.recording.resim import resimulate
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 from test_simulate_steps_e2e import _reply  # noqa: E402 (a reply lost by a fresh server is asked for again)
@@ -77,7 +80,8 @@ def test_a_topic_hardware_interface_client_spins_a_wheel_by_one_held_effort_comm
     from rigid_rot_msgs.msg import RejectedCommand
     from rigid_rot_sim.ros.qos import REJECTED_QOS
 
-    node = launch_node("--ros-args", "-p", f"scene:={scene_file(tmp_path)}", name="doors")
+    bag = tmp_path / "doors.mcap"
+    node = launch_node("--ros-args", "-p", f"scene:={scene_file(tmp_path)}", "-p", f"record_path:={bag}", name="doors")
     states = collector.subscribe(JointState, STATES, qos_profile_sensor_data)  # as the interface reads them
     rejected = collector.subscribe(RejectedCommand, "/rigid_rot_sim/rejected", REJECTED_QOS)
     publisher = collector.node.create_publisher(JointState, COMMANDS, QoSProfile(depth=1))  # rclcpp::QoS(1)
@@ -119,6 +123,14 @@ def test_a_topic_hardware_interface_client_spins_a_wheel_by_one_held_effort_comm
     collector.spin_until(lambda: len(states) > count + 2, 30.0, node, "more states")
     assert list(states[-1].effort) == [0.0, U]  # nothing of a rejected command acted
     assert "JointState door for ros2_control" in node.log()
+
+    # the run, the door's command included, re-simulates bit for bit from its recording
+    assert node.stop() == 0, node.log()
+    report = resimulate(bag)
+    assert report.identical and report.wheel_states > 0 and report.digest_verdict == "equal", report.format()
+    events = [decode_event(e) for _, e in BagReader(bag).decoded(["/rigid_rot_sim/sim_events"])]
+    door = [e for e in events if e.kind == "wheel_torque"]
+    assert len(door) == 1 and door[0].values["source"] == COMMANDS and door[0].vector("torques", 2) == (0.0, U)
 
 
 def test_a_generic_client_finds_the_standard_services_at_root_names(tmp_path, launch_node, collector):
@@ -207,3 +219,50 @@ def test_a_generic_client_finds_the_standard_services_at_root_names(tmp_path, la
     assert completed[-1] == steps and completed == sorted(set(completed))
     assert len(completed) <= 50 * elapsed + 2  # bounded: not one per step
     client.destroy()
+
+
+def test_the_commands_topic_answers_lockstep_turns(tmp_path, launch_node, collector):
+    """``lockstep.inputs: [/rw_joint_commands]``: each turn waits for one JointState stamped with its time."""
+    from rclpy.qos import QoSProfile, ReliabilityPolicy
+    from sensor_msgs.msg import JointState
+    from std_srvs.srv import SetBool
+
+    from rigid_rot_msgs.msg import RigidBodyState
+
+    namespace, duration = "/doors_lockstep", 0.2
+    lockstep = {"period": 0.01, "inputs": [COMMANDS], "timeout": 60.0, "on_timeout": "pause"}
+    path = scene_file(tmp_path, lockstep=lockstep, real_time_factor=0.0, duration=duration)
+    bag = tmp_path / "lockstep.mcap"
+    args = ["-r", f"__ns:={namespace}", "-p", f"scene:={path}", "-p", "start_paused:=true"]
+    node = launch_node("--ros-args", *args, "-p", f"record_path:={bag}", name="lockstep")
+    publisher = collector.node.create_publisher(JointState, COMMANDS, QoSProfile(depth=10))
+    answered = []
+
+    def answer(state):  # the controller: one command per turn, stamped with the turn's state
+        command = joint_command(["rw_z"], effort=[U if len(answered) % 2 == 0 else -U])
+        command.header.stamp = state.header.stamp
+        publisher.publish(command)
+        answered.append(time_to_seconds(state.header.stamp))
+
+    qos = QoSProfile(depth=1000, reliability=ReliabilityPolicy.RELIABLE)
+    collector.node.create_subscription(RigidBodyState, f"{namespace}/rigid_rot_sim/state", answer, qos)
+    collector.spin_until(
+        lambda: (
+            publisher.get_subscription_count() > 0
+            and collector.node.count_publishers(f"{namespace}/rigid_rot_sim/state") > 0
+        ),
+        60.0,
+        node,
+        "the loop's graph",
+    )
+    reply = collector.call(SetBool, f"{namespace}/rigid_rot_sim/pause", SetBool.Request(data=False), process=node)
+    assert reply.success, reply.message
+    collector.spin_until(lambda: not node.alive(), 120.0, None, "the run to reach its duration")
+    assert node.process.returncode == 0, node.log()
+    assert "LOCKSTEP on" in node.log() and f"waits for {COMMANDS}" in node.log()
+    events = [decode_event(e) for _, e in BagReader(bag).decoded([f"{namespace}/rigid_rot_sim/sim_events"])]
+    turns = [e for e in events if e.kind == "wheel_torque"]
+    # every turn before the last answered by the door, at its own time (no timeout: the run never paused)
+    assert len(turns) >= round(duration / 0.01) and not any(e.kind == "lockstep_timeout" for e in events)
+    assert [e.number("effective_time") for e in turns] == answered[: len(turns)]
+    assert resimulate(bag).identical
