@@ -21,6 +21,7 @@ from rcl_interfaces.msg import FloatingPointRange, ParameterDescriptor
 from rclpy.node import Node
 
 from rigid_rot_sim.core import limits
+from rigid_rot_sim.ros.parameters import JOINT_STATE_COMMANDS
 from rigid_rot_sim.run.lockstep import TURN_OUTPUTS, Lockstep
 from rigid_rot_sim.run.pacing import MAX_TICK, RunDriver
 from rigid_rot_sim.scene.scene import LockstepSpec, Scene, lockstep_spec
@@ -71,7 +72,7 @@ def lockstep_from_parameters(node: Node, scene: Scene, dt: float) -> LockstepSpe
         "timeout": float(value("lockstep.timeout")),
         "on_timeout": on_timeout,
     }
-    commands = value("joint_state_topics.commands")  # the wheels' JointState door may be a turn input too
+    commands = value(JOINT_STATE_COMMANDS.name)  # the wheels' JointState door may be a turn input too
     return lockstep_spec(section, scene.topic_inputs, dt, (commands,) if commands else ())
 
 

@@ -5,7 +5,9 @@ The same ``diagnostic_msgs/msg/DiagnosticStatus`` events a recording holds on ``
 ``set_state``, ``reset``, an integrator change, a lockstep turn that timed out), published by the
 node whether it records or not, made by the recording's own observer
 (:class:`~rigid_rot_sim.ros.recording.NodeRecording`) so that the live topic and the file never
-differ. QoS: reliable, transient local, keep-last :data:`HISTORY`: the recent history is latched,
+differ (that observer lives with the recording, whose module needs the ``mcap`` packages: without
+them, optional at run time, there is no live topic either, and the log says so). QoS: reliable,
+transient local, keep-last :data:`HISTORY`: the recent history is latched,
 so a tool that starts late (``ros2 topic echo``, Foxglove) still gets the last events. The
 recording writes its copy itself: the live messages are not recorded twice.
 """
@@ -48,9 +50,14 @@ class _Publishing:
         self.publisher.publish(msg)
 
 
-def start(node: Node, sim: Simulator) -> SimulationObserver:
-    """The live ``~/sim_events`` publisher, added to ``sim``'s observers; returned for the start-up line."""
-    from rigid_rot_sim.ros.recording import NodeRecording
+def start(node: Node, sim: Simulator) -> SimulationObserver | None:
+    """The live ``~/sim_events`` publisher, added to ``sim``'s observers (None, logged, without mcap)."""
+    try:
+        from rigid_rot_sim.ros.recording import NodeRecording
+    except ImportError as exc:
+        missing = (exc.name or "").split(".")[0] or str(exc)
+        node.get_logger().warning(f"no live {TOPIC}: {missing} is not installed (pip install mcap mcap-ros2-support)")
+        return None
 
     publisher = node.create_publisher(DiagnosticStatus, TOPIC, QOS)
     live = NodeRecording(_Publishing(publisher), sim, node.get_logger())  # type: ignore[arg-type]
