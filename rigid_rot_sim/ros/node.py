@@ -19,7 +19,10 @@ world frame), ~/mass_properties (geometry_msgs/InertiaStamped, transient local, 
 has ``sensors.gyro``) and ~/odom (nav_msgs/Odometry) when the scene asks for them,
 ~/star_tracker (geometry_msgs/PoseWithCovarianceStamped) with ``sensors.star_tracker``
 (docs/sensors.md), /tf (world -> body) and /tf_static (body -> principal frame, where it
-differs from the body frame), /clock (sim time). QoS: rigid_rot_sim.ros.qos.
+differs from the body frame), /clock (sim time; the frozen time while paused: :mod:`.paused_clock`),
+~/sim_events (live, the recent history latched: :mod:`.sim_events`), and for a scene with wheels
+the JointState door of ros2_control's topic hardware interface (:mod:`.joint_state_door`). QoS:
+rigid_rot_sim.ros.qos.
 Every header stamp is sim time. Frame names: the ``world_frame`` / ``body_frame``
 parameters (default: the scene's ``frames``, REP 105 ``odom`` / ``base_link``), used by
 every output, /tf and the recording. Torque inputs: the scene's topics (WrenchStamped or
