@@ -3,7 +3,8 @@
 #
 #   make setup   create or update .venv, build + install rigid_rot_msgs, install rigid_rot_sim,
 #                compile (and cache) the numba kernels
-#                its share directory and ament index entry; `. .venv/bin/activate` then gives a
+#                its share directory, ament index entry and lib/rigid_rot_sim/ (ros2 run);
+#                `. .venv/bin/activate` then gives a
 #                shell that is a sourced ROS 2 workspace (AMENT_PREFIX_PATH & co.)
 #   make demo    setup, then the main job
 #   make test    setup, then the whole test suite
@@ -137,9 +138,12 @@ $(STAMPS)/kernels: $(STAMPS)/package $(CORE_SOURCES)
 	"$(VPY)" -m rigid_rot_sim.core.precompile
 	touch $@
 
-# After the package: the ament index must list rigid_rot_sim only once it imports.
-$(STAMPS)/workspace: $(STAMPS)/package tools/install_workspace.py $(VENV)/bin/activate
+# After the package: the ament index must list rigid_rot_sim only once it imports. The share directory
+# holds a link per file (what `ros2 launch` can walk): a file added under config/ or launch/ reruns it.
+SHARE_SOURCES := $(shell find config launch -type f -not -path '*/__pycache__/*' 2>/dev/null)
+$(STAMPS)/workspace: $(STAMPS)/package tools/install_workspace.py $(VENV)/bin/activate $(SHARE_SOURCES)
 	"$(VPY)" "$(TOOLS)/install_workspace.py" "$(CURDIR)"
+	test -x "$(VENV)/lib/rigid_rot_sim/rigid_rot_sim_node" || { echo "setup: $(VENV)/lib/rigid_rot_sim/rigid_rot_sim_node missing (ros2 run)" >&2; exit 1; }
 	env -u AMENT_PREFIX_PATH "$(VPY)" -c "from rigid_rot_sim.share import share_directory as s; import sys; sys.exit(0 if (s() / 'config' / 'scenes').is_dir() and str(s()).startswith(sys.prefix) else 'setup: the ament index does not find rigid_rot_sim in ' + sys.prefix)"
 	touch $@
 

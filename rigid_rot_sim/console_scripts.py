@@ -70,17 +70,29 @@ def ensure_library_path() -> None:
     os.execve(sys.executable, sys.orig_argv, environ)
 
 
+def ensure_kernels() -> None:
+    """Before a node starts: compile the kernels if this install never did (a colcon build), saying so."""
+    from rigid_rot_sim.core.precompile import ensure_compiled
+
+    spent = ensure_compiled(lambda text: print(f"[rigid_rot_sim] {text}", file=sys.stderr, flush=True))
+    if spent:
+        print(f"[rigid_rot_sim] kernels compiled in {spent:.1f} s; starting", file=sys.stderr, flush=True)
+
+
 def rigid_rot() -> int:
-    """``rigid-rot``: :func:`rigid_rot_sim.cli.main`."""
+    """``rigid-rot``: :func:`rigid_rot_sim.cli.main` (``run`` starts a node: the kernels first)."""
     ensure_library_path()
+    if sys.argv[1:2] == ["run"]:
+        ensure_kernels()
     from rigid_rot_sim.cli import main
 
     return main()
 
 
 def rigid_rot_sim_node() -> int:
-    """``rigid_rot_sim_node``: :func:`rigid_rot_sim.ros.node.main`."""
+    """``rigid_rot_sim_node``: :func:`rigid_rot_sim.ros.node.main` (the kernels compiled first if never)."""
     ensure_library_path()
+    ensure_kernels()
     from rigid_rot_sim.ros.node import main
 
     return main()

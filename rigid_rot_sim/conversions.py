@@ -349,13 +349,26 @@ def wheel_torques_from_msg(msg: WheelTorques) -> tuple[list[float], float]:
     return [float(v) for v in msg.torques], time_to_seconds(msg.header.stamp)
 
 
+def joint_command_from_msg(msg: JointState) -> tuple[list[str], list[float], list[float], list[float], float]:
+    """sensor_msgs/JointState -> (names, positions, velocities, efforts, unvalidated; header stamp s, 0 = none)."""
+    return (
+        [str(n) for n in msg.name],
+        [float(v) for v in msg.position],
+        [float(v) for v in msg.velocity],
+        [float(v) for v in msg.effort],
+        time_to_seconds(msg.header.stamp),
+    )
+
+
 def snapshot_to_joint_state(snapshot: StateSnapshot, body_frame: str) -> JointState:
-    """The reaction wheels as sensor_msgs/JointState: name, velocity = speed relative to the body (rad/s),
-    effort = the motor torque acting (N*m); position is left empty (a wheel's angle is not simulated)."""
+    """The reaction wheels as sensor_msgs/JointState: name, position = angle relative to the body (rad,
+    unwrapped: continuous, as a controller that differentiates it needs), velocity = speed relative to
+    the body (rad/s), effort = the motor torque acting (N*m)."""
     msg = JointState()
     msg.header.stamp = seconds_to_time(snapshot.t)
     msg.header.frame_id = body_frame
     msg.name = list(snapshot.wheel_names or ())
+    msg.position = [float(v) for v in (snapshot.wheel_angles if snapshot.wheel_angles is not None else ())]
     msg.velocity = [float(v) for v in (snapshot.wheel_speeds if snapshot.wheel_speeds is not None else ())]
     msg.effort = [float(v) for v in (snapshot.wheel_torques if snapshot.wheel_torques is not None else ())]
     return msg

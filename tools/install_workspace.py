@@ -1,10 +1,14 @@
 """Make the running venv a ROS 2 workspace for this checkout: ``python tools/install_workspace.py CHECKOUT``.
 
 1. The share directory and the ament index marker that ``colcon build`` installs from setup.py's data_files
-   (an editable pip install skips data_files): relative symlinks to the checkout, so the share directory
-   stays in step with the sources as the editable install does (like ``colcon build --symlink-install``),
-   and the links move with the checkout that holds the venv.
-2. ``bin/activate`` exports AMENT_PREFIX_PATH and CMAKE_PREFIX_PATH (the venv prepended), ROS_VERSION,
+   (an editable pip install skips data_files), laid out as ``colcon build --symlink-install`` does: real
+   directories holding one relative symlink per file. ``ros2 launch`` finds a launch file by an ``os.walk``
+   of the share directory, which does not descend into a symlinked directory (so a link per directory
+   hides every file below it); a file link is listed like a file, and its contents stay in step with the
+   sources as the editable install does. Links of files no longer in the checkout are removed.
+2. ``lib/rigid_rot_sim/``: a relative symlink to each of the package's console scripts in ``bin/``, where
+   ``ros2 run`` looks (``get_executable_paths``: the executable files under ``<prefix>/lib/<package>``).
+3. ``bin/activate`` exports AMENT_PREFIX_PATH and CMAKE_PREFIX_PATH (the venv prepended), ROS_VERSION,
    ROS_PYTHON_VERSION and ROS_DISTRO, as a sourced setup.bash does, and ``deactivate`` restores the
    previous values.
 
@@ -49,6 +53,53 @@ def link(target: Path, path: Path) -> None:
     path.symlink_to(relative)
 
 
+def link_tree(source: Path, target: Path) -> list[Path]:
+    """Mirror ``source`` (a file or a directory) at ``target``: real directories, one relative link per file.
+
+    Returns the links. What ``target`` held that is not in ``source`` (a stale link, an old directory
+    link) is removed.
+    """
+    if source.is_file():
+        link(source, target)
+        return [target]
+    if target.is_symlink() or target.is_file():
+        target.unlink()  # the directory link of an older set-up
+    target.mkdir(parents=True, exist_ok=True)
+    wanted = {entry.name for entry in source.iterdir() if not entry.name.startswith((".", "__pycache__"))}
+    for entry in target.iterdir():
+        if entry.name not in wanted:
+            if entry.is_dir() and not entry.is_symlink():
+                shutil.rmtree(entry)
+            else:
+                entry.unlink()
+    links = []
+    for name in sorted(wanted):
+        links += link_tree(source / name, target / name)
+    return links
+
+
+def console_scripts(package: str = PACKAGE) -> list[str]:
+    """The names of the installed distribution's console scripts (setup.py's entry points)."""
+    from importlib.metadata import distribution
+
+    return sorted(e.name for e in distribution(package).entry_points if e.group == "console_scripts")
+
+
+def link_executables(prefix: Path, names: list[str]) -> Path:
+    """``<prefix>/lib/<package>/<name>`` -> ``<prefix>/bin/<name>`` for every console script; the directory."""
+    directory = prefix / "lib" / PACKAGE
+    directory.mkdir(parents=True, exist_ok=True)
+    for entry in directory.iterdir():
+        if entry.name not in names:
+            entry.unlink()
+    for name in names:
+        script = prefix / "bin" / name
+        if not script.is_file():
+            raise SystemExit(f"setup: {script} is not installed (pip install the package first)")
+        link(script, directory / name)
+    return directory
+
+
 def restore_lines() -> list[str]:
     """The lines that ``deactivate`` runs first: each variable back to its value before activation."""
     lines = [f"    {BEGIN}"]
@@ -91,11 +142,16 @@ def extend_activate(text: str, path: Path) -> str:
     return text.rstrip("\n") + "\n\n" + "\n".join(apply_lines()) + "\n"
 
 
-def install(checkout: Path, prefix: Path) -> Path:
-    """Link the share directory and the ament index entry, extend bin/activate; return the share directory."""
+def install(checkout: Path, prefix: Path, executables: list[str] | None = None) -> Path:
+    """Lay out the share directory, the ament index entry and lib/<package>, extend bin/activate.
+
+    ``executables``: the console scripts to link (default: the installed distribution's). Returns the
+    share directory.
+    """
     share = prefix / "share" / PACKAGE
     for name in SHARED:
-        link(checkout / name, share / name)
+        link_tree(checkout / name, share / name)
+    link_executables(prefix, console_scripts() if executables is None else executables)
     index = prefix / "share" / "ament_index" / "resource_index" / "packages"
     link(checkout / "resource" / PACKAGE, index / PACKAGE)
     activate = prefix / "bin" / "activate"
@@ -109,7 +165,8 @@ def main(argv: list[str]) -> int:
     checkout = Path(argv[1]).resolve()
     share = install(checkout, Path(sys.prefix))
     print(
-        f"setup: {share} and the ament index entry link to {checkout}; "
+        f"setup: {share} (a link per file) and the ament index entry link to {checkout}; "
+        f"{Path(sys.prefix) / 'lib' / PACKAGE} holds the console scripts (ros2 run); "
         f"{Path(sys.prefix) / 'bin' / 'activate'} sets AMENT_PREFIX_PATH & co."
     )
     return 0

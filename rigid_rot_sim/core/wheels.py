@@ -42,7 +42,13 @@ refuses a wheel set that leaves no body). The kinetic energy is
 and (4), (5) give ``dT/dt = omega . tau + sum_i Omega_i (u_i - f_i)``: with frictionless
 wheels, no motor torque and no external torque, T and the world-frame momentum
 ``R(q) H`` are conserved (the tests check both to the method's order); the attitude
-obeys ``dq/dt = 1/2 q (x) (omega, 0)`` as for the bare body.
+obeys ``dq/dt = 1/2 q (x) (omega, 0)`` as for the bare body. Each wheel's angle theta_i
+(rad, about g_i, relative to the body) is the integral of its relative speed,
+
+    dtheta_i/dt = Omega_i                                                          (8)
+
+unwrapped (continuous, never reduced to [-pi, pi]: a joint position a controller differentiates
+must not jump); it drives nothing, so the integrators carry it without error control.
 
 Limits, as documented in the scene schema:
 
@@ -149,7 +155,7 @@ class WheelModel:
             self.stiction_speed,
         )
 
-    def compiled(self) -> tuple:
+    def compiled(self) -> tuple[np.ndarray, ...]:
         """The tuple the kernels take: (axes, J, max_speed, ramp, coulomb, viscous, stiction_speed)."""
         return (
             np.ascontiguousarray(self.axes, dtype=float),
@@ -277,14 +283,16 @@ def orbit_model(mu: float, radius: float, inclination: float = 0.0) -> OrbitMode
 
 
 @register_jitable
-def _orbit_direction(orbit, t):
+def _orbit_direction(orbit: np.ndarray, t: float) -> tuple[float, float, float]:
     u = orbit[1] * t
     su = math.sin(u)
     return math.cos(u), orbit[2] * su, orbit[3] * su
 
 
 @register_jitable
-def gravity_gradient_torque(orbit, moments, q, t):
+def gravity_gradient_torque(
+    orbit: np.ndarray, moments: np.ndarray, q: tuple[float, float, float, float], t: float
+) -> tuple[float, float, float]:
     """Eq. (7): ``3 n^2 r x (I r)`` (N*m) in the principal frame of ``moments``; q principal -> world.
 
     ``orbit`` is :meth:`OrbitModel.compiled`; zero torque when 3 n^2 is 0.
@@ -298,7 +306,7 @@ def gravity_gradient_torque(orbit, moments, q, t):
 
 
 @register_jitable
-def friction_torque(coulomb, viscous, stiction_speed, speed):
+def friction_torque(coulomb: float, viscous: float, stiction_speed: float, speed: float) -> float:
     """Friction torque (N*m) opposing a relative wheel speed (rad/s).
 
     Coulomb (linear below stiction_speed) + viscous.
@@ -313,7 +321,7 @@ def friction_torque(coulomb, viscous, stiction_speed, speed):
 
 
 @register_jitable
-def applied_motor_torque(command, speed, max_speed, ramp):
+def applied_motor_torque(command: float, speed: float, max_speed: float, ramp: float) -> float:
     """The motor torque (N*m) that acts for a (clamped) command at wheel speed ``speed`` (rad/s).
 
     A torque that speeds the wheel up fades linearly to zero over the last ``ramp`` rad/s
@@ -330,9 +338,22 @@ def applied_motor_torque(command, speed, max_speed, ramp):
 
 
 @register_jitable
-def gyrostat_rhs(t, y, moments, wheels, hub_inverse, external, orbit, commands, dy, applied):
-    """d/dt of ``y = (q, omega, Omega)`` into ``dy`` (eqs. (4), (5), dq/dt = 1/2 q (x) omega).
+def gyrostat_rhs(
+    t: float,
+    y: np.ndarray,
+    moments: np.ndarray,
+    wheels: tuple[np.ndarray, ...],
+    hub_inverse: np.ndarray,
+    external: np.ndarray,
+    orbit: np.ndarray,
+    commands: np.ndarray,
+    dy: np.ndarray,
+    applied: np.ndarray,
+) -> None:
+    """d/dt of ``y = (q, omega, Omega[, theta])`` into ``dy`` (eqs. (4), (5), dq/dt = 1/2 q (x) omega).
 
+    When ``y`` also carries the n wheel angles ``theta`` (rad, relative to the body: length 7 + 2n),
+    ``dtheta_i/dt = Omega_i`` (eq. (8)); the angles feed back into nothing.
     ``moments`` (3,) principal moments (wheels included); ``wheels`` :meth:`WheelModel.compiled`
     in the principal frame; ``hub_inverse`` (3, 3) the inverse of ``I - sum J g g^T``;
     ``external`` (3,) a constant external torque (N*m); ``orbit`` :meth:`OrbitModel.compiled`;
@@ -373,6 +394,9 @@ def gyrostat_rhs(t, y, moments, wheels, hub_inverse, external, orbit, commands, 
     dy[4], dy[5], dy[6] = a1, a2, a3
     for i in range(n):
         dy[7 + i] = dy[7 + i] / spin[i] - (axes[i, 0] * a1 + axes[i, 1] * a2 + axes[i, 2] * a3)
+    if y.shape[0] >= 7 + 2 * n:
+        for i in range(n):
+            dy[7 + n + i] = y[7 + i]
 
 
 # ---------------------------------------------------------------------- invariants (numpy)
@@ -381,14 +405,16 @@ def gyrostat_rhs(t, y, moments, wheels, hub_inverse, external, orbit, commands, 
 def hub_inertia(moments: Any, wheels: WheelModel) -> np.ndarray:
     """``I - sum J g g^T`` (3, 3), kg*m^2, with ``moments`` the principal moments of the wheels' frame."""
     spin = np.einsum("i,ij,ik->jk", wheels.spin_inertia, wheels.axes, wheels.axes)
-    return np.diag(np.asarray(moments, dtype=float)) - spin
+    hub: np.ndarray = np.diag(np.asarray(moments, dtype=float)) - spin
+    return hub
 
 
 def total_momentum_body(moments: Any, wheels: WheelModel, omega: Any, speeds: Any) -> np.ndarray:
     """Eq. (1): ``I omega + sum J Omega g`` (kg*m^2/s), body frame; omega (..., 3), speeds (..., n)."""
     omega = np.asarray(omega, dtype=float)
     speeds = np.asarray(speeds, dtype=float)
-    return np.asarray(moments, dtype=float) * omega + (speeds * wheels.spin_inertia) @ wheels.axes
+    momentum: np.ndarray = np.asarray(moments, dtype=float) * omega + (speeds * wheels.spin_inertia) @ wheels.axes
+    return momentum
 
 
 def gyrostat_energy(moments: Any, wheels: WheelModel, omega: Any, speeds: Any) -> np.ndarray:
@@ -398,4 +424,5 @@ def gyrostat_energy(moments: Any, wheels: WheelModel, omega: Any, speeds: Any) -
     hub = hub_inertia(moments, wheels)
     axial = omega @ wheels.axes.T + speeds
     body = 0.5 * np.einsum("...j,jk,...k->...", omega, hub, omega)
-    return body + 0.5 * np.sum(wheels.spin_inertia * axial**2, axis=-1)
+    energy: np.ndarray = body + 0.5 * np.sum(wheels.spin_inertia * axial**2, axis=-1)
+    return energy

@@ -12,6 +12,11 @@ Sensor readings (``~/imu`` of a scene with ``sensors.gyro``, ``~/star_tracker``)
 again from the recorded seed (the ``sensors`` metadata record), one per recorded message
 in file order, at the recorded message's step (:class:`~rigid_rot_sim.run.sensors.SensorSuite`),
 and compared bit for bit: the re-simulation is BIT-EXACT only when they agree too.
+
+The reaction wheels' states (``~/wheels``, sensor_msgs/JointState: angle, speed and motor torque
+per wheel) are compared bit for bit at each recorded message's step in the same way: the wheel
+angles drive nothing, so neither the body's states nor the run digest (t, q, omega) would notice
+a wheel angle that differs.
 """
 
 from __future__ import annotations
@@ -35,6 +40,7 @@ from rigid_rot_sim.run.simulator import Simulator, StateSnapshot
 from rigid_rot_sim.scene.scene import parse_scene_text
 
 STATE_TYPE = "rigid_rot_msgs/msg/RigidBodyState"
+WHEELS_TYPE = "sensor_msgs/msg/JointState"
 #: Sensor outputs: role -> (message type, the sensor's field of the scene's sensors section).
 SENSOR_TYPES = {
     "imu": ("sensor_msgs/msg/Imu", "gyro"),
@@ -91,6 +97,9 @@ class ResimReport:
 
     sensor_readings: int = 0
     sensor_mismatches: int = 0
+    #: ``~/wheels`` messages compared (angle, speed, motor torque of every wheel) and how many differ.
+    wheel_states: int = 0
+    wheel_mismatches: int = 0
 
     @property
     def verdict(self) -> str:
@@ -99,7 +108,12 @@ class ResimReport:
             return "NOTHING TO COMPARE: the recording holds no state messages"
         if self.identical:
             readings = f" and {self.sensor_readings} sensor readings" if self.sensor_readings else ""
-            return f"BIT-EXACT: all {self.states} states{readings} reproduced bit for bit"
+            wheels = f" and {self.wheel_states} wheel states" if self.wheel_states else ""
+            return f"BIT-EXACT: all {self.states} states{readings}{wheels} reproduced bit for bit"
+        if self.wheel_mismatches and not self.sensor_mismatches and self.max_attitude_error == 0.0:
+            return (
+                f"MISMATCH: {self.wheel_mismatches} of {self.wheel_states} wheel states differ (the body states agree)"
+            )
         if self.sensor_mismatches and self.max_attitude_error == self.max_omega_error == 0.0:
             return (
                 f"MISMATCH: {self.sensor_mismatches} of {self.sensor_readings} sensor readings differ "
@@ -136,6 +150,8 @@ class ResimReport:
         ]
         if self.sensor_readings:
             lines.append(f"  sensor readings         {self.sensor_readings} redrawn, {self.sensor_mismatches} differ")
+        if self.wheel_states:
+            lines.append(f"  wheel states            {self.wheel_states} compared, {self.wheel_mismatches} differ")
         if self.first_difference_t is not None:
             lines.append(f"  first difference at t = {self.first_difference_t:.9g} s")
         if self.digest is not None:
@@ -218,8 +234,10 @@ def resimulate(path: str | os.PathLike[str], method: str | None = None) -> Resim
     if events_topic is None:
         raise ValueError(f"{path}: no simulation event log (~/sim_events) in the recording")
     sensors, sensor_topics = _sensors(reader, scene, path)
+    wheels_topic = reader.find_topic("wheels", WHEELS_TYPE) if scene.spacecraft.wheels else None
     topics = [events_topic] + ([state_topic] if state_topic else []) + list(sensor_topics)
-    readings = mismatches = 0
+    topics += [wheels_topic] if wheels_topic else []
+    readings = mismatches = wheel_states = wheel_mismatches = 0
 
     states = events = 0
     max_att = max_omega = max_l = max_e = 0.0
@@ -243,6 +261,13 @@ def resimulate(path: str | os.PathLike[str], method: str | None = None) -> Resim
             readings += 1
             if not _same_reading(sensor_topics[message.topic], sensors, decoded, snapshot):
                 mismatches += 1
+                if identical:
+                    identical, first_difference = False, t
+            continue
+        if message.topic == wheels_topic:
+            wheel_states += 1
+            if not _same_wheels(decoded, snapshot):
+                wheel_mismatches += 1
                 if identical:
                     identical, first_difference = False, t
             continue
@@ -271,7 +296,7 @@ def resimulate(path: str | os.PathLike[str], method: str | None = None) -> Resim
         dt=dt,
         states=states,
         events=events,
-        duration=0.0 if t_first is None else t_last - t_first,
+        duration=0.0 if t_first is None or t_last is None else t_last - t_first,
         max_attitude_error=max_att,
         max_omega_error=max_omega,
         max_momentum_error=max_l,
@@ -282,6 +307,8 @@ def resimulate(path: str | os.PathLike[str], method: str | None = None) -> Resim
         recorded_digest=recorded_digest,
         sensor_readings=readings,
         sensor_mismatches=mismatches,
+        wheel_states=wheel_states,
+        wheel_mismatches=wheel_mismatches,
     )
 
 
@@ -309,6 +336,19 @@ def _same_reading(role: str, sensors: Any, recorded: Any, snapshot: StateSnapsho
         return bool(np.array_equal(vector3_to_array(recorded.angular_velocity), sensors.read_gyro(snapshot)))
     attitude = quaternion_to_array(recorded.pose.pose.orientation)
     return bool(np.array_equal(attitude, sensors.read_star_tracker(snapshot)))
+
+
+def _same_wheels(recorded: Any, snapshot: StateSnapshot) -> bool:
+    """A recorded ``~/wheels`` message against the re-simulated wheels, bit for bit.
+
+    A recording made before wheel angles were simulated has no positions: those are not compared.
+    """
+    fields = [(recorded.velocity, snapshot.wheel_speeds), (recorded.effort, snapshot.wheel_torques)]
+    if len(recorded.position):
+        fields.append((recorded.position, snapshot.wheel_angles))
+    return list(recorded.name) == list(snapshot.wheel_names or ()) and all(
+        np.array_equal(np.asarray(given, dtype=float), np.asarray(mine, dtype=float)) for given, mine in fields
+    )
 
 
 def _compare(recorded: Any, snapshot: StateSnapshot) -> tuple[bool, tuple[float, float, float, float]]:

@@ -21,6 +21,7 @@ from rcl_interfaces.msg import FloatingPointRange, ParameterDescriptor
 from rclpy.node import Node
 
 from rigid_rot_sim.core import limits
+from rigid_rot_sim.ros.parameters import JOINT_STATE_COMMANDS
 from rigid_rot_sim.run.lockstep import TURN_OUTPUTS, Lockstep
 from rigid_rot_sim.run.pacing import MAX_TICK, RunDriver
 from rigid_rot_sim.scene.scene import LockstepSpec, Scene, lockstep_spec
@@ -29,7 +30,7 @@ from rigid_rot_sim.scene.scene_schema import LOCKSTEP_ON_TIMEOUT
 #: name -> (description, read from the scene); the block to move into the parameter table.
 LOCKSTEP_PARAMETERS = {
     "lockstep.period": "Lockstep: s of sim time between controller turns, a whole number of steps; 0 = off",
-    "lockstep.inputs": "Lockstep: the torque topic inputs waited for at every turn",
+    "lockstep.inputs": "Lockstep: the torque topic inputs (or joint_state_topics.commands) waited for at every turn",
     "lockstep.timeout": "Lockstep: s of wall time to wait for a turn's commands",
     "lockstep.on_timeout": "Lockstep: pause | hold, what a turn that timed out does",
 }
@@ -71,7 +72,8 @@ def lockstep_from_parameters(node: Node, scene: Scene, dt: float) -> LockstepSpe
         "timeout": float(value("lockstep.timeout")),
         "on_timeout": on_timeout,
     }
-    return lockstep_spec(section, scene.topic_inputs, dt)
+    commands = value(JOINT_STATE_COMMANDS.name)  # the wheels' JointState door may be a turn input too
+    return lockstep_spec(section, scene.topic_inputs, dt, (commands,) if commands else ())
 
 
 class NodeLockstep:

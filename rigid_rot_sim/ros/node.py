@@ -19,7 +19,10 @@ world frame), ~/mass_properties (geometry_msgs/InertiaStamped, transient local, 
 has ``sensors.gyro``) and ~/odom (nav_msgs/Odometry) when the scene asks for them,
 ~/star_tracker (geometry_msgs/PoseWithCovarianceStamped) with ``sensors.star_tracker``
 (docs/sensors.md), /tf (world -> body) and /tf_static (body -> principal frame, where it
-differs from the body frame), /clock (sim time). QoS: rigid_rot_sim.ros.qos.
+differs from the body frame), /clock (sim time; the frozen time while paused: :mod:`.paused_clock`),
+~/sim_events (live, the recent history latched: :mod:`.sim_events`), and for a scene with wheels
+the JointState door of ros2_control's topic hardware interface (:mod:`.joint_state_door`). QoS:
+rigid_rot_sim.ros.qos.
 Every header stamp is sim time. Frame names: the ``world_frame`` / ``body_frame``
 parameters (default: the scene's ``frames``, REP 105 ``odom`` / ``base_link``), used by
 every output, /tf and the recording. Torque inputs: the scene's topics (WrenchStamped or
@@ -77,8 +80,9 @@ from rclpy.signals import SignalHandlerOptions
 
 from rigid_rot_sim.core import limits
 from rigid_rot_sim.ros import parameters as params
-from rigid_rot_sim.ros import simulation_services
+from rigid_rot_sim.ros import paused_clock, sim_events, simulation_services
 from rigid_rot_sim.ros.inputs import Rejections, TorqueInputs
+from rigid_rot_sim.ros.joint_state_door import JointStateDoor
 from rigid_rot_sim.ros.lockstep import NodeLockstep, declare_lockstep_parameters, lockstep_from_parameters, timer_period
 from rigid_rot_sim.ros.outputs import Outputs
 from rigid_rot_sim.ros.parameters import RunParameters, declare_parameters, declare_scene_parameter, read_settings
@@ -129,16 +133,33 @@ class SceneRun:
         rejections = Rejections(node, sim, self.outputs)
         self.inputs = TorqueInputs(node, sim, scene, settings[params.COMMAND_DEPTH], rejections)
         self.wheel_input = WheelTorqueInput(node, sim, scene, settings[params.COMMAND_DEPTH], rejections)
+        self.joint_state_door = JointStateDoor(
+            node,
+            sim,
+            scene,
+            (settings[params.JOINT_STATE_COMMANDS], settings[params.JOINT_STATE_STATES]),
+            self.outputs.rates.get("wheels", 0.0),
+            settings[params.COMMAND_DEPTH],
+            rejections,
+        )
+        self.driver.observers.append(self.joint_state_door)  # the states, at ~/wheels' steps
         self.lockstep: NodeLockstep | None = None
         lockstep = lockstep_from_parameters(node, scene, sim.dt)
         if lockstep is not None:
             self.lockstep = NodeLockstep(node, lockstep, self.driver, self.tick)
             self.inputs.listeners.append(self.lockstep)  # wakes the run the moment a turn is answered
+            self.joint_state_door.listeners.append(self.lockstep)
         self.services = RunServices(node, self.driver, scene, rejections, self.report_progress)
         self._action_destroyed = False
         self.simulation_services = (
-            simulation_services.SimulationServices(node, self.services) if simulation_services.AVAILABLE else None
+            simulation_services.SimulationServices(
+                node, self.services, settings[params.SIMULATION_INTERFACES_NAMESPACE]
+            )
+            if simulation_services.AVAILABLE
+            else None
         )
+        self.sim_events = sim_events.start(node, sim)  # ~/sim_events, live (latched recent history)
+        self.paused_clock = paused_clock.start(node, sim, self.outputs.publishers, self.outputs.rates)
         self.recording: NodeRecording | None = None
         if settings[params.RECORD_PATH]:
             self.recording = self._start_recording(node, settings[params.RECORD_PATH], settings[params.RECORD_LOG_TIME])
@@ -177,13 +198,14 @@ class SceneRun:
             missing = (exc.name or "").split(".")[0] or str(exc)
             self.logger.error(f"recording disabled: {missing} is not installed (pip install mcap mcap-ros2-support)")
             return None
-        subscriptions = self.inputs.subscriptions + self.wheel_input.subscriptions
+        subscriptions = self.inputs.subscriptions + self.wheel_input.subscriptions + self.joint_state_door.subscriptions
         recording = NodeRecording.start(node, self.sim, self.outputs, subscriptions, path, log_time)
         if recording is not None:
             self.sim.add_observer(recording)  # events: commands accepted, torques applied, set_state, ...
             self.outputs.listeners.append(recording)  # every message published, as the bytes published
             self.inputs.listeners.append(recording)  # every torque command as received
             self.wheel_input.listeners.append(recording)  # every wheel command as received
+            self.joint_state_door.listeners.append(recording)  # every JointState command as received
         return recording
 
     def _start_foxglove(self, node: Node, address: str) -> tuple[FoxgloveLive | None, str]:
@@ -210,7 +232,8 @@ class SceneRun:
             built.insert(0, self.lockstep.describe())
         else:
             left_out.append("lockstep (commands act when they arrive)")
-        for part_built, part_left_out in (self.outputs.describe(), self.inputs.describe(), self.wheel_input.describe()):
+        parts = (self.outputs.describe(), self.inputs.describe(), self.wheel_input.describe())
+        for part_built, part_left_out in (*parts, self.joint_state_door.describe()):
             built += part_built
             left_out += part_left_out
         if self.sensors is None:
@@ -225,7 +248,7 @@ class SceneRun:
         else:
             built.append(f"gravity {scene.gravity.acceleration:g} m/s^2 about the pivot")
         if self.simulation_services is not None:
-            built.append("simulation_interfaces services (~/step_simulation, ~/reset_simulation, ...)")
+            built.append(self.simulation_services.describe())
         else:
             left_out.append("simulation_interfaces services (package not installed)")
         if record_path:

@@ -335,6 +335,31 @@ COMMAND_DEPTH = ParamSpec(
     range=limits.COMMAND_DEPTH_RANGE,
     read_only=True,
 )
+SIMULATION_INTERFACES_NAMESPACE = ParamSpec(
+    "simulation_interfaces_namespace",
+    str,
+    lambda scene: scene.simulation_interfaces_namespace,
+    "Where the simulation_interfaces services and the SimulateSteps action are served: '~' (the node's "
+    "private names, ~/step_simulation), '/' (root names, /step_simulation, as generic clients look for them) "
+    "or any namespace",
+    read_only=True,
+)
+JOINT_STATE_COMMANDS = ParamSpec(
+    "joint_state_topics.commands",
+    str,
+    lambda scene: scene.joint_state_topics.commands if scene.joint_state_topics else "",
+    "Topic of the wheels' sensor_msgs/JointState commands (effort, N*m, per named wheel; ros2_control's "
+    "topic hardware interface); empty = not built (docs/ros2_control.md)",
+    read_only=True,
+)
+JOINT_STATE_STATES = ParamSpec(
+    "joint_state_topics.states",
+    str,
+    lambda scene: scene.joint_state_topics.states if scene.joint_state_topics else "",
+    "Topic of the wheels' sensor_msgs/JointState states (position rad, velocity rad/s, effort N*m; "
+    "SensorDataQoS, at rates.wheels); empty = not built",
+    read_only=True,
+)
 
 #: Every parameter of a node with a scene, in declaration order (``scene`` itself: :data:`SCENE`).
 PARAMETERS: tuple[ParamSpec[Any], ...] = (
@@ -354,6 +379,9 @@ PARAMETERS: tuple[ParamSpec[Any], ...] = (
     *RATES.values(),
     MAX_TORQUE,
     COMMAND_DEPTH,
+    SIMULATION_INTERFACES_NAMESPACE,
+    JOINT_STATE_COMMANDS,
+    JOINT_STATE_STATES,
 )
 
 #: Declared first, with or without a scene (default empty: no simulation); not in the table.

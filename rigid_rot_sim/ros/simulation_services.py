@@ -1,21 +1,33 @@
 """The standard simulator services of ``simulation_interfaces`` on top of the node's own.
 
 ``simulation_interfaces`` is the ROS 2 simulator standard released into Jazzy (Gazebo,
-Isaac Sim and O3DE serve it). The node serves the part that fits a single rigid body,
-under names relative to the node, as Gazebo does (``/gzserver/step_simulation``):
+Isaac Sim and O3DE serve it). The node serves the part that fits a single rigid body, under
+the ``simulation_interfaces_namespace`` parameter (scene key of the same name): ``~`` (the
+default) puts them under the node's name, as Gazebo does (``/gzserver/step_simulation``);
+``/`` at root names (``/step_simulation``), where Isaac Sim and O3DE serve them and generic
+clients of the standard look for them; any other namespace (``sim``, ``/sat1/sim``) as ROS
+resolves it. Names below for ``~``:
 
-==========================  ============================================  ===========================
-``~/get_simulator_features``  ``simulation_interfaces/srv/GetSimulatorFeatures``  what is supported (below)
-``~/get_simulation_state``    ``GetSimulationState``                         PLAYING, PAUSED or STOPPED
-``~/set_simulation_state``    ``SetSimulationState``                         play, pause, stop (= pause + reset)
-``~/step_simulation``         ``StepSimulation``                             n steps while paused (as ``~/step``)
-``~/reset_simulation``        ``ResetSimulation``                            time and state, or state only
-``~/simulate_steps``          ``SimulateSteps`` (action)                     as many steps, feedback per step, cancel
-==========================  ============================================  ===========================
+============================  ========================  ============================================
+``~/get_simulator_features``  GetSimulatorFeatures      what is served (:data:`FEATURE_INTERFACES`)
+``~/get_simulation_state``    GetSimulationState        PLAYING, PAUSED or STOPPED
+``~/set_simulation_state``    SetSimulationState        play, pause, stop (= pause + reset)
+``~/step_simulation``         StepSimulation            n steps while paused (as ``~/step``)
+``~/reset_simulation``        ResetSimulation           time and state, or state only
+``~/simulate_steps``          SimulateSteps (action)    as many steps, feedback at most 50 Hz, cancel
+============================  ========================  ============================================
+
+SetSimulationState answers every state SimulationState.msg defines: STOPPED, PLAYING, PAUSED as
+above; QUITTING with ``RESULT_FEATURE_UNSUPPORTED`` (stop the node with SIGINT or SIGTERM);
+NO_WORLD and LOADING_WORLD with ``INCORRECT_TRANSITION``: the .msg describes them as states in
+which "the simulation is inactive and cannot be started, stopped, or paused", reached by
+unloading or loading a world (LoadWorld, UnloadWorld: not served, the world is the scene loaded at
+start-up), never targets of SetSimulationState. GetSimulationState never reports them.
 
 Every call goes through the action behind the node's own service
 (:class:`~rigid_rot_sim.ros.services.RunServices`: ``step``, ``reset``, ``pause``,
-``set_initial_state``), so their checks, limits and the recording of what changed apply to both. The outcome is a ``simulation_interfaces/msg/Result``:
+``set_initial_state``), so their checks, limits and the recording of what changed apply to both.
+The outcome is a ``simulation_interfaces/msg/Result``:
 ``RESULT_FEATURE_UNSUPPORTED`` for what this simulator cannot do (a reset of time alone,
 QUITTING), ``RESULT_OPERATION_FAILED`` with the node's reason otherwise, stepping while
 playing included: StepSimulation.srv and SimulateSteps.action say so ("Calling with
@@ -70,6 +82,12 @@ if AVAILABLE:
     STOPPED, PLAYING, PAUSED, QUITTING = (
         _constant(SimulationState, name, "STATE_") for name in ("STOPPED", "PLAYING", "PAUSED", "QUITTING")
     )
+    #: The world-loading states of 1.5 (absent from older versions of the package).
+    WORLD_STATES = {
+        _constant(SimulationState, name, "STATE_"): name
+        for name in ("NO_WORLD", "LOADING_WORLD")
+        if hasattr(SimulationState, "STATE_" + name) or hasattr(SimulationState, name)
+    }
 
 #: ResetSimulation scope bits (the values of the request's SCOPE_* constants).
 SCOPE_DEFAULT, SCOPE_TIME, SCOPE_STATE, SCOPE_SPAWNED, SCOPE_ALL = 0, 1, 2, 4, 255
@@ -81,6 +99,34 @@ SERVICE_NAMES = (
     "~/step_simulation",
     "~/reset_simulation",
 )
+#: The node's private names: the default ``simulation_interfaces_namespace``.
+PRIVATE = "~"
+#: SimulatorFeatures code name -> the service or action (name under the namespace) it says is served.
+FEATURE_INTERFACES = {
+    "SIMULATION_RESET": "reset_simulation",
+    "SIMULATION_RESET_TIME": "reset_simulation",
+    "SIMULATION_RESET_STATE": "reset_simulation",
+    "SIMULATION_STATE_GETTING": "get_simulation_state",
+    "SIMULATION_STATE_SETTING": "set_simulation_state",
+    "SIMULATION_STATE_PAUSE": "set_simulation_state",
+    "STEP_SIMULATION_SINGLE": "step_simulation",
+    "STEP_SIMULATION_MULTIPLE": "step_simulation",
+    "STEP_SIMULATION_ACTION": "simulate_steps",
+}
+
+
+def served_name(namespace: str, name: str) -> str:
+    """``name`` (e.g. ``step_simulation``) under ``namespace``: ``~`` -> ``~/name``, ``/`` -> ``/name``,
+    ``ns`` -> ``ns/name`` (relative to the node's namespace), ``/ns`` -> ``/ns/name``.
+
+    ValueError for an empty namespace or one with whitespace (ROS's own check of the full name follows).
+    """
+    text = namespace.strip()
+    if not text or text != namespace or any(c.isspace() for c in text):
+        raise ValueError(
+            f"simulation_interfaces_namespace must be '~', '/' or a namespace without whitespace, got {namespace!r}"
+        )
+    return f"{text.rstrip('/')}/{name}" if text != "/" else f"/{name}"
 
 
 class _Refused(Exception):
@@ -92,27 +138,41 @@ class _Refused(Exception):
 
 
 class SimulationServices:
-    """The five services, created on ``node``, acting through ``actions`` (the node's own services)."""
+    """The five services and the action, created on ``node`` under ``namespace`` (``~``: the node's
+    private names), acting through ``actions`` (the node's own services)."""
 
-    def __init__(self, node: Any, actions: Any) -> None:
+    def __init__(self, node: Any, actions: Any, namespace: str = PRIVATE) -> None:
         if not AVAILABLE:
             raise RuntimeError("simulation_interfaces is not installed")
         self.node = node
         self.actions = actions
         self.run = actions.run
+        self.namespace = namespace
         self._stopped = False  # set by SetSimulationState(STOPPED) until played or stepped
+        self.names = [served_name(namespace, name.removeprefix("~/")) for name in SERVICE_NAMES]
+        callbacks = (
+            (GetSimulatorFeatures, self.get_features_callback),
+            (GetSimulationState, self.get_state_callback),
+            (SetSimulationState, self.set_state_callback),
+            (StepSimulation, self.step_callback),
+            (ResetSimulation, self.reset_callback),
+        )
         self.services = [
-            node.create_service(GetSimulatorFeatures, SERVICE_NAMES[0], self.get_features_callback),
-            node.create_service(GetSimulationState, SERVICE_NAMES[1], self.get_state_callback),
-            node.create_service(SetSimulationState, SERVICE_NAMES[2], self.set_state_callback),
-            node.create_service(StepSimulation, SERVICE_NAMES[3], self.step_callback),
-            node.create_service(ResetSimulation, SERVICE_NAMES[4], self.reset_callback),
+            node.create_service(kind, name, callback)
+            for name, (kind, callback) in zip(self.names, callbacks, strict=True)
         ]
         self.simulate_steps = None
         if SimulateSteps is not None:
             from rigid_rot_sim.ros.simulate_steps import SimulateStepsAction
 
-            self.simulate_steps = SimulateStepsAction(node, self, SimulateSteps, OK, OPERATION_FAILED)
+            self.simulate_steps = SimulateStepsAction(
+                node, self, SimulateSteps, OK, OPERATION_FAILED, served_name(namespace, "simulate_steps")
+            )
+
+    def describe(self) -> str:
+        """For the start-up line: where the services are."""
+        first = self.services[3].srv_name  # the fully resolved name of step_simulation
+        return f"simulation_interfaces services ({first}, ...{', SimulateSteps' if self.simulate_steps else ''})"
 
     # ------------------------------------------------------------------ queries
 
@@ -124,22 +184,24 @@ class SimulationServices:
         return response
 
     def _fill_features(self, features: Any) -> None:
-        features.features = [
-            SimulatorFeatures.SIMULATION_RESET,
-            SimulatorFeatures.SIMULATION_RESET_STATE,
-            SimulatorFeatures.SIMULATION_STATE_GETTING,
-            SimulatorFeatures.SIMULATION_STATE_SETTING,
-            SimulatorFeatures.SIMULATION_STATE_PAUSE,
-            SimulatorFeatures.STEP_SIMULATION_SINGLE,
-            SimulatorFeatures.STEP_SIMULATION_MULTIPLE,
-        ] + ([SimulatorFeatures.STEP_SIMULATION_ACTION] if self.simulate_steps is not None else [])
+        features.features = [getattr(SimulatorFeatures, name) for name in self.feature_names()]
         features.custom_info = (
             "rigid_rot_sim: one rigid body (Euler's equations) driven by torque topics. ResetSimulation scopes: "
-            "DEFAULT/ALL or with TIME = time and state, STATE = state only at the current time; nothing is spawned. "
+            "DEFAULT/ALL or TIME|STATE = time and state, STATE = state only at the current time (TIME alone: "
+            "unsupported); nothing is spawned. "
             f"Also served: {self.node.get_name()}'s ~/step (returns the state), ~/set_state, ~/apply_torque, "
             "~/step_with_torque (a torque over the next N steps, then the state, in one call). "
-            "SimulateSteps: feedback after every step; a cancel is honoured before the next step."
+            "SimulateSteps: feedback at most 50 times per second of wall time and always after the last step; "
+            "a cancel is honoured within 20 ms."
         )
+
+    def feature_names(self) -> list[str]:
+        """The SimulatorFeatures codes this node serves (keys of :data:`FEATURE_INTERFACES`), by name.
+
+        SIMULATION_RESET_TIME is not among them: time cannot be reset without the state.
+        """
+        names = [name for name in FEATURE_INTERFACES if name != "SIMULATION_RESET_TIME"]
+        return [name for name in names if name != "STEP_SIMULATION_ACTION" or self.simulate_steps is not None]
 
     def run_state(self) -> int:
         """SimulationState code of the run now."""
@@ -165,8 +227,19 @@ class SimulationServices:
         names = {STOPPED: "STOPPED", PLAYING: "PLAYING", PAUSED: "PAUSED"}
         if target == QUITTING:
             raise _Refused(FEATURE_UNSUPPORTED, "QUITTING is not supported: stop the node with SIGINT or SIGTERM")
+        if target in WORLD_STATES:
+            raise _Refused(
+                SetSimulationState.Response.INCORRECT_TRANSITION,
+                f"{WORLD_STATES[target]} is not a target of SetSimulationState: a world is unloaded or loaded "
+                "through UnloadWorld / LoadWorld, which this simulator does not serve (its world is the scene, "
+                "loaded at start-up)",
+            )
         if target not in names:
-            raise _Refused(OPERATION_FAILED, f"unknown simulation state {target} (STOPPED 0, PLAYING 1, PAUSED 2)")
+            raise _Refused(
+                OPERATION_FAILED,
+                f"unknown simulation state {target} (STOPPED 0, PLAYING 1, PAUSED 2, QUITTING 3, NO_WORLD 4, "
+                "LOADING_WORLD 5)",
+            )
         if target == current:
             raise _Refused(already, f"already {names[target]}")
         if self.run.finished:

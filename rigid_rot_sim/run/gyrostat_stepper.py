@@ -3,7 +3,7 @@
 :class:`GyrostatStepper` is the :class:`~rigid_rot_sim.run.stepper.Stepper` of a scene with
 ``actuators.reaction_wheels`` or ``environment.gravity_gradient``: it runs a method of
 :data:`~rigid_rot_sim.core.integrators.gyrostat.GYROSTAT_METHODS` (``auto``: ``dopri5``),
-carries the wheel speeds with the body's state, gives the integrator the wheel motor
+carries the wheel speeds and angles with the body's state, gives the integrator the wheel motor
 torques of the :class:`~rigid_rot_sim.run.commands.CommandSchedule` at every boundary, and
 reports the total angular momentum (body + wheels), the energy of eq. (6) of
 :mod:`rigid_rot_sim.core.wheels` and every torque on the body by source.
@@ -59,16 +59,24 @@ class GyrostatStepper(Stepper):
         if dry_run:
             cls(self.body.principal_moments, dt, wheels=self._wheels, orbit=self._orbit, **options)
             return
+        state: tuple[Any, ...]
         if first:
             state = (
                 0.0,
                 self.body.attitude_to_principal(np.array(self.scene.initial.orientation)),
                 np.zeros(3),
                 self._initial_speeds(),
+                None,
             )
         else:
             assert isinstance(self.integrator, GyrostatIntegrator)
-            state = (self.integrator.t, self.integrator.q, self.integrator.omega, self.integrator.wheel_speeds)
+            state = (
+                self.integrator.t,
+                self.integrator.q,
+                self.integrator.omega,
+                self.integrator.wheel_speeds,
+                self.integrator.wheel_angles,
+            )
         integrator = cls(
             self.body.principal_moments,
             dt,
@@ -79,6 +87,7 @@ class GyrostatStepper(Stepper):
             q0=state[1],
             omega0=state[2],
             wheel_speeds0=state[3],
+            wheel_angles0=state[4],
             **options,
         )
         if self.integrator is not None:
@@ -97,6 +106,7 @@ class GyrostatStepper(Stepper):
         assert isinstance(self.integrator, GyrostatIntegrator)
         self.integrator.set_wheel_commands(np.zeros(len(self.scene.spacecraft.wheels)))
         self.integrator.wheel_speeds = self._initial_speeds()
+        self.integrator.wheel_angles = np.zeros(len(self.scene.spacecraft.wheels))  # a reset zeroes the angles
         super().restart()
 
     def set_command_torque(self) -> None:
@@ -106,11 +116,11 @@ class GyrostatStepper(Stepper):
 
     def _saved_state(self) -> tuple:
         assert isinstance(self.integrator, GyrostatIntegrator)
-        return (*super()._saved_state(), self.integrator.wheel_speeds.copy())
+        return (*super()._saved_state(), self.integrator.wheel_speeds.copy(), self.integrator.wheel_angles.copy())
 
     def _restore(self, saved: tuple) -> None:
         assert isinstance(self.integrator, GyrostatIntegrator)
-        self.integrator.set_state(*saved[:3], wheel_speeds=saved[4])
+        self.integrator.set_state(saved[0], saved[1], saved[2], wheel_speeds=saved[4], wheel_angles=saved[5])
         self.integrator.n_steps = saved[3]
 
     def _torque_bound(self) -> float:
@@ -139,6 +149,7 @@ class GyrostatStepper(Stepper):
         if wheels is not None:
             # eqs. (1) and (6) of core.wheels, in the principal frame the integrator works in
             moments, principal_wheels = self.body.principal_moments, self._wheels
+            assert principal_wheels is not None  # built with the body-frame wheels
             momentum = total_momentum_body(moments, principal_wheels, integrator.omega, speeds)
             momentum_body = np.array(quat.rotate(body_from_principal, momentum))
             energy = float(gyrostat_energy(moments, principal_wheels, integrator.omega, speeds))
@@ -170,12 +181,13 @@ class GyrostatStepper(Stepper):
             angular_momentum_drift=_relative_change(math.hypot(*momentum_world), reference_momentum),
             wheel_names=self.scene.spacecraft.wheel_names,
             wheel_speeds=speeds,
+            wheel_angles=integrator.wheel_angles.copy(),
             wheel_torques=applied,
             torque_sources=tuple(sources),
         )
 
     def set_body_state(self, q: np.ndarray, omega: np.ndarray) -> None:
-        super().set_body_state(q, omega)  # the wheels keep their speeds relative to the body
+        super().set_body_state(q, omega)  # the wheels keep their speeds and angles relative to the body
 
 
 def make_stepper(scene: Any, *args: Any) -> Stepper:

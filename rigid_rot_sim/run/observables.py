@@ -59,6 +59,8 @@ class StateSnapshot:
     #: Reaction wheels (scene order): speeds relative to the body (rad/s) and the motor torques acting (N*m).
     wheel_names: tuple[str, ...] | None = None
     wheel_speeds: np.ndarray | None = None
+    #: Reaction wheel angles relative to the body (rad, unwrapped: continuous, 0 at the start and after a reset).
+    wheel_angles: np.ndarray | None = None
     wheel_torques: np.ndarray | None = None
     #: Every torque acting on the body at this state, by source, N*m, user body frame (their sum is ``torque_body``).
     torque_sources: tuple[tuple[str, np.ndarray], ...] | None = None
@@ -129,7 +131,7 @@ class Observables:
         if self.gravity is not None:
             potential = self.weight * quat.rotate(q, self.com_body)[2]
             gravity = quat.rotate(body_from_principal, self.gravity(0.0, np.array(q_principal), np.array((w1, w2, w3))))
-            torque_body = tuple(a + b for a, b in zip(torque_body, gravity))
+            torque_body = tuple(a + b for a, b in zip(torque_body, gravity, strict=True))
             euler = np.array(quat.quaternion_to_zxz(quat.multiply(q, self._body_from_top)))
             p_phi = momentum_world[2]
             p_psi = float(np.dot(momentum_body, self._symmetry_axis))

@@ -102,6 +102,23 @@ class SceneError(ValueError):
 
 
 @dataclass(frozen=True)
+class JointStateTopics:
+    """The JointState door of the reaction wheels (ros2_control's topic hardware interface; docs/ros2_control.md).
+
+    ``commands``: sensor_msgs/JointState in, the motor torque (``effort``, N*m) per named wheel;
+    ``states``: sensor_msgs/JointState out, position (rad), velocity (rad/s) and effort (N*m) per wheel.
+    Topic names as ROS resolves them (absolute, relative to the node's namespace, or ``~/...``).
+    """
+
+    commands: str
+    states: str
+
+
+#: ``simulation_interfaces_namespace``: the node's private names (``~/step_simulation``), the default.
+PRIVATE_NAMESPACE = "~"
+
+
+@dataclass(frozen=True)
 class Frames:
     """Names of the world frame and of the body frame (REP 103 axes, REP 105 names).
 
@@ -210,7 +227,7 @@ class TorqueSchedule:
         Zero before the first segment takes effect.
         """
         value: Vector3 = (0.0, 0.0, 0.0)
-        for segment, step in zip(self.segments, self.change_steps(dt)):
+        for segment, step in zip(self.segments, self.change_steps(dt), strict=True):
             if step <= k:
                 value = segment.torque
         return value
@@ -355,6 +372,10 @@ class Scene:
     lockstep: LockstepSpec | None = None
     spacecraft: Spacecraft = Spacecraft()
     sensors: Sensors = Sensors()
+    #: The wheels' JointState door (None: not built).
+    joint_state_topics: JointStateTopics | None = None
+    #: Where the simulation_interfaces services and the SimulateSteps action are served: ``~`` or a namespace.
+    simulation_interfaces_namespace: str = PRIVATE_NAMESPACE
     description: str = ""
     #: UTC date and time of sim time 0 (ISO 8601; see :data:`scene_schema.DEFAULT_EPOCH`).
     epoch: str = DEFAULT_EPOCH
@@ -459,6 +480,10 @@ def _scene(spec: Mapping[str, Any], source: str, text: str) -> Scene:
     foxglove = spec.get("foxglove")
     sensors = _sensors(spec.get("sensors") or {})
     outputs = spec.get("outputs") or {}
+    joint_state_topics = spec.get("joint_state_topics")
+    if joint_state_topics is not None and not spacecraft.wheels:
+        raise ValueError("joint_state_topics: the scene has no reaction wheels (actuators.reaction_wheels)")
+    namespace = spec.get("simulation_interfaces_namespace")
     return Scene(
         name=spec.get("name", default_name).strip(),
         description=(spec.get("description") or "").strip(),
@@ -484,17 +509,29 @@ def _scene(spec: Mapping[str, Any], source: str, text: str) -> Scene:
             max_torque=float(commands.get("max_torque", 0.0)),
             qos_depth=commands.get("qos_depth", limits.DEFAULT_COMMAND_DEPTH),
         ),
-        lockstep=lockstep_spec(spec.get("lockstep"), topics, float((spec.get("integrator") or {}).get("dt", 0.001))),
+        lockstep=lockstep_spec(
+            spec.get("lockstep"),
+            topics,
+            float((spec.get("integrator") or {}).get("dt", 0.001)),
+            () if joint_state_topics is None else (joint_state_topics["commands"].strip(),),
+        ),
+        joint_state_topics=None
+        if joint_state_topics is None
+        else JointStateTopics(joint_state_topics["commands"].strip(), joint_state_topics["states"].strip()),
+        simulation_interfaces_namespace=PRIVATE_NAMESPACE if namespace is None else namespace.strip(),
         source=source,
         text=text,
     )
 
 
-def lockstep_spec(spec: Mapping[str, Any] | None, topics: tuple[TopicInput, ...], dt: float) -> LockstepSpec | None:
-    """The lockstep section: its inputs are topic inputs of the scene, its period whole steps of dt."""
+def lockstep_spec(
+    spec: Mapping[str, Any] | None, topics: tuple[TopicInput, ...], dt: float, wheel_inputs: tuple[str, ...] = ()
+) -> LockstepSpec | None:
+    """The lockstep section: its inputs are topic inputs of the scene (or the wheels' JointState commands
+    topic, ``wheel_inputs``), its period whole steps of dt."""
     if spec is None:
         return None
-    known = [t.topic for t in topics]
+    known = [t.topic for t in topics] + list(wheel_inputs)
     inputs = []
     for index, name in enumerate(spec["inputs"]):
         name = name.strip()

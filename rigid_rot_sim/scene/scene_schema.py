@@ -99,7 +99,8 @@ OUTPUTS: dict[str, OutputSpec] = {
     "wheels": OutputSpec(100.0, "sensor_msgs/JointState on ~/wheels (scenes with reaction wheels only)"),
     "torque_breakdown": OutputSpec(
         100.0,
-        "rigid_rot_msgs/TorqueBreakdown on ~/torque_breakdown (N*m, body frame; every torque by source: scenes where a torque acts)",
+        "rigid_rot_msgs/TorqueBreakdown on ~/torque_breakdown (N*m, body frame; every torque by source: "
+        "scenes where a torque acts)",
     ),
 }
 
@@ -443,6 +444,31 @@ SCENE_SCHEMA: dict[str, Any] = {
                 }
             ),
             "sensors": _SENSORS,
+            "joint_state_topics": nullable(
+                mapping(
+                    "The reaction wheels' JointState door for ros2_control's topic hardware interface "
+                    "(docs/ros2_control.md); needs actuators.reaction_wheels.",
+                    {
+                        "commands": text(
+                            "Topic of the sensor_msgs/JointState commands: effort (N*m) per named wheel, held "
+                            "until the next command for that wheel."
+                        ),
+                        "states": text(
+                            "Topic of the sensor_msgs/JointState states: position (rad, unwrapped), velocity "
+                            "(rad/s), effort (N*m) per wheel, at outputs.wheels."
+                        ),
+                    },
+                    required=["commands", "states"],
+                )
+            ),
+            "simulation_interfaces_namespace": nullable(
+                text(
+                    "Where the simulation_interfaces services and the SimulateSteps action are served: '~' (the "
+                    "node's private names, the default; quote it, a bare ~ is YAML's null), '/' (root names, "
+                    "as generic clients look for them) or any namespace.",
+                    default="~",
+                )
+            ),
             "commands": nullable(
                 mapping(
                     "Settings of the torque command inputs.",

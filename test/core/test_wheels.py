@@ -175,6 +175,7 @@ def test_advance_k_equals_k_single_steps_bit_for_bit(cls):
     assert a.q.tobytes() == b.q.tobytes()
     assert a.omega.tobytes() == b.omega.tobytes()
     assert a.wheel_speeds.tobytes() == b.wheel_speeds.tobytes()
+    assert a.wheel_angles.tobytes() == b.wheel_angles.tobytes()
 
 
 @pytest.mark.parametrize("cls", list(GYROSTAT_METHODS.values()))
@@ -191,3 +192,58 @@ def test_a_wheel_set_that_leaves_no_body_is_refused():
         wheel_model(np.diag(MOMENTS), ["big"], [[1, 0, 0]], [10.0], [0.1], [100.0])
     with pytest.raises(ValueError, match="axis"):
         wheel_model(np.diag(MOMENTS), ["zero"], [[0, 0, 0]], [0.1], [0.1], [100.0])
+
+
+# ------------------------------------------------------------------ wheel angles (eq. (8))
+
+
+@pytest.mark.parametrize("cls", list(GYROSTAT_METHODS.values()))
+def test_wheel_angle_of_a_single_wheel_follows_the_closed_form_and_is_never_wrapped(cls):
+    # body at rest, one wheel on the z principal axis, constant motor torque u:
+    # dOmega/dt = u I3 / (J (I3 - J)) = a, so theta(t) = Omega0 t + a t^2 / 2 (rad, relative to the body)
+    spin, u, speed0 = 0.5, 0.1, 3.0
+    wheels = wheel_model(np.diag(MOMENTS), ["z"], [[0, 0, 1]], [spin], [0.2], [1000.0])
+    g = cls(MOMENTS, 0.01, wheels=wheels, wheel_speeds0=[speed0])
+    g.set_wheel_commands([u])
+    a = u * MOMENTS[2] / (spin * (MOMENTS[2] - spin))
+    angles = []
+    for _ in range(40):
+        g.advance(50)
+        angles.append(float(g.wheel_angles[0]))
+    t = g.t
+    assert t == pytest.approx(20.0)
+    assert g.wheel_angles[0] == pytest.approx(speed0 * t + 0.5 * a * t * t, rel=1e-12)
+    assert g.wheel_angles[0] > 20 * math.pi  # many turns: unwrapped, never reduced to [-pi, pi]
+    assert np.all(np.diff(angles) > 0.0)  # continuous and increasing with a positive speed
+
+
+@pytest.mark.parametrize("cls", list(GYROSTAT_METHODS.values()))
+def test_wheel_angles_drive_nothing_and_do_not_change_the_steps(cls):
+    # the angles feed back into nothing and (dopri5) stay out of the error control, so a huge
+    # initial angle leaves every other state bit for bit as it was
+    wheels = three_wheels()
+    common = dict(wheels=wheels, omega0=(0.1, 0.3, -0.2), wheel_speeds0=(50.0, -20.0, 30.0))
+    small = cls(MOMENTS, 0.05, ConstantTorque(np.array([0.01, 0.0, -0.02])), **common)
+    large = cls(MOMENTS, 0.05, ConstantTorque(np.array([0.01, 0.0, -0.02])), wheel_angles0=[1e7, -3.0, 0.5], **common)
+    for g in (small, large):
+        g.set_wheel_commands([0.05, -0.1, 0.02])
+        g.advance(200)
+    assert np.array_equal(small.q, large.q) and np.array_equal(small.omega, large.omega)
+    assert np.array_equal(small.wheel_speeds, large.wheel_speeds)
+    moved = small.wheel_angles
+    assert large.wheel_angles == pytest.approx(moved + [1e7, -3.0, 0.5], rel=1e-12, abs=1e-6)
+
+
+@pytest.mark.parametrize("cls", list(GYROSTAT_METHODS.values()))
+def test_set_state_replaces_or_keeps_the_wheel_angles(cls):
+    wheels = three_wheels()
+    g = cls(MOMENTS, 0.05, wheels=wheels, wheel_speeds0=(1.0, 2.0, 3.0))
+    g.advance(10)
+    kept = g.wheel_angles.copy()
+    assert np.all(kept != 0.0)
+    g.set_state(g.t, g.q, g.omega)
+    assert np.array_equal(g.wheel_angles, kept)
+    g.set_state(g.t, g.q, g.omega, wheel_angles=[0.0, 1.0, 2.0])
+    assert g.wheel_angles.tolist() == [0.0, 1.0, 2.0]
+    with pytest.raises(ValueError, match="wheel angles must be finite"):
+        g.set_state(g.t, g.q, g.omega, wheel_angles=[0.0, math.inf, 2.0])

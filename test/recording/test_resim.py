@@ -135,3 +135,51 @@ def test_report_says_when_the_numerical_core_changed_since_the_recording(tmp_pat
     report = resimulate(path)
     assert report.core_changed is True
     assert "changed since the recording" in report.format()
+
+
+def record_wheels(path: Path, tamper_angle_at: int | None = None):
+    """The wheel_slew scene run as the node runs it, ~/wheels (angles, speeds, torques) recorded beside ~/state,
+    with wheel commands from a JointState door's topic; ``tamper_angle_at``: a state index whose recorded wheel
+    angle is changed in its last bit."""
+    from sensor_msgs.msg import JointState
+
+    scene_path = SCENES / "wheel_slew.yaml"
+    scene = load_scene(scene_path)
+    sim = Simulator(scene, method="rk4")
+    with RunRecorder(
+        path,
+        scene_text=scene_path.read_text(),
+        scene_file=str(scene_path),
+        parameters={"integrator": "rk4"},
+        events_topic="/rigid_rot_sim/sim_events",
+        integrator={"method": sim.method, "dt": sim.dt, "options": sim.options},
+        sim_seconds=lambda: sim.t,
+    ) as run:
+        run.add_topic("/rigid_rot_sim/state", RigidBodyState, role="state")
+        run.add_topic("/rigid_rot_sim/wheels", JointState, role="wheels")
+        sim.add_observer(NodeRecording(run, sim, None))
+        for i, k in enumerate(range(0, 3000, 50)):
+            if k == 1200:  # a command of the door, as its source names it: replayed by resim from the event
+                sim.submit_wheel_torques("/rw_joint_commands", [0.05, -0.02, 0.0])
+            sim.advance_to(k)
+            snapshot = sim.snapshot()
+            run.record("/rigid_rot_sim/state", conversions.snapshot_to_state(snapshot, "odom", "base_link"))
+            wheels = conversions.snapshot_to_joint_state(snapshot, "base_link")
+            if i == tamper_angle_at:
+                wheels.position[2] = float(np.nextafter(wheels.position[2], np.inf))
+            run.record("/rigid_rot_sim/wheels", wheels)
+    return sim.snapshot()
+
+
+def test_a_wheel_run_reproduces_the_wheel_angles_bit_for_bit(tmp_path):
+    last = record_wheels(tmp_path / "run.mcap")
+    assert abs(last.wheel_angles[2]) > 2 * np.pi and last.wheel_angles[0] != 0.0  # turned, and commanded
+    report = resimulate(tmp_path / "run.mcap")
+    assert report.identical and report.wheel_states == 60 and report.wheel_mismatches == 0, report.format()
+    assert report.digest_verdict == "equal"
+    assert "60 wheel states" in report.verdict
+    record_wheels(tmp_path / "tampered.mcap", tamper_angle_at=40)
+    tampered = resimulate(tmp_path / "tampered.mcap")
+    assert not tampered.identical and tampered.wheel_mismatches == 1
+    assert tampered.max_attitude_error == 0.0 and tampered.digest_verdict == "equal"  # the body agrees
+    assert "1 of 60 wheel states differ" in tampered.verdict

@@ -152,8 +152,12 @@ def _result(h, goal_handle):
     return future.result()
 
 
-def test_simulate_steps_action_feedback_per_step_cancel_and_refusal(harness, monkeypatch):
+def test_simulate_steps_action_feedback_at_a_bounded_rate_cancel_and_refusal(harness, monkeypatch):
+    import time
+
     from rclpy.action.server import ServerGoalHandle
+
+    from rigid_rot_sim.ros.simulate_steps import FEEDBACK_RATE
 
     published = []  # every feedback the server sends (DDS may drop older ones: keep-last depth 10)
     send = ServerGoalHandle.publish_feedback
@@ -161,7 +165,7 @@ def test_simulate_steps_action_feedback_per_step_cancel_and_refusal(harness, mon
         ServerGoalHandle,
         "publish_feedback",
         lambda self, message: (
-            published.append((message.completed_steps, message.remaining_steps)),
+            published.append((message.completed_steps, message.remaining_steps, time.monotonic())),
             send(self, message),
         )[1],
     )
@@ -170,12 +174,19 @@ def test_simulate_steps_action_feedback_per_step_cancel_and_refusal(harness, mon
     assert SimulatorFeatures.STEP_SIMULATION_ACTION in features.features
     client = ActionClient(h.client, SimulateSteps, "/rigid_rot_sim/simulate_steps")
     feedback = []
-    goal = _send_goal(h, client, 40, feedback)
+    steps = 20_000
+    goal = _send_goal(h, client, steps, feedback)
     assert goal.accepted
     done = _result(h, goal)
     assert done.status == 4 and done.result.result.result == Result.RESULT_OK  # GoalStatus.STATUS_SUCCEEDED
-    assert h.node.run.sim.step_index == 40 and h.node.run.sim.paused
-    assert published == [(n, 40 - n) for n in range(1, 41)]  # one feedback after each step, in order
+    assert h.node.run.sim.step_index == steps and h.node.run.sim.paused
+    # feedback after complete steps, in order, the first after the first step and always the last;
+    # at most FEEDBACK_RATE per second of wall time, not one per step
+    assert [p[:2] for p in published[:1] + published[-1:]] == [(1, steps - 1), (steps, 0)]
+    assert all(a[0] < b[0] and a[0] + a[1] == steps for a, b in zip(published, published[1:], strict=False))
+    intervals = [b[2] - a[2] for a, b in zip(published[:-2], published[1:-1], strict=True)]
+    assert all(gap >= 1.0 / FEEDBACK_RATE - 1e-3 for gap in intervals)  # the last one may come sooner
+    assert len(published) < steps / 10
     # (what the client received of those depends on when its feedback reader matched: checked below)
 
     # cancel: a long goal, canceled once it has started; it stops before the next step

@@ -96,7 +96,7 @@ def test_commands_and_chunking_give_the_same_bits(method):
         runs.append(sim.snapshot())
     a, b = runs
     assert a.t == b.t == 20.0
-    for field in ("orientation", "angular_velocity_body", "wheel_speeds", "angular_momentum_world"):
+    for field in ("orientation", "angular_velocity_body", "wheel_speeds", "wheel_angles", "angular_momentum_world"):
         assert getattr(a, field).tobytes() == getattr(b, field).tobytes(), field
     names = [name for name, _ in a.torque_sources]
     assert names == ["~/torque", "reaction_wheels", "gravity_gradient"]
@@ -112,6 +112,41 @@ def test_reset_restores_the_wheel_speeds_and_drops_wheel_commands():
     sim.reset()
     np.testing.assert_array_equal(sim.snapshot().wheel_speeds, first.wheel_speeds)
     np.testing.assert_array_equal(sim.snapshot().wheel_torques, [0.0, 0.0, 0.0])
+    np.testing.assert_array_equal(sim.snapshot().wheel_angles, [0.0, 0.0, 0.0])  # a reset zeroes the angles
+
+
+def test_wheel_angles_integrate_the_speeds_and_survive_set_state_and_an_integrator_change():
+    sim = Simulator(parse_scene_text(SINGLE_WHEEL % "rk4"))
+    assert sim.snapshot().wheel_angles.tolist() == [0.0]
+    sim.advance(1000)  # 10 s: 5 s at 0.05 N*m, then coasting
+    a = 0.05 * 15.0 / (0.5 * 14.5)
+    angle = 10.0 * 10.0 + 0.5 * a * 5.0**2 + a * 5.0 * 5.0
+    assert sim.snapshot().wheel_angles[0] == pytest.approx(angle, rel=1e-12)
+    before = sim.snapshot().wheel_angles.copy()
+    sim.set_state([0.0, 0.0, 0.0, 1.0], [0.0, 0.0, 0.1])  # the body's state: the wheels keep speed and angle
+    np.testing.assert_array_equal(sim.snapshot().wheel_angles, before)
+    sim.set_integrator("dopri5", 0.01, {})
+    np.testing.assert_array_equal(sim.snapshot().wheel_angles, before)
+    sim.advance(100)
+    assert sim.snapshot().wheel_angles[0] > before[0]
+
+
+def test_a_topic_wheel_command_holds_until_the_next_schedule_segment_replaces_it():
+    """The rule (docs/spacecraft.md): the latest wheel command, from the topic, the JointState door or a
+    schedule segment starting, sets every wheel torque it gives; a segment gives all of them at its start."""
+    sim = Simulator(parse_scene_text(SINGLE_WHEEL % "rk4"))  # segments: 0.05 N*m from t = 0, 0 from t = 5 s
+    sim.advance(100)
+    assert sim.snapshot().wheel_torques.tolist() == [0.05]
+    sim.submit_wheel_torques("~/wheel_torque", [-0.08])  # replaces the schedule's torque from now on
+    sim.advance(1)
+    assert sim.snapshot().wheel_torques.tolist() == [-0.08]
+    sim.advance(398)  # t = 4.99 s: still the topic's
+    assert sim.snapshot().wheel_torques.tolist() == [-0.08]
+    sim.advance(2)  # t = 5.01 s: the segment that starts at 5 s replaced it
+    assert sim.snapshot().wheel_torques.tolist() == [0.0]
+    sim.submit_wheel_torques("~/wheel_torque", [0.03])  # after the last segment: holds for good
+    sim.advance(1000)
+    assert sim.snapshot().wheel_torques.tolist() == [0.03]
 
 
 @pytest.mark.parametrize(

@@ -1,8 +1,9 @@
 """Integrators of a gyrostat: a body with reaction wheels, under gravity gradient and a body torque.
 
-The state is ``y = (q, omega, Omega)``: q (x, y, z, w) principal -> world, omega (rad/s,
-principal frame) and the n wheel speeds Omega (rad/s, relative to the body); the
-equations are those of :mod:`rigid_rot_sim.core.wheels`. Two methods, both compiled
+The state is ``y = (q, omega, Omega, theta)``: q (x, y, z, w) principal -> world, omega (rad/s,
+principal frame), the n wheel speeds Omega (rad/s, relative to the body) and the n wheel
+angles theta (rad, relative to the body, unwrapped: continuous, never reduced to [-pi, pi]);
+the equations are those of :mod:`rigid_rot_sim.core.wheels` (eq. (8): dtheta/dt = Omega). Two methods, both compiled
 (:func:`rigid_rot_sim.core.jit.compiled`, no fastmath: the same bits run to run):
 
 * ``rk4``: the classical RK4 on y, the quaternion normalised after each step (order 4);
@@ -12,7 +13,10 @@ equations are those of :mod:`rigid_rot_sim.core.wheels`. Two methods, both compi
   on every multiple of dt. Its own steps do not depend on where it reports: the solver
   (its time, state, next step size and last step's stages) is carried from call to call,
   so ``advance(k)`` equals k calls of ``advance(1)`` bit for bit. It restarts from the
-  reported state when the state, the body torque or the wheel commands are replaced.
+  reported state when the state, the body torque or the wheel commands are replaced. Its
+  error control runs over (q, omega, Omega) only: the angles drive nothing, and (as CVODES
+  does for quadratures by default) leaving them out keeps the body's steps exactly those
+  of a run without them, however large the unwrapped angles grow.
 
 What may change between steps: ``torque`` (None or a :class:`~rigid_rot_sim.core.torque.ConstantTorque`,
 principal frame: the commanded body torque) and :meth:`GyrostatIntegrator.set_wheel_commands`
@@ -44,7 +48,20 @@ _MAX_STEPS_PER_OUTPUT = 1_000_000
 
 
 @compiled
-def rk4_advance(t_anchor, k0, dt, n, y, moments, wheels, hub_inverse, external, orbit, commands, applied):
+def rk4_advance(
+    t_anchor: float,
+    k0: int,
+    dt: float,
+    n: int,
+    y: np.ndarray,
+    moments: np.ndarray,
+    wheels: tuple[np.ndarray, ...],
+    hub_inverse: np.ndarray,
+    external: np.ndarray,
+    orbit: np.ndarray,
+    commands: np.ndarray,
+    applied: np.ndarray,
+) -> tuple[int, int]:
     """Steps k0 .. k0 + n - 1 of RK4 from ``y`` (updated in place): (steps done, status).
 
     ``applied`` receives the motor torques (N*m) that acted at the start of the last step.
@@ -116,25 +133,25 @@ _T, _H, _T_OLD, _H_OLD, _FSAL = range(5)
 
 @compiled
 def dopri5_advance(
-    t_anchor,
-    k0,
-    dt,
-    n,
-    y_out,
-    solver,
-    y_int,
-    y_old,
-    stages,
-    rtol,
-    atol,
-    moments,
-    wheels,
-    hub_inverse,
-    external,
-    orbit,
-    commands,
-    applied,
-):
+    t_anchor: float,
+    k0: int,
+    dt: float,
+    n: int,
+    y_out: np.ndarray,
+    solver: np.ndarray,
+    y_int: np.ndarray,
+    y_old: np.ndarray,
+    stages: np.ndarray,
+    rtol: float,
+    atol: float,
+    moments: np.ndarray,
+    wheels: tuple[np.ndarray, ...],
+    hub_inverse: np.ndarray,
+    external: np.ndarray,
+    orbit: np.ndarray,
+    commands: np.ndarray,
+    applied: np.ndarray,
+) -> tuple[int, int]:
     """Report steps k0 + 1 .. k0 + n (times ``t_anchor + k dt``) into ``y_out``: (reports done, status).
 
     ``solver`` (5,) = (t, h, t_old, h_old, fsal valid), ``y_int`` the solver's state at t,
@@ -143,6 +160,7 @@ def dopri5_advance(
     On failure y_out holds the last good report.
     """
     m = y_out.shape[0]
+    controlled = min(m, 7 + applied.shape[0])  # (q, omega, Omega): the angles are not error-controlled
     stage = np.empty(m)
     new = np.empty(m)
     ks = np.empty((7, m))
@@ -178,13 +196,15 @@ def dopri5_advance(
             err = 0.0
             finite = True
             for i in range(m):
+                finite = finite and math.isfinite(new[i]) and math.isfinite(ks[6, i])
+                if i >= controlled:
+                    continue
                 e = 0.0
                 for r in range(7):
                     e += _E[r] * ks[r, i]
                 x = h * e / (atol + rtol * max(abs(y_int[i]), abs(new[i])))
                 err += x * x
-                finite = finite and math.isfinite(new[i]) and math.isfinite(ks[6, i])
-            err = math.sqrt(err / m)
+            err = math.sqrt(err / controlled)
             if not (finite and math.isfinite(err)):
                 solver[_H] = 0.2 * h  # retry smaller: a step size underflow ends it
                 continue
@@ -234,9 +254,13 @@ class GyrostatIntegrator(Integrator):
         The orbit of the gravity-gradient torque (:data:`~rigid_rot_sim.core.wheels.NO_ORBIT`: none).
     wheel_speeds0 : array_like, shape (n,)
         Initial wheel speeds, rad/s relative to the body.
+    wheel_angles0 : array_like, shape (n,)
+        Initial wheel angles, rad relative to the body (default 0).
     """
 
     fixed_step: ClassVar[bool] = True
+    #: The body torque the method last saw (set by each method before the base initialiser runs).
+    _torque_seen: Any
 
     def __init__(
         self,
@@ -247,6 +271,7 @@ class GyrostatIntegrator(Integrator):
         wheels: WheelModel | None = None,
         orbit: OrbitModel = NO_ORBIT,
         wheel_speeds0: Any = None,
+        wheel_angles0: Any = None,
         t0: float = 0.0,
         q0: Any = (0.0, 0.0, 0.0, 1.0),
         omega0: Any = (0.0, 0.0, 0.0),
@@ -256,6 +281,7 @@ class GyrostatIntegrator(Integrator):
         self.orbit = orbit
         n = self.wheels.count
         self.wheel_speeds = np.zeros(n) if wheel_speeds0 is None else np.array(wheel_speeds0, dtype=float).reshape(n)
+        self.wheel_angles = np.zeros(n) if wheel_angles0 is None else np.array(wheel_angles0, dtype=float).reshape(n)
         self.wheel_commands = np.zeros(n)
         self._wheel_data = self.wheels.compiled()
         self._orbit_data = orbit.compiled()
@@ -271,17 +297,20 @@ class GyrostatIntegrator(Integrator):
 
     # ------------------------------------------------------------------ state
 
-    def set_state(self, t: float, q: Any, omega: Any, wheel_speeds: Any = None) -> None:
-        """Replace the state; ``wheel_speeds`` (rad/s) None keeps the wheels' speeds."""
-        if wheel_speeds is not None:
-            speeds = np.array(wheel_speeds, dtype=float).reshape(self.wheels.count)
-            if not np.all(np.isfinite(speeds)):
-                raise ValueError(f"wheel speeds must be finite, got {speeds}")
-            self.wheel_speeds = speeds
+    def set_state(self, t: float, q: Any, omega: Any, wheel_speeds: Any = None, wheel_angles: Any = None) -> None:
+        """Replace the state; ``wheel_speeds`` (rad/s) and ``wheel_angles`` (rad) None keep the wheels' own."""
+        values = {}
+        for name, given in (("speeds", wheel_speeds), ("angles", wheel_angles)):
+            if given is not None:
+                values[name] = np.array(given, dtype=float).reshape(self.wheels.count)
+                if not np.all(np.isfinite(values[name])):
+                    raise ValueError(f"wheel {name} must be finite, got {values[name]}")
+        self.wheel_speeds = values.get("speeds", self.wheel_speeds)
+        self.wheel_angles = values.get("angles", self.wheel_angles)
         super().set_state(t, q, omega)
 
     def _on_state_change(self) -> None:
-        self._y = np.concatenate((self.q, self.omega, self.wheel_speeds))
+        self._y = np.concatenate((self.q, self.omega, self.wheel_speeds, self.wheel_angles))
         self._anchor_t, self._anchor_k, self._anchor_dt = self.t, 0, self.dt
         self._restart()
 
@@ -317,14 +346,19 @@ class GyrostatIntegrator(Integrator):
         if torque is not self._torque_seen:
             self._torque_seen = torque
             self._restart()
-        return np.zeros(3) if torque is None else np.ascontiguousarray(torque.value, dtype=float)
+        if torque is None:
+            return np.zeros(3)
+        assert isinstance(torque, ConstantTorque)  # _check_torque refused anything else
+        return np.ascontiguousarray(torque.value, dtype=float)
 
     def _commit(self, steps: int) -> None:
         if steps:
             y = self._y
             self.q = y[:4].copy()
             self.omega = y[4:7].copy()
-            self.wheel_speeds = y[7:].copy()
+            n = self.wheels.count
+            self.wheel_speeds = y[7 : 7 + n].copy()
+            self.wheel_angles = y[7 + n :].copy()
             self._anchor_k += steps
             self.t = self._anchor_t + self._anchor_k * self.dt
             self.n_steps += steps
@@ -398,10 +432,10 @@ class GyrostatDopri5(GyrostatIntegrator):
         super().__init__(*args, **kwargs)
 
     def _restart(self) -> None:
-        m = 7 + self.wheels.count
+        m = 7 + 2 * self.wheels.count
         h = self._solver[_H] if self._solver[_H] > 0.0 else self.dt
         self._solver = np.array([self.t, h, self.t, 0.0, 0.0])
-        self._y_int = np.concatenate((self.q, self.omega, self.wheel_speeds))
+        self._y_int = np.concatenate((self.q, self.omega, self.wheel_speeds, self.wheel_angles))
         self._y_old = self._y_int.copy()
         self._stages = np.zeros((7, m))
 
