@@ -10,6 +10,7 @@ messages carry SI units (REP 103) and quaternions are (x, y, z, w) on both sides
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from typing import TYPE_CHECKING
 
 import numpy as np
@@ -33,6 +34,7 @@ from visualization_msgs.msg import Marker, MarkerArray
 
 from rigid_rot_msgs.msg import HeavyTopState, RejectedCommand, RigidBodyState, TorqueBreakdown, WheelTorques
 from rigid_rot_msgs.srv import ComputeInertia
+from rigid_rot_sim.core import quaternion
 from rigid_rot_sim.core.inertia import MassProperties, principal_orientation
 from rigid_rot_sim.message_fields import (  # noqa: F401 (the readers are part of this module's API)
     quaternion_to_array,
@@ -442,19 +444,26 @@ def gyro_to_imu(reading, t: float, body_frame: str, variance: float) -> Imu:
     return msg
 
 
-def star_tracker_pose(orientation, t: float, world_frame: str, covariance) -> PoseWithCovarianceStamped:
+def star_tracker_pose(
+    orientation: Sequence[float], t: float, world_frame: str, covariance_body: np.ndarray
+) -> PoseWithCovarianceStamped:
     """geometry_msgs/PoseWithCovarianceStamped of a star tracker attitude (x, y, z, w; body -> world).
 
-    Position (0, 0, 0), not measured (variance ``UNMEASURED_POSITION_VARIANCE``); the rotation
-    block is ``covariance`` (3x3, rad^2): the attitude error's, about the body axes.
+    Position (0, 0, 0), not measured (variance ``UNMEASURED_POSITION_VARIANCE``). The rotation
+    block is about the fixed axes (those of ``world_frame``), as PoseWithCovariance defines it:
+    ``covariance_body`` (3x3, rad^2, the attitude error's about the body axes) rotated by the
+    published attitude, R C R^T. (The error vector about the fixed axes is R(q) δθ = R(q_m) δθ
+    for q_m = q ⊗ exp(δθ), so the published attitude rotates it exactly as the true one would.)
     """
     msg = PoseWithCovarianceStamped()
     msg.header.stamp = seconds_to_time(t)
     msg.header.frame_id = world_frame
+    attitude = tuple(float(v) for v in orientation)
     q = msg.pose.pose.orientation
-    q.x, q.y, q.z, q.w = np.asarray(orientation, dtype=float).tolist()
+    q.x, q.y, q.z, q.w = attitude
+    rotation = np.array([quaternion.rotate(attitude, axis) for axis in np.eye(3)]).T  # columns: body axes in world
     block = np.zeros((6, 6))
     block[:3, :3] = np.eye(3) * UNMEASURED_POSITION_VARIANCE
-    block[3:, 3:] = np.asarray(covariance, dtype=float).reshape(3, 3)
+    block[3:, 3:] = rotation @ np.asarray(covariance_body, dtype=float).reshape(3, 3) @ rotation.T
     msg.pose.covariance = block.reshape(36).tolist()
     return msg

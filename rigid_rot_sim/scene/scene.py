@@ -59,7 +59,7 @@ from rigid_rot_sim.scene.scene_schema import (
     TORQUE_MESSAGE_TYPES,
 )
 from rigid_rot_sim.scene.schema import validated
-from rigid_rot_sim.scene.spacecraft import Spacecraft, parse_spacecraft
+from rigid_rot_sim.scene.spacecraft import GravityGradient, Spacecraft, parse_spacecraft
 
 __all__ = [
     "SceneError",
@@ -453,6 +453,11 @@ def _scene(spec: Mapping[str, Any], source: str, text: str) -> Scene:
     if gravity is not None and spacecraft:
         raise ValueError("actuators / environment: not supported in a gravity (heavy top) scene; drop gravity")
     duration = spec.get("duration")
+    dt = float((spec.get("integrator") or {}).get("dt", IntegratorSpec.dt))
+    if duration is not None:
+        _at("duration", _duration_steps, float(duration), dt)
+    if spacecraft.gravity_gradient is not None:
+        _at("environment.gravity_gradient.orbit", _orbit_rate, spacecraft.gravity_gradient)
     qos = spec.get("qos") or {}
     commands = spec.get("commands") or {}
     recording = spec.get("recording")
@@ -473,7 +478,7 @@ def _scene(spec: Mapping[str, Any], source: str, text: str) -> Scene:
         spacecraft=spacecraft,
         duration=None if duration is None else float(duration),
         real_time_factor=float(spec.get("real_time_factor", 1.0)),
-        outputs=OutputRates(_sensor_rates(sensors, {name: float(rate) for name, rate in outputs.items()})),
+        outputs=OutputRates(_sensor_rates(sensors, _output_rates(outputs))),
         sensors=sensors,
         qos=OutputQos(
             reliability=qos.get("reliability", OutputQos.reliability), depth=qos.get("depth", OutputQos.depth)
@@ -484,7 +489,7 @@ def _scene(spec: Mapping[str, Any], source: str, text: str) -> Scene:
             max_torque=float(commands.get("max_torque", 0.0)),
             qos_depth=commands.get("qos_depth", limits.DEFAULT_COMMAND_DEPTH),
         ),
-        lockstep=lockstep_spec(spec.get("lockstep"), topics, float((spec.get("integrator") or {}).get("dt", 0.001))),
+        lockstep=lockstep_spec(spec.get("lockstep"), topics, dt),
         source=source,
         text=text,
     )
@@ -672,6 +677,36 @@ def _sensors(spec: Mapping[str, Any]) -> Sensors:
     )
 
 
+def _duration_steps(duration: float, dt: float) -> int:
+    """The steps a duration (s) implies at ``dt`` (s): at least one (``step_at_or_after``, the run's rule)."""
+    steps = step_at_or_after(duration, dt)
+    if steps < 1:
+        raise ValueError(
+            f"{duration!r} s is not one step of integrator.dt {dt:g} s (the run would end before it began; "
+            "null runs unbounded)"
+        )
+    return steps
+
+
+def _orbit_rate(gravity_gradient: GravityGradient) -> float:
+    """The orbit's frequency (Hz, n / 2 pi) within the rate limits: its square scales the torque."""
+    try:
+        n = gravity_gradient.model().mean_motion
+    except (ZeroDivisionError, OverflowError):  # radius**3 underflowed to 0
+        n = math.inf
+    if not (math.isfinite(n) and n / (2.0 * math.pi) <= limits.RATE_RANGE[1]):
+        raise ValueError(
+            f"radius {gravity_gradient.radius!r} m and mu {gravity_gradient.mu!r} m^3/s^2 imply a mean motion of "
+            f"{n:g} rad/s, more than {limits.RATE_RANGE[1]:g} orbits per second"
+        )
+    return n / (2.0 * math.pi)
+
+
+def _output_rates(outputs: Mapping[str, Any]) -> dict[str, float]:
+    """Each rate 0 or within the limits (:func:`limits.check_rate`: a period of whole steps)."""
+    return {name: _at(f"outputs.{name}", limits.check_rate, float(rate)) for name, rate in outputs.items()}
+
+
 def _sensor_rates(sensors: Sensors, rates: dict[str, float]) -> dict[str, float]:
     """The output rates with ~/imu at the gyro's rate and ~/star_tracker at the star tracker's."""
     for output, sensor, key in (
@@ -682,6 +717,7 @@ def _sensor_rates(sensors: Sensors, rates: dict[str, float]) -> dict[str, float]
             if output == "star_tracker" and rates.get(output, 0.0) > 0.0:
                 raise ValueError("outputs.star_tracker: needs a sensors.star_tracker section (its noise)")
             continue
+        _at(key, limits.check_rate, sensor.rate)
         if output in rates and rates[output] != sensor.rate:
             raise ValueError(
                 f"outputs.{output}: {rates[output]:g} Hz differs from {key} {sensor.rate:g} Hz "
