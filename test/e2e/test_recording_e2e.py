@@ -435,7 +435,7 @@ def test_rigid_rot_run_record_writes_a_complete_bag_with_sim_time_log_times(tmp_
 @pytest.mark.parametrize(
     "where, reason",
     [
-        ("a_file/run.mcap", "Not a directory"),  # a file where a directory must be
+        ("a_file/run.mcap", "File exists"),  # a file where a directory must be
         ("/proc/rigid_rot_no_such_dir/run.mcap", "No such file or directory"),  # cannot be created (issue 29)
         ("/dev/full", "No space left on device"),  # a full disk: the file opens, its first write fails (ENOSPC)
     ],
