@@ -27,13 +27,20 @@ from geometry_msgs.msg import (
     Vector3Stamped,
 )
 from nav_msgs.msg import Odometry
+from numpy.typing import ArrayLike
 from rosgraph_msgs.msg import Clock
 from sensor_msgs.msg import Imu, JointState
 from std_msgs.msg import ColorRGBA
 from visualization_msgs.msg import Marker, MarkerArray
 
-from rigid_rot_msgs.msg import HeavyTopState, RejectedCommand, RigidBodyState, TorqueBreakdown, WheelTorques
-from rigid_rot_msgs.srv import ComputeInertia
+from rigid_rot_msgs.msg import (  # type: ignore[attr-defined]  # generated, untyped
+    HeavyTopState,
+    RejectedCommand,
+    RigidBodyState,
+    TorqueBreakdown,
+    WheelTorques,
+)
+from rigid_rot_msgs.srv import ComputeInertia  # type: ignore[attr-defined]  # generated, untyped
 from rigid_rot_sim.core import quaternion
 from rigid_rot_sim.core.inertia import MassProperties, principal_orientation
 from rigid_rot_sim.message_fields import (  # noqa: F401 (the readers are part of this module's API)
@@ -53,13 +60,13 @@ def point_to_array(point: Point) -> np.ndarray:
     return np.array([point.x, point.y, point.z], dtype=float)
 
 
-def array_to_point(vector: np.ndarray) -> Point:
+def array_to_point(vector: ArrayLike) -> Point:
     """ndarray (3,) -> geometry_msgs/Point, m."""
     x, y, z = (float(value) for value in np.asarray(vector, dtype=float).reshape(3))
     return Point(x=x, y=y, z=z)
 
 
-def array_to_quaternion(quat_xyzw: np.ndarray) -> Quaternion:
+def array_to_quaternion(quat_xyzw: ArrayLike) -> Quaternion:
     """ndarray (4,) scalar-last -> geometry_msgs/Quaternion (same order, no renormalisation)."""
     x, y, z, w = (float(value) for value in np.asarray(quat_xyzw, dtype=float).reshape(4))
     return Quaternion(x=x, y=y, z=z, w=w)
@@ -226,7 +233,7 @@ def vector_stamped(values, t: float, frame_id: str) -> Vector3Stamped:
 
 def snapshot_to_top_state(snapshot: StateSnapshot, world_frame: str) -> HeavyTopState:
     """Heavy-top Euler angles (z-x-z, rad) and conserved momenta of a gravity scene's snapshot."""
-    if snapshot.euler_zxz is None:
+    if snapshot.euler_zxz is None or snapshot.p_phi is None or snapshot.p_psi is None:
         raise ValueError("snapshot has no heavy-top quantities (not a gravity scene)")
     phi, theta, psi = (float(v) for v in snapshot.euler_zxz)
     msg = HeavyTopState(

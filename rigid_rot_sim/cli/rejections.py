@@ -14,7 +14,7 @@ another publisher at the same time would be taken for ours.)
 
 from __future__ import annotations
 
-from collections.abc import Iterable
+from collections.abc import Callable, Iterable
 from typing import Any
 
 from rclpy.node import Node
@@ -57,7 +57,7 @@ class RejectionWatch:
 
     def discover(self) -> None:
         """Subscribe to the ~/rejected of each node now subscribed to the command topic."""
-        from rigid_rot_msgs.msg import RejectedCommand
+        from rigid_rot_msgs.msg import RejectedCommand  # type: ignore[attr-defined]  # generated, untyped
         from rigid_rot_sim.ros.qos import REJECTED_QOS
 
         for info in self.node.get_subscriptions_info_by_topic(self.topic):
@@ -68,10 +68,7 @@ class RejectionWatch:
             if not any(p.topic_type == REJECTED_TYPE for p in self.node.get_publishers_info_by_topic(rejected)):
                 continue  # not a rigid_rot_sim node (or its ~/rejected is not on the graph yet)
             self.watched[rejected] = self.node.create_subscription(
-                RejectedCommand,
-                rejected,
-                lambda msg, ns=info.node_namespace, name=info.node_name, peer=peer: self._received(msg, ns, name, peer),
-                REJECTED_QOS,
+                RejectedCommand, rejected, self._listener(info.node_namespace, info.node_name, peer), REJECTED_QOS
             )
 
     def ready(self) -> bool:
@@ -81,6 +78,9 @@ class RejectionWatch:
     def sent(self, frame_id: str, torque: Iterable[float]) -> None:
         """Remember a command published (its frame_id and torque, N*m)."""
         self._sent.add((limits.clip_text(frame_id), tuple(float(v) for v in torque)))
+
+    def _listener(self, namespace: str, name: str, peer: str) -> Callable[[Any], None]:
+        return lambda msg: self._received(msg, namespace, name, peer)
 
     def _received(self, msg: Any, namespace: str, name: str, peer: str) -> None:
         if resolve_source(msg.source, namespace, name) != self.topic:

@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import time
 from collections.abc import Sequence
+from typing import Any
 
 from rclpy.clock import Clock
 from rclpy.clock_type import ClockType
@@ -30,7 +31,7 @@ NAME_GRACE = 3.0
 UNKNOWN_NODE_NAME = "_NODE_NAME_UNKNOWN_"
 
 
-def message_type_name(msg_type: type) -> str:
+def message_type_name(msg_type: Any) -> str:
     """``pkg/msg/Type`` of a generated rclpy message class, as the graph names types."""
     return f"{msg_type.__module__.split('.', 1)[0]}/msg/{msg_type.__name__}"
 

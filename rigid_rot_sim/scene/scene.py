@@ -32,7 +32,7 @@ from __future__ import annotations
 import datetime
 import math
 import os
-from collections.abc import Callable, Iterator, Mapping
+from collections.abc import Callable, Iterator, Mapping, Sequence
 from dataclasses import dataclass
 from typing import Any
 
@@ -210,7 +210,7 @@ class TorqueSchedule:
         Zero before the first segment takes effect.
         """
         value: Vector3 = (0.0, 0.0, 0.0)
-        for segment, step in zip(self.segments, self.change_steps(dt)):
+        for segment, step in zip(self.segments, self.change_steps(dt), strict=True):
             if step <= k:
                 value = segment.torque
         return value
@@ -599,7 +599,7 @@ def _gravity(spec: Mapping[str, Any], point_masses: bool) -> tuple[Gravity, floa
 
 def _initial(spec: Mapping[str, Any]) -> InitialState:
     """A non-zero quaternion, normalised (or the attitude from Euler angles)."""
-    orientation = InitialState.orientation
+    orientation: tuple[float, ...] = InitialState.orientation
     if "orientation" in spec:
         orientation = _floats(validation.quaternion("initial.orientation", _floats(spec["orientation"])))
     elif "euler_zxz" in spec:
@@ -608,7 +608,7 @@ def _initial(spec: Mapping[str, Any]) -> InitialState:
     return InitialState(orientation=orientation, angular_velocity=omega)  # type: ignore[arg-type]
 
 
-def _torque_inputs(items: list[Mapping[str, Any]]) -> tuple[tuple[TopicInput, ...], tuple[TorqueSchedule, ...]]:
+def _torque_inputs(items: Sequence[Mapping[str, Any]]) -> tuple[tuple[TopicInput, ...], tuple[TorqueSchedule, ...]]:
     """Topic names ROS accepts, each listed once; schedule segments in order of their start."""
     topics: list[TopicInput] = []
     schedules: list[TorqueSchedule] = []
@@ -661,13 +661,12 @@ def _integrator(spec: Mapping[str, Any], spacecraft: bool = False) -> Integrator
 def _sensors(spec: Mapping[str, Any]) -> Sensors:
     gyro = spec.get("gyro")
     star_tracker = spec.get("star_tracker")
+    gyro_options: dict[str, Any] = {
+        name: _floats(value) if isinstance(value, list) else float(value) for name, value in (gyro or {}).items()
+    }
     return Sensors(
         seed=spec.get("seed"),
-        gyro=None
-        if gyro is None
-        else GyroModel(
-            **{name: _floats(value) if isinstance(value, list) else float(value) for name, value in gyro.items()}
-        ),
+        gyro=None if gyro is None else GyroModel(**gyro_options),
         star_tracker=None
         if star_tracker is None
         else StarTrackerModel(
