@@ -495,3 +495,24 @@ def test_disk_full_mid_run_stops_the_recording_and_the_simulation_runs_on(tmp_pa
         process.send_signal(signal.SIGINT)
         assert process.wait(timeout=20) == 0, log_path.read_text()
     assert len(BagReader(bag).counts()) > 0  # what was flushed before the error is readable
+
+
+def test_replay_exits_2_with_the_nodes_reason_when_it_refuses_replayed_commands(recorded_run, tmp_path, launch_node):
+    """The recorded run holds commands the node refused (an unknown frame, a force, NaN): replayed into a
+    live node they are refused again, and rigid-rot replay says so (issue 29; it reported success)."""
+    bag, _ = recorded_run
+    node = launch_node("--ros-args", "-p", f"scene:={write_scene(tmp_path)}", name="replay_target")
+    rigid_rot = Path(sys.executable).with_name("rigid-rot")
+    done = subprocess.run(
+        [str(rigid_rot), "replay", str(bag), "--wait", "60", "--rate", "5"],
+        capture_output=True,
+        text=True,
+        timeout=180,
+        env=os.environ,
+    )
+    assert done.returncode == 2 and done.stdout == "", done.stdout + done.stderr
+    (line,) = done.stderr.strip().splitlines()
+    assert line.startswith("rigid-rot replay: error: /rigid_rot_sim rejected "), line
+    assert f"of the {len(COMMANDS)} replayed commands (first on {TORQUE_TOPIC}): " in line, line
+    assert "'no_such_frame'" in line or "force" in line, line  # the node's reason for one of them
+    node.check_alive()
