@@ -14,8 +14,11 @@ is one JSON Schema, :data:`rigid_rot_sim.scene.scene_schema.SCENE_SCHEMA` (expor
 choices, bounds: :mod:`rigid_rot_sim.core.limits`, the ranges of the node's parameters),
 then checks what a schema cannot express, one small function each: a physical inertia
 (positive definite, triangle inequality), the integrator's name in the registry, topic
-and frame names ROS accepts (:mod:`names`), and the rules across sections (gravity needs a
-mass and centre of mass unless point masses give them; no torque inputs with gravity).
+and frame names ROS accepts (:mod:`names`), the rules across sections (gravity needs a
+mass and centre of mass unless point masses give them; no torque inputs with gravity), and
+what rates and durations imply: every output or sensor rate has a period of a finite whole
+number of steps (:func:`~rigid_rot_sim.core.limits.check_rate`), a duration is at least one
+step, an orbit's mean motion is a rate within the limits.
 Every error is a :class:`SceneError` (a ValueError) naming the file, the key and what is
 wrong, in one line, e.g. ``free_tumble.yaml: body.principal_moments[2] must be > 0 kg*m^2, got -1.0``.
 The file itself is read within limits, without YAML aliases (:mod:`bounded_yaml`).
