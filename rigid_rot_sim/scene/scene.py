@@ -17,8 +17,8 @@ then checks what a schema cannot express, one small function each: a physical in
 and frame names ROS accepts (:mod:`names`), the rules across sections (gravity needs a
 mass and centre of mass unless point masses give them; no torque inputs with gravity), and
 what rates and durations imply: every output or sensor rate has a period of a finite whole
-number of steps (:func:`~rigid_rot_sim.core.limits.check_rate`), a duration is at least one
-step, an orbit's mean motion is a rate within the limits.
+number of steps (:func:`~rigid_rot_sim.core.limits.check_rate`), a duration and a hold timeout
+are at least one step, an orbit's mean motion is a rate within the limits.
 Every error is a :class:`SceneError` (a ValueError) naming the file, the key and what is
 wrong, in one line, e.g. ``free_tumble.yaml: body.principal_moments[2] must be > 0 kg*m^2, got -1.0``.
 The file itself is read within limits, without YAML aliases (:mod:`bounded_yaml`).
@@ -458,7 +458,16 @@ def _scene(spec: Mapping[str, Any], source: str, text: str) -> Scene:
     duration = spec.get("duration")
     dt = float((spec.get("integrator") or {}).get("dt", IntegratorSpec.dt))
     if duration is not None:
-        _at("duration", _duration_steps, float(duration), dt)
+        _at("duration", _whole_steps, float(duration), dt, "the run would end before it began; null runs unbounded")
+    for index, topic in enumerate(topics):
+        if topic.timeout is not None:  # counted from the boundary where a command takes effect
+            _at(
+                f"torque_inputs[{index}].hold.timeout",
+                _whole_steps,
+                topic.timeout,
+                dt,
+                "a command would act for no step",
+            )
     if spacecraft.gravity_gradient is not None:
         _at("environment.gravity_gradient.orbit", _orbit_rate, spacecraft.gravity_gradient)
     qos = spec.get("qos") or {}
@@ -679,14 +688,12 @@ def _sensors(spec: Mapping[str, Any]) -> Sensors:
     )
 
 
-def _duration_steps(duration: float, dt: float) -> int:
-    """The steps a duration (s) implies at ``dt`` (s): at least one (``step_at_or_after``, the run's rule)."""
-    steps = step_at_or_after(duration, dt)
+def _whole_steps(seconds: float, dt: float, else_: str) -> int:
+    """The steps a span (s) implies at ``dt`` (s), ``step_at_or_after`` (the run's rule): at least one,
+    else ValueError saying what would happen (``else_``)."""
+    steps = step_at_or_after(seconds, dt)
     if steps < 1:
-        raise ValueError(
-            f"{duration!r} s is not one step of integrator.dt {dt:g} s (the run would end before it began; "
-            "null runs unbounded)"
-        )
+        raise ValueError(f"{seconds!r} s is not one step of integrator.dt {dt:g} s ({else_})")
     return steps
 
 

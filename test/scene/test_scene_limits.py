@@ -246,6 +246,14 @@ def test_a_duration_shorter_than_one_step_is_refused(duration):
     assert message.startswith("bad.yaml: duration: ") and "is not one step of integrator.dt 0.001 s" in message
 
 
+@pytest.mark.parametrize("timeout", ["5.0e-324", "1.0e-300"])
+def test_a_hold_timeout_shorter_than_one_step_is_refused(timeout):
+    """The command would expire on the boundary where it takes effect: it would act for no step."""
+    text = MINIMAL + f"torque_inputs: [{{topic: ~/torque, hold: {{timeout: {timeout}}}}}]\n"
+    message = refused(text)
+    assert "torque_inputs[0].hold.timeout: " in message and "(a command would act for no step)" in message
+
+
 def test_a_duration_of_one_step_or_part_of_one_loads():
     assert parse_scene_text(MINIMAL + "duration: 4.0e-4\nintegrator: {dt: 0.001}\n").duration == 4e-4
 
