@@ -10,6 +10,7 @@ messages carry SI units (REP 103) and quaternions are (x, y, z, w) on both sides
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from typing import TYPE_CHECKING
 
 import numpy as np
@@ -26,13 +27,21 @@ from geometry_msgs.msg import (
     Vector3Stamped,
 )
 from nav_msgs.msg import Odometry
+from numpy.typing import ArrayLike
 from rosgraph_msgs.msg import Clock
 from sensor_msgs.msg import Imu, JointState
 from std_msgs.msg import ColorRGBA
 from visualization_msgs.msg import Marker, MarkerArray
 
-from rigid_rot_msgs.msg import HeavyTopState, RejectedCommand, RigidBodyState, TorqueBreakdown, WheelTorques
-from rigid_rot_msgs.srv import ComputeInertia
+from rigid_rot_msgs.msg import (  # type: ignore[attr-defined]  # generated, untyped
+    HeavyTopState,
+    RejectedCommand,
+    RigidBodyState,
+    TorqueBreakdown,
+    WheelTorques,
+)
+from rigid_rot_msgs.srv import ComputeInertia  # type: ignore[attr-defined]  # generated, untyped
+from rigid_rot_sim.core import quaternion
 from rigid_rot_sim.core.inertia import MassProperties, principal_orientation
 from rigid_rot_sim.message_fields import (  # noqa: F401 (the readers are part of this module's API)
     quaternion_to_array,
@@ -51,13 +60,13 @@ def point_to_array(point: Point) -> np.ndarray:
     return np.array([point.x, point.y, point.z], dtype=float)
 
 
-def array_to_point(vector: np.ndarray) -> Point:
+def array_to_point(vector: ArrayLike) -> Point:
     """ndarray (3,) -> geometry_msgs/Point, m."""
     x, y, z = (float(value) for value in np.asarray(vector, dtype=float).reshape(3))
     return Point(x=x, y=y, z=z)
 
 
-def array_to_quaternion(quat_xyzw: np.ndarray) -> Quaternion:
+def array_to_quaternion(quat_xyzw: ArrayLike) -> Quaternion:
     """ndarray (4,) scalar-last -> geometry_msgs/Quaternion (same order, no renormalisation)."""
     x, y, z, w = (float(value) for value in np.asarray(quat_xyzw, dtype=float).reshape(4))
     return Quaternion(x=x, y=y, z=z, w=w)
@@ -224,7 +233,7 @@ def vector_stamped(values, t: float, frame_id: str) -> Vector3Stamped:
 
 def snapshot_to_top_state(snapshot: StateSnapshot, world_frame: str) -> HeavyTopState:
     """Heavy-top Euler angles (z-x-z, rad) and conserved momenta of a gravity scene's snapshot."""
-    if snapshot.euler_zxz is None:
+    if snapshot.euler_zxz is None or snapshot.p_phi is None or snapshot.p_psi is None:
         raise ValueError("snapshot has no heavy-top quantities (not a gravity scene)")
     phi, theta, psi = (float(v) for v in snapshot.euler_zxz)
     msg = HeavyTopState(
@@ -455,19 +464,26 @@ def gyro_to_imu(reading, t: float, body_frame: str, variance: float) -> Imu:
     return msg
 
 
-def star_tracker_pose(orientation, t: float, world_frame: str, covariance) -> PoseWithCovarianceStamped:
+def star_tracker_pose(
+    orientation: Sequence[float], t: float, world_frame: str, covariance_body: np.ndarray
+) -> PoseWithCovarianceStamped:
     """geometry_msgs/PoseWithCovarianceStamped of a star tracker attitude (x, y, z, w; body -> world).
 
-    Position (0, 0, 0), not measured (variance ``UNMEASURED_POSITION_VARIANCE``); the rotation
-    block is ``covariance`` (3x3, rad^2): the attitude error's, about the body axes.
+    Position (0, 0, 0), not measured (variance ``UNMEASURED_POSITION_VARIANCE``). The rotation
+    block is about the fixed axes (those of ``world_frame``), as PoseWithCovariance defines it:
+    ``covariance_body`` (3x3, rad^2, the attitude error's about the body axes) rotated by the
+    published attitude, R C R^T. (The error vector about the fixed axes is R(q) δθ = R(q_m) δθ
+    for q_m = q ⊗ exp(δθ), so the published attitude rotates it exactly as the true one would.)
     """
     msg = PoseWithCovarianceStamped()
     msg.header.stamp = seconds_to_time(t)
     msg.header.frame_id = world_frame
+    attitude = tuple(float(v) for v in orientation)
     q = msg.pose.pose.orientation
-    q.x, q.y, q.z, q.w = np.asarray(orientation, dtype=float).tolist()
+    q.x, q.y, q.z, q.w = attitude
+    rotation = np.array([quaternion.rotate(attitude, axis) for axis in np.eye(3)]).T  # columns: body axes in world
     block = np.zeros((6, 6))
     block[:3, :3] = np.eye(3) * UNMEASURED_POSITION_VARIANCE
-    block[3:, 3:] = np.asarray(covariance, dtype=float).reshape(3, 3)
+    block[3:, 3:] = rotation @ np.asarray(covariance_body, dtype=float).reshape(3, 3) @ rotation.T
     msg.pose.covariance = block.reshape(36).tolist()
     return msg

@@ -11,6 +11,13 @@ applies each command at the sim time it arrives. With ``--duration S`` the comma
 repeated at ``--rate`` Hz (wall clock) for S seconds and followed by a zero torque, which
 also keeps inputs with a hold timeout alive meanwhile. Waits up to ``--wait`` s for the
 node's subscription first; exit code 1 (message on stderr) when nobody subscribes.
+
+The node may refuse a command it received (a ``--frame`` the scene does not name, a torque
+above ``commands.max_torque``): it says so on its ``~/rejected``, which this command watches
+(:mod:`.rejections`). A refused command ends it with the node's reason as one line on stderr
+and exit code 2 (with ``--duration``, at the first refusal, after a zero torque). Having sent,
+it listens ``--confirm`` s (default 1) after the node acknowledged the last command before it
+reports success: a refusal later than that goes unseen.
 ``--ros-args`` passes remappings, a namespace or parameters to ROS, as with ``ros2 run``.
 """
 
@@ -20,10 +27,14 @@ import argparse
 import sys
 import time
 
-from rigid_rot_sim.cli.argtypes import finite_number, positive_number
+from rigid_rot_sim.cli.argtypes import finite_number, nonnegative_number, positive_number
 from rigid_rot_sim.cli.ros_args import add_ros_args, rclpy_args
 
 DEFAULT_TOPIC = "/rigid_rot_sim/torque"
+#: Seconds to listen for a refusal after the node acknowledged the last command.
+DEFAULT_CONFIRM = 1.0
+#: Most seconds to wait, once the node subscribes, for its ~/rejected to be on the graph and matched.
+REJECTED_DISCOVERY = 2.0
 
 
 def add_parser(subparsers) -> None:
@@ -42,6 +53,12 @@ def add_parser(subparsers) -> None:
     parser.add_argument("--zero", action="store_true", help="publish a zero torque (clears a held command)")
     parser.add_argument(
         "--wait", type=positive_number, default=5.0, help="seconds to wait for a subscriber (default 5)"
+    )
+    parser.add_argument(
+        "--confirm",
+        type=nonnegative_number,
+        default=DEFAULT_CONFIRM,
+        help=f"seconds to listen to the node's ~/rejected after the last command (default {DEFAULT_CONFIRM:g})",
     )
     add_ros_args(parser)
     parser.set_defaults(handler=run)
@@ -69,37 +86,67 @@ def run(args: argparse.Namespace) -> int:
         msg.wrench.torque = array_to_vector3(values)
         return msg
 
+    from rigid_rot_sim.cli.rejections import RejectionWatch
+
     rclpy.init(args=rclpy_args(args))
     node = rclpy.create_node("rigid_rot_torque")
     try:
         publisher = node.create_publisher(WrenchStamped, args.topic, COMMAND_QOS)
-        deadline = time.monotonic() + args.wait
-        while publisher.get_subscription_count() == 0:
-            if time.monotonic() > deadline:
-                print(
-                    f"rigid-rot torque: no subscriber on {publisher.topic_name} after {args.wait:g} s "
-                    "(is the node running?)",
-                    file=sys.stderr,
-                )
-                return 1
-            rclpy.spin_once(node, timeout_sec=0.05)
+        watch = RejectionWatch(node, publisher.topic_name)
+
+        def spin_until(condition, until: float) -> bool:
+            """Spin until ``condition()`` holds (True) or the monotonic time ``until`` (False)."""
+            while not condition():
+                left = until - time.monotonic()
+                if left <= 0.0:
+                    return False
+                rclpy.spin_once(node, timeout_sec=min(left, 0.05))
+            return True
+
+        def send(values) -> None:
+            publisher.publish(message(values))
+            watch.sent(args.frame, values)
+
+        if not spin_until(lambda: publisher.get_subscription_count() > 0, time.monotonic() + args.wait):
+            print(
+                f"rigid-rot torque: no subscriber on {publisher.topic_name} after {args.wait:g} s "
+                "(is the node running?)",
+                file=sys.stderr,
+            )
+            return 1
+
+        def watching() -> bool:
+            watch.discover()
+            return bool(watch.watched) and watch.ready()
+
+        spin_until(watching, time.monotonic() + REJECTED_DISCOVERY)  # a subscriber without ~/rejected: unwatched
         sent = 0
         if args.duration is None:
-            publisher.publish(message(torque))
+            send(torque)
             sent = 1
         else:
             period = 1.0 / args.rate
             start = time.monotonic()
-            while time.monotonic() - start < args.duration:
-                publisher.publish(message(torque))
+            while time.monotonic() - start < args.duration and not watch.rejections:
+                send(torque)
                 sent += 1
-                time.sleep(max(0.0, start + sent * period - time.monotonic()))
-            publisher.publish(message((0.0, 0.0, 0.0)))
-        # reliable delivery: give the middleware a moment before the process goes away
+                spin_until(lambda: bool(watch.rejections), start + min(sent * period, args.duration))
+            send((0.0, 0.0, 0.0))
+        # reliable delivery: the node has every command, then a moment for its verdict
         publisher.wait_for_all_acked(rclpy.duration.Duration(seconds=2.0))
+        if watch.watched:
+            spin_until(lambda: bool(watch.rejections), time.monotonic() + args.confirm)
+        if watch.rejections:
+            peer, reason = watch.rejections[0]
+            raise ValueError(
+                f"{peer} rejected the command on {publisher.topic_name} "
+                f"({len(watch.rejections)} of {sent + (args.duration is not None)} refused): {reason}"
+            )
+        unwatched = "" if watch.watched else " (not confirmed: no ~/rejected of the subscriber to watch)"
         print(
             f"rigid-rot torque: {sent} command(s) {list(torque)} N*m in frame {args.frame!r} on {publisher.topic_name}"
             + (", then zero" if args.duration is not None else "")
+            + unwatched
         )
         return 0
     finally:

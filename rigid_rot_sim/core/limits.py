@@ -25,10 +25,12 @@ __all__ = [
     "REAL_TIME_FACTOR_RANGE",
     "DURATION_RANGE",
     "RATE_RANGE",
+    "MIN_RATE",
     "MAX_TORQUE_RANGE",
     "COMMAND_DEPTH_RANGE",
     "QOS_DEPTH_RANGE",
     "DEFAULT_COMMAND_DEPTH",
+    "check_rate",
     "clip_text",
     "one_line",
 ]
@@ -64,11 +66,26 @@ DT_RANGE = (1e-7, 10.0)  # s
 REAL_TIME_FACTOR_RANGE = (0.0, 1000.0)  # 0 = as fast as possible
 DURATION_RANGE = (0.0, 1e9)  # s of sim time; 0 = unbounded (parameter)
 RATE_RANGE = (0.0, 1e6)  # Hz of sim time; 0 = not published
+#: Slowest rate (Hz of sim time) other than 0: a period of at most the longest duration. A slower
+#: one (5e-324 Hz) implies a period no step count holds (1 / (rate * dt) overflows), and would
+#: never be published within any run.
+MIN_RATE = 1.0 / DURATION_RANGE[1]
 MAX_TORQUE_RANGE = (0.0, MAX_MAGNITUDE)  # N*m; 0 = no limit
 COMMAND_DEPTH_RANGE = (1, 10_000)  # keep-last depth of the torque subscriptions
 DEFAULT_COMMAND_DEPTH = 10
 #: Keep-last depth of the state-like outputs (the upper bound limits the memory a slow subscriber can pin).
 QOS_DEPTH_RANGE = (1, 100_000)
+
+
+def check_rate(rate: float) -> float:
+    """``rate`` (Hz of sim time) when it is 0 (off) or from :data:`MIN_RATE` to ``RATE_RANGE[1]``, else
+    ValueError saying the range: the one rule for output and sensor rates (scene files, parameters)."""
+    if rate == 0.0 or MIN_RATE <= rate <= RATE_RANGE[1]:  # NaN fails both
+        return rate
+    raise ValueError(
+        f"must be 0 (not published) or from {MIN_RATE:g} to {RATE_RANGE[1]:g} Hz "
+        f"(a period of at most {DURATION_RANGE[1]:g} s), got {rate!r}"
+    )
 
 
 def clip_text(text: str, limit: int = MAX_NAME_LENGTH) -> str:

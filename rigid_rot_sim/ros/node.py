@@ -88,6 +88,7 @@ from rigid_rot_sim.ros.outputs import Outputs
 from rigid_rot_sim.ros.parameters import RunParameters, declare_parameters, declare_scene_parameter, read_settings
 from rigid_rot_sim.ros.qos import output_qos
 from rigid_rot_sim.ros.services import InertiaService, RunServices
+from rigid_rot_sim.ros.topic_types import WrongTypeWatch
 from rigid_rot_sim.ros.wheel_inputs import WheelTorqueInput
 from rigid_rot_sim.run.pacing import OutputSchedule, Pacer, Progress, RunDriver
 from rigid_rot_sim.run.sensors import SensorSuite
@@ -143,6 +144,10 @@ class SceneRun:
             rejections,
         )
         self.driver.observers.append(self.joint_state_door)  # the states, at ~/wheels' steps
+        self.type_watch = WrongTypeWatch(
+            node,
+            self.inputs.subscriptions + self.wheel_input.subscriptions + self.joint_state_door.subscriptions,
+        )
         self.lockstep: NodeLockstep | None = None
         lockstep = lockstep_from_parameters(node, scene, sim.dt)
         if lockstep is not None:

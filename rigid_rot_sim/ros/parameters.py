@@ -178,8 +178,18 @@ def _set_max_torque(run: RunParameters, change: Change) -> None:
     run.driver.sim.max_torque = change[MAX_TORQUE]
 
 
+def _check_rate_values(values: Iterable[tuple[ParamSpec[float], float]]) -> None:
+    """ValueError naming the first rate outside :func:`limits.check_rate`'s range (5e-324 Hz has no period)."""
+    for spec, rate in values:
+        try:
+            limits.check_rate(rate)
+        except ValueError as exc:
+            raise ValueError(f"{spec.name} {exc}") from None
+
+
 def _check_rates(run: RunParameters, change: Change) -> None:
     periods = run.driver.schedule.periods
+    _check_rate_values((spec, change[spec]) for spec in RATES.values() if spec in change)
     for output, spec in RATES.items():
         if spec in change and change[spec] > 0.0 and output not in periods:
             raise ValueError(f"{output_topic(output)} was not built at start-up; restart with {spec.name} > 0")
@@ -473,6 +483,7 @@ def read_settings(node: Node, scene: Scene, specs: Iterable[ParamSpec[Any]] = PA
     settings = NodeSettings(scene, types.MappingProxyType(values))
     for spec in specs:
         spec.check_choice(settings[spec])
+    _check_rate_values((spec, settings[spec]) for spec in RATES.values() if spec.name in values)
     frames = Frames(settings[WORLD_FRAME], settings[BODY_FRAME]).checked()
     return dataclasses.replace(settings, scene=dataclasses.replace(scene, frames=frames))
 

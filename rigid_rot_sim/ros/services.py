@@ -15,7 +15,13 @@ from rclpy.callback_groups import MutuallyExclusiveCallbackGroup
 from rclpy.node import Node
 from std_srvs.srv import SetBool, Trigger
 
-from rigid_rot_msgs.srv import ApplyTorque, ComputeInertia, SetState, Step, StepWithTorque
+from rigid_rot_msgs.srv import (  # type: ignore[attr-defined]  # generated, untyped
+    ApplyTorque,
+    ComputeInertia,
+    SetState,
+    Step,
+    StepWithTorque,
+)
 from rigid_rot_sim import conversions
 from rigid_rot_sim.core import limits
 from rigid_rot_sim.core.inertia import mass_properties
@@ -36,6 +42,8 @@ class InertiaService:
     that takes it (2.4 s for 1e6 masses, refused only afterwards), so with the node's
     MultiThreadedExecutor a huge request is taken beside the stepping and publishing, which stay
     in the node's default group. Thread-safe: it touches nothing but its request and response.
+    What such a request still costs in memory (rclpy offers no way to refuse it before it is taken):
+    docs/limits.md, measured by ``benchmarks/inertia_request_memory.py``.
     """
 
     def __init__(self, node: Node) -> None:
@@ -54,7 +62,8 @@ class InertiaService:
         if len(request.frame_id) > limits.MAX_NAME_LENGTH:
             return self._refuse(
                 response,
-                f"invalid request: frame_id of {len(request.frame_id)} characters exceeds the limit of {limits.MAX_NAME_LENGTH}",
+                f"invalid request: frame_id of {len(request.frame_id)} characters exceeds the limit of "
+                f"{limits.MAX_NAME_LENGTH}",
             )
         try:
             masses, positions, origin = conversions.compute_inertia_request_to_arrays(request)

@@ -33,6 +33,8 @@ from collections.abc import Callable, Iterable, Mapping, Sequence
 from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
+from rigid_rot_sim.core import limits
+
 if TYPE_CHECKING:  # annotations only
     from rigid_rot_sim.run.observer import SimulationObserver
     from rigid_rot_sim.run.simulator import Simulator
@@ -146,8 +148,19 @@ class OutputSchedule:
 
     @staticmethod
     def period_steps(rate: float, dt: float) -> int:
-        """Whole steps of ``dt`` s per period of ``rate`` Hz (at least 1)."""
-        return max(1, int(round(1.0 / (rate * dt))))
+        """Whole steps of ``dt`` s per period of ``rate`` Hz (at least 1: an output faster than the
+        steps is due at every step).
+
+        ValueError unless ``rate`` is > 0 within :func:`~rigid_rot_sim.core.limits.check_rate`'s
+        range and ``dt`` > 0 is finite: the period must be a finite positive whole number of steps.
+        """
+        if rate == 0.0:
+            raise ValueError("rate 0 Hz: the output is not scheduled (it has no period)")
+        limits.check_rate(rate)
+        steps = 1.0 / (rate * dt) if math.isfinite(dt) and dt > 0.0 else math.nan
+        if not math.isfinite(steps):
+            raise ValueError(f"rate {rate!r} Hz at dt {dt!r} s: the period is not a finite number of steps")
+        return max(1, int(round(steps)))
 
     @classmethod
     def from_rates(cls, rates: Mapping[str, float], dt: float) -> OutputSchedule:

@@ -14,8 +14,11 @@ is one JSON Schema, :data:`rigid_rot_sim.scene.scene_schema.SCENE_SCHEMA` (expor
 choices, bounds: :mod:`rigid_rot_sim.core.limits`, the ranges of the node's parameters),
 then checks what a schema cannot express, one small function each: a physical inertia
 (positive definite, triangle inequality), the integrator's name in the registry, topic
-and frame names ROS accepts (:mod:`names`), and the rules across sections (gravity needs a
-mass and centre of mass unless point masses give them; no torque inputs with gravity).
+and frame names ROS accepts (:mod:`names`), the rules across sections (gravity needs a
+mass and centre of mass unless point masses give them; no torque inputs with gravity), and
+what rates and durations imply: every output or sensor rate has a period of a finite whole
+number of steps (:func:`~rigid_rot_sim.core.limits.check_rate`), a duration and a hold timeout
+are at least one step, an orbit's mean motion is a rate within the limits.
 Every error is a :class:`SceneError` (a ValueError) naming the file, the key and what is
 wrong, in one line, e.g. ``free_tumble.yaml: body.principal_moments[2] must be > 0 kg*m^2, got -1.0``.
 The file itself is read within limits, without YAML aliases (:mod:`bounded_yaml`).
@@ -32,7 +35,7 @@ from __future__ import annotations
 import datetime
 import math
 import os
-from collections.abc import Callable, Iterator, Mapping
+from collections.abc import Callable, Iterator, Mapping, Sequence
 from dataclasses import dataclass
 from typing import Any
 
@@ -59,7 +62,7 @@ from rigid_rot_sim.scene.scene_schema import (
     TORQUE_MESSAGE_TYPES,
 )
 from rigid_rot_sim.scene.schema import validated
-from rigid_rot_sim.scene.spacecraft import Spacecraft, parse_spacecraft
+from rigid_rot_sim.scene.spacecraft import GravityGradient, Spacecraft, parse_spacecraft
 
 __all__ = [
     "SceneError",
@@ -474,6 +477,20 @@ def _scene(spec: Mapping[str, Any], source: str, text: str) -> Scene:
     if gravity is not None and spacecraft:
         raise ValueError("actuators / environment: not supported in a gravity (heavy top) scene; drop gravity")
     duration = spec.get("duration")
+    dt = float((spec.get("integrator") or {}).get("dt", IntegratorSpec.dt))
+    if duration is not None:
+        _at("duration", _whole_steps, float(duration), dt, "the run would end before it began; null runs unbounded")
+    for index, topic in enumerate(topics):
+        if topic.timeout is not None:  # counted from the boundary where a command takes effect
+            _at(
+                f"torque_inputs[{index}].hold.timeout",
+                _whole_steps,
+                topic.timeout,
+                dt,
+                "a command would act for no step",
+            )
+    if spacecraft.gravity_gradient is not None:
+        _at("environment.gravity_gradient.orbit", _orbit_rate, spacecraft.gravity_gradient)
     qos = spec.get("qos") or {}
     commands = spec.get("commands") or {}
     recording = spec.get("recording")
@@ -498,7 +515,7 @@ def _scene(spec: Mapping[str, Any], source: str, text: str) -> Scene:
         spacecraft=spacecraft,
         duration=None if duration is None else float(duration),
         real_time_factor=float(spec.get("real_time_factor", 1.0)),
-        outputs=OutputRates(_sensor_rates(sensors, {name: float(rate) for name, rate in outputs.items()})),
+        outputs=OutputRates(_sensor_rates(sensors, _output_rates(outputs))),
         sensors=sensors,
         qos=OutputQos(
             reliability=qos.get("reliability", OutputQos.reliability), depth=qos.get("depth", OutputQos.depth)
@@ -512,7 +529,7 @@ def _scene(spec: Mapping[str, Any], source: str, text: str) -> Scene:
         lockstep=lockstep_spec(
             spec.get("lockstep"),
             topics,
-            float((spec.get("integrator") or {}).get("dt", 0.001)),
+            dt,
             () if joint_state_topics is None else (joint_state_topics["commands"].strip(),),
         ),
         joint_state_topics=None
@@ -631,7 +648,7 @@ def _gravity(spec: Mapping[str, Any], point_masses: bool) -> tuple[Gravity, floa
 
 def _initial(spec: Mapping[str, Any]) -> InitialState:
     """A non-zero quaternion, normalised (or the attitude from Euler angles)."""
-    orientation = InitialState.orientation
+    orientation: tuple[float, ...] = InitialState.orientation
     if "orientation" in spec:
         orientation = _floats(validation.quaternion("initial.orientation", _floats(spec["orientation"])))
     elif "euler_zxz" in spec:
@@ -640,7 +657,7 @@ def _initial(spec: Mapping[str, Any]) -> InitialState:
     return InitialState(orientation=orientation, angular_velocity=omega)  # type: ignore[arg-type]
 
 
-def _torque_inputs(items: list[Mapping[str, Any]]) -> tuple[tuple[TopicInput, ...], tuple[TorqueSchedule, ...]]:
+def _torque_inputs(items: Sequence[Mapping[str, Any]]) -> tuple[tuple[TopicInput, ...], tuple[TorqueSchedule, ...]]:
     """Topic names ROS accepts, each listed once; schedule segments in order of their start."""
     topics: list[TopicInput] = []
     schedules: list[TorqueSchedule] = []
@@ -693,13 +710,12 @@ def _integrator(spec: Mapping[str, Any], spacecraft: bool = False) -> Integrator
 def _sensors(spec: Mapping[str, Any]) -> Sensors:
     gyro = spec.get("gyro")
     star_tracker = spec.get("star_tracker")
+    gyro_options: dict[str, Any] = {
+        name: _floats(value) if isinstance(value, list) else float(value) for name, value in (gyro or {}).items()
+    }
     return Sensors(
         seed=spec.get("seed"),
-        gyro=None
-        if gyro is None
-        else GyroModel(
-            **{name: _floats(value) if isinstance(value, list) else float(value) for name, value in gyro.items()}
-        ),
+        gyro=None if gyro is None else GyroModel(**gyro_options),
         star_tracker=None
         if star_tracker is None
         else StarTrackerModel(
@@ -707,6 +723,34 @@ def _sensors(spec: Mapping[str, Any]) -> Sensors:
             noise_equivalent_angle=_floats(star_tracker["noise_equivalent_angle"]),  # type: ignore[arg-type]
         ),
     )
+
+
+def _whole_steps(seconds: float, dt: float, else_: str) -> int:
+    """The steps a span (s) implies at ``dt`` (s), ``step_at_or_after`` (the run's rule): at least one,
+    else ValueError saying what would happen (``else_``)."""
+    steps = step_at_or_after(seconds, dt)
+    if steps < 1:
+        raise ValueError(f"{seconds!r} s is not one step of integrator.dt {dt:g} s ({else_})")
+    return steps
+
+
+def _orbit_rate(gravity_gradient: GravityGradient) -> float:
+    """The orbit's frequency (Hz, n / 2 pi) within the rate limits: its square scales the torque."""
+    try:
+        n = gravity_gradient.model().mean_motion
+    except (ZeroDivisionError, OverflowError):  # radius**3 underflowed to 0
+        n = math.inf
+    if not (math.isfinite(n) and n / (2.0 * math.pi) <= limits.RATE_RANGE[1]):
+        raise ValueError(
+            f"radius {gravity_gradient.radius!r} m and mu {gravity_gradient.mu!r} m^3/s^2 imply a mean motion of "
+            f"{n:g} rad/s, more than {limits.RATE_RANGE[1]:g} orbits per second"
+        )
+    return n / (2.0 * math.pi)
+
+
+def _output_rates(outputs: Mapping[str, Any]) -> dict[str, float]:
+    """Each rate 0 or within the limits (:func:`limits.check_rate`: a period of whole steps)."""
+    return {name: _at(f"outputs.{name}", limits.check_rate, float(rate)) for name, rate in outputs.items()}
 
 
 def _sensor_rates(sensors: Sensors, rates: dict[str, float]) -> dict[str, float]:
@@ -719,6 +763,7 @@ def _sensor_rates(sensors: Sensors, rates: dict[str, float]) -> dict[str, float]
             if output == "star_tracker" and rates.get(output, 0.0) > 0.0:
                 raise ValueError("outputs.star_tracker: needs a sensors.star_tracker section (its noise)")
             continue
+        _at(key, limits.check_rate, sensor.rate)
         if output in rates and rates[output] != sensor.rate:
             raise ValueError(
                 f"outputs.{output}: {rates[output]:g} Hz differs from {key} {sensor.rate:g} Hz "

@@ -432,15 +432,27 @@ def test_rigid_rot_run_record_writes_a_complete_bag_with_sim_time_log_times(tmp_
     assert resimulate(bag).identical
 
 
-def test_unwritable_record_path_is_reported_and_the_simulation_runs_on(tmp_path, launch_node, ros_node):
-    blocker = tmp_path / "a_file"
-    blocker.write_text("not a directory")
-    node = launch_node(*node_args(write_scene(tmp_path), blocker / "run.mcap"), name="unwritable")
-    t0 = first_state_time(ros_node, node)
-    assert t0 >= 0.0
+@pytest.mark.parametrize(
+    "where, reason",
+    [
+        ("a_file/run.mcap", "File exists"),  # a file where a directory must be
+        ("/proc/rigid_rot_no_such_dir/run.mcap", "No such file or directory"),  # cannot be created (issue 29)
+        ("/dev/full", "No space left on device"),  # a full disk: the file opens, its first write fails (ENOSPC)
+    ],
+)
+def test_a_recording_that_cannot_start_is_reported_and_the_simulation_runs_and_publishes(
+    where, reason, tmp_path, launch_node, ros_node
+):
+    """Not just the t = 0 state published at start-up: the run goes on at its pace (sim time passes)."""
+    (tmp_path / "a_file").write_text("not a directory")
+    path = tmp_path / where  # an absolute ``where`` replaces tmp_path
+    node = launch_node(*node_args(write_scene(tmp_path), path), name="unwritable")
+    wait_for_sim_time(ros_node, node, 0.5)
     node.check_alive()
-    assert f"cannot record to {blocker / 'run.mcap'}" in node.log()
-    assert "without recording" in node.log()
+    log = node.log()
+    assert f"cannot record to {path}: {reason}; the simulation runs without recording" in log, log
+    assert "no recording (see the error above)" in log and "simulation paused" not in log
+    assert node.stop() == 0, node.log()
 
 
 def test_disk_full_mid_run_stops_the_recording_and_the_simulation_runs_on(tmp_path, ros_env, ros_node):
@@ -483,3 +495,24 @@ def test_disk_full_mid_run_stops_the_recording_and_the_simulation_runs_on(tmp_pa
         process.send_signal(signal.SIGINT)
         assert process.wait(timeout=20) == 0, log_path.read_text()
     assert len(BagReader(bag).counts()) > 0  # what was flushed before the error is readable
+
+
+def test_replay_exits_2_with_the_nodes_reason_when_it_refuses_replayed_commands(recorded_run, tmp_path, launch_node):
+    """The recorded run holds commands the node refused (an unknown frame, a force, NaN): replayed into a
+    live node they are refused again, and rigid-rot replay says so (issue 29; it reported success)."""
+    bag, _ = recorded_run
+    node = launch_node("--ros-args", "-p", f"scene:={write_scene(tmp_path)}", name="replay_target")
+    rigid_rot = Path(sys.executable).with_name("rigid-rot")
+    done = subprocess.run(
+        [str(rigid_rot), "replay", str(bag), "--wait", "60", "--rate", "5"],
+        capture_output=True,
+        text=True,
+        timeout=180,
+        env=os.environ,
+    )
+    assert done.returncode == 2 and done.stdout == "", done.stdout + done.stderr
+    (line,) = done.stderr.strip().splitlines()
+    assert line.startswith("rigid-rot replay: error: /rigid_rot_sim rejected "), line
+    assert f"of the {len(COMMANDS)} replayed commands (first on {TORQUE_TOPIC}): " in line, line
+    assert "'no_such_frame'" in line or "force" in line, line  # the node's reason for one of them
+    node.check_alive()

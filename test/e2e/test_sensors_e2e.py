@@ -10,8 +10,9 @@ from __future__ import annotations
 from pathlib import Path
 
 import numpy as np
+from scipy.spatial.transform import Rotation
 
-from rigid_rot_sim.message_fields import time_to_seconds, vector3_to_array
+from rigid_rot_sim.message_fields import quaternion_to_array, time_to_seconds, vector3_to_array
 from rigid_rot_sim.recording.reader import BagReader
 from rigid_rot_sim.recording.resim import resimulate
 
@@ -47,7 +48,9 @@ def test_sensor_topics_over_dds_are_recorded_and_resimulate_bit_exact(tmp_path: 
 
     for pose in poses:
         covariance = np.array(pose.pose.covariance).reshape(6, 6)
-        np.testing.assert_array_equal(covariance[3:, 3:], np.diag(np.square(NEA)))
+        # about the fixed (world) axes, as PoseWithCovariance defines it: R diag(NEA^2) R^T
+        matrix = Rotation.from_quat(quaternion_to_array(pose.pose.pose.orientation)).as_matrix()
+        np.testing.assert_allclose(covariance[3:, 3:], matrix @ np.diag(np.square(NEA)) @ matrix.T, rtol=0, atol=1e-20)
         assert pose.header.frame_id == "odom"
     assert all(imu.orientation_covariance[0] == -1.0 and imu.header.frame_id == "base_link" for imu in imus)
 

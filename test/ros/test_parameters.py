@@ -99,3 +99,22 @@ def test_each_parameter_name_is_written_once_in_ros_and_cli():
                 written.setdefault(item.value, []).append(f"{where}:{item.lineno}")
     assert {name: places for name, places in written.items() if len(places) != 1} == {}
     assert set(written) == names
+
+
+def test_a_rate_with_no_period_in_steps_is_refused_at_run_time_and_at_start_up(node):
+    """5e-324 Hz is within the descriptor's range but 1 / (rate * dt) overflows: refused with the reason
+    (an OverflowError out of the parameter callback before, issue 29); the schedule is unchanged."""
+    periods = dict(node.run.driver.schedule.periods)
+    refused = node.set_parameters([Parameter("rates.state", value=5e-324)])[0]
+    assert not refused.successful
+    assert refused.reason.startswith("rates.state must be 0 (not published) or from 1e-09 to 1e+06 Hz"), refused.reason
+    assert node.run.driver.schedule.periods == periods and node.get_parameter("rates.state").value > 1.0
+    assert node.set_parameters([Parameter("rates.state", value=2e-9)])[0].successful  # slow, but a period
+    context = rclpy.Context()
+    rclpy.init(context=context)
+    try:
+        overrides = [Parameter("scene", value="free_tumble"), Parameter("rates.clock", value=1e-300)]
+        with pytest.raises(ValueError, match=r"^rates.clock must be 0 .* got 1e-300$"):
+            RigidRotSimNode(context=context, parameter_overrides=overrides)
+    finally:
+        rclpy.shutdown(context=context)

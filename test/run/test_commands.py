@@ -172,6 +172,7 @@ def test_admit_resolves_the_frame_and_the_effective_time():
         (lambda c: c.admit("hold_in", [0, 0, 1], "", None, [1, 0, 0]), "non-zero force"),
         (lambda c: c.admit("hold_in", [0, 3, 4], "", None, None), "|torque| = 5 N*m exceeds max_torque = 4.5 N*m"),
         (lambda c: c.apply([0, 0, 1], "", math.inf), "duration must be finite and > 0"),
+        (lambda c: c.apply([0, 0, 1], "", 5e-324), "duration 5e-324 s is not one step of dt"),  # issue 29: no step
         (lambda c: c.apply([0, 0, math.inf], "", 1.0), "non-finite torque.z"),
     ],
 )

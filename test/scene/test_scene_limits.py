@@ -196,3 +196,75 @@ def test_topic_name_rules_agree_with_rclpy():
         except (InvalidTopicNameException, ValueError):
             theirs = False
         assert ours == theirs, name
+
+
+# ---------------------------------------------------------------- what rates and durations imply (issue 29)
+
+GYRO = "sensors: {gyro: {rate: %s}}\n"
+STAR_TRACKER = "sensors: {star_tracker: {rate: %s, noise_equivalent_angle: [1.0e-5, 1.0e-5, 1.0e-4]}}\n"
+ORBIT = "environment: {gravity_gradient: {orbit: {radius: %s}}}\n"
+
+
+@pytest.mark.parametrize("rate", ["5.0e-324", "2.2250738585072014e-308", "1.0e-300", "9.0e-10"])
+@pytest.mark.parametrize(
+    "section, key",
+    [
+        ("outputs: {state: %s}\n", "outputs.state"),
+        ("outputs: {imu: %s}\n", "outputs.imu"),
+        (GYRO, "sensors.gyro.rate"),
+        (STAR_TRACKER, "sensors.star_tracker.rate"),
+    ],
+)
+def test_a_rate_with_no_period_in_steps_is_refused_naming_its_key(section, key, rate):
+    """5e-324 Hz was an OverflowError traceback in period_steps: 1 / (rate * dt) is inf."""
+    message = refused(MINIMAL + section % rate)
+    assert f"{key}: must be 0 (not published) or from 1e-09 to 1e+06 Hz" in message, message
+    assert f"got {float(rate)!r}" in message
+
+
+def test_the_slowest_rate_loads_and_its_period_is_a_whole_number_of_steps():
+    from rigid_rot_sim.run.pacing import OutputSchedule
+
+    scene = parse_scene_text(MINIMAL + f"outputs: {{state: {limits.MIN_RATE:.17e}}}\nintegrator: {{dt: 1.0e-7}}\n")
+    period = OutputSchedule.period_steps(scene.outputs["state"], scene.integrator.dt)
+    assert isinstance(period, int) and period == round(1e9 / 1e-7)
+
+
+@pytest.mark.parametrize("rate", [5e-324, 1e-300, float("nan"), float("inf"), -1.0, 2e6])
+def test_period_steps_refuses_what_has_no_period_with_a_value_error(rate):
+    from rigid_rot_sim.run.pacing import OutputSchedule
+
+    with pytest.raises(ValueError, match="must be 0 .not published. or from 1e-09 to 1e.06 Hz"):
+        OutputSchedule.period_steps(rate, 0.001)
+    with pytest.raises(ValueError, match="not scheduled"):
+        OutputSchedule.period_steps(0.0, 0.001)
+
+
+@pytest.mark.parametrize("duration", ["5.0e-324", "1.0e-15"])
+def test_a_duration_shorter_than_one_step_is_refused(duration):
+    message = refused(MINIMAL + f"duration: {duration}\nintegrator: {{dt: 0.001}}\n")
+    assert message.startswith("bad.yaml: duration: ") and "is not one step of integrator.dt 0.001 s" in message
+
+
+@pytest.mark.parametrize("timeout", ["5.0e-324", "1.0e-300"])
+def test_a_hold_timeout_shorter_than_one_step_is_refused(timeout):
+    """The command would expire on the boundary where it takes effect: it would act for no step."""
+    text = MINIMAL + f"torque_inputs: [{{topic: ~/torque, hold: {{timeout: {timeout}}}}}]\n"
+    message = refused(text)
+    assert "torque_inputs[0].hold.timeout: " in message and "(a command would act for no step)" in message
+
+
+def test_a_duration_of_one_step_or_part_of_one_loads():
+    assert parse_scene_text(MINIMAL + "duration: 4.0e-4\nintegrator: {dt: 0.001}\n").duration == 4e-4
+
+
+@pytest.mark.parametrize("radius", ["5.0e-324", "1.0e-110", "1.0e-3"])
+def test_an_orbit_whose_mean_motion_is_no_rate_is_refused(radius):
+    """radius**3 underflowed to 0: mean_motion raised ZeroDivisionError when the run was built."""
+    message = refused(MINIMAL + ORBIT % radius)
+    assert "environment.gravity_gradient.orbit: radius" in message and "orbits per second" in message
+
+
+def test_a_real_orbit_loads():
+    scene = parse_scene_text(MINIMAL + ORBIT % "7.0e+6")
+    assert scene.spacecraft.gravity_gradient is not None and scene.spacecraft.gravity_gradient.radius == 7e6
