@@ -35,19 +35,45 @@ __all__ = ["advance_gyrostats", "hub_inverses"]
 _PARALLEL_BODY_STEPS = 200_000
 
 
-def _kernel(dt, n_steps, y, moments, wheels, hub_inverse, external, orbit, commands, done, status):
+def _kernel(  # each body's steps and status into done[b], status[b]
+    dt: float,
+    k0: int,
+    n_steps: int,
+    y: np.ndarray,
+    moments: np.ndarray,
+    wheels: tuple[np.ndarray, ...],
+    hub_inverse: np.ndarray,
+    external: np.ndarray,
+    orbit: np.ndarray,
+    commands: np.ndarray,
+    done: np.ndarray,
+    status: np.ndarray,
+) -> None:
     applied = np.empty(commands.shape[1])
     for b in range(y.shape[0]):
         done[b], status[b] = rk4_advance(
-            0.0, 0, dt, n_steps, y[b], moments[b], wheels, hub_inverse[b], external[b], orbit, commands[b], applied
+            0.0, k0, dt, n_steps, y[b], moments[b], wheels, hub_inverse[b], external[b], orbit, commands[b], applied
         )
 
 
-def _kernel_parallel(dt, n_steps, y, moments, wheels, hub_inverse, external, orbit, commands, done, status):
+def _kernel_parallel(
+    dt: float,
+    k0: int,
+    n_steps: int,
+    y: np.ndarray,
+    moments: np.ndarray,
+    wheels: tuple[np.ndarray, ...],
+    hub_inverse: np.ndarray,
+    external: np.ndarray,
+    orbit: np.ndarray,
+    commands: np.ndarray,
+    done: np.ndarray,
+    status: np.ndarray,
+) -> None:
     for b in prange(y.shape[0]):
         applied = np.empty(commands.shape[1])
         done[b], status[b] = rk4_advance(
-            0.0, 0, dt, n_steps, y[b], moments[b], wheels, hub_inverse[b], external[b], orbit, commands[b], applied
+            0.0, k0, dt, n_steps, y[b], moments[b], wheels, hub_inverse[b], external[b], orbit, commands[b], applied
         )
 
 
@@ -126,6 +152,7 @@ def advance_gyrostats(
     run = _advance_parallel if n > 1 and n * n_steps >= _PARALLEL_BODY_STEPS else _advance_serial
     run(
         float(dt),
+        0,  # the first step's index (an argument: a literal 0 would compile rk4_advance a second time)
         int(n_steps),
         y,
         moments,

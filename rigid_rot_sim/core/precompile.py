@@ -54,7 +54,7 @@ def exercise() -> None:
         PolynomialTorque(np.array([[0.1, 0.0, 0.0], [0.0, 0.01, 0.0]])),
         GravityTorque(np.array([0.0, 0.0, 0.1]), 1.0),
     ]
-    for name, cls in METHODS.items():
+    for cls in METHODS.values():
         for torque in torques:
             try:
                 integrator = cls(moments, 1e-3, torque, omega0=(1.0, 0.1, 0.5))
@@ -90,6 +90,7 @@ def exercise() -> None:
         np.zeros(2, dtype=np.int64),
         np.zeros((2, 10)),
         np.zeros(2),
+        True,
     )
     from rigid_rot_sim.core.exact import torque_free_flow, torque_free_solution
 

@@ -32,7 +32,20 @@ __all__ = ["slew_update", "attitude_error"]
 
 
 @compiled
-def slew_update(q_observed, omega_observed, q, omega, target, action, weights, tolerances, hold, observation, reward):
+def slew_update(
+    q_observed: np.ndarray,
+    omega_observed: np.ndarray,
+    q: np.ndarray,
+    omega: np.ndarray,
+    target: np.ndarray,
+    action: np.ndarray,
+    weights: np.ndarray,
+    tolerances: np.ndarray,
+    hold: np.ndarray,
+    observation: np.ndarray,
+    reward: np.ndarray,
+    truth: bool,
+) -> np.ndarray:
     """Write each body's observation, reward and hold count; returns the terminated flags (N,) bool.
 
     ``q_observed`` (N, 4), ``omega_observed`` (N, 3): what the body reports (the truth, or a
@@ -41,18 +54,22 @@ def slew_update(q_observed, omega_observed, q, omega, target, action, weights, t
     (w_attitude, w_rate, w_effort); ``tolerances`` (3,) = (angle_tolerance rad, rate_tolerance
     rad/s, hold_periods). ``hold`` (N,) int64 is updated in place; ``observation`` (N, m >= 10)
     receives ``(q_observed, omega_observed, e_observed)`` in its first 10 columns; ``reward`` (N,).
+    ``truth``: the observed state is the true one (its error is computed once).
     """
     n = q.shape[0]
     terminated = np.zeros(n, dtype=np.bool_)
     for b in range(n):
         tx, ty, tz, tw = target[b, 0], target[b, 1], target[b, 2], target[b, 3]
-        e1, e2, e3, _ = _error(q_observed[b, 0], q_observed[b, 1], q_observed[b, 2], q_observed[b, 3], tx, ty, tz, tw)
+        e1, e2, e3, angle = _error(q[b, 0], q[b, 1], q[b, 2], q[b, 3], tx, ty, tz, tw)
+        if not truth:
+            e1, e2, e3, _ = _error(
+                q_observed[b, 0], q_observed[b, 1], q_observed[b, 2], q_observed[b, 3], tx, ty, tz, tw
+            )
         for i in range(4):
             observation[b, i] = q_observed[b, i]
         for i in range(3):
             observation[b, 4 + i] = omega_observed[b, i]
         observation[b, 7], observation[b, 8], observation[b, 9] = e1, e2, e3
-        _, _, _, angle = _error(q[b, 0], q[b, 1], q[b, 2], q[b, 3], tx, ty, tz, tw)
         w1, w2, w3 = omega[b, 0], omega[b, 1], omega[b, 2]
         rate = math.sqrt(w1 * w1 + w2 * w2 + w3 * w3)
         effort = 0.0
@@ -68,7 +85,10 @@ def slew_update(q_observed, omega_observed, q, omega, target, action, weights, t
 
 
 @compiled
-def _error(qx, qy, qz, qw, tx, ty, tz, tw):
+def _error(
+    qx: float, qy: float, qz: float, qw: float, tx: float, ty: float, tz: float, tw: float
+) -> tuple[float, float, float, float]:
+    """The error rotation vector of q to the target t, and its angle (rad)."""
     dx, dy, dz, dw = quat.multiply(quat.conjugate((tx, ty, tz, tw)), (qx, qy, qz, qw))
     if dw < 0.0:
         dx, dy, dz, dw = -dx, -dy, -dz, -dw

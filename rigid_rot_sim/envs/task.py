@@ -289,19 +289,20 @@ class SlewBodies:
             )
         self.steps += 1
         rows = slice(None)
-        q_seen, omega_seen = self._observed(np.arange(self.n))
+        q_seen, omega_seen = self._observed(rows)
         reward, terminated = self._update(rows, q_seen, omega_seen, action, self.hold)
         truncated = (self.steps >= task.max_episode_steps) & ~terminated
         return reward, terminated, truncated
 
-    def _observed(self, rows: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    def _observed(self, rows: np.ndarray | slice) -> tuple[np.ndarray, np.ndarray]:
         """The attitude and rate the observation reports for ``rows``: the truth, or the sensors' readings."""
         sensors = self.task.sensors
         if sensors is None:
             return self.q[rows], self.omega[rows]
-        q_seen = np.empty((len(rows), 4))
-        omega_seen = np.empty((len(rows), 3))
-        for j, b in enumerate(rows):  # per body: the noise of each comes from its own seed
+        bodies = np.arange(self.n)[rows]
+        q_seen = np.empty((len(bodies), 4))
+        omega_seen = np.empty((len(bodies), 3))
+        for j, b in enumerate(bodies):  # per body: the noise of each comes from its own seed
             seed = self._sensor_seed[b]
             t = float(self.steps[b]) * self.task.control_period
             omega_seen[j], self._gyro_state[b] = gyro_sample(
@@ -329,6 +330,7 @@ class SlewBodies:
             hold,
             observation,
             reward,
+            self.task.sensors is None,
         )
         self.observation[rows, :10] = observation
         if self.with_wheels:
