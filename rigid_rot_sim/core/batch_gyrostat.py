@@ -31,8 +31,10 @@ from rigid_rot_sim.core.wheels import NO_ORBIT, WheelModel, hub_inertia
 __all__ = ["advance_gyrostats", "hub_inverses"]
 
 # Below this many body-steps a call runs serially: starting a parallel region costs up to a
-# scheduler time slice when the cores are busy (as core/batch.py).
-_PARALLEL_BODY_STEPS = 200_000
+# scheduler time slice when the cores are busy (as core/batch.py, whose threshold is 10x higher:
+# a gyrostat RK4 step costs ~2 us, a rigid body's ~0.1 us; at 8192 bodies x 10 steps the parallel
+# loop took half the serial time on the busy 2-core machine).
+_PARALLEL_BODY_STEPS = 20_000
 
 
 def _kernel(  # each body's steps and status into done[b], status[b]

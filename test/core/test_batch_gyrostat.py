@@ -17,7 +17,7 @@ def _wheels():
     return wheel_model(np.diag([2.0, 2.5, 3.0]), list("abcd"), axes, [0.01] * 4, [0.1] * 4, [50.0] * 4)
 
 
-@pytest.mark.parametrize("n_steps", [1, 7])
+@pytest.mark.parametrize("n_steps", [1, 7, 5_000])  # 5 bodies x 5000 steps: the parallel loop
 def test_each_body_matches_the_single_body_integrator_bit_for_bit(n_steps):
     rng = np.random.default_rng(0)
     n = 5
