@@ -140,3 +140,26 @@ def test_bad_use_is_refused():
     envs.reset(seed=None)  # from entropy
     with pytest.raises(ValueError, match="finite"):
         envs.step(np.array([[0.0, 0.0, np.inf], [0.0, 0.0, 0.0]]))
+
+
+def test_next_step_autoreset_as_gymnasium_defines_it():
+    """An episode that ends at step k: step k + 1 ignores the action, resets the slot, reward 0, flags false."""
+    loose = {"angle_tolerance": 4.0, "rate_tolerance": 10.0, "hold_periods": 2}  # every episode ends at step 2
+    envs = AttitudeControlVectorEnv(num_envs=2, **loose)
+    single = AttitudeControlEnv(**loose)
+    obs, _ = envs.reset(seed=[5, 6])
+    single.reset(seed=5)
+    first = envs.step(np.zeros((2, 3)))
+    assert first[2].tolist() == [False, False]
+    obs, reward, terminated, truncated, info = envs.step(np.zeros((2, 3)))
+    assert terminated.tolist() == [True, True] and not truncated.any() and np.all(reward <= 0.0)
+    assert info == {}
+    obs, reward, terminated, truncated, info = envs.step(np.full((2, 3), 1.0))  # the action is ignored
+    assert reward.tolist() == [0.0, 0.0] and not terminated.any() and not truncated.any()
+    assert info["_principal_moments"].tolist() == [True, True]  # the resets' infos, masked
+    single.step(np.zeros(3))
+    single.step(np.zeros(3))
+    restarted, single_info = single.reset()  # the next episode of the same generator
+    assert restarted.tobytes() == obs[0].tobytes()
+    assert single_info["principal_moments"].tobytes() == info["principal_moments"][0].tobytes()
+    assert envs.step(np.zeros((2, 3)))[2].tolist() == [False, False]  # a fresh episode: step 1 of 2
