@@ -265,7 +265,10 @@ class SlewBodies:
 
         Returns ``(reward, terminated, truncated)`` (N,); the observations are in :attr:`observation`.
         """
-        action = np.asarray(action, dtype=float).reshape(self.n, 3)
+        action = np.asarray(action, dtype=float)
+        if action.size != 3 * self.n:
+            raise ValueError(f"the action must hold 3 values per body ({self.n}, 3), got shape {action.shape}")
+        action = action.reshape(self.n, 3)
         if not np.all(np.isfinite(action)):
             raise ValueError(f"the action must be finite, got {action[~np.isfinite(action).all(axis=1)][0]}")
         action = np.clip(action, -1.0, 1.0)

@@ -32,13 +32,15 @@ def test_gymnasium_check_env_passes_without_a_warning(env_id, sensors):
     env.close()
 
 
-def test_the_module_prefixed_id_imports_the_package():
+def test_the_module_prefixed_id_imports_the_package_and_no_ros():
     code = (
         "import gymnasium, sys; env = gymnasium.make('rigid_rot_sim.envs:RigidRot/AttitudeControl-v0'); "
-        "print(type(env.unwrapped).__name__, env.spec.max_episode_steps)"
+        "env.reset(seed=0); env.step(env.action_space.sample()); "
+        "print(type(env.unwrapped).__name__, env.spec.max_episode_steps, "
+        "[m for m in sys.modules if m.startswith(('rclpy', 'rigid_rot_msgs'))])"
     )
     result = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=300, check=True)
-    assert result.stdout.split() == ["AttitudeControlEnv", "300"]
+    assert result.stdout.split() == ["AttitudeControlEnv", "300", "[]"]
 
 
 # The same seed and actions in another process: a script that prints a digest of every observation

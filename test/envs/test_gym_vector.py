@@ -138,6 +138,8 @@ def test_bad_use_is_refused():
     with pytest.raises(ValueError, match="num_envs"):
         AttitudeControlVectorEnv(num_envs=0)
     envs.reset(seed=None)  # from entropy
+    with pytest.raises(ValueError, match=r"\(2, 3\)"):
+        envs.step(np.zeros(3))
     with pytest.raises(ValueError, match="finite"):
         envs.step(np.array([[0.0, 0.0, np.inf], [0.0, 0.0, 0.0]]))
 
