@@ -19,7 +19,7 @@ SHORT = {"max_episode_steps": 12, "angle_tolerance": 1.5, "rate_tolerance": 0.2,
 
 
 @pytest.mark.parametrize(
-    ("env_id", "cls"), zip(IDS, [AttitudeControlVectorEnv, WheelAttitudeControlVectorEnv], strict=True)
+    ("env_id", "cls"), list(zip(IDS, [AttitudeControlVectorEnv, WheelAttitudeControlVectorEnv], strict=True))
 )
 def test_make_vec_builds_the_native_vector_env_with_its_autoreset_mode(env_id, cls):
     envs = gym.make_vec(env_id, num_envs=3, vectorization_mode="vector_entry_point")
