@@ -73,9 +73,9 @@ class AttitudeControlEnv(gym.Env[np.ndarray, np.ndarray]):
     def reset(self, *, seed: int | None = None, options: dict[str, Any] | None = None) -> tuple[np.ndarray, dict]:
         """A new episode drawn from the environment's generator (seeded by ``seed`` when given)."""
         super().reset(seed=seed)
-        info = self.bodies.reset(0, self.np_random)
+        (episode,) = self.bodies.reset([0], [self.np_random])
         self._started = True
-        return self.bodies.observation[0].copy(), info
+        return self.bodies.observation[0].copy(), episode.info()
 
     def step(self, action: Any) -> tuple[np.ndarray, float, bool, bool, dict]:
         """One control period under ``action`` (3,) in [-1, 1]."""

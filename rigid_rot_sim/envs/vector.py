@@ -24,7 +24,7 @@ from gymnasium.vector import AutoresetMode, VectorEnv
 from gymnasium.vector.utils import batch_space
 
 from rigid_rot_sim.envs.attitude import action_space, make_task, observation_space
-from rigid_rot_sim.envs.task import SensorSuite, SlewBodies
+from rigid_rot_sim.envs.task import Episode, SensorSuite, SlewBodies
 
 __all__ = ["AttitudeControlVectorEnv", "WheelAttitudeControlVectorEnv", "slot_seeds"]
 
@@ -80,9 +80,8 @@ class AttitudeControlVectorEnv(VectorEnv):
             if len(seeds) != self.num_envs:
                 raise ValueError(f"reset: {len(seeds)} seeds for {self.num_envs} slots")
         self._generators = [seeding.np_random(s)[0] for s in seeds]
-        infos: dict[str, Any] = {}
-        for slot in range(self.num_envs):
-            infos = self._add_info(infos, self.bodies.reset(slot, self._generators[slot]), slot)
+        slots = np.arange(self.num_envs)
+        infos = self._reset_infos(slots, self.bodies.reset(slots, self._generators))
         self._autoreset[:] = False
         return self.bodies.observation.copy(), infos
 
@@ -93,13 +92,27 @@ class AttitudeControlVectorEnv(VectorEnv):
         restarting = np.flatnonzero(self._autoreset)
         reward, terminated, truncated = self.bodies.step(actions)
         infos: dict[str, Any] = {}
-        for slot in restarting:
-            infos = self._add_info(infos, self.bodies.reset(int(slot), self._generators[slot]), int(slot))
+        if restarting.size:
+            episodes = self.bodies.reset(restarting, [self._generators[slot] for slot in restarting])
+            infos = self._reset_infos(restarting, episodes)
         reward[restarting] = 0.0
         terminated[restarting] = False
         truncated[restarting] = False
         self._autoreset = terminated | truncated
         return self.bodies.observation.copy(), reward, terminated, truncated, infos
+
+    def _reset_infos(self, slots: np.ndarray, episodes: list[Episode]) -> dict[str, Any]:
+        """The reset infos of ``slots``, batched as ``VectorEnv._add_info`` batches them (value, ``_key`` mask)."""
+        infos: dict[str, Any] = {}
+        mask = np.zeros(self.num_envs, dtype=np.bool_)
+        mask[slots] = True
+        for key in ("principal_moments", "inertia", "target"):
+            values = np.array([episode.info()[key] for episode in episodes])
+            array = np.zeros((self.num_envs, *values.shape[1:]), dtype=values.dtype)
+            array[slots] = values
+            infos[key] = array
+            infos["_" + key] = mask.copy()
+        return infos
 
 
 class WheelAttitudeControlVectorEnv(AttitudeControlVectorEnv):
