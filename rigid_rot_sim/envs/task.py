@@ -201,16 +201,17 @@ def draw_episode(task: SlewTask, rng: np.random.Generator) -> Episode:
     ``max_initial_rate * (2 u[4:7] - 1)``; sensor seed ``rng.integers(0, 2**63)``. Three calls on the
     generator: an episode's draws cost ~10 us, which matters when thousands of slots restart.
     """
-    u = rng.random(7)
-    z = rng.normal(size=7)
+    u = rng.random(7).tolist()  # Python floats: the arithmetic below costs ~1 us instead of ~20 on numpy scalars
+    z = rng.normal(size=7).tolist()
     sensor_seed = int(rng.integers(0, 2**63, dtype=np.int64))
-    moments = np.asarray(task.principal_moments, dtype=float) * (1.0 + task.inertia_dispersion * (2.0 * u[0:3] - 1.0))
+    d = task.inertia_dispersion
+    moments = [m * (1.0 + d * (2.0 * x - 1.0)) for m, x in zip(task.principal_moments, u[0:3], strict=True)]
     target = quat.normalize(z[0:4])
-    ax, ay, az = float(z[4]), float(z[5]), float(z[6])
-    scale = task.max_initial_error * float(u[3]) / math.sqrt(ax * ax + ay * ay + az * az)
+    ax, ay, az = z[4:7]
+    scale = task.max_initial_error * u[3] / math.sqrt(ax * ax + ay * ay + az * az)
     q0 = quat.normalize(quat.multiply(target, quat.exp_rotation_vector((scale * ax, scale * ay, scale * az))))
-    omega0 = task.max_initial_rate * (2.0 * u[4:7] - 1.0)
-    return Episode(moments, np.array(target), np.array(q0), omega0, sensor_seed)
+    omega0 = [task.max_initial_rate * (2.0 * x - 1.0) for x in u[4:7]]
+    return Episode(np.array(moments), np.array(target), np.array(q0), np.array(omega0), sensor_seed)
 
 
 class SlewBodies:

@@ -106,8 +106,11 @@ class AttitudeControlVectorEnv(VectorEnv):
         infos: dict[str, Any] = {}
         mask = np.zeros(self.num_envs, dtype=np.bool_)
         mask[slots] = True
-        for key in ("principal_moments", "inertia", "target"):
-            values = np.array([episode.info()[key] for episode in episodes])
+        moments = np.array([episode.principal_moments for episode in episodes])
+        targets = np.array([episode.target for episode in episodes])
+        inertias = np.zeros((len(episodes), 3, 3))
+        inertias[:, [0, 1, 2], [0, 1, 2]] = moments  # Episode.info's np.diag, for all at once
+        for key, values in (("principal_moments", moments), ("inertia", inertias), ("target", targets)):
             array = np.zeros((self.num_envs, *values.shape[1:]), dtype=values.dtype)
             array[slots] = values
             infos[key] = array
