@@ -37,7 +37,7 @@ ROS_PINS := \
 PY_PINS := \
 	setuptools==65.5.0 wheel==0.45.1 numpy==2.4.6 scipy==1.17.1 mcap==1.6.0 mcap-ros2-support==0.6.0 \
 	PyYAML==6.0.3 matplotlib==3.11.2 tqdm==4.70.1 numba==0.68.1 llvmlite==0.50.0 \
-	jsonschema==4.26.0
+	jsonschema==4.26.0 gymnasium==1.4.0 farama-notifications==0.0.6
 # Sweeps: dask.distributed is the engine (local cluster or `dask scheduler`/`dask worker`), Parquet output.
 SWEEP_PINS := dask==2026.8.0 distributed==2026.8.0 pyarrow==26.0.1
 # The viewer extra (pip install rigid_rot_sim[viewer]): Foxglove's SDK, a live WebSocket server without ROS.

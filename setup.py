@@ -36,6 +36,7 @@ setup(
         "pyyaml",
         "jsonschema>=4.0",
         "numba",
+        "gymnasium>=1.0",
     ],  # jsonschema: Draft 2020-12
     # sweeps (`rigid-rot sweep`, --scheduler): no rosdep keys exist for these; pip installs them
     # viewer (`--foxglove`, `rigid-rot view`): the Foxglove live server, without ROS

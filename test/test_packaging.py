@@ -33,6 +33,7 @@ PYTHON_KEYS: dict[str, set[str]] = {
     "websockets": {"python3-websockets"},
     "mpmath": {"python3-mpmath"},
     "numba": {"python3-numba"},
+    "gymnasium": {"python3-gymnasium-pip"},
     "catkin_pkg": {"python3-catkin-pkg", "python3-catkin-pkg-modules"},
     "setuptools": {"python3-setuptools"},
 }

@@ -109,7 +109,7 @@ def test_no_module_imports_one_that_imports_it_back():
 LAYERS = (
     ("core",),
     ("scene",),
-    ("run",),
+    ("run", "envs"),
     ("message_fields", "share"),
     ("recording",),
     ("conversions", "viewer"),

@@ -28,7 +28,7 @@ import numpy as np
 
 def entry_points() -> dict[str, Any]:
     """The compiled entry points of the core (numba dispatchers, which numba does not type), by name."""
-    from rigid_rot_sim.core import batch, exact
+    from rigid_rot_sim.core import batch, batch_gyrostat, exact, slew
     from rigid_rot_sim.core.integrators import gyrostat, kernels, taylor
 
     return {
@@ -43,6 +43,9 @@ def entry_points() -> dict[str, Any]:
         "batch._advance_bodies_parallel": batch._advance_bodies_parallel,
         "batch._rk4_soa_serial": batch._rk4_soa_serial,
         "batch._rk4_soa_parallel": batch._rk4_soa_parallel,
+        "batch_gyrostat._advance_serial": batch_gyrostat._advance_serial,
+        "batch_gyrostat._advance_parallel": batch_gyrostat._advance_parallel,
+        "slew.slew_update": slew.slew_update,
     }
 
 
@@ -75,6 +78,28 @@ def exercise() -> None:
     for cls in GYROSTAT_METHODS.values():
         gyrostat = cls(moments, 1e-3, ConstantTorque(np.ones(3)), wheels=wheels, orbit=orbit_model(4e14, 7e6))
         gyrostat.advance(2)
+    from rigid_rot_sim.core.batch_gyrostat import advance_gyrostats
+    from rigid_rot_sim.core.slew import slew_update
+
+    for n, steps in ((1, 2), (2, 100_000)):  # serial, then parallel
+        q0 = np.tile([0.0, 0.0, 0.0, 1.0], (n, 1))
+        advance_gyrostats(
+            np.tile(moments, (n, 1)), wheels, q0, np.ones((n, 3)), np.zeros((n, 1)), np.ones((n, 1)), 1e-4, steps
+        )
+    slew_update(
+        q0,
+        np.ones((2, 3)),
+        q0,
+        np.ones((2, 3)),
+        q0,
+        np.zeros((2, 3)),
+        np.ones(3),
+        np.ones(3),
+        np.zeros(2, dtype=np.int64),
+        np.zeros((2, 10)),
+        np.zeros(2),
+        True,
+    )
     from rigid_rot_sim.core.exact import torque_free_flow, torque_free_solution
 
     solution = torque_free_solution(moments, (1.0, 0.1, 0.5))
