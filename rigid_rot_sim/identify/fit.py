@@ -6,7 +6,7 @@
        J (w(b) - w(a)) + int_a^b w x (J w) dt = int_a^b tau dt + tau_b (b - a)
 
    with the measured ``w`` (trapezoid rule) and the torque integrated exactly. A linear least
-   squares gives the starting tensor (made positive definite if noise left it otherwise).
+   squares gives the starting tensor (moved into the physical set if noise left it outside).
 2. **Output error**: the window is cut into segments (``segment`` s each), each re-simulated
    from its own initial angular velocity by :func:`rigid_rot_sim.identify.kernel.integrate_segments`;
    the residuals ``w_model + gyro_bias - w_measured``, weighted per axis by the noise measured in
@@ -187,14 +187,23 @@ def equation_error(
     if torque_bias:
         A = np.concatenate([A, -(t[b] - t[a])[:, None, None] * np.eye(3)[None]], axis=-1)
     solution = np.linalg.lstsq(A.reshape(-1, A.shape[-1]), rhs.reshape(-1), rcond=None)[0]
-    tensor = _positive_definite(basis.tensor(solution[:k]))
+    tensor = _physical(basis.tensor(solution[:k]))
     return tensor, (solution[k:] if torque_bias else np.zeros(3))
 
 
-def _positive_definite(tensor: np.ndarray) -> np.ndarray:
+def _physical(tensor: np.ndarray) -> np.ndarray:
+    """The nearest tensor (same axes) with positive moments that keep the triangle inequality.
+
+    Noise, or data that say nothing about an axis, can leave the equation-error tensor outside
+    the physical set; a start there may not even be integrable (a body with two tiny moments spins
+    up about them exponentially), so the moments are moved in before the output-error fit.
+    """
     values, vectors = np.linalg.eigh(0.5 * (tensor + tensor.T))
-    floor = 1e-3 * max(abs(values).max(), 1e-300)
-    return (vectors * np.maximum(values, floor)) @ vectors.T
+    largest = max(float(abs(values).max()), 1e-300)
+    values = np.maximum(values, 1e-3 * largest)
+    if values[0] + values[1] < values[2]:
+        values[:2] = np.maximum(values[:2], 0.55 * values[2])
+    return (vectors * values) @ vectors.T
 
 
 class _Problem:
@@ -304,7 +313,8 @@ def identify(
         raw = fit.fun.reshape(-1, 3) / problem.weights
         dof = max(n - problem.n_par / 3.0, 1.0)
         sigma = np.sqrt(np.sum(raw**2, axis=0) / dof)
-        sigma = np.maximum(sigma, 1e-300)
+        # noise-free data (or an axis that never moves) leaves no noise to measure: a floor far below any gyro's
+        sigma = np.maximum(sigma, 1e-12 * max(float(np.sqrt(np.mean(measurements.omega**2))), 1e-300))
         converged = np.allclose(1.0 / sigma, problem.weights, rtol=0.2)
         problem.weights = 1.0 / sigma
         if converged:
@@ -323,15 +333,14 @@ def _result(
 ) -> Identification:
     basis, k = problem.basis, problem.k
     jac = problem.jacobian(x)
-    scale = np.linalg.norm(jac, axis=0)
-    scale[scale == 0.0] = 1.0
-    normalised = jac / scale
+    scale = _parameter_scales(problem, basis.tensor(x[:k]))
+    normalised = jac * scale
     information = normalised.T @ normalised  # eigenvalues: the squared singular values of ``normalised``
     eigenvalues, eigenvectors = np.linalg.eigh(information)
     singular = np.sqrt(np.maximum(eigenvalues, 0.0))
     names = _parameter_names(problem)
     weak = singular < UNOBSERVABLE * singular[-1]
-    cov = np.linalg.pinv(information, hermitian=True) / np.outer(scale, scale)
+    cov = np.linalg.pinv(information, hermitian=True) * np.outer(scale, scale)
     theta, tau_b, gyro_b, omega0 = problem.split(x)
     tensor = basis.tensor(theta)
     cov6 = basis.M @ cov[:k, :k] @ basis.M.T
@@ -378,6 +387,21 @@ def _result(
         n_samples=problem.m.t.shape[0],
         iterations=nfev,
     )
+
+
+def _parameter_scales(problem: _Problem, tensor: np.ndarray) -> np.ndarray:
+    """Each parameter's physical size, so that the information matrix compares like with like.
+
+    Inertia: a third of the trace; rates (gyro bias, initial rates): the RMS measured rate; torque
+    bias: the larger of the commanded torque and the gyroscopic torque ``J w^2``. A direction is
+    unobservable when moving the parameters by their sizes along it changes the weighted readings
+    by less than :data:`UNOBSERVABLE` of the best determined direction.
+    """
+    inertia = float(np.trace(tensor)) / 3.0
+    rate = max(float(np.sqrt(np.mean(np.sum(problem.m.omega**2, axis=1)))), 1e-300)
+    torque = max(inertia * rate**2, float(np.abs(problem.m.torque.values).max(initial=0.0)), 1e-300)
+    scales = [inertia] * problem.k + [torque] * (3 * problem.est_tau) + [rate] * (3 * problem.est_gyro)
+    return np.array(scales + [rate] * (3 * problem.n_seg))
 
 
 def _parameter_names(problem: _Problem) -> list[str]:
