@@ -359,7 +359,7 @@ def _result(
         i += 3
     if problem.est_gyro:
         gyro_sigma = np.sqrt(np.diag(cov)[i : i + 3])
-    unobservable = [_unobservable_sentence(eigenvectors[:, i], names, problem.m) for i in np.nonzero(weak)[0]]
+    unobservable = _unobservable(eigenvectors[:, weak], names, problem.m)
     warnings = []
     if ratios:
         warnings.append("no torque in the window: the scale of the inertia is unobservable; reported with unit trace")
@@ -416,13 +416,17 @@ def _parameter_names(problem: _Problem) -> list[str]:
     return names
 
 
-def _unobservable_sentence(direction: np.ndarray, names: list[str], m: Measurements) -> str:
-    """Which parameters a null direction mixes, and what in the data leaves it free."""
-    involved = [names[i] for i in np.argsort(-np.abs(direction)) if abs(direction[i]) > 0.2]
-    singular = np.linalg.svd(m.omega - 0.0, compute_uv=False)
+def _unobservable(directions: np.ndarray, names: list[str], m: Measurements) -> list[str]:
+    """One sentence naming the parameters the null directions mix, and what in the data leaves them free."""
+    if directions.shape[1] == 0:
+        return []
+    weight = np.sqrt(np.sum(directions**2, axis=1))
+    involved = [names[i] for i in range(len(names)) if weight[i] > 0.2]
+    singular = np.linalg.svd(m.omega, compute_uv=False)
     axes = int(np.sum(singular > 1e-3 * singular[0])) if singular[0] > 0.0 else 0
     if axes < 3:
         why = f"the body turned about {axes} independent axis{'es' if axes != 1 else ''} only"
     else:
-        why = "the excitation changes no reading along this combination"
-    return f"not observable: {' and '.join(involved)} ({why})"
+        why = "the excitation changes no reading along these combinations"
+    count = directions.shape[1]
+    return [f"not observable: {', '.join(involved)} ({count} direction{'s' if count > 1 else ''}; {why})"]
