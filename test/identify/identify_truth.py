@@ -96,6 +96,7 @@ def write_bag(
     torque_topics: tuple[str, ...] = ("/robot/torque",),
     vector_topic: str | None = None,
     stamp0: int = 1_700_000_000_000_000_000,
+    command_frame: str | None = None,
 ) -> Path:
     """A rosbag2 directory (metadata.yaml + MCAP) written by rosbags: Imu readings and WrenchStamped commands.
 
@@ -147,7 +148,7 @@ def write_bag(
             if vector is not None:
                 v = Vector3Stamped(header=header(t, "imu_link"), vector=vec(readings[i]))
                 events.append((t, vector, store.serialize_cdr(v, "geometry_msgs/msg/Vector3Stamped")))
-        frame = "base_link" if truth.frame == "body" else "odom"
+        frame = command_frame or ("base_link" if truth.frame == "body" else "odom")
         for t, value in zip(truth.command_times, truth.commands, strict=True):
             for conn in torques:
                 w = WrenchStamped(
