@@ -159,11 +159,16 @@ def build_grid(measurements: Measurements, segment: float, max_step: float) -> G
 
 
 def equation_error(
-    measurements: Measurements, basis: Basis, torque_bias: bool, window: int = 20
+    measurements: Measurements, basis: Basis, torque_bias: bool, window: float = 1.0
 ) -> tuple[np.ndarray, np.ndarray]:
-    """The starting tensor and torque bias from the integrated equations over windows of ``window`` samples."""
+    """The starting tensor and torque bias from the integrated equations over windows of ``window`` s.
+
+    Long windows (at least 20 samples) keep the noise of the rate differences small against the
+    change of rate they measure, which a least squares with noise in its regressors needs.
+    """
     t, w = measurements.t, measurements.omega
     n = t.shape[0]
+    window = max(20, int(round(window / max(float(np.median(np.diff(t))), 1e-300))))
     edges = np.arange(0, n, window)
     if edges[-1] != n - 1:
         edges = np.append(edges, n - 1)
@@ -363,6 +368,13 @@ def _result(
     warnings = []
     if ratios:
         warnings.append("no torque in the window: the scale of the inertia is unobservable; reported with unit trace")
+    floor = _noise_floor(problem.m.omega)
+    if np.any(sigma > 3.0 * floor + 1e-12 * np.abs(problem.m.omega).max()):
+        warnings.append(
+            f"the fit stays above the noise floor (residual per axis {', '.join(f'{v:.3g}' for v in sigma)} rad/s, "
+            f"the readings' own noise about {', '.join(f'{v:.3g}' for v in floor)}): unmodelled torque, a wrong "
+            "torque frame or time offset, or a local minimum (try a shorter --segment)"
+        )
     if moments[0] <= 0.0 or moments[2] > moments[0] + moments[1] * (1 + 1e-9):
         warnings.append(f"the identified tensor is not physical (principal moments {moments.tolist()})")
     return Identification(
@@ -387,6 +399,14 @@ def _result(
         n_samples=problem.m.t.shape[0],
         iterations=nfev,
     )
+
+
+def _noise_floor(omega: np.ndarray) -> np.ndarray:
+    """Per-axis white noise of the readings from their second differences (rad/s; an upper bound for rough signals)."""
+    if omega.shape[0] < 3:
+        return np.full(3, np.inf)
+    second = omega[2:] - 2.0 * omega[1:-1] + omega[:-2]
+    return np.sqrt(np.mean(second**2, axis=0) / 6.0)
 
 
 def _parameter_scales(problem: _Problem, tensor: np.ndarray) -> np.ndarray:

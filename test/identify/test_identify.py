@@ -93,6 +93,7 @@ def test_world_frame_torque_is_turned_with_the_bag_attitude(tmp_path, excited):
     # read as if in the body frame, the same commands give a wrong model: the frame matters
     wrong = identify(Measurements(truth.t, truth.omega, TorqueSchedule(times, values)))
     assert np.max(np.abs(wrong.inertia - INERTIA)) / np.max(np.abs(INERTIA)) > 1e-2
+    assert result.warnings == () and any("noise floor" in w for w in wrong.warnings)  # and it says so
 
 
 def test_world_frame_torque_without_attitude_is_refused(tmp_path, excited):
