@@ -41,6 +41,8 @@ ESTIMATES = ("inertia", "torque_bias", "gyro_bias")
 #: A direction of the normalised information matrix with a singular value below this fraction
 #: of the largest is not determined by the data.
 UNOBSERVABLE = 1e-6
+#: The residual of a model that could not be integrated (a trial step the fit then rejects).
+_FAILED = 1e150
 #: Fewer samples than this in the window is an error.
 MIN_SAMPLES = 20
 
@@ -251,10 +253,10 @@ class _Problem:
         try:
             self._simulate(x, with_sens=False)
         except (ZeroDivisionError, np.linalg.LinAlgError):
-            return np.full(3 * self.m.t.shape[0], 1e150)
+            return np.full(3 * self.m.t.shape[0], _FAILED)
         gyro_b = self.split(x)[2]
         r = (self._omega + gyro_b - self.m.omega) * self.weights
-        return np.where(np.isfinite(r), r, 1e150).reshape(-1)
+        return np.where(np.isfinite(r), r, _FAILED).reshape(-1)
 
     def jacobian(self, x: np.ndarray) -> np.ndarray:
         self._simulate(x, with_sens=True)
@@ -315,6 +317,11 @@ def identify(
     for _ in range(3):  # refit with the per-axis noise found in the residuals of the last fit
         fit = least_squares(problem.residuals, x, jac=problem.jacobian, method="lm", xtol=1e-12, ftol=1e-12)
         x, nfev = fit.x, nfev + fit.nfev
+        if not np.isfinite(fit.cost) or np.max(np.abs(fit.fun)) >= _FAILED:
+            raise ValueError(
+                "the output-error fit found no model that can be integrated over the window "
+                "(check the torque topics and frames, or try a shorter --segment)"
+            )
         raw = fit.fun.reshape(-1, 3) / problem.weights
         dof = max(n - problem.n_par / 3.0, 1.0)
         sigma = np.sqrt(np.sum(raw**2, axis=0) / dof)
