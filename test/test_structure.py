@@ -113,7 +113,7 @@ LAYERS = (
     ("message_fields", "share"),
     ("recording",),
     ("conversions", "viewer"),
-    ("ros", "analysis"),
+    ("ros", "analysis", "identify"),
     ("cli",),
     ("console_scripts",),
 )

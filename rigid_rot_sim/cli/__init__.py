@@ -40,6 +40,7 @@ SUBCOMMANDS = [
     "replay",
     "view",
     "export",
+    "identify",
     "run",
     "torque",
 ]

@@ -21,6 +21,8 @@ SHIPPED = {
     "wheel_slew": "spacecraft",
     "gravity_gradient_satellite": "spacecraft",
     "closed_loop_lockstep": "topic",
+    "excitation": "schedule",
+    "excitation_gentle": "schedule",
 }
 
 MINIMAL = "body: {principal_moments: [1.0, 2.0, 3.0]}\n"
