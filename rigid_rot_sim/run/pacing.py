@@ -1,8 +1,9 @@
 """Pacing a run: wall clock against sim time, outputs due per step, slices of bounded wall time.
 
 Plain classes, no ROS, every clock injected, so the rules are tested with a fake clock
-(``test/run/test_pacing.py``); the ROS node only calls :meth:`RunDriver.tick` from its
-timer and :meth:`RunDriver.run` from ``~/step``.
+(``test/run/test_pacing.py``); the ROS node's run loop (``rigid_rot_sim.ros.run_loop``) calls
+:meth:`RunDriver.tick` at each turn and waits :meth:`RunDriver.next_wait` for the next, and
+``~/step`` calls :meth:`RunDriver.run`.
 
 * :class:`Pacer`: the real-time factor r. At r > 0 the run is due at step
   ``r * (wall time since the anchor)`` after the anchor's sim time; a backlog of more than
@@ -48,6 +49,8 @@ MIN_TICK = 0.001
 MAX_TICK = 0.02
 #: At r > 0, a backlog beyond this much wall time is dropped (the run re-anchors), with a warning.
 MAX_BACKLOG_WALL = 0.5
+#: Wall time (s) after a step's due time that its tick is timed for (float rounding never wakes it early).
+DUE_MARGIN = 2e-6
 #: Steps to the next due output when no output is scheduled at all.
 NEVER = 10**9
 
@@ -107,6 +110,10 @@ class Pacer:
         """Restart pacing from sim time ``t`` (s) now: after a pause, a reset, a new r."""
         self._anchor_wall = self.clock()
         self._anchor_t = t
+
+    def wall_at(self, t: float) -> float:
+        """The wall time (clock s) at which sim time ``t`` is due (r > 0)."""
+        return self._anchor_wall + (t - self._anchor_t) / self.real_time_factor
 
     def tick_period(self, dt: float) -> float:
         """Wall seconds between two timer ticks: one step of wall time, within [MIN_TICK, MAX_TICK]."""
@@ -208,6 +215,8 @@ class RunDriver:
         self.step_cost = StepCost()
         self.finished = False
         self.observers: list[SimulationObserver] = list(observers)
+        #: Called between two chunks of steps (the node takes its commands there); returns how many came.
+        self.between_chunks: Callable[[], int] | None = None
 
     def publish_due(self, force: bool = False, rest: bool = False) -> None:
         """Report the outputs due at the current step (see :meth:`OutputSchedule.due`)."""
@@ -224,8 +233,29 @@ class RunDriver:
         self.finished = False
         self.pacer.anchor(self.sim.t)
 
-    def tick(self) -> Progress:
-        """One timer tick: step to the paced target (r > 0) or as far as ``MAX_TICK_WALL`` allows."""
+    def next_wait(self) -> float | None:
+        """Wall time (s) until the run next needs a tick: the next due output (or the end) at r > 0, 0 at
+        r = 0, None when paused or finished (nothing is due until something changes).
+
+        Steps between two outputs are computed at the next output's tick: the states do not depend
+        on when they are computed, and a command that arrives in between wakes the run, which first
+        steps to the step due at that wall time.
+        """
+        sim = self.sim
+        if sim.paused or self.finished:
+            return None
+        r = self.pacer.real_time_factor
+        if r <= 0.0:
+            return 0.0
+        k = sim.step_index
+        stop = self.schedule.next_due(k)
+        if self.duration is not None:
+            stop = min(stop, sim.step_at_or_after(self.duration))
+        due = self.pacer.wall_at(sim.t + (stop - k) * sim.dt) + DUE_MARGIN
+        return max(0.0, due - self.clock())
+
+    def tick(self, budget: float = MAX_TICK_WALL) -> Progress:
+        """One tick: step to the paced target (r > 0) or as far as ``budget`` s of wall time allows."""
         sim = self.sim
         if sim.paused or self.finished:
             return Progress()
@@ -243,7 +273,7 @@ class RunDriver:
                 math.hypot(*snapshot.angular_velocity_body.tolist()),
                 math.hypot(*snapshot.torque_body.tolist()),
             )
-        progress = self.run(target, now + MAX_TICK_WALL)
+        progress = self.run(target, now + budget)
         progress.falling_behind = behind
         return progress
 
@@ -273,6 +303,8 @@ class RunDriver:
                 self.publish_due(force=True)
                 return Progress(steps=sim.step_index - start, failure=sim.failure)
             self.publish_due()
+            if self.between_chunks is not None:
+                self.between_chunks()
             if deadline is not None and self.clock() >= deadline:
                 break
         return Progress(steps=sim.step_index - start)
