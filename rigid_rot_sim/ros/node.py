@@ -415,6 +415,8 @@ def run_until_finished(start: Callable[[list[Node]], RigidRotSimNode], drain: fl
         node = start(nodes)
         for signum in (signal.SIGINT, signal.SIGTERM):
             signal.signal(signum, lambda *_: stop.set())
+        if node.run is not None:
+            node.run.loop.detach()  # the turns run on this thread, never on the executor's
         executor = SingleThreadedExecutor()
         for each in nodes:
             executor.add_node(each)

@@ -97,6 +97,10 @@ class RunCallbackGroup(MutuallyExclusiveCallbackGroup):
             self.wake()
 
 
+def _not_called() -> None:
+    raise AssertionError("the run loop's timer is taken by the RunLoop, never called")
+
+
 class RunLoop(Waitable):
     """The run's turns for ``node``: :meth:`spin` on a thread of its own, or as a Waitable of any executor."""
 
@@ -106,17 +110,26 @@ class RunLoop(Waitable):
         self.turn = turn
         # one-shot: armed for the next turn by each turn (executor use only); steady, never /clock
         self.timer = Timer(
-            None, None, int(POLL_WALL * 1e9), Clock(clock_type=ClockType.STEADY_TIME), context=node.context
+            _not_called,  # the Waitable takes the timer itself; it is no node's timer
+            TAKEN_BY_THE_RUN_LOOP,
+            int(POLL_WALL * 1e9),
+            Clock(clock_type=ClockType.STEADY_TIME),
+            context=node.context,
+            autostart=False,
         )
         self._indices: tuple[list[int], int, int] = ([], 0, 0)
         node.add_waitable(self)
 
     # ---------------------------------------------------------------- on a thread of its own
 
+    def detach(self) -> None:
+        """From now on no executor runs the turns (call before an executor spins the node): :meth:`spin` does."""
+        self.callback_group = TAKEN_BY_THE_RUN_LOOP
+        self.timer.cancel()
+
     def spin(self, lock: RunLock, keep_going: Callable[[], bool]) -> None:
         """Turns until ``keep_going()`` is False: wait for the next turn's time, a command or a wake-up."""
-        self.callback_group = TAKEN_BY_THE_RUN_LOOP  # no executor runs the turns any more
-        self.timer.cancel()
+        self.detach()
         wait_s: float | None = 0.0
         with self.intake.waiting() as wait:
             while keep_going():

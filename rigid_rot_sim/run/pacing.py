@@ -29,6 +29,7 @@ pacing decides only *when* (wall clock) a step is computed.
 from __future__ import annotations
 
 import math
+import os
 import time
 from collections.abc import Callable, Iterable, Mapping, Sequence
 from dataclasses import dataclass
@@ -49,6 +50,9 @@ MIN_TICK = 0.001
 MAX_TICK = 0.02
 #: At r > 0, a backlog beyond this much wall time is dropped (the run re-anchors), with a warning.
 MAX_BACKLOG_WALL = 0.5
+#: The physics is blamed for falling behind only when it alone needs more than 1 / PHYSICS_SHARE of the
+#: wall time at the real-time factor (it can run less than PHYSICS_SHARE times as fast as asked).
+PHYSICS_SHARE = 2.0
 #: Wall time (s) after a step's due time that its tick is timed for (float rounding never wakes it early).
 DUE_MARGIN = 2e-6
 #: Steps to the next due output when no output is scheduled at all.
@@ -82,16 +86,45 @@ class StepCost:
 
 
 def falling_behind_message(
-    real_time_factor: float, behind_wall: float, method: str, dt: float, per_step: float, omega: float, torque: float
+    real_time_factor: float,
+    behind_wall: float,
+    method: str,
+    dt: float,
+    per_step: float,
+    omega: float,
+    torque: float,
+    spent: tuple[float, float, float] | None = None,
 ) -> str:
-    """Why the run cannot keep its pace: the wall time one step of the method takes now."""
+    """Why the run cannot keep its pace, measured: the physics, or the rest of the machine.
+
+    The physics is named (with the integrator advice) only when one step of ``method`` takes more
+    than ``1 / PHYSICS_SHARE`` of its wall-time budget at this real-time factor. Otherwise the time
+    went elsewhere, and ``spent`` (wall s of the window, s in the physics, s in the outputs and
+    commands) says where: what is left was not the run's (the process waited for a core, or a
+    service held the run).
+    """
     pace = dt / per_step if per_step > 0.0 else math.inf
-    return (
-        f"cannot keep up with real_time_factor {real_time_factor:g} ({behind_wall:.2f} s of wall time behind): "
-        f"{method} needs {per_step * 1e3:.3g} ms of wall time per {dt:g} s step "
-        f"(at most {pace:.3g}x real time) at |omega| = {omega:.3g} rad/s, |torque| = {torque:.3g} N*m; "
-        "dropping the backlog (a smaller torque, max_torque or another integrator helps)"
+    head = f"cannot keep up with real_time_factor {real_time_factor:g} ({behind_wall:.2f} s of wall time behind): "
+    if pace < PHYSICS_SHARE * real_time_factor:
+        return head + (
+            f"{method} needs {per_step * 1e3:.3g} ms of wall time per {dt:g} s step "
+            f"(at most {pace:.3g}x real time) at |omega| = {omega:.3g} rad/s, |torque| = {torque:.3g} N*m; "
+            "dropping the backlog (a smaller torque, max_torque or another integrator helps)"
+        )
+    text = head + (
+        f"not the physics ({method} needs {per_step * 1e6:.3g} µs of wall time per {dt:g} s step, "
+        f"{pace:.3g}x real time)"
     )
+    if spent is not None:
+        wall, physics, node_side = spent
+        elsewhere = max(0.0, wall - physics - node_side)
+        load = os.getloadavg()[0] if hasattr(os, "getloadavg") else math.nan
+        text += (
+            f": of the last {wall:.2f} s of wall time the run spent {physics:.3f} s stepping and {node_side:.3f} s "
+            f"on its outputs and commands; the other {elsewhere:.2f} s it did not run (the process waited for a "
+            f"core, or a service held the run; load average {load:.1f} on {os.cpu_count()} cores)"
+        )
+    return text + "; dropping the backlog (a less busy machine, or fewer or slower outputs, helps)"
 
 
 class Pacer:
@@ -217,6 +250,8 @@ class RunDriver:
         self.observers: list[SimulationObserver] = list(observers)
         #: Called between two chunks of steps (the node takes its commands there); returns how many came.
         self.between_chunks: Callable[[], int] | None = None
+        #: Since the run was last on pace: [wall start, s stepping, s on outputs and commands].
+        self._spent = [self.clock(), 0.0, 0.0]
 
     def publish_due(self, force: bool = False, rest: bool = False) -> None:
         """Report the outputs due at the current step (see :meth:`OutputSchedule.due`)."""
@@ -272,9 +307,13 @@ class RunDriver:
                 self.step_cost.per_step,
                 math.hypot(*snapshot.angular_velocity_body.tolist()),
                 math.hypot(*snapshot.torque_body.tolist()),
+                (now - self._spent[0], self._spent[1], self._spent[2]),
             )
+            self._spent = [now, 0.0, 0.0]
         progress = self.run(target, now + budget)
         progress.falling_behind = behind
+        if target is not None and sim.step_index >= target:
+            self._spent = [self.clock(), 0.0, 0.0]  # on pace: the window of a next warning starts here
         return progress
 
     def run(self, target: int | None, deadline: float | None) -> Progress:
@@ -298,13 +337,17 @@ class RunDriver:
             if stop <= k:
                 break
             began = self.clock()
-            self.step_cost.record(sim.advance_to(stop), self.clock() - began)
+            steps = sim.advance_to(stop)
+            stepped = self.clock()
+            self.step_cost.record(steps, stepped - began)
             if sim.failure is not None:
                 self.publish_due(force=True)
                 return Progress(steps=sim.step_index - start, failure=sim.failure)
             self.publish_due()
             if self.between_chunks is not None:
                 self.between_chunks()
+            self._spent[1] += stepped - began
+            self._spent[2] += self.clock() - stepped
             if deadline is not None and self.clock() >= deadline:
                 break
         return Progress(steps=sim.step_index - start)
