@@ -36,25 +36,27 @@ raises out of a callback. Where simulation_interfaces is installed, also the sta
 simulator services (:mod:`.simulation_services`), through the same actions
 (``~/step_simulation`` runs ``~/step``'s code, limits included) and the SimulateSteps action
 (``~/simulate_steps``, stepped by a timer of its own: :mod:`.simulate_steps`).
-Executor: two threads; the run's callbacks share the node's default (mutually exclusive)
-callback group, ``~/compute_inertia`` has its own, so a huge request is deserialised beside them.
+The node loop (:mod:`.run_loop`, docs/architecture.md "The node loop"): the run's turns on the main
+thread, which also takes every command in arrival order (:mod:`.intake`); the services, parameters
+and actions on an executor thread, each holding the run lock (the node's default group), so a
+huge request is deserialised beside the stepping and the commands.
 Every limit is in :mod:`rigid_rot_sim.core.limits` (README, "Limits and failure behaviour").
 
 Pacing
 ------
-``real_time_factor`` r > 0: a wall-clock timer advances the simulation to
-``r * (wall time since the anchor)`` each tick (at most ``run.pacing.MAX_TICK_WALL`` of work per
-tick, so commands and services are served in between); r = 0: as fast as possible, in
-batches of at most ``MAX_TICK_WALL`` wall time per tick. The states do not depend on r
-or on the publish rates (see the Simulator's determinism notes). The timer runs on the
+``real_time_factor`` r > 0: each turn of the run loop advances the simulation to
+``r * (wall time since the anchor)`` (at most ``run_loop.SLICE_WALL`` of work per turn, so
+commands are taken in between), and the next turn comes when the next output is due; r = 0: as
+fast as possible, in turns of at most ``SLICE_WALL``. The states do not depend on r
+or on the publish rates (see the Simulator's determinism notes). The turns are timed on the
 steady clock: the node is the source of sim time (/clock), so ``use_sim_time`` true (a
 launch-wide setting) is accepted with a warning that says so: nothing here reads the ROS clock.
 
 Lockstep (the scene's ``lockstep`` section or the read-only ``lockstep.*`` parameters): the
 run waits at every turn for the controllers' commands stamped with the turn's time
 (:mod:`rigid_rot_sim.run.lockstep` has the contract, :mod:`.lockstep` the wiring, docs/lockstep.md
-the user's view); the timer then only decides timeouts and pacing, a guard condition wakes the
-run the moment a turn is answered. ``dt`` is fixed in lockstep.
+the user's view); the turn that takes a lockstep turn's last answer steps on at once, and the
+next turn is otherwise timed by the turn's timeout. ``dt`` is fixed in lockstep.
 """
 
 from __future__ import annotations

@@ -11,7 +11,7 @@ Design (docs/architecture.md, "The node loop"; issue 27):
 * **Waking**: the next turn comes when that time is up, a command arrives (the loop waits on the
   command subscriptions themselves), or a service, parameter change or action changed the run
   (:class:`RunCallbackGroup` wakes the loop after each). Nothing fires for nothing: a paused node
-  waits on its inputs only (and on :data:`POLL_WALL`, for SIGINT).
+  waits on its inputs, with one look every :data:`POLL_WALL` (SIGINT, a change made by a direct call).
 * **Who runs it**: :func:`rigid_rot_sim.ros.node.run_until_finished` (``rigid-rot run``, the console
   script) runs :meth:`RunLoop.spin` on the main thread, beside an executor thread that serves the
   services, parameters and actions; neither path waits for the other except for the
@@ -142,13 +142,12 @@ class RunLoop(Waitable):
     # ---------------------------------------------------------------- as an rclpy Waitable
 
     def _arm(self, wait_s: float | None) -> None:
-        if wait_s is None:
-            self.timer.cancel()
-        elif wait_s <= 0.0:
+        # None (paused, finished) waits POLL_WALL, as spin does: a change made by a direct call is seen
+        if wait_s is not None and wait_s <= 0.0:
             self.timer.cancel()
             self.intake.wake()
         else:
-            self.timer.timer_period_ns = max(1, int(min(wait_s, POLL_WALL) * 1e9))
+            self.timer.timer_period_ns = max(1, int(min(POLL_WALL if wait_s is None else wait_s, POLL_WALL) * 1e9))
             self.timer.reset()
 
     def get_num_entities(self) -> NumberOfEntities:
@@ -177,7 +176,7 @@ class RunLoop(Waitable):
         self._arm(self.turn())  # the executor holds the run lock (RunCallbackGroup) around this
 
     def destroy(self) -> None:
-        self.timer.cancel()
+        """The timer and the wake-up (idempotent; the subscriptions go with the node)."""
         self.timer.destroy()
         self.intake.destroy()
 
