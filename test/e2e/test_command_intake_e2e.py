@@ -119,19 +119,23 @@ def _is(value: float, marker: float) -> bool:
 def _check(bag: Path, topic: str, marker: float, values, accepted_kind: str, accepted_values, process) -> None:
     """In the recording: every command of the burst taken, the valid accepted, the invalid rejected, none lost."""
     BURSTS[topic] = BURSTS.get(topic, 0) + 1
+    sent, invalid = BURSTS[topic] * COUNT, BURSTS[topic] * COUNT // 2  # by this node so far
     deadline = time.monotonic() + WAIT
-    while True:
-        received = [msg for _, msg in BagReader(bag).decoded([topic]) if _is(values(msg)[1], marker)]
-        rejected = [msg for _, msg in BagReader(bag).decoded([REJECTED]) if msg.source == topic]
-        lost = [r.reason for r in rejected if r.reason.startswith("lost")]
-        if lost or (len(received) >= COUNT and len(rejected) >= BURSTS[topic] * COUNT // 2):
+    while True:  # the counts first (cheap): every command taken, every invalid one reported
+        counts = recorded_counts(bag)
+        if counts.get(topic, 0) >= sent and counts.get(REJECTED, 0) >= invalid:
             break
         process.check_alive()
-        assert time.monotonic() < deadline, (
-            f"{topic} at marker {marker}: {len(received)} of {COUNT} taken, "
-            f"{len(rejected)} of {BURSTS[topic] * COUNT // 2} rejected so far"
-        )
+        if time.monotonic() > deadline:
+            said = [r.reason for _, r in BagReader(bag).decoded([REJECTED]) if r.reason.startswith("lost")]
+            raise AssertionError(
+                f"{topic} at marker {marker}: {counts.get(topic, 0)} of {sent} taken, "
+                f"{counts.get(REJECTED, 0)} of {invalid} rejected so far; the node said: {said}"
+            )
         time.sleep(0.25)
+    received = [msg for _, msg in BagReader(bag).decoded([topic]) if _is(values(msg)[1], marker)]
+    rejected = [msg for _, msg in BagReader(bag).decoded([REJECTED]) if msg.source == topic]
+    lost = [r.reason for r in rejected if r.reason.startswith("lost")]
     assert not lost, f"the node reported lost commands: {lost}"
     valid = [float(i) for i in range(0, COUNT, 2)]
     assert len(received) == COUNT  # every command the publisher sent was taken
@@ -140,6 +144,14 @@ def _check(bag: Path, topic: str, marker: float, values, accepted_kind: str, acc
     events = [decode_event(e) for _, e in BagReader(bag).decoded([EVENTS])]
     accepted = [e for e in events if e.kind == accepted_kind and _is(accepted_values(e)[1], marker)]
     assert sorted(round(accepted_values(e)[0] * 1e9) for e in accepted) == valid
+
+
+def recorded_counts(bag: Path) -> dict[str, int]:
+    """Messages per topic in the recording while it is written (its flushed part)."""
+    try:
+        return dict(BagReader(bag).counts())
+    except Exception:  # noqa: BLE001 - a file caught before its first chunk is complete: try again
+        return {}
 
 
 def _torque(marker: float):
