@@ -237,7 +237,11 @@ def loop_figures(node, seconds: float) -> dict[str, float]:
             stop(sim)
     sim = start_node(*rates, "start_paused:=true")
     try:
-        time.sleep(3.0)
+        seen = len(stamps)
+        deadline = time.monotonic() + 60.0
+        while len(stamps) == seen and time.monotonic() < deadline:  # started: its first state is out
+            rclpy.spin_once(node, timeout_sec=0.05)
+        time.sleep(1.0)
         figures["paused cpu"] = cpu_share(sim.pid, seconds)
     finally:
         stop(sim)

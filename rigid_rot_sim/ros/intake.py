@@ -36,6 +36,7 @@ from dataclasses import dataclass, field
 from typing import Any
 
 from rclpy.callback_groups import CallbackGroup
+from rclpy.exceptions import InvalidHandle
 from rclpy.guard_condition import GuardCondition
 from rclpy.impl.implementation_singleton import rclpy_implementation as _rclpy
 from rclpy.node import Node
@@ -84,6 +85,8 @@ class Door:
     streams: list[int] = field(default_factory=list)
     taken: int = 0
     lost: int = 0
+    #: Count and report sequence gaps (False for a topic whose keep-last drops are by design: /clock).
+    counts_gaps: bool = True
 
     def gap(self, sequence: int | None) -> int:
         """Messages missing before the one numbered ``sequence`` from its publisher (0: none)."""
@@ -124,6 +127,12 @@ class CommandIntake:
         self.doors.append(Door(subscription, handler, subscription.topic_name, qos.depth))
         return subscription
 
+    def adopt(self, subscription: Subscription, handler: Handler) -> None:
+        """A subscription made elsewhere in :data:`TAKEN_BY_THE_RUN_LOOP` (rclpy's own /clock, with
+        ``use_sim_time``): drained with the others, its keep-last drops not counted (not a command)."""
+        depth = subscription.qos_profile.depth
+        self.doors.append(Door(subscription, handler, subscription.topic_name, depth, counts_gaps=False))
+
     def wake(self) -> None:
         """Wake the run loop now (thread-safe)."""
         self.guard.trigger()
@@ -131,10 +140,15 @@ class CommandIntake:
     def drain(self) -> int:
         """Take every message the readers hold and hand each on, all topics in reception order; how many."""
         pending: list[tuple[int, int, Door, Any]] = []
-        for door in self.doors:
+        for door in list(self.doors):
             subscription = door.subscription
             taken = 0
-            with subscription.handle:
+            try:
+                subscription.handle.__enter__()
+            except InvalidHandle:  # destroyed meanwhile (rclpy's /clock when use_sim_time turns false)
+                self.doors.remove(door)
+                continue
+            try:
                 while True:
                     got = subscription.handle.take_message(subscription.msg_type, subscription.raw)
                     if got is None:
@@ -142,10 +156,12 @@ class CommandIntake:
                     msg, info = got
                     taken += 1
                     received_ns = info.get("received_timestamp") or time.time_ns()
-                    missing = door.gap(info.get("publication_sequence_number"))
+                    missing = door.gap(info.get("publication_sequence_number")) if door.counts_gaps else 0
                     if missing:
                         self._lost(door, missing, full=taken >= door.depth)
                     pending.append((received_ns, len(pending), door, msg))
+            finally:
+                subscription.handle.__exit__(None, None, None)
             door.taken += taken
         if len(self.doors) > 1:
             pending.sort(key=lambda item: (item[0], item[1]))

@@ -74,12 +74,14 @@ from rclpy.exceptions import NameValidationException, ParameterException
 from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
 from rclpy.node import Node
 from rclpy.signals import SignalHandlerOptions
+from rclpy.subscription import Subscription
+from rclpy.time_source import CLOCK_TOPIC
 
 from rigid_rot_sim.core import limits
 from rigid_rot_sim.ros import parameters as params
 from rigid_rot_sim.ros import simulation_services
 from rigid_rot_sim.ros.inputs import Rejections, TorqueInputs
-from rigid_rot_sim.ros.intake import CommandIntake
+from rigid_rot_sim.ros.intake import TAKEN_BY_THE_RUN_LOOP, CommandIntake
 from rigid_rot_sim.ros.lockstep import NodeLockstep, declare_lockstep_parameters, lockstep_from_parameters
 from rigid_rot_sim.ros.outputs import Outputs
 from rigid_rot_sim.ros.parameters import RunParameters, declare_parameters, declare_scene_parameter, read_settings
@@ -254,14 +256,15 @@ class SceneRun:
 
     def turn(self) -> float | None:
         """One turn of the run loop (:mod:`.run_loop`): step to the step due now, take every command in
-        arrival order, step again if one came (a lockstep turn it answered goes on at once).
+        arrival order (they act from the step due now), and in lockstep step again if one came (the turn it
+        answered goes on at once).
 
         Returns the wall time (s) until the run needs the next turn (None: only when woken).
         """
         try:
             self.tick()
-            if self.intake.drain():
-                self.tick()
+            if self.intake.drain() and self.lockstep is not None:
+                self.tick()  # the answer of a lockstep turn: the run goes on at once
             if self.lockstep is not None and self.lockstep.turns.waiting:
                 return self.lockstep.turns.next_decision()
             return self.driver.next_wait()
@@ -324,6 +327,7 @@ class RigidRotSimNode(Node):
         # the default group (services, parameters, actions) holds the run lock: the run loop steps beside it
         self.run_lock = RunLock()
         self._run_group = RunCallbackGroup(self.run_lock)
+        self._clock_subscriptions: list[tuple[Subscription, Callable[[Any], None]]] = []
         super().__init__(NODE_NAME, **kwargs)
         params.accept_integers_for_doubles(self)  # `ros2 param set ... real_time_factor 2` stores 2.0
         params.explain_use_sim_time(self)  # with or without a scene
@@ -331,6 +335,9 @@ class RigidRotSimNode(Node):
         self.run: SceneRun | None = None
         scene_path = declare_scene_parameter(self)
         if not scene_path:
+            for subscription, _ in self._clock_subscriptions:  # no run loop: the executor takes /clock
+                subscription.callback_group = self.default_callback_group
+                self.default_callback_group.add_entity(subscription)
             self.get_logger().info(
                 "no scene parameter: serving ~/compute_inertia only (rigid-rot run SCENE starts a simulation)"
             )
@@ -340,6 +347,25 @@ class RigidRotSimNode(Node):
         except BaseException:
             super().destroy_node()  # a node that could not start leaves the graph at once
             raise
+        for subscription, callback in self._clock_subscriptions:
+            self.run.intake.adopt(subscription, _message_only(callback))
+
+    def create_subscription(
+        self, msg_type: Any, topic: str, callback: Callable[[Any], None], qos_profile: Any, **kwargs: Any
+    ) -> Subscription:
+        """As rclpy's, but rclpy's own ``/clock`` subscription (``use_sim_time`` true) is taken by the run
+        loop between its turns: its messages (this node's own /clock, at its rate) never wake the executor.
+        The node reads no ROS time (module docstring); the ROS clock still follows /clock."""
+        if topic != CLOCK_TOPIC or kwargs.get("callback_group") is not None:
+            return super().create_subscription(msg_type, topic, callback, qos_profile, **kwargs)
+        subscription = super().create_subscription(
+            msg_type, topic, callback, qos_profile, callback_group=TAKEN_BY_THE_RUN_LOOP, **kwargs
+        )
+        self._clock_subscriptions.append((subscription, callback))
+        run = getattr(self, "run", None)  # None while rclpy's Node.__init__ subscribes (the scene comes later)
+        if run is not None:
+            run.intake.adopt(subscription, _message_only(callback))
+        return subscription
 
     @property
     def default_callback_group(self) -> RunCallbackGroup:
@@ -369,6 +395,11 @@ class RigidRotSimNode(Node):
             self.run.close()  # the recording's file is complete (also on SIGINT / SIGTERM)
             self.run.loop.destroy()
         super().destroy_node()
+
+
+def _message_only(callback: Callable[[Any], None]) -> Callable[[Any, int], None]:
+    """An intake handler ``(msg, received_ns)`` calling a subscription callback ``(msg)``."""
+    return lambda msg, received_ns: callback(msg)
 
 
 #: What a bad scene, parameter or name raises while the node starts: exit code 2, one line.

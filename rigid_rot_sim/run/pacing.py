@@ -322,7 +322,11 @@ class RunDriver:
         sim = self.sim
         start = sim.step_index
         end_step = sim.step_at_or_after(self.duration) if self.duration is not None else None
+        first = True
         while True:
+            if not first and self.between_chunks is not None:
+                self.between_chunks()  # between two chunks of one call (the caller takes them before and after)
+            first = False
             k = sim.step_index
             if end_step is not None and k >= end_step:
                 self.publish_due(rest=True)  # every output ends on the final state, none twice
@@ -349,8 +353,6 @@ class RunDriver:
                 self.publish_due(force=True)
                 return Progress(steps=sim.step_index - start, failure=sim.failure)
             self.publish_due()
-            if self.between_chunks is not None:
-                self.between_chunks()
             self._spent[1] += stepped - began
             self._spent[2] += self.clock() - stepped
             if deadline is not None and self.clock() >= deadline:
