@@ -15,12 +15,14 @@ messages at ``--rate`` per second (rclpy's default reliable QoS, depth 10), each
 * taken of sent, and the numbers lost;
 * how often the executor handed the subscription's handler to a worker thread that could not
   start it (``beginning_execution`` refused: the tick held the group), so the handler returned
-  without taking a message;
+  without taking a message (measured 0 here: the subscription is rather never yielded, because the
+  timer, yielded first, already holds the group when the executor gets to it);
 * the longest stretch of wall time without a take, against the depth's worth of arrivals
   (depth / rate): a loss happens exactly when a stretch exceeds it (the reader's keep-last
   history overwrites its oldest sample; reliability does not help, the history is the reader's);
 * the losses the stretches predict (messages sent during each stretch beyond the depth) next to
-  those observed.
+  those observed: at least those (more under load: the publisher's own keep-last-10 history then also
+  overwrites what the starved reader process has not yet acknowledged).
 
 The same probe with ``--executor run-loop`` takes the subscription the way the node does now
 (:mod:`rigid_rot_sim.ros.intake`: its own wait set, drained completely between steps).

@@ -237,11 +237,10 @@ def loop_figures(node, seconds: float) -> dict[str, float]:
             stop(sim)
     sim = start_node(*rates, "start_paused:=true")
     try:
-        seen = len(stamps)
         deadline = time.monotonic() + 60.0
-        while len(stamps) == seen and time.monotonic() < deadline:  # started: its first state is out
-            rclpy.spin_once(node, timeout_sec=0.05)
-        time.sleep(1.0)
+        while node.count_publishers("/rigid_rot_sim/state") == 0 and time.monotonic() < deadline:
+            rclpy.spin_once(node, timeout_sec=0.05)  # wait for its outputs on the graph: started
+        time.sleep(3.0)  # the start-up's tail (the last imports, the first state) is not the paused cost
         figures["paused cpu"] = cpu_share(sim.pid, seconds)
     finally:
         stop(sim)
