@@ -142,7 +142,7 @@ class CommandIntake:
         pending: list[tuple[int, int, Door, Any]] = []
         for door in list(self.doors):
             subscription = door.subscription
-            taken = 0
+            taken = missing = 0
             try:
                 subscription.handle.__enter__()
             except InvalidHandle:  # destroyed meanwhile (rclpy's /clock when use_sim_time turns false)
@@ -156,13 +156,14 @@ class CommandIntake:
                     msg, info = got
                     taken += 1
                     received_ns = info.get("received_timestamp") or time.time_ns()
-                    missing = door.gap(info.get("publication_sequence_number")) if door.counts_gaps else 0
-                    if missing:
-                        self._lost(door, missing, full=taken >= door.depth)
+                    if door.counts_gaps:
+                        missing += door.gap(info.get("publication_sequence_number"))
                     pending.append((received_ns, len(pending), door, msg))
             finally:
                 subscription.handle.__exit__(None, None, None)
             door.taken += taken
+            if missing:  # a full history overflowed; else a publisher's own history dropped them
+                self._lost(door, missing, full=taken >= door.depth)
         if len(self.doors) > 1:
             pending.sort(key=lambda item: (item[0], item[1]))
         for received_ns, _, door, msg in pending:
