@@ -174,7 +174,8 @@ class CommandIntake:
         door.lost += count
         why = (
             f"{count} command(s) lost before the node could take them: more than the queue depth "
-            f"({door.depth}, commands.qos_depth) arrived while the run was stepping"
+            f"({door.depth}, commands.qos_depth) arrived between two takes (the run stepping, or the process "
+            "not running: a busy machine)"
             if full
             else f"{count} command(s) from a publisher never arrived (its own history overwrote them before delivery)"
         )

@@ -5,8 +5,8 @@ Design (docs/architecture.md, "The node loop"; issue 27):
 * **One turn** (``turn``, :meth:`rigid_rot_sim.ros.node.SceneRun.turn`): step the run up to the step
   due now (at most :data:`SLICE_WALL` of wall time), drain the command topics in arrival order
   (:meth:`~rigid_rot_sim.ros.intake.CommandIntake.drain`; they act from the step due now), and, in
-  lockstep, step again when a command came (the turn it answered goes on at once). It returns the wall time until the run needs
-  the next turn: the next due output, the end of the run, a lockstep timeout, 0 at
+  lockstep, step again when a command came (the turn it answered goes on at once). It returns the
+  wall time until the run needs the next turn: the next due output, the end of the run, a lockstep timeout, 0 at
   ``real_time_factor`` 0, or None (paused, finished: only a command or a service wakes it).
 * **Waking**: the next turn comes when that time is up, a command arrives (the loop waits on the
   command subscriptions themselves), or a service, parameter change or action changed the run

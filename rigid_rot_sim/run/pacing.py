@@ -97,11 +97,12 @@ def falling_behind_message(
 ) -> str:
     """Why the run cannot keep its pace, measured: the physics, or the rest of the machine.
 
-    The physics is named (with the integrator advice) only when one step of ``method`` takes more
-    than ``1 / PHYSICS_SHARE`` of its wall-time budget at this real-time factor. Otherwise the time
-    went elsewhere, and ``spent`` (wall s of the window, s in the physics, s in the outputs and
-    commands) says where: what is left was not the run's (the process waited for a core, or a
-    service held the run).
+    ``per_step``: the CPU time of one step (the time the process waited for a core never counts as
+    the physics'). The physics is named (with the integrator advice) only when one step of ``method``
+    takes more than ``1 / PHYSICS_SHARE`` of its wall-time budget at this real-time factor. Otherwise
+    the time went elsewhere, and ``spent`` (wall s of the window, CPU s in the physics, CPU s in the
+    outputs and commands) says where: what is left was not the run's (the process waited for a core,
+    or a service held the run).
     """
     pace = dt / per_step if per_step > 0.0 else math.inf
     head = f"cannot keep up with real_time_factor {real_time_factor:g} ({behind_wall:.2f} s of wall time behind): "
@@ -112,16 +113,15 @@ def falling_behind_message(
             "dropping the backlog (a smaller torque, max_torque or another integrator helps)"
         )
     text = head + (
-        f"not the physics ({method} needs {per_step * 1e6:.3g} µs of wall time per {dt:g} s step, "
-        f"{pace:.3g}x real time)"
+        f"not the physics ({method} needs {per_step * 1e6:.3g} µs of CPU time per {dt:g} s step, {pace:.3g}x real time)"
     )
     if spent is not None:
         wall, physics, node_side = spent
         elsewhere = max(0.0, wall - physics - node_side)
         load = os.getloadavg()[0] if hasattr(os, "getloadavg") else math.nan
         text += (
-            f": of the last {wall:.2f} s of wall time the run spent {physics:.3f} s stepping and {node_side:.3f} s "
-            f"on its outputs and commands; the other {elsewhere:.2f} s it did not run (the process waited for a "
+            f": of the last {wall:.2f} s of wall time the run used {physics:.3f} s of CPU stepping and "
+            f"{node_side:.3f} s on its outputs and commands; the other {elsewhere:.2f} s it did not run (the process waited for a "
             f"core, or a service held the run; load average {load:.1f} on {os.cpu_count()} cores)"
         )
     return text + "; dropping the backlog (a less busy machine, or fewer or slower outputs, helps)"
@@ -246,12 +246,17 @@ class RunDriver:
         self.clock = pacer.clock
         self.duration = duration
         self.step_cost = StepCost()
+        #: CPU time (s) of this thread, for what the run itself costs: a step's wall time also holds the
+        #: time the process waited for a core, which must never be blamed on the physics.
+        self.cpu_clock: Clock = time.thread_time
+        #: Running estimate of one physics step in CPU time (the falling-behind warning's physics figure).
+        self.physics_cost = StepCost()
         self.finished = False
         self.observers: list[SimulationObserver] = list(observers)
         #: Called between two chunks of steps (the node takes its commands there); returns how many came.
         self.between_chunks: Callable[[], int] | None = None
         self._warm = False
-        #: Since the run was last on pace: [wall start, s stepping, s on outputs and commands].
+        #: Since the run was last on pace: [wall start, CPU s stepping, CPU s on outputs and commands].
         self._spent = [self.clock(), 0.0, 0.0]
 
     def publish_due(self, force: bool = False, rest: bool = False) -> None:
@@ -305,7 +310,7 @@ class RunDriver:
                 dropped,
                 sim.method,
                 sim.dt,
-                self.step_cost.per_step,
+                self.physics_cost.per_step,
                 math.hypot(*snapshot.angular_velocity_body.tolist()),
                 math.hypot(*snapshot.torque_body.tolist()),
                 (now - self._spent[0], self._spent[1], self._spent[2]),
@@ -341,11 +346,12 @@ class RunDriver:
                 stop = min(stop, end_step)
             if stop <= k:
                 break
-            began = self.clock()
+            began, cpu_began = self.clock(), self.cpu_clock()
             steps = sim.advance_to(stop)
-            stepped = self.clock()
+            stepped, cpu_stepped = self.clock(), self.cpu_clock()
             if self._warm:
                 self.step_cost.record(steps, stepped - began)
+                self.physics_cost.record(steps, cpu_stepped - cpu_began)
             else:  # the first chunk loads the compiled kernels: not a step's cost, and the pace starts after it
                 self._warm = True
                 self.pacer.anchor(sim.t)
@@ -353,8 +359,8 @@ class RunDriver:
                 self.publish_due(force=True)
                 return Progress(steps=sim.step_index - start, failure=sim.failure)
             self.publish_due()
-            self._spent[1] += stepped - began
-            self._spent[2] += self.clock() - stepped
+            self._spent[1] += cpu_stepped - cpu_began
+            self._spent[2] += self.cpu_clock() - cpu_stepped
             if deadline is not None and self.clock() >= deadline:
                 break
         return Progress(steps=sim.step_index - start)
