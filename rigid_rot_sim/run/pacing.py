@@ -122,7 +122,8 @@ def falling_behind_message(
         text += (
             f": of the last {wall:.2f} s of wall time the run used {physics:.3f} s of CPU stepping and "
             f"{node_side:.3f} s on its outputs and commands; the other {elsewhere:.2f} s it did not run "
-            f"(the process waited for a core, or a service held the run; load average {load:.1f} on {os.cpu_count()} cores)"
+            f"(the process waited for a core, or a service held the run; load average {load:.1f} on "
+            f"{os.cpu_count()} cores)"
         )
     return text + "; dropping the backlog (a less busy machine, or fewer or slower outputs, helps)"
 
