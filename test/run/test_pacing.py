@@ -224,3 +224,33 @@ def test_a_step_request_runs_to_its_target_within_its_budget():
     sim.step_wall = 0.1
     run.step_cost.per_step = 0.1
     assert run.run(50, clock() + 0.25).steps < 25  # stopped short at the budget; the reply says so
+
+
+def test_the_next_tick_is_due_when_the_next_output_is_and_never_while_paused():
+    clock = FakeClock()
+    sim = FakeSim(clock)  # dt 0.01
+    run, due = driver(clock, sim, rtf=2.0, periods={"state": 5}, duration=0.07)
+    assert run.next_wait() == pytest.approx(5 * 0.01 / 2.0, abs=1e-5)  # step 5 is due at 0.025 s of wall time
+    clock.now += 0.01
+    assert run.next_wait() == pytest.approx(0.015, abs=1e-5)  # the steps before it wait for it (no tick for them)
+    clock.now += 0.015
+    run.tick()
+    assert sim.step_index == 5 and run.next_wait() == pytest.approx(2 * 0.01 / 2.0, abs=1e-5)  # then the end, step 7
+    sim.paused = True
+    assert run.next_wait() is None  # paused: nothing is due until something changes
+    sim.paused = False
+    run.pacer.real_time_factor = 0.0
+    assert run.next_wait() == 0.0  # as fast as possible: at once
+    clock.now += 1.0
+    run.tick()
+    assert run.finished and run.next_wait() is None
+
+
+def test_a_run_loop_takes_its_commands_between_the_chunks_of_a_long_call():
+    clock = FakeClock()
+    sim = FakeSim(clock)
+    run, _ = driver(clock, sim, rtf=0.0, periods={"state": 4})
+    calls: list[int] = []
+    run.between_chunks = lambda: calls.append(sim.step_index) or 0
+    run.run(12, None)  # three chunks: 0-4, 4-8, 8-12
+    assert calls == [4, 8, 12]  # after each chunk (none before the first: the caller took them just before)
