@@ -42,7 +42,7 @@ WHEEL_SCENE = {
     },
     "integrator": {"method": "rk4", "dt": 0.001},
     "real_time_factor": 1.0,
-    "commands": {"qos_depth": 100},
+    "commands": {"qos_depth": 1000},  # as torque_driven: 1 s of commands at 1 kHz while the node has no core
     "outputs": {"state": 100, "orientation": 0, "angular_velocity": 0, "angular_momentum": 0, "tf": 0, "clock": 100},
 }
 
