@@ -17,8 +17,9 @@ ROS outputs and the recorder.
 
 A torque command's route, top to bottom
 ---------------------------------------
-1. ``inputs.TorqueInputs.torque_callback(msg, source, topic)``: the subscription's callback
-   (one per topic input of the scene, created in ``TorqueInputs.__init__``).
+1. ``inputs.TorqueInputs.torque_callback(msg, source, topic)``: the handler of the topic, called by
+   the run loop's ``intake.CommandIntake.drain`` for every message in arrival order (one subscription
+   per topic input of the scene, created in ``TorqueInputs.__init__`` through ``CommandIntake.subscribe``).
 2. ``conversions.torque_command_from_msg(msg)``: torque, force (WrenchStamped), frame_id and
    header stamp (s) as numpy arrays and floats.
 3. ``run.simulator.Simulator.receive_torque(source, torque, frame_id, stamp, force)`` ->
@@ -34,7 +35,7 @@ A torque command's route, top to bottom
    ``~/sim_events`` as a ``torque`` event: what resim replays.
 5. Back in ``torque_callback``: the message as received goes to the input listeners;
    ``NodeRecording.received`` records it on the torque topic.
-6. Later, on the wall-clock timer: ``node.SceneRun.tick`` ->
+6. Later, at the run loop's next turn (``run_loop.RunLoop``, ``node.SceneRun.turn``): ``node.SceneRun.tick`` ->
    ``run.pacing.RunDriver.tick`` (``Pacer.target_step``: the step due now) ->
    ``RunDriver.run`` -> ``Simulator.advance_to`` -> ``Simulator.advance`` ->
    ``run.stepper.Stepper.advance``: at the command's step ``CommandSchedule.process_due``

@@ -5,7 +5,9 @@ Vector3Stamped); :meth:`TorqueInputs.torque_callback` converts the message
 (:func:`~rigid_rot_sim.conversions.torque_command_from_msg`), hands it to
 :meth:`Simulator.receive_torque <rigid_rot_sim.run.simulator.Simulator.receive_torque>`
 and, when the simulator refuses it, to :meth:`Rejections.reject`. Then it hands the message
-as received to its listeners (the recorder), with the wall-clock receive time.
+as received to its listeners (the recorder), with the wall-clock receive time. The
+subscriptions are the run loop's (:mod:`.intake`): every command is taken, in arrival order,
+and a command lost before it could be taken is counted and reported (:meth:`Rejections.lost`).
 """
 
 from __future__ import annotations
@@ -21,6 +23,7 @@ from rclpy.subscription import Subscription
 
 from rigid_rot_sim import conversions
 from rigid_rot_sim.core import limits
+from rigid_rot_sim.ros.intake import CommandIntake
 from rigid_rot_sim.ros.outputs import Outputs
 from rigid_rot_sim.ros.qos import COMMAND_QOS
 from rigid_rot_sim.run.simulator import CommandRejected, Simulator
@@ -46,6 +49,8 @@ class Rejections:
         self.sim = sim
         self.outputs = outputs
         self._warned: dict[str, tuple[float, int]] = {}
+        #: Commands lost before the node could take them (every topic; 0 unless a bound was hit).
+        self.lost_total = 0
 
     def reject(self, source: str, reason: str, frame_id: str, torque: Any) -> None:
         # the frame_id is echoed, but never more than MAX_NAME_LENGTH characters of it
@@ -61,6 +66,14 @@ class Rejections:
         else:
             self._warned[source] = (last, suppressed + 1)
 
+    def lost(self, topic: str, count: int, why: str) -> None:
+        """``count`` commands on ``topic`` never reached the node's handler (a bound was hit): one
+        RejectedCommand (its reason says how many and why; no frame, zero torque) and a warning."""
+        reason = limits.clip_text(f"lost: {why}", limits.MAX_TEXT_LENGTH)
+        self.outputs.publish("rejected", conversions.rejected_command(topic, reason, self.sim.t, "", (0.0, 0.0, 0.0)))
+        self.lost_total += count
+        self.logger.warning(f"{topic}: {why} ({self.lost_total} lost in all)")
+
 
 class TorqueInputs:
     """One subscription per topic input of ``scene`` (none for a torque-free scene).
@@ -68,7 +81,8 @@ class TorqueInputs:
     ``depth``: keep-last depth of the subscriptions (``commands.qos_depth``).
     """
 
-    def __init__(self, node: Node, sim: Simulator, scene: Scene, depth: int, rejections: Rejections) -> None:
+    def __init__(self, intake: CommandIntake, sim: Simulator, scene: Scene, depth: int, rejections: Rejections) -> None:
+        node = intake.node
         self.sim = sim
         self.rejections = rejections
         self.listeners: list[ReceivedListener] = []
@@ -78,10 +92,12 @@ class TorqueInputs:
         for spec in scene.topic_inputs:
             msg_type = WrenchStamped if spec.message_type == "WrenchStamped" else Vector3Stamped
             topic = node.resolve_topic_name(spec.topic)
-            subscription = node.create_subscription(
+            subscription = intake.subscribe(
                 msg_type,
                 spec.topic,
-                lambda msg, source=spec.topic, topic=topic: self.torque_callback(msg, source, topic),
+                lambda msg, received_ns, source=spec.topic, topic=topic: self.torque_callback(
+                    msg, source, topic, received_ns
+                ),
                 qos,
             )
             self.subscriptions.append(subscription)
@@ -104,9 +120,12 @@ class TorqueInputs:
             )
         return built, []
 
-    def torque_callback(self, msg: Any, source: str, topic: str) -> None:
-        """A command on ``source`` (the scene's topic; ``topic`` fully qualified): to the simulator, or rejected."""
-        received_ns = time.time_ns()
+    def torque_callback(self, msg: Any, source: str, topic: str, received_ns: int | None = None) -> None:
+        """A command on ``source`` (the scene's topic; ``topic`` fully qualified): to the simulator, or rejected.
+
+        ``received_ns``: when DDS received it (ns since the epoch; default now).
+        """
+        received_ns = time.time_ns() if received_ns is None else received_ns
         torque, force, frame_id, stamp = conversions.torque_command_from_msg(msg)
         try:
             self.sim.receive_torque(source, torque, frame_id, stamp, force)

@@ -24,8 +24,9 @@ the scene's ``joint_state_topics`` section gives their defaults) name topics, in
 
 How it hooks into the node (a wire, no physics): :class:`JointStateDoor` is built beside
 :class:`~rigid_rot_sim.ros.wheel_inputs.WheelTorqueInput`; ``subscriptions`` go to the recording like
-the wheel topic's, ``listeners`` receive every command message as received (the recording, the
-lockstep wake-up), and the door is an observer of the run driver (:meth:`outputs_due`) for the states.
+the wheel topic's, ``listeners`` receive every command message as received (the recording; the
+run loop's intake wakes a lockstep turn), and the door is an observer of the run driver
+(:meth:`outputs_due`) for the states.
 """
 
 from __future__ import annotations
@@ -34,12 +35,12 @@ import time
 from collections.abc import Sequence
 from typing import Any
 
-from rclpy.node import Node
 from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
 from sensor_msgs.msg import JointState
 
 from rigid_rot_sim import conversions
 from rigid_rot_sim.ros.inputs import Rejections
+from rigid_rot_sim.ros.intake import CommandIntake
 from rigid_rot_sim.run.joint_commands import effective_time, merged_torques, wheel_efforts
 from rigid_rot_sim.run.observables import StateSnapshot
 from rigid_rot_sim.run.observer import SimulationObserver
@@ -55,7 +56,7 @@ class JointStateDoor(SimulationObserver):
 
     def __init__(
         self,
-        node: Node,
+        intake: CommandIntake,
         sim: Simulator,
         scene: Scene,
         topics: tuple[str, str],
@@ -63,7 +64,11 @@ class JointStateDoor(SimulationObserver):
         depth: int,
         rejections: Rejections,
     ) -> None:
-        """``topics``: (commands, states), empty for none; ``wheels_rate``: rates.wheels (Hz of sim time)."""
+        """``topics``: (commands, states), empty for none; ``wheels_rate``: rates.wheels (Hz of sim time).
+
+        The commands subscription is the run loop's (``intake``): taken in arrival order with every other
+        command topic, losses counted and reported (:mod:`rigid_rot_sim.ros.intake`)."""
+        node = intake.node
         commands, states = topics
         self.sim = sim
         self.rejections = rejections
@@ -82,7 +87,7 @@ class JointStateDoor(SimulationObserver):
             raise ValueError("joint_state_topics.states needs rates.wheels > 0: the states are published at its steps")
         if commands:
             qos = QoSProfile(depth=depth, reliability=ReliabilityPolicy.RELIABLE, durability=DurabilityPolicy.VOLATILE)
-            self.subscriptions.append(node.create_subscription(JointState, commands, self.callback, qos))
+            self.subscriptions.append(intake.subscribe(JointState, commands, self.callback, qos))
             self.commands_topic = self.subscriptions[0].topic_name
         if states:
             self.publisher = node.create_publisher(JointState, states, STATES_QOS)
@@ -100,8 +105,9 @@ class JointStateDoor(SimulationObserver):
 
     # ------------------------------------------------------------------ commands
 
-    def callback(self, msg: Any) -> None:
-        received_ns = time.time_ns()
+    def callback(self, msg: Any, received_ns: int | None = None) -> None:
+        """A JointState command (from the run loop's intake, in arrival order): to the simulator, or rejected."""
+        received_ns = time.time_ns() if received_ns is None else received_ns
         try:
             self._command(msg)
         except CommandRejected as exc:

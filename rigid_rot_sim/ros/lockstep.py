@@ -7,14 +7,14 @@ The turns themselves (state machine, stamp matching, timeout decision) are
   ``lockstep.timeout`` (s of wall time), ``lockstep.on_timeout`` (pause | hold), read-only,
   the scene's ``lockstep`` section as defaults; :func:`lockstep_from_parameters` checks them
   as the scene loader does;
-* :class:`NodeLockstep`: builds the turns, gates the simulator's commands through them, and
-  wakes the executor (a guard condition) the moment the last answer of a turn arrives, so a
-  turn costs one DDS round trip, not a timer period. Nothing waits in a callback.
+* :class:`NodeLockstep`: builds the turns and gates the simulator's commands through them. The
+  run loop (:mod:`.run_loop`) waits on the command topics themselves: the turn that takes the last
+  answer of a lockstep turn steps on at once, so a turn costs one DDS round trip, not a timer
+  period. Nothing waits in a callback.
 """
 
 from __future__ import annotations
 
-from collections.abc import Callable
 from typing import Any
 
 from rcl_interfaces.msg import FloatingPointRange, ParameterDescriptor
@@ -23,7 +23,7 @@ from rclpy.node import Node
 from rigid_rot_sim.core import limits
 from rigid_rot_sim.ros.parameters import JOINT_STATE_COMMANDS
 from rigid_rot_sim.run.lockstep import TURN_OUTPUTS, Lockstep
-from rigid_rot_sim.run.pacing import MAX_TICK, RunDriver
+from rigid_rot_sim.run.pacing import RunDriver
 from rigid_rot_sim.scene.scene import LockstepSpec, Scene, lockstep_spec
 from rigid_rot_sim.scene.scene_schema import LOCKSTEP_ON_TIMEOUT
 
@@ -77,12 +77,9 @@ def lockstep_from_parameters(node: Node, scene: Scene, dt: float) -> LockstepSpe
 
 
 class NodeLockstep:
-    """Lockstep turns for the node's ``run``: the gate, the turn outputs' periods, the wake-up.
+    """Lockstep turns for the node's ``run``: the gate and the turn outputs' periods."""
 
-    ``tick`` is the node's timer callback: it also runs as soon as a turn is answered.
-    """
-
-    def __init__(self, node: Node, spec: LockstepSpec, run: RunDriver, tick: Callable[[], None]) -> None:
+    def __init__(self, node: Node, spec: LockstepSpec, run: RunDriver) -> None:
         sim = run.sim
         self.run = run
         self.turns = Lockstep(spec, sim, clock=run.clock)
@@ -95,7 +92,6 @@ class NodeLockstep:
         self.turn_outputs = built
         sim.add_observer(self.turns)
         sim.command_gate = self.turns.admit
-        self.guard = node.create_guard_condition(tick)
 
     def describe(self) -> str:
         spec = self.turns.spec
@@ -105,28 +101,10 @@ class NodeLockstep:
             f"{spec.on_timeout}; {', '.join(self.turn_outputs)} once per turn"
         )
 
-    def received(self, topic: str, msg: Any, received_ns: int) -> None:
-        """After every torque command (an input listener): wake the run once the open turn is answered."""
-        if self.turns.waiting and not self.turns.missing():
-            self.guard.trigger()
-
-    def after_tick(self) -> None:
-        """As fast as possible (r = 0) and between turns: go on at once, without waiting for the timer."""
-        run, sim = self.run, self.run.sim
-        if run.pacer.real_time_factor <= 0.0 and not (self.turns.waiting or sim.paused or run.finished):
-            self.guard.trigger()
-
-
-def timer_period(run: RunDriver, dt: float) -> float:
-    """The node timer's period in lockstep: paced runs as usual; at r = 0 only the timeouts need the
-    timer (a turn goes on through the guard condition)."""
-    return MAX_TICK if run.pacer.real_time_factor <= 0.0 else run.pacer.tick_period(dt)
-
 
 __all__ = [
     "LOCKSTEP_PARAMETERS",
     "NodeLockstep",
     "declare_lockstep_parameters",
     "lockstep_from_parameters",
-    "timer_period",
 ]

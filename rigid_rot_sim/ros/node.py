@@ -39,25 +39,27 @@ raises out of a callback. Where simulation_interfaces is installed, also the sta
 simulator services (:mod:`.simulation_services`), through the same actions
 (``~/step_simulation`` runs ``~/step``'s code, limits included) and the SimulateSteps action
 (``~/simulate_steps``, stepped by a timer of its own: :mod:`.simulate_steps`).
-Executor: two threads; the run's callbacks share the node's default (mutually exclusive)
-callback group, ``~/compute_inertia`` has its own, so a huge request is deserialised beside them.
+The node loop (:mod:`.run_loop`, docs/architecture.md "The node loop"): the run's turns on the main
+thread, which also takes every command in arrival order (:mod:`.intake`); the services, parameters
+and actions on an executor thread, each holding the run lock (the node's default group), so a
+huge request is deserialised beside the stepping and the commands.
 Every limit is in :mod:`rigid_rot_sim.core.limits` (README, "Limits and failure behaviour").
 
 Pacing
 ------
-``real_time_factor`` r > 0: a wall-clock timer advances the simulation to
-``r * (wall time since the anchor)`` each tick (at most ``run.pacing.MAX_TICK_WALL`` of work per
-tick, so commands and services are served in between); r = 0: as fast as possible, in
-batches of at most ``MAX_TICK_WALL`` wall time per tick. The states do not depend on r
-or on the publish rates (see the Simulator's determinism notes). The timer runs on the
+``real_time_factor`` r > 0: each turn of the run loop advances the simulation to
+``r * (wall time since the anchor)`` (at most ``run_loop.SLICE_WALL`` of work per turn, so
+commands are taken in between), and the next turn comes when the next output is due; r = 0: as
+fast as possible, in turns of at most ``SLICE_WALL``. The states do not depend on r
+or on the publish rates (see the Simulator's determinism notes). The turns are timed on the
 steady clock: the node is the source of sim time (/clock), so ``use_sim_time`` true (a
 launch-wide setting) is accepted with a warning that says so: nothing here reads the ROS clock.
 
 Lockstep (the scene's ``lockstep`` section or the read-only ``lockstep.*`` parameters): the
 run waits at every turn for the controllers' commands stamped with the turn's time
 (:mod:`rigid_rot_sim.run.lockstep` has the contract, :mod:`.lockstep` the wiring, docs/lockstep.md
-the user's view); the timer then only decides timeouts and pacing, a guard condition wakes the
-run the moment a turn is answered. ``dt`` is fixed in lockstep.
+the user's view); the turn that takes a lockstep turn's last answer steps on at once, and the
+next turn is otherwise timed by the turn's timeout. ``dt`` is fixed in lockstep.
 """
 
 from __future__ import annotations
@@ -70,23 +72,25 @@ from collections.abc import Callable
 from typing import TYPE_CHECKING, Any
 
 import rclpy
-from rclpy.clock import Clock as SteadyClock
-from rclpy.clock_type import ClockType
 from rclpy.duration import Duration
 from rclpy.exceptions import NameValidationException, ParameterException
-from rclpy.executors import ExternalShutdownException, MultiThreadedExecutor
+from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
 from rclpy.node import Node
 from rclpy.signals import SignalHandlerOptions
+from rclpy.subscription import Subscription
+from rclpy.time_source import CLOCK_TOPIC
 
 from rigid_rot_sim.core import limits
 from rigid_rot_sim.ros import parameters as params
 from rigid_rot_sim.ros import paused_clock, sim_events, simulation_services
 from rigid_rot_sim.ros.inputs import Rejections, TorqueInputs
+from rigid_rot_sim.ros.intake import TAKEN_BY_THE_RUN_LOOP, CommandIntake
 from rigid_rot_sim.ros.joint_state_door import JointStateDoor
-from rigid_rot_sim.ros.lockstep import NodeLockstep, declare_lockstep_parameters, lockstep_from_parameters, timer_period
+from rigid_rot_sim.ros.lockstep import NodeLockstep, declare_lockstep_parameters, lockstep_from_parameters
 from rigid_rot_sim.ros.outputs import Outputs
 from rigid_rot_sim.ros.parameters import RunParameters, declare_parameters, declare_scene_parameter, read_settings
 from rigid_rot_sim.ros.qos import output_qos
+from rigid_rot_sim.ros.run_loop import POLL_WALL, SLICE_WALL, RunCallbackGroup, RunLock, RunLoop
 from rigid_rot_sim.ros.services import InertiaService, RunServices
 from rigid_rot_sim.ros.topic_types import WrongTypeWatch
 from rigid_rot_sim.ros.wheel_inputs import WheelTorqueInput
@@ -101,9 +105,7 @@ if TYPE_CHECKING:  # imported when recording only: the mcap packages are optiona
     from rigid_rot_sim.ros.recording import NodeRecording
 
 NODE_NAME = "rigid_rot_sim"
-#: Executor threads: the run's callbacks (one at a time) and ~/compute_inertia beside them.
-EXECUTOR_THREADS = 2
-#: Most wall time (s) to wait at shutdown for a callback in flight (a slice is at most 0.25 s).
+#: Most wall time (s) to wait at shutdown for a service in flight (a ~/step request is at most 0.25 s).
 EXECUTOR_SHUTDOWN_WAIT = 2.0
 
 
@@ -132,10 +134,13 @@ class SceneRun:
         pacer = Pacer(settings[params.REAL_TIME_FACTOR])
         self.driver = RunDriver(sim, schedule, pacer, settings[params.DURATION] or None, observers=[self.outputs])
         rejections = Rejections(node, sim, self.outputs)
-        self.inputs = TorqueInputs(node, sim, scene, settings[params.COMMAND_DEPTH], rejections)
-        self.wheel_input = WheelTorqueInput(node, sim, scene, settings[params.COMMAND_DEPTH], rejections)
+        # every command topic is taken by the run loop, in arrival order (never by the executor)
+        self.intake = CommandIntake(node, lost=rejections.lost)
+        self.driver.between_chunks = self.intake.drain  # also while a service steps the run
+        self.inputs = TorqueInputs(self.intake, sim, scene, settings[params.COMMAND_DEPTH], rejections)
+        self.wheel_input = WheelTorqueInput(self.intake, sim, scene, settings[params.COMMAND_DEPTH], rejections)
         self.joint_state_door = JointStateDoor(
-            node,
+            self.intake,
             sim,
             scene,
             (settings[params.JOINT_STATE_COMMANDS], settings[params.JOINT_STATE_STATES]),
@@ -151,9 +156,7 @@ class SceneRun:
         self.lockstep: NodeLockstep | None = None
         lockstep = lockstep_from_parameters(node, scene, sim.dt)
         if lockstep is not None:
-            self.lockstep = NodeLockstep(node, lockstep, self.driver, self.tick)
-            self.inputs.listeners.append(self.lockstep)  # wakes the run the moment a turn is answered
-            self.joint_state_door.listeners.append(self.lockstep)
+            self.lockstep = NodeLockstep(node, lockstep, self.driver)
         self.services = RunServices(node, self.driver, scene, rejections, self.report_progress)
         self._action_destroyed = False
         self.simulation_services = (
@@ -174,11 +177,11 @@ class SceneRun:
             self.foxglove, self.foxglove_words = self._start_foxglove(node, settings[params.FOXGLOVE])
             sim.pause(settings[params.START_PAUSED])
             self.driver.pacer.anchor(sim.t)
-            # steady clock: the pacing never depends on /clock, which this node itself publishes
-            in_lockstep = self.lockstep is not None
-            period = timer_period(self.driver, sim.dt) if in_lockstep else self.driver.pacer.tick_period(sim.dt)
-            self.timer = node.create_timer(period, self.tick, clock=SteadyClock(clock_type=ClockType.STEADY_TIME))
-            self.parameters = RunParameters(node, self.driver, self.timer)
+            # the run loop's turns (run_loop): paced on the steady clock, never on /clock, which this node publishes
+            self.loop = RunLoop(node, self.intake, self.turn)
+            if isinstance(node.default_callback_group, RunCallbackGroup):
+                node.default_callback_group.wake = self.intake.wake
+            self.parameters = RunParameters(node, self.driver, self.intake.wake)
             self.logger.info(
                 self._startup_line(
                     settings[params.INTEGRATOR] == "auto",
@@ -190,6 +193,7 @@ class SceneRun:
                 self.logger.warning(warning)
             self.outputs.publish_latched(sim.t)
             self.driver.publish_due(force=True)
+            self.intake.wake()  # the first turn
         except BaseException:  # e.g. Ctrl-C / SIGTERM while starting (main's start-up handler)
             self.close()  # the recording started above ends as a complete file
             raise
@@ -277,17 +281,31 @@ class SceneRun:
         """The run reached its duration."""
         return self.driver.finished
 
-    def tick(self) -> None:
-        """The timer callback: advance the run by one slice and publish what is due."""
+    def turn(self) -> float | None:
+        """One turn of the run loop (:mod:`.run_loop`): step to the step due now, take every command in
+        arrival order (they act from the step due now), and in lockstep step again if one came (the turn it
+        answered goes on at once).
+
+        Returns the wall time (s) until the run needs the next turn (None: only when woken).
+        """
         try:
-            if self.lockstep is None:
-                self.report_progress(self.driver.tick())
-            else:
-                self.report_progress(self.lockstep.turns.tick(self.driver))
-                self.lockstep.after_tick()
-        except Exception as exc:  # never out of a callback: the run pauses with the reason, the node serves on
+            self.tick()
+            if self.intake.drain() and self.lockstep is not None:
+                self.tick()  # the answer of a lockstep turn: the run goes on at once
+            if self.lockstep is not None and self.lockstep.turns.waiting:
+                return self.lockstep.turns.next_decision()
+            return self.driver.next_wait()
+        except Exception as exc:  # never out of the loop: the run pauses with the reason, the node serves on
             self.logger.error(f"simulation paused: internal error {exc!r} (reset or set_state to continue)")
             self.sim.fail(f"internal error: {exc!r}")
+            return None
+
+    def tick(self) -> None:
+        """Advance the run by one slice (at most ``SLICE_WALL`` of wall time) and publish what is due."""
+        if self.lockstep is None:
+            self.report_progress(self.driver.tick(SLICE_WALL))
+        else:
+            self.report_progress(self.lockstep.turns.tick(self.driver, SLICE_WALL))
 
     def report_progress(self, progress: Progress) -> None:
         """Log what a slice of the run came to: falling behind, a failure, the duration reached."""
@@ -304,6 +322,7 @@ class SceneRun:
 
     def close(self) -> None:
         """Close the recording (summary and indexes: the file is complete) and the live server; idempotent."""
+        self.report_lost()
         if self.recording is not None:
             self.recording.close()
         if self.foxglove is not None:
@@ -315,6 +334,14 @@ class SceneRun:
             action.destroy()
             self._action_destroyed = True
 
+    def report_lost(self) -> None:
+        """At the end: how many commands each topic took, and how many it lost (0 unless a bound was hit)."""
+        lost = [
+            f"{door.topic}: {door.lost} lost of {door.taken + door.lost}" for door in self.intake.doors if door.lost
+        ]
+        if lost:
+            self.logger.warning(f"commands lost before the node could take them: {'; '.join(lost)}")
+
 
 class RigidRotSimNode(Node):
     """Node ``rigid_rot_sim``; keyword arguments go to :class:`rclpy.node.Node`.
@@ -324,6 +351,10 @@ class RigidRotSimNode(Node):
     """
 
     def __init__(self, **kwargs: Any) -> None:
+        # the default group (services, parameters, actions) holds the run lock: the run loop steps beside it
+        self.run_lock = RunLock()
+        self._run_group = RunCallbackGroup(self.run_lock)
+        self._clock_subscriptions: list[tuple[Subscription, Callable[[Any], None]]] = []
         super().__init__(NODE_NAME, **kwargs)
         params.accept_integers_for_doubles(self)  # `ros2 param set ... real_time_factor 2` stores 2.0
         params.explain_use_sim_time(self)  # with or without a scene
@@ -331,6 +362,9 @@ class RigidRotSimNode(Node):
         self.run: SceneRun | None = None
         scene_path = declare_scene_parameter(self)
         if not scene_path:
+            for subscription, _ in self._clock_subscriptions:  # no run loop: the executor takes /clock
+                subscription.callback_group = self.default_callback_group
+                self.default_callback_group.add_entity(subscription)
             self.get_logger().info(
                 "no scene parameter: serving ~/compute_inertia only (rigid-rot run SCENE starts a simulation)"
             )
@@ -340,11 +374,43 @@ class RigidRotSimNode(Node):
         except BaseException:
             super().destroy_node()  # a node that could not start leaves the graph at once
             raise
+        for subscription, callback in self._clock_subscriptions:
+            self.run.intake.adopt(subscription, _message_only(callback))
+
+    def create_subscription(
+        self, msg_type: Any, topic: str, callback: Callable[[Any], None], qos_profile: Any, **kwargs: Any
+    ) -> Subscription:
+        """As rclpy's, but rclpy's own ``/clock`` subscription (``use_sim_time`` true) is taken by the run
+        loop between its turns: its messages (this node's own /clock, at its rate) never wake the executor.
+        The node reads no ROS time (module docstring); the ROS clock still follows /clock."""
+        if topic != CLOCK_TOPIC or kwargs.get("callback_group") is not None:
+            return super().create_subscription(msg_type, topic, callback, qos_profile, **kwargs)
+        subscription = super().create_subscription(
+            msg_type, topic, callback, qos_profile, callback_group=TAKEN_BY_THE_RUN_LOOP, **kwargs
+        )
+        self._clock_subscriptions.append((subscription, callback))
+        run = getattr(self, "run", None)  # None while rclpy's Node.__init__ subscribes (the scene comes later)
+        if run is not None:
+            run.intake.adopt(subscription, _message_only(callback))
+        return subscription
+
+    @property
+    def default_callback_group(self) -> RunCallbackGroup:
+        """Every callback the node creates without a group: one at a time, each holding the run lock."""
+        return self._run_group
 
     @property
     def finished(self) -> bool:
         """The run reached its duration."""
         return self.run is not None and self.run.finished
+
+    def spin_run(self, keep_going: Callable[[], bool]) -> None:
+        """The run loop on this thread until ``keep_going()`` is False or the run finished (no scene: just wait)."""
+        if self.run is None:
+            while keep_going():
+                time.sleep(POLL_WALL)
+            return
+        self.run.loop.spin(self.run_lock, lambda: keep_going() and not self.finished)
 
     def flush_publishers(self, timeout: float = 1.0) -> None:
         """Wait (at most ``timeout`` s each) until reliable subscribers acknowledged what was published."""
@@ -354,7 +420,13 @@ class RigidRotSimNode(Node):
     def destroy_node(self) -> None:
         if self.run is not None:
             self.run.close()  # the recording's file is complete (also on SIGINT / SIGTERM)
+            self.run.loop.destroy()
         super().destroy_node()
+
+
+def _message_only(callback: Callable[[Any], None]) -> Callable[[Any, int], None]:
+    """An intake handler ``(msg, received_ns)`` calling a subscription callback ``(msg)``."""
+    return lambda msg, received_ns: callback(msg)
 
 
 #: What a bad scene, parameter or name raises while the node starts: exit code 2, one line.
@@ -370,25 +442,6 @@ def _interrupt(signum: int, frame: Any) -> None:
     raise KeyboardInterrupt
 
 
-def _wait_for_callbacks(node: Node, timeout: float) -> bool:
-    """Wait (at most ``timeout`` s) until no callback of the node's default group runs, and keep it so.
-
-    The run's callbacks (ticks, services, commands) are all in that mutually exclusive group; once
-    it is claimed here none starts again (the executor is shut down), so the node and its recording
-    close with no callback in flight. (rclpy 7.1's ``Executor.shutdown`` does not wait for them.)
-    """
-    group = node.default_callback_group
-    member = next((entity for entity in (ref() for ref in list(group.entities)) if entity is not None), None)
-    if member is None:
-        return True
-    deadline = time.monotonic() + timeout
-    while not group.beginning_execution(member):
-        if time.monotonic() > deadline:
-            return False
-        time.sleep(0.005)
-    return True
-
-
 def init_ros(args: list[str] | None) -> None:
     """``rclpy.init`` without rclpy's signal handlers: while nodes start, Ctrl-C / SIGTERM stop them at once.
 
@@ -400,44 +453,59 @@ def init_ros(args: list[str] | None) -> None:
 
 
 def run_until_finished(start: Callable[[list[Node]], RigidRotSimNode], drain: float = 0.0) -> None:
-    """Start the nodes and spin them in one executor until the run finishes, Ctrl-C, SIGTERM or shutdown.
+    """Start the nodes and run them until the run finishes, Ctrl-C, SIGTERM or shutdown.
 
     ``start`` creates the nodes, adding each to the list it is given as soon as it exists,
-    and returns the simulation node. Once they are started, SIGINT and SIGTERM only ask the
+    and returns the simulation node. The run loop (:mod:`.run_loop`) runs on this thread;
+    an executor on a thread of its own serves every node's services, parameters and actions
+    (and the other nodes' callbacks). Once they are started, SIGINT and SIGTERM only ask the
     loop to stop: the nodes (and the recording) then close here, never interrupted in a
     callback or a file write. When the run reached its duration, reliable subscribers get
-    what was published (at most 1 s per publisher) and the executor spins ``drain`` s more
-    for them. Then every node is destroyed (last started first) and rclpy shut down.
-    A start-up error (:data:`STARTUP_ERRORS`) is raised after that.
+    what was published (at most 1 s per publisher) and the executor serves ``drain`` s more
+    for them. Then the executor's thread ends, every node is destroyed (last started first)
+    and rclpy shut down: nothing of rclpy runs while the nodes are destroyed, so nothing is
+    left to fail on a destroyed entity. A start-up error (:data:`STARTUP_ERRORS`) is raised
+    after that.
     """
     nodes: list[Node] = []
     stop = threading.Event()
-    executor = None
+    executor: SingleThreadedExecutor | None = None
+    server: threading.Thread | None = None
     try:
         node = start(nodes)
         for signum in (signal.SIGINT, signal.SIGTERM):
             signal.signal(signum, lambda *_: stop.set())
-        # two threads: every callback that touches the run is in the node's default (mutually
-        # exclusive) group, so they never overlap; ~/compute_inertia has a group of its own, so a
-        # huge request is deserialised beside the stepping and publishing (InertiaService)
-        executor = MultiThreadedExecutor(num_threads=EXECUTOR_THREADS)
+        if node.run is not None:
+            node.run.loop.detach()  # the turns run on this thread, never on the executor's
+        executor = SingleThreadedExecutor()
         for each in nodes:
             executor.add_node(each)
-        while rclpy.ok() and not node.finished and not stop.is_set():
-            executor.spin_once(timeout_sec=0.1)
-        if node.finished:
+        server = threading.Thread(target=_serve, args=(executor, stop), name="rigid_rot_sim services", daemon=True)
+        server.start()
+        node.spin_run(lambda: rclpy.ok() and not stop.is_set())
+        if node.finished and not stop.is_set():
             node.flush_publishers()
-            for _ in range(round(drain / 0.01)):
-                executor.spin_once(timeout_sec=0.01)
+            stop.wait(drain)
     except (KeyboardInterrupt, ExternalShutdownException):
         pass
     finally:
+        stop.set()
+        if server is not None:
+            server.join(EXECUTOR_SHUTDOWN_WAIT)  # a service in flight ends before the recording closes
         if executor is not None:
             executor.shutdown(timeout_sec=0)
         for each in reversed(nodes):
-            _wait_for_callbacks(each, EXECUTOR_SHUTDOWN_WAIT)  # a tick in flight ends before the recording closes
             each.destroy_node()
         rclpy.try_shutdown()
+
+
+def _serve(executor: SingleThreadedExecutor, stop: threading.Event) -> None:
+    """The services' thread: spin until asked to stop (each wait at most ``POLL_WALL``)."""
+    try:
+        while not stop.is_set() and executor.context.ok():
+            executor.spin_once(timeout_sec=POLL_WALL)
+    except ExternalShutdownException:
+        pass
 
 
 def _start_node(nodes: list[Node]) -> RigidRotSimNode:

@@ -58,7 +58,6 @@ from typing import Any, Generic, TypeVar
 from rcl_interfaces.msg import FloatingPointRange, IntegerRange, ParameterDescriptor, SetParametersResult
 from rclpy.node import Node
 from rclpy.parameter import Parameter
-from rclpy.timer import Timer
 
 from rigid_rot_sim.core import limits
 from rigid_rot_sim.recording import LOG_TIME_BASES  # the package itself is light (no mcap)
@@ -513,16 +512,16 @@ def _once(actions: Iterable[Action | None]) -> list[Action]:
 class RunParameters:
     """Run-time parameter changes of a running scene: refused with a reason, or applied.
 
-    ``driver``: the run; ``timer``: the node's tick timer, whose period follows dt and the
+    ``driver``: the run; ``wake``: wakes the run loop, whose next turn follows dt and the
     real-time factor.
     """
 
     def __init__(
-        self, node: Node, driver: RunDriver, timer: Timer, specs: Iterable[ParamSpec[Any]] = PARAMETERS
+        self, node: Node, driver: RunDriver, wake: Callable[[], None], specs: Iterable[ParamSpec[Any]] = PARAMETERS
     ) -> None:
         self.node = node
         self.driver = driver
-        self.timer = timer
+        self.wake = wake
         self.logger = node.get_logger()
         self.specs = tuple(specs)
         node.add_on_set_parameters_callback(self.validate)
@@ -551,5 +550,5 @@ class RunParameters:
             action(self, change)
 
     def retime(self) -> None:
-        """The tick timer's period after a change of dt or of the real-time factor."""
-        self.timer.timer_period_ns = int(self.driver.pacer.tick_period(self.driver.sim.dt) * 1e9)
+        """After a change of dt or of the real-time factor: the run loop's next turn is timed anew."""
+        self.wake()

@@ -39,9 +39,9 @@ class InertiaService:
     """``~/compute_inertia``: mass properties of point masses (served with or without a scene).
 
     In a callback group of its own: rclpy turns a request into Python objects in the thread
-    that takes it (2.4 s for 1e6 masses, refused only afterwards), so with the node's
-    MultiThreadedExecutor a huge request is taken beside the stepping and publishing, which stay
-    in the node's default group. Thread-safe: it touches nothing but its request and response.
+    that takes it (2.4 s for 1e6 masses, refused only afterwards); the node's run loop steps,
+    publishes and takes the commands on a thread of its own (:mod:`.run_loop`), so a huge request is
+    taken beside them, without the run lock. Thread-safe: it touches nothing but its request and response.
     What such a request still costs in memory (rclpy offers no way to refuse it before it is taken):
     docs/limits.md, measured by ``benchmarks/inertia_request_memory.py``.
     """

@@ -12,12 +12,12 @@ from __future__ import annotations
 import time
 from typing import Any
 
-from rclpy.node import Node
 from rclpy.qos import QoSProfile
 
 from rigid_rot_msgs.msg import WheelTorques
 from rigid_rot_sim import conversions
 from rigid_rot_sim.ros.inputs import Rejections
+from rigid_rot_sim.ros.intake import CommandIntake
 from rigid_rot_sim.ros.qos import COMMAND_QOS
 from rigid_rot_sim.run.simulator import CommandRejected, Simulator
 from rigid_rot_sim.scene.scene import Scene
@@ -29,7 +29,8 @@ WHEEL_TORQUE_TOPIC = "~/wheel_torque"
 class WheelTorqueInput:
     """The ``~/wheel_torque`` subscription of a scene with wheels (:attr:`subscriptions` is empty otherwise)."""
 
-    def __init__(self, node: Node, sim: Simulator, scene: Scene, depth: int, rejections: Rejections) -> None:
+    def __init__(self, intake: CommandIntake, sim: Simulator, scene: Scene, depth: int, rejections: Rejections) -> None:
+        node = intake.node
         self.sim = sim
         self.rejections = rejections
         self.logger = node.get_logger()
@@ -41,7 +42,7 @@ class WheelTorqueInput:
         self.topic = node.resolve_topic_name(WHEEL_TORQUE_TOPIC)
         if self.names:
             qos = QoSProfile(depth=depth, reliability=COMMAND_QOS.reliability, durability=COMMAND_QOS.durability)
-            self.subscriptions.append(node.create_subscription(WheelTorques, WHEEL_TORQUE_TOPIC, self.callback, qos))
+            self.subscriptions.append(intake.subscribe(WheelTorques, WHEEL_TORQUE_TOPIC, self.callback, qos))
 
     def describe(self) -> tuple[list[str], list[str]]:
         """For the start-up line: (what was built, what was left out and why).
@@ -66,8 +67,9 @@ class WheelTorqueInput:
             )
         return built, left_out
 
-    def callback(self, msg: Any) -> None:
-        received_ns = time.time_ns()
+    def callback(self, msg: Any, received_ns: int | None = None) -> None:
+        """A wheel command (from the run loop's intake, in arrival order): to the simulator, or rejected."""
+        received_ns = time.time_ns() if received_ns is None else received_ns
         torques, stamp = conversions.wheel_torques_from_msg(msg)
         try:
             effective = stamp if stamp > 0.0 and stamp >= self.sim.t else None

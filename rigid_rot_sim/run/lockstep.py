@@ -195,7 +195,15 @@ class Lockstep(SimulationObserver):
         self.open_step = None
         self.answered = set()
 
-    def tick(self, run: RunDriver) -> Progress:
+    def next_decision(self) -> float:
+        """Wall time (s) until the open turn's next decision (timeout or resend) is due (call while waiting)."""
+        now = self.clock()
+        due = [self.sent_at + min(RESEND_WALL, self.timeout / 4)] if not self.answered else []
+        if not self.sim.paused:
+            due.append(self.waiting_since + self.timeout)
+        return max(0.0, min(due, default=now + RESEND_WALL) - now)
+
+    def tick(self, run: RunDriver, budget: float = MAX_TICK_WALL) -> Progress:
         """One tick of a lockstep run (the node's timer, or as soon as a turn is answered).
 
         Opens the turn the run stands on, decides an open one (:meth:`decide`), and steps a
@@ -235,7 +243,7 @@ class Lockstep(SimulationObserver):
         now = run.clock()
         target, _ = run.pacer.target_step(sim, now)  # waiting for a controller is not falling behind
         stop = self.next_turn_step() if target is None else min(target, self.next_turn_step())
-        progress = run.run(stop, now + MAX_TICK_WALL)
+        progress = run.run(stop, now + budget)
         progress.lockstep_timeout = note
         if self.waiting:
             self._sync()  # the timeout counts from the publication of the turn's state

@@ -1,8 +1,9 @@
 """Pacing a run: wall clock against sim time, outputs due per step, slices of bounded wall time.
 
 Plain classes, no ROS, every clock injected, so the rules are tested with a fake clock
-(``test/run/test_pacing.py``); the ROS node only calls :meth:`RunDriver.tick` from its
-timer and :meth:`RunDriver.run` from ``~/step``.
+(``test/run/test_pacing.py``); the ROS node's run loop (``rigid_rot_sim.ros.run_loop``) calls
+:meth:`RunDriver.tick` at each turn and waits :meth:`RunDriver.next_wait` for the next, and
+``~/step`` calls :meth:`RunDriver.run`.
 
 * :class:`Pacer`: the real-time factor r. At r > 0 the run is due at step
   ``r * (wall time since the anchor)`` after the anchor's sim time; a backlog of more than
@@ -28,6 +29,7 @@ pacing decides only *when* (wall clock) a step is computed.
 from __future__ import annotations
 
 import math
+import os
 import time
 from collections.abc import Callable, Iterable, Mapping, Sequence
 from dataclasses import dataclass
@@ -50,6 +52,11 @@ MIN_TICK = 0.001
 MAX_TICK = 0.02
 #: At r > 0, a backlog beyond this much wall time is dropped (the run re-anchors), with a warning.
 MAX_BACKLOG_WALL = 0.5
+#: The physics is blamed for falling behind only when it alone needs more than 1 / PHYSICS_SHARE of the
+#: wall time at the real-time factor (it can run less than PHYSICS_SHARE times as fast as asked).
+PHYSICS_SHARE = 2.0
+#: Wall time (s) after a step's due time that its tick is timed for (float rounding never wakes it early).
+DUE_MARGIN = 2e-6
 #: Steps to the next due output when no output is scheduled at all.
 NEVER = 10**9
 
@@ -81,16 +88,46 @@ class StepCost:
 
 
 def falling_behind_message(
-    real_time_factor: float, behind_wall: float, method: str, dt: float, per_step: float, omega: float, torque: float
+    real_time_factor: float,
+    behind_wall: float,
+    method: str,
+    dt: float,
+    per_step: float,
+    omega: float,
+    torque: float,
+    spent: tuple[float, float, float] | None = None,
 ) -> str:
-    """Why the run cannot keep its pace: the wall time one step of the method takes now."""
+    """Why the run cannot keep its pace, measured: the physics, or the rest of the machine.
+
+    ``per_step``: the CPU time of one step (the time the process waited for a core never counts as
+    the physics'). The physics is named (with the integrator advice) only when one step of ``method``
+    takes more than ``1 / PHYSICS_SHARE`` of its wall-time budget at this real-time factor. Otherwise
+    the time went elsewhere, and ``spent`` (wall s of the window, CPU s in the physics, CPU s in the
+    outputs and commands) says where: what is left was not the run's (the process waited for a core,
+    or a service held the run).
+    """
     pace = dt / per_step if per_step > 0.0 else math.inf
-    return (
-        f"cannot keep up with real_time_factor {real_time_factor:g} ({behind_wall:.2f} s of wall time behind): "
-        f"{method} needs {per_step * 1e3:.3g} ms of wall time per {dt:g} s step "
-        f"(at most {pace:.3g}x real time) at |omega| = {omega:.3g} rad/s, |torque| = {torque:.3g} N*m; "
-        "dropping the backlog (a smaller torque, max_torque or another integrator helps)"
+    head = f"cannot keep up with real_time_factor {real_time_factor:g} ({behind_wall:.2f} s of wall time behind): "
+    if pace < PHYSICS_SHARE * real_time_factor:
+        return head + (
+            f"{method} needs {per_step * 1e3:.3g} ms of wall time per {dt:g} s step "
+            f"(at most {pace:.3g}x real time) at |omega| = {omega:.3g} rad/s, |torque| = {torque:.3g} N*m; "
+            "dropping the backlog (a smaller torque, max_torque or another integrator helps)"
+        )
+    text = head + (
+        f"not the physics ({method} needs {per_step * 1e6:.3g} µs of CPU time per {dt:g} s step, {pace:.3g}x real time)"
     )
+    if spent is not None:
+        wall, physics, node_side = spent
+        elsewhere = max(0.0, wall - physics - node_side)
+        load = os.getloadavg()[0] if hasattr(os, "getloadavg") else math.nan
+        text += (
+            f": of the last {wall:.2f} s of wall time the run used {physics:.3f} s of CPU stepping and "
+            f"{node_side:.3f} s on its outputs and commands; the other {elsewhere:.2f} s it did not run "
+            f"(the process waited for a core, or a service held the run; load average {load:.1f} on "
+            f"{os.cpu_count()} cores)"
+        )
+    return text + "; dropping the backlog (a less busy machine, or fewer or slower outputs, helps)"
 
 
 class Pacer:
@@ -109,6 +146,10 @@ class Pacer:
         """Restart pacing from sim time ``t`` (s) now: after a pause, a reset, a new r."""
         self._anchor_wall = self.clock()
         self._anchor_t = t
+
+    def wall_at(self, t: float) -> float:
+        """The wall time (clock s) at which sim time ``t`` is due (r > 0)."""
+        return self._anchor_wall + (t - self._anchor_t) / self.real_time_factor
 
     def tick_period(self, dt: float) -> float:
         """Wall seconds between two timer ticks: one step of wall time, within [MIN_TICK, MAX_TICK]."""
@@ -219,8 +260,18 @@ class RunDriver:
         self.clock = pacer.clock
         self.duration = duration
         self.step_cost = StepCost()
+        #: CPU time (s) of this thread, for what the run itself costs: a step's wall time also holds the
+        #: time the process waited for a core, which must never be blamed on the physics.
+        self.cpu_clock: Clock = time.thread_time
+        #: Running estimate of one physics step in CPU time (the falling-behind warning's physics figure).
+        self.physics_cost = StepCost()
         self.finished = False
         self.observers: list[SimulationObserver] = list(observers)
+        #: Called between two chunks of steps (the node takes its commands there); returns how many came.
+        self.between_chunks: Callable[[], int] | None = None
+        self._warm = False
+        #: Since the run was last on pace: [wall start, CPU s stepping, CPU s on outputs and commands].
+        self._spent = [self.clock(), 0.0, 0.0]
 
     def publish_due(self, force: bool = False, rest: bool = False) -> None:
         """Report the outputs due at the current step (see :meth:`OutputSchedule.due`)."""
@@ -237,8 +288,29 @@ class RunDriver:
         self.finished = False
         self.pacer.anchor(self.sim.t)
 
-    def tick(self) -> Progress:
-        """One timer tick: step to the paced target (r > 0) or as far as ``MAX_TICK_WALL`` allows."""
+    def next_wait(self) -> float | None:
+        """Wall time (s) until the run next needs a tick: the next due output (or the end) at r > 0, 0 at
+        r = 0, None when paused or finished (nothing is due until something changes).
+
+        Steps between two outputs are computed at the next output's tick: the states do not depend
+        on when they are computed, and a command that arrives in between wakes the run, which first
+        steps to the step due at that wall time.
+        """
+        sim = self.sim
+        if sim.paused or self.finished:
+            return None
+        r = self.pacer.real_time_factor
+        if r <= 0.0:
+            return 0.0
+        k = sim.step_index
+        stop = self.schedule.next_due(k)
+        if self.duration is not None:
+            stop = min(stop, sim.step_at_or_after(self.duration))
+        due = self.pacer.wall_at(sim.t + (stop - k) * sim.dt) + DUE_MARGIN
+        return max(0.0, due - self.clock())
+
+    def tick(self, budget: float = MAX_TICK_WALL) -> Progress:
+        """One tick: step to the paced target (r > 0) or as far as ``budget`` s of wall time allows."""
         sim = self.sim
         if sim.paused or self.finished:
             return Progress()
@@ -252,12 +324,16 @@ class RunDriver:
                 dropped,
                 sim.method,
                 sim.dt,
-                self.step_cost.per_step,
+                self.physics_cost.per_step,
                 math.hypot(*snapshot.angular_velocity_body.tolist()),
                 math.hypot(*snapshot.torque_body.tolist()),
+                (now - self._spent[0], self._spent[1], self._spent[2]),
             )
-        progress = self.run(target, now + MAX_TICK_WALL)
+            self._spent = [now, 0.0, 0.0]
+        progress = self.run(target, now + budget)
         progress.falling_behind = behind
+        if target is not None and sim.step_index >= target:
+            self._spent = [self.clock(), 0.0, 0.0]  # on pace: the window of a next warning starts here
         return progress
 
     def run(self, target: int | None, deadline: float | None) -> Progress:
@@ -265,7 +341,11 @@ class RunDriver:
         sim = self.sim
         start = sim.step_index
         end_step = sim.step_at_or_after(self.duration) if self.duration is not None else None
+        first = True
         while True:
+            if not first and self.between_chunks is not None:
+                self.between_chunks()  # between two chunks of one call (the caller takes them before and after)
+            first = False
             k = sim.step_index
             if end_step is not None and k >= end_step:
                 self.publish_due(rest=True)  # every output ends on the final state, none twice
@@ -280,12 +360,21 @@ class RunDriver:
                 stop = min(stop, end_step)
             if stop <= k:
                 break
-            began = self.clock()
-            self.step_cost.record(sim.advance_to(stop), self.clock() - began)
+            began, cpu_began = self.clock(), self.cpu_clock()
+            steps = sim.advance_to(stop)
+            stepped, cpu_stepped = self.clock(), self.cpu_clock()
+            if self._warm:
+                self.step_cost.record(steps, stepped - began)
+                self.physics_cost.record(steps, cpu_stepped - cpu_began)
+            else:  # the first chunk loads the compiled kernels: not a step's cost, and the pace starts after it
+                self._warm = True
+                self.pacer.anchor(sim.t)
             if sim.failure is not None:
                 self.publish_due(force=True)
                 return Progress(steps=sim.step_index - start, failure=sim.failure)
             self.publish_due()
+            self._spent[1] += cpu_stepped - cpu_began
+            self._spent[2] += self.cpu_clock() - cpu_stepped
             if deadline is not None and self.clock() >= deadline:
                 break
         return Progress(steps=sim.step_index - start)

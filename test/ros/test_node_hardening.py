@@ -117,7 +117,7 @@ def test_step_requests_are_bounded_and_other_services_keep_answering(harness):
 
 def test_use_sim_time_is_accepted_with_a_warning_and_the_timer_stays_steady(context, harness, capfd):
     h = harness("free_tumble", real_time_factor=1.0)
-    assert h.node.run.timer.clock.clock_type == ClockType.STEADY_TIME
+    assert h.node.run.loop.timer.clock.clock_type == ClockType.STEADY_TIME
     # a launch-wide use_sim_time:=true (Nav2 / Gazebo bringups) must not stop the node that is the clock
     result = h.node.set_parameters([Parameter("use_sim_time", value=True)])[0]
     assert result.successful
@@ -133,7 +133,7 @@ def test_use_sim_time_is_accepted_with_a_warning_and_the_timer_stays_steady(cont
     )
     try:
         assert node.get_parameter("use_sim_time").value is True
-        assert node.run.timer.clock.clock_type == ClockType.STEADY_TIME
+        assert node.run.loop.timer.clock.clock_type == ClockType.STEADY_TIME
     finally:
         node.destroy_node()
     logged = capfd.readouterr().err

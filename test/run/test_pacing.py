@@ -45,6 +45,14 @@ def test_the_falling_behind_warning_says_why():
     assert "max_torque" in message
 
 
+def test_the_falling_behind_warning_never_blames_a_physics_that_keeps_up():
+    # the physics alone could run 196x real time: the time went elsewhere, and the warning says where
+    message = falling_behind_message(1.0, 0.8, "taylor", 0.001, 0.001 / 196, 2.5, 0.1, spent=(1.3, 0.0066, 0.05))
+    assert "not the physics" in message and "196x real time" in message
+    assert "used 0.007 s of CPU stepping and 0.050 s on its outputs and commands; the other 1.24 s" in message
+    assert "integrator" not in message and "max_torque" not in message
+
+
 # ---------------------------------------------------------------- Pacer, OutputSchedule, RunDriver (fake clock)
 
 
@@ -147,7 +155,8 @@ def test_a_backlog_beyond_the_limit_is_dropped_with_the_reason():
     clock.now += MAX_BACKLOG_WALL + 0.3  # e.g. the process was stopped
     progress = run.tick()
     assert progress.falling_behind is not None and "cannot keep up with real_time_factor 1" in progress.falling_behind
-    assert "|omega| = 5 rad/s" in progress.falling_behind
+    # the fake steps cost nothing: the 0.8 s were lost elsewhere, and the warning says so
+    assert "not the physics" in progress.falling_behind and "the other 0.80 s it did not run" in progress.falling_behind
     # re-anchored: only half a tick of sim time ahead, not the 0.8 s missed
     assert sim.step_index == sim.step_at_or_before(MAX_TICK_WALL * 0.5) == 1
     clock.now += 0.05
@@ -215,3 +224,33 @@ def test_a_step_request_runs_to_its_target_within_its_budget():
     sim.step_wall = 0.1
     run.step_cost.per_step = 0.1
     assert run.run(50, clock() + 0.25).steps < 25  # stopped short at the budget; the reply says so
+
+
+def test_the_next_tick_is_due_when_the_next_output_is_and_never_while_paused():
+    clock = FakeClock()
+    sim = FakeSim(clock)  # dt 0.01
+    run, due = driver(clock, sim, rtf=2.0, periods={"state": 5}, duration=0.07)
+    assert run.next_wait() == pytest.approx(5 * 0.01 / 2.0, abs=1e-5)  # step 5 is due at 0.025 s of wall time
+    clock.now += 0.01
+    assert run.next_wait() == pytest.approx(0.015, abs=1e-5)  # the steps before it wait for it (no tick for them)
+    clock.now += 0.015
+    run.tick()
+    assert sim.step_index == 5 and run.next_wait() == pytest.approx(2 * 0.01 / 2.0, abs=1e-5)  # then the end, step 7
+    sim.paused = True
+    assert run.next_wait() is None  # paused: nothing is due until something changes
+    sim.paused = False
+    run.pacer.real_time_factor = 0.0
+    assert run.next_wait() == 0.0  # as fast as possible: at once
+    clock.now += 1.0
+    run.tick()
+    assert run.finished and run.next_wait() is None
+
+
+def test_a_run_loop_takes_its_commands_between_the_chunks_of_a_long_call():
+    clock = FakeClock()
+    sim = FakeSim(clock)
+    run, _ = driver(clock, sim, rtf=0.0, periods={"state": 4})
+    calls: list[int] = []
+    run.between_chunks = lambda: calls.append(sim.step_index) or 0
+    run.run(12, None)  # three chunks: 0-4, 4-8, 8-12
+    assert calls == [4, 8, 12]  # after each chunk (none before the first: the caller took them just before)
