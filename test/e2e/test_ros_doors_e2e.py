@@ -165,7 +165,17 @@ def test_a_generic_client_finds_the_standard_services_at_root_names(tmp_path, la
     features = call(GetSimulatorFeatures, "/get_simulator_features", GetSimulatorFeatures.Request()).features
     listed = {name for name in FEATURE_INTERFACES if getattr(SimulatorFeatures, name) in features.features}
     assert len(listed) == len(features.features)  # every code listed is one this node knows
-    services = collector.node.get_service_names_and_types_by_node("rigid_rot_sim", "/")
+
+    # the graph learns a node's name and its services apart from answering a call: wait for both
+    def node_services():
+        if ("rigid_rot_sim", "/") not in collector.node.get_node_names_and_namespaces():
+            return []
+        return collector.node.get_service_names_and_types_by_node("rigid_rot_sim", "/")
+
+    collector.spin_until(
+        lambda: any(name == "/step_simulation" for name, _ in node_services()), 30.0, node, "the node's services"
+    )
+    services = node_services()
     served = {
         name
         for name, types in services
