@@ -102,16 +102,16 @@ from rigid_rot_sim.core import quaternion as quat
 from rigid_rot_sim.core import validation
 from rigid_rot_sim.core.dynamics import axes_by_moment
 from rigid_rot_sim.core.elliptic import (
-    AGM_LEVELS,
+    AGM_SIZE,
     FOUR_PI_DD,
     PI_DD,
     TWO_PI_DD,
-    agm_tables,
+    agm_tables_kp,
     carlson_rf,
     carlson_rj,
     dd_add,
     dd_add_d,
-    dd_complete_integrals,
+    dd_complete_integrals_kp,
     dd_div,
     dd_mul,
     dd_reduce,
@@ -184,7 +184,20 @@ _S_MOMENTS, _S_AXIS, _S_RATE, _S_BETA, _S_L, _S_Q0 = 1, 4, 5, 8, 9, 12
     _E_G0_LO,
     _E_M1_LO,
 ) = (1, 4, 7, 10, 13, 16, 18, 19, 20, 21, 22, 23, 24, 25, 26, 27, 31, 35, 36, 37, 38, 39, 41, 43, 45, 51, 52, 53, 54)
-PARAMS_SIZE = 55
+# ASCALE: 1 / S_A, the scale of the amplitudes and LSCALE of axes 1 and 2 (see _elliptic_params)
+_E_ASCALE = 55
+# every kind: the time scale c (omega = c omega_true, tau_flow = tau / c; see flow_params), 1.0 mostly
+_TSCALE = 56
+# k' = sqrt(1 - m) (a double-double) for the reflection next to the turning points (see _phase)
+_E_KP = 57
+# Pi(n|m) - K (a double-double), for the precession in the reflection (see _reflected_phase)
+_E_EXCESS = 59
+PARAMS_SIZE = 61
+# Exponent limits of the rules in flow_params and _elliptic_params (powers of 2, so every rescaling is exact):
+# moments and the largest |omega_k| outside [2^-_RANGE, 2^_RANGE] are brought to [1, 2); two components below
+# 2^-_TINY (then below 2^(_RANGE - _TINY) of the largest) are scaled up by a power of 4 before they are squared.
+_RANGE = 100
+_TINY = 300
 
 
 def _relabelling_table() -> np.ndarray:
@@ -277,12 +290,62 @@ def _separatrix_distance(moments, omega, i_min, i_mid, i_max):
 # -- construction -------------------------------------------------------------------------
 
 
+#: Below this k' (next to the separatrix) the Jacobi functions within K / 2 of a turning point come from
+#: the reflection of :func:`_reflected_jacobi`, and u0 from the complementary amplitude (_elliptic_params).
+_SMALL_KP = 0.0625
+
+
+@register_jitable
+def _reflected_phase(params, agm_a, agm_c, rh, rl):
+    """sn, cn, dn (double-doubles) and g = Pi(n; am r | m) - r (g_h, g_l) at r = rh + rl, K / 2 < |r| <= K,
+    from v = K - |r| (A&S 16.8): ``sn(K - v) = cn v / dn v``, ``cn(K - v) = k' sn v / dn v``,
+    ``dn(K - v) = k' / dn v``; g is odd in r and, with dPi(n; am u) / du = 1 / (1 - n sn^2 u) and
+    sn(K - w) = cd w and ``1 / (1 - n cd^2) = dn^2 / (dn^2 - n cn^2) = (m / n' + (1 - m / n') / (1 - n' sn^2)) / (1 - n)``
+    integrated from K (the last term is Pi(n'; am v | m) = v + (n' / 3) sn^3 R_J(...)):
+
+        g(K - v) = (Pi(n|m) - K) - n v / (1 - n) + n (1 - m) / (3 (1 - n)^2) sn^3 v R_J(cn^2 v, dn^2 v, 1, p')
+
+    with ``n' = (m - n) / (1 - n)`` and ``p' = 1 - n' sn^2 v = (dn^2 v - n cn^2 v) / (1 - n)``.
+
+    Next to the separatrix cn and dn are of order k' around the turning point (the body next to the
+    middle axis): from the amplitude near pi / 2 they would carry its absolute rounding, here they keep
+    their relative accuracy (psi needs it), and g, which is logarithmic in them and of the size of K,
+    is the sum of terms in v without a cancellation (the last one is of order 1 - m)."""
+    side = _sign(rh)
+    vh, vl = dd_add(params[_E_K], params[_E_K_LO], -side * rh, -side * rl)
+    sv, cv, dv = jacobi_dd(
+        vh,
+        vl,
+        agm_a,
+        agm_c,
+        int(params[_E_LEVELS]),
+        params[_E_M1],
+        params[_E_M1_LO],
+        params[_E_AGM_TOP],
+        params[_E_AGM_TOP + 1],
+    )
+    inv = dd_div(1.0, 0.0, *dv)
+    kp = (params[_E_KP], params[_E_KP + 1])
+    sn = dd_mul(*cv, *inv)
+    n_h, n_l = params[_E_N], params[_E_N_LO]
+    one_minus_n = dd_add(1.0, 0.0, -n_h, -n_l)
+    slope = dd_div(n_h, n_l, *one_minus_n)
+    g = dd_add(params[_E_EXCESS], params[_E_EXCESS + 1], *dd_mul(-slope[0], -slope[1], vh, vl))
+    c2, d2 = cv[0] * cv[0], dv[0] * dv[0]
+    m1 = params[_E_M1]
+    rest = n_h * m1 / (3.0 * one_minus_n[0] * one_minus_n[0]) * sv[0] ** 3
+    if rest != 0.0:
+        rest *= carlson_rj(c2, d2, 1.0, (d2 - n_h * c2) / one_minus_n[0])
+    g = dd_add_d(*g, rest)
+    return (side * sn[0], side * sn[1]), dd_mul(*dd_mul(*kp, *sv), *inv), dd_mul(*kp, *inv), side * g[0], side * g[1]
+
+
 @register_jitable
 def _phase(params, agm_a, agm_c, uh, ul):
     """sn, cn, dn at u = uh + ul and the two parts of Pi(n; am u | m) beyond u: (j, g_h, g_l),
     j the number of half periods 2K from 0 to u and g = g_h + g_l a bounded remainder."""
     n = params[_E_N]
-    if params[_E_M1] == 0.0:  # separatrix
+    if params[_E_KP] == 0.0:  # separatrix (k' of any other flow is a normal double)
         u = uh + ul
         sn = math.tanh(u)
         e = math.exp(-abs(u))
@@ -294,17 +357,22 @@ def _phase(params, agm_a, agm_c, uh, ul):
     # u - 2 K j in double-double: the phase is reduced without the rounding of u or of K j
     ph, pl = two_product(j, 2.0 * k)
     rh, rl = dd_add(uh, ul, -ph, -pl - j * 2.0 * params[_E_K_LO])
-    sn, cn, dn = jacobi_dd(
-        rh,
-        rl,
-        agm_a,
-        agm_c,
-        int(params[_E_LEVELS]),
-        params[_E_M1],
-        params[_E_M1_LO],
-        params[_E_AGM_TOP],
-        params[_E_AGM_TOP + 1],
-    )
+    if params[_E_KP] < _SMALL_KP and abs(rh) > 0.5 * k:
+        sn, cn, dn, g_h, g_l = _reflected_phase(params, agm_a, agm_c, rh, rl)
+        parity = 1.0 - 2.0 * (j % 2.0)
+        return (parity * sn[0], parity * sn[1]), (parity * cn[0], parity * cn[1]), dn, j, g_h, g_l
+    else:
+        sn, cn, dn = jacobi_dd(
+            rh,
+            rl,
+            agm_a,
+            agm_c,
+            int(params[_E_LEVELS]),
+            params[_E_M1],
+            params[_E_M1_LO],
+            params[_E_AGM_TOP],
+            params[_E_AGM_TOP + 1],
+        )
     g_h, g_l = third_kind_excess_dd(sn, cn, dn, n, params[_E_N_LO])
     # sn and cn change sign over each half period 2K (dn does not)
     parity = 1.0 - 2.0 * (j % 2.0)
@@ -324,7 +392,7 @@ def _elliptic_state(params, agm_a, agm_c, tau):
     sn, cn, dn, j, g_h, g_l = _phase(params, agm_a, agm_c, uh, ul)
     j0, g0 = params[_E_J0], params[_E_G0]
     coeff = params[_E_COEFF]
-    if params[_E_M1] == 0.0:
+    if params[_E_KP] == 0.0:  # separatrix
         phi_h, phi_l = l_norm * tau / i3 + coeff * (lam * tau + (g_h - g0)) / (1.0 - n), 0.0
     else:
         phi_h, phi_l = two_product(params[_E_RATE], tau)
@@ -333,8 +401,9 @@ def _elliptic_state(params, agm_a, agm_c, tau):
         # the bounded part COEFF (g - g0) in double-double: it is up to ~2 rad
         bounded = dd_mul(coeff, params[_E_COEFF_LO], *dd_add(g_h, g_l, -g0, -params[_E_G0_LO]))
         phi_h, phi_l = dd_add(phi_h, phi_l, *bounded)
-    w0 = params[_E_SIGNS] * params[_E_AMPLITUDE] * cn[0]
-    w1 = params[_E_SIGNS + 1] * params[_E_AMPLITUDE + 1] * sn[0]
+    # (amplitudes 1 and 2 kept times S_A: ASCALE is 1 but next to the axis of circulation)
+    w0 = params[_E_SIGNS] * params[_E_AMPLITUDE] * cn[0] * params[_E_ASCALE]
+    w1 = params[_E_SIGNS + 1] * params[_E_AMPLITUDE + 1] * sn[0] * params[_E_ASCALE]
     w2 = params[_E_SIGNS + 2] * params[_E_AMPLITUDE + 2] * dn[0]
     # L_body = (I1 w1, I2 w2, I3 w3) from I_k A_k s_k (double-doubles) and cn, sn, dn
     l_body = (
@@ -342,7 +411,7 @@ def _elliptic_state(params, agm_a, agm_c, tau):
         dd_mul(params[_E_LSCALE + 1], params[_E_LSCALE + 4], *sn),
         dd_mul(params[_E_LSCALE + 2], params[_E_LSCALE + 5], *dn),
     )
-    z_hi, z_lo = _zxz_from_momentum(phi_h, phi_l, *l_body, (params[_E_RNORM], params[_E_RNORM + 1]))
+    z_hi, z_lo = _zxz_from_momentum(phi_h, phi_l, *l_body, (params[_E_RNORM], params[_E_RNORM + 1]), params[_E_ASCALE])
     order, axis_signs = params[_E_ORDER : _E_ORDER + 3], params[_E_AXIS_SIGNS : _E_AXIS_SIGNS + 3]
     q = _compensated_product(
         params[_E_QWL : _E_QWL + 4],
@@ -440,9 +509,10 @@ def _dot2_pair(a_h, a_l, b_h, b_l, c_h, c_l, d_h, d_l):
 
 
 @register_jitable
-def _zxz_from_momentum(phi_h, phi_l, l1, l2, l3, r_norm):
+def _zxz_from_momentum(phi_h, phi_l, l1, l2, l3, r_norm, across):
     """The quaternion of Rz(phi) Rx(theta) Rz(psi) with ``L_body = |L| (sin th sin psi, sin th cos psi, cos th)``
-    for L_body = (l1, l2, l3) and r_norm = 1 / |L| (double-doubles) and phi = phi_h + phi_l (rad), as (hi, lo)
+    for L_body = (across l1, across l2, l3) and r_norm = 1 / |L| (double-doubles; ``across`` a power of 2, so
+    that l1 and l2 may be given scaled where they would underflow) and phi = phi_h + phi_l (rad), as (hi, lo)
     tuples.
 
     Rx(theta) Rz(psi) is ``(sh c, -sh s, ch s, ch c)`` with ch, sh = cos, sin(theta / 2) and c, s = cos,
@@ -453,6 +523,7 @@ def _zxz_from_momentum(phi_h, phi_l, l1, l2, l3, r_norm):
     if sq12[0] > 0.0:
         r_across = dd_rsqrt(*sq12)
         sin_theta = dd_mul(*dd_mul(*sq12, *r_across), *r_norm)
+        sin_theta = (sin_theta[0] * across, sin_theta[1] * across)
         # psi = atan2(l1, l2) in (-pi, pi]: its half angle from |l2|, |l1| and the sign of l1
         near, far = _half_angles_dd(
             *dd_mul(abs(l2[0]), math.copysign(1.0, l2[0]) * l2[1], *r_across),
@@ -478,7 +549,17 @@ def _zxz_from_momentum(phi_h, phi_l, l1, l2, l3, r_norm):
 
 @register_jitable
 def flow_state(params, agm_a, agm_c, tau):
-    """``(q, omega)`` as tuples, tau (s) after the anchor of the flow ``params``."""
+    """``(q, omega)`` as tuples, tau (s) after the anchor of the flow ``params`` (its time scale undone)."""
+    scale = params[_TSCALE]
+    if scale == 1.0:
+        return _flow_state(params, agm_a, agm_c, tau)
+    q, w = _flow_state(params, agm_a, agm_c, tau / scale)
+    return q, (w[0] / scale, w[1] / scale, w[2] / scale)
+
+
+@register_jitable
+def _flow_state(params, agm_a, agm_c, tau):
+    """flow_state in the flow's own time scale."""
     kind = params[_KIND]
     if kind == _RIGID:
         q0 = (params[_R_Q0], params[_R_Q0 + 1], params[_R_Q0 + 2], params[_R_Q0 + 3])
@@ -512,6 +593,35 @@ def _dd_ratio_sum(num_a, num_b, den_a, den_b, x, y):
     return dd_add(*term, *two_product(y, y))
 
 
+#: exact_split's short flows take K and Pi(n|m) - K in double down to this k' (below, in double-double)
+_SHORT_RUN_KP = 2.0**-26
+#: The smallest k' served (the smallest normal double): see _elliptic_params
+_SMALLEST_KP = 2.2250738585072014e-308
+#: The Newton step on u0 where dn(u0) is at least this (it divides am0's rounding by dn)
+_NEWTON_DN = 0.0625
+
+
+@register_jitable
+def _tiny_pair_scale(x, y):
+    """A power of 4, S, with max(|x|, |y|) S in [2^-_TINY, 2^(2 - _TINY)) where max(|x|, |y|) is below
+    2^-_TINY (and not 0), else 1."""
+    top = max(abs(x), abs(y))
+    if top == 0.0 or top >= 2.0**-_TINY:
+        return 1.0
+    exponent = math.frexp(top)[1]  # top in [2^(e - 1), 2^e)
+    return math.ldexp(1.0, 2 * ((-_TINY - exponent) // 2 + 1))
+
+
+@register_jitable
+def _asinh_ratio(sn, cn_scaled, scale):
+    """asinh(sn / cn) for cn = cn_scaled / scale (scale a power of 2), where the ratio may overflow:
+    asinh(x) = ln(2 |x|) + O(1 / x^2) with sign beyond 2^27."""
+    ratio = sn / cn_scaled  # the true ratio / scale
+    if abs(ratio) * scale < 2.0**27:
+        return math.asinh(ratio * scale)
+    return math.copysign(math.log(2.0 * abs(ratio)) + math.log(scale), ratio)
+
+
 @register_jitable
 def _elliptic_params(moments, omega, q0, order, d, params, agm_a, agm_c, long_run):
     """Fill params / the AGM tables for the triaxial body; ``d`` = L^2 - 2 E I2 (0: separatrix).
@@ -530,17 +640,39 @@ def _elliptic_params(moments, omega, q0, order, d, params, agm_a, agm_c, long_ru
     w2 = axis_signs[1] * omega[order[1]]
     w3 = axis_signs[2] * omega[order[2]]
     eps = _sign(i3 - i2)
+    # Two components too small to be squared (flow_params has brought the largest to at least
+    # 2^-_RANGE, so these are below 2^(_RANGE - _TINY) of it and their squares are nothing beside its):
+    # (w1, w2) next to the axis of circulation (region A) or (w1, w3) next to the middle axis (region B)
+    # are scaled by a power of 4, S, for what depends on them in ratio (amplitudes, phase, psi, k').
+    scale_a = _tiny_pair_scale(w1, w2)
+    scale_b = _tiny_pair_scale(w1, w3)
     d31, d32, d21 = two_sum(i3, -i1), two_sum(i3, -i2), two_sum(i2, -i1)
-    a1_sq = _dd_ratio_sum(i2, d32, i1, d31, w2, w1)
-    a2_sq = _dd_ratio_sum(i1, d31, i2, d32, w1, w2)
+    # region A: A1, A2 (and LSCALE of axes 1, 2) are kept times S_A, undone at evaluation by ASCALE
+    a1_sq = _dd_ratio_sum(i2, d32, i1, d31, w2 * scale_a, w1 * scale_a)
+    a2_sq = _dd_ratio_sum(i1, d31, i2, d32, w1 * scale_a, w2 * scale_a)
     a3_sq = _dd_ratio_sum(i2, d21, i3, d31, w2, w3)
     a1_dd, a2_dd, a3_dd = dd_sqrt(*a1_sq), dd_sqrt(*a2_sq), dd_sqrt(*a3_sq)
     a1, a2, a3 = a1_dd[0], a2_dd[0], a3_dd[0]
     big = dd_mul(*dd_mul(i3, 0.0, *d32), *a3_sq)
-    above = dd_mul(*dd_mul(i3, 0.0, *d32), *two_product(w3, w3))
-    below = dd_mul(*dd_mul(i1, 0.0, *d21), *two_product(w1, w1))
-    m1_dd = dd_div(*dd_add(*above, -below[0], -below[1]), *big)
-    m = dd_div(*dd_mul(*dd_mul(i1, 0.0, *d21), *a1_sq), *big)[0]
+    # region B: 1 - m = k'^2 is formed times S_B^2 (it underflows next to the middle axis), k' and
+    # sqrt(k') from it by exact powers of 2
+    above = dd_mul(*dd_mul(i3, 0.0, *d32), *two_product(w3 * scale_b, w3 * scale_b))
+    below = dd_mul(*dd_mul(i1, 0.0, *d21), *two_product(w1 * scale_b, w1 * scale_b))
+    m1s_dd = dd_div(*dd_add(*above, -below[0], -below[1]), *big)
+    kps_dd = dd_sqrt(*m1s_dd)  # k' S_B
+    kp_dd = (kps_dd[0] / scale_b, kps_dd[1] / scale_b)
+    root_scale = math.sqrt(scale_b)  # exact: S_B is a power of 4
+    root_kp = dd_sqrt(*kps_dd)
+    root_kp = (root_kp[0] / root_scale, root_kp[1] / root_scale)
+    m1_dd = (m1s_dd[0] / scale_b / scale_b, m1s_dd[1] / scale_b / scale_b)
+    if d != 0.0 and kp_dd[0] < _SMALLEST_KP:
+        # cn and dn around the turning points are of order k': below the normal doubles they lose the
+        # relative accuracy that psi and the precession need
+        raise ValueError(
+            "exact flow: omega0 is within 1e-307 (relative) of the middle principal axis but not on it; "
+            "the elliptic functions there are not served (k' = sqrt(1 - m) below the normal doubles)"
+        )
+    m = dd_div(*dd_mul(*dd_mul(i1, 0.0, *d21), *a1_sq), *big)[0] / scale_a / scale_a
     lam_dd = dd_sqrt(*dd_div(*dd_mul(*dd_mul(*d32, *d31), *a3_sq), *two_product(i1, i2)))
     n_dd = dd_div(*dd_mul(-i3, 0.0, *d21), *dd_mul(i1, 0.0, *d32))
     l_dd = dd_sqrt(*dd_add(*dd_add(*_square_dd(i1, w1), *_square_dd(i2, w2)), *_square_dd(i3, w3)))
@@ -551,49 +683,70 @@ def _elliptic_params(moments, omega, q0, order, d, params, agm_a, agm_c, long_ru
     s3 = _sign(w3)
     s1 = _sign(w1) if separatrix else 1.0
     sigma = eps * s1 * s3
-    # phase u0 from sn u0 = sigma w2 / A2, cn u0 = s1 w1 / A1 (normalised against rounding)
+    # phase u0 from sn u0 = sigma w2 / A2, cn u0 = s1 w1 / A1 (normalised against rounding); cn0 times
+    # S_B (cn0_s) for the comparison with k' next to the middle axis
     if a1 > 0.0:
-        sn0, cn0 = sigma * w2 / a2, s1 * w1 / a1
+        sn0, cn0_s = sigma * w2 * scale_a / a2, s1 * w1 * scale_a * scale_b / a1
     else:
-        sn0, cn0 = 0.0, 1.0
-    norm = math.hypot(sn0, cn0)
-    sn0, cn0 = sn0 / norm, cn0 / norm
+        sn0, cn0_s = 0.0, 1.0
+    norm = math.hypot(sn0, cn0_s / scale_b)
+    sn0, cn0_s = sn0 / norm, cn0_s / norm
+    cn0 = cn0_s / scale_b
     params[_KIND] = _ELLIPTIC
     k_dd = (math.inf, 0.0)
+    excess_dd = (0.0, 0.0)
     turn_dd = (0.0, 0.0)
     u0_dd = (0.0, 0.0)
     if separatrix:
         agm_a[0], agm_c[0] = 1.0, 1.0
         levels = 0
-        u0_dd = (math.asinh(sn0 / cn0), 0.0)
+        u0_dd = (_asinh_ratio(sn0, cn0_s, scale_b), 0.0)
         m1 = 0.0
     else:
-        levels = agm_tables(m, m1, agm_a, agm_c)
-        if long_run:
-            k_h, k_l, excess_h, excess_l = dd_complete_integrals(m1_dd[0], m1_dd[1], n_dd[0], n_dd[1])
+        levels = agm_tables_kp(m, kp_dd[0], root_kp[0], agm_a, agm_c)
+        if long_run or kp_dd[0] < _SHORT_RUN_KP:
+            # (R_J(0, k'^2, 1, 1 - n) in double would not converge once k'^2 underflows)
+            k_h, k_l, excess_h, excess_l = dd_complete_integrals_kp(*kp_dd, *root_kp, n_dd[0], n_dd[1])
         else:
             k_h, k_l = math.pi / (2.0 * agm_a[levels]), 0.0
             excess_h, excess_l = (n / 3.0) * carlson_rj(0.0, m1, 1.0, 1.0 - n), 0.0
         k_dd = (k_h, k_l)
+        excess_dd = (excess_h, excess_l)
         turn_dd = dd_mul(*coeff_dd, 2.0 * excess_h, 2.0 * excess_l)
-        f = sn0 * carlson_rf(cn0 * cn0, cn0 * cn0 + m1 * sn0 * sn0, 1.0)
-        if cn0 >= 0.0:
-            u0_dd = (f, 0.0)
+        if kp_dd[0] >= _SMALL_KP or cn0_s * cn0_s >= kps_dd[0] * scale_b * sn0 * sn0:
+            # F(am0 | m) from am0 itself (sn0, cn0), the nearer end of the quarter period
+            f = sn0 * carlson_rf(cn0 * cn0, cn0 * cn0 + m1 * sn0 * sn0, 1.0)
+            if cn0 >= 0.0:
+                u0_dd = (f, 0.0)
+            else:
+                u0_dd = dd_add(math.copysign(2.0 * k_h, sn0), math.copysign(2.0 * k_l, sn0), -f, 0.0)
+            newton = long_run
         else:
-            u0_dd = dd_add(math.copysign(2.0 * k_h, sn0), math.copysign(2.0 * k_l, sn0), -f, 0.0)
-        if long_run and a1 > 0.0:
+            # next to the separatrix (k' < _SMALL_KP) and nearer the turning point sn = +-1 than am0 = am(K / 2):
+            # u0 = +-(K -+ F(psi | m)) with tan am0 tan psi = 1 / k' (A&S 17.4.13), psi from cn0 and k' sn0
+            # (both small there: taken times S_B); F(am0 | m) would be the difference of K and F(psi | m)
+            across = math.hypot(cn0_s, kps_dd[0] * sn0)
+            sin_psi, cos_psi = abs(cn0_s) / across, kps_dd[0] * abs(sn0) / across
+            v0 = sin_psi * carlson_rf(cos_psi * cos_psi, cos_psi * cos_psi + m1 * sin_psi * sin_psi, 1.0)
+            u0_dd = dd_add(k_h, k_l, -_sign(cn0) * v0, 0.0)
+            u0_dd = (_sign(sn0) * u0_dd[0], _sign(sn0) * u0_dd[1])
+            newton = False
+        if newton and a1 > 0.0:
             # one Newton step on am(u0) = am0 (d am / du = dn), am0 from
-            # tan am0 = sigma w2 A1 / (w1 A2) with A1 / A2 = sqrt(I2 (I3 - I2) / (I1 (I3 - I1)))
+            # tan am0 = sigma w2 A1 / (w1 A2) with A1 / A2 = sqrt(I2 (I3 - I2) / (I1 (I3 - I1))); only where
+            # dn(u0) >= 1/16: the step divides am0's rounding by dn
             ratio = dd_sqrt(*dd_div(*dd_mul(i2, 0.0, *d32), *dd_mul(i1, 0.0, *d31)))[0]
-            am0 = math.atan2(sigma * w2 * ratio, w1)
+            am0 = math.atan2(sigma * w2 * scale_a * ratio, w1 * scale_a)
             top = dd_div(*PI_DD, 2.0 * k_h, 2.0 * k_l)
             j = math.floor((u0_dd[0] + k_h) / (2.0 * k_h))
             ph, pl = two_product(j, 2.0 * k_h)
             rh, rl = dd_add(u0_dd[0], u0_dd[1], -ph, -pl - j * 2.0 * k_l)
             am_h, am_l = jacobi_amplitude_dd(rh, rl, agm_a, agm_c, levels, top[0], top[1])
-            sn_u = math.sin(am_h)
-            miss = ((am0 - j * PI_DD[0]) - am_h) - (am_l + j * PI_DD[1])
-            u0_dd = dd_add_d(u0_dd[0], u0_dd[1], miss / math.sqrt(1.0 - m * sn_u * sn_u))
+            sn_u, cn_u = math.sin(am_h), math.cos(am_h)
+            dn_u = math.sqrt(cn_u * cn_u + m1 * sn_u * sn_u)
+            if dn_u >= _NEWTON_DN:
+                miss = ((am0 - j * PI_DD[0]) - am_h) - (am_l + j * PI_DD[1])
+                u0_dd = dd_add_d(u0_dd[0], u0_dd[1], miss / dn_u)
     for idx in range(3):
         params[_E_ORDER + idx] = order[idx]
         params[_E_AXIS_SIGNS + idx] = axis_signs[idx]
@@ -602,6 +755,9 @@ def _elliptic_params(moments, omega, q0, order, d, params, agm_a, agm_c, long_ru
     params[_E_SIGNS], params[_E_SIGNS + 1], params[_E_SIGNS + 2] = s1, sigma, s3
     for idx, (sign, moment, amplitude) in enumerate(((s1, i1, a1_dd), (sigma, i2, a2_dd), (s3, i3, a3_dd))):
         params[_E_LSCALE + idx], params[_E_LSCALE + 3 + idx] = dd_mul(sign * moment, 0.0, *amplitude)
+    params[_E_ASCALE] = 1.0 / scale_a
+    params[_E_KP], params[_E_KP + 1] = (0.0, 0.0) if separatrix else kp_dd
+    params[_E_EXCESS], params[_E_EXCESS + 1] = excess_dd
     params[_E_LAM], params[_E_LAM_LO] = lam_dd
     params[_E_U0], params[_E_U0_LO] = u0_dd
     params[_E_M1], params[_E_M1_LO], params[_E_N], params[_E_N_LO] = m1, m1_dd[1], n, n_dd[1]
@@ -634,10 +790,11 @@ def _elliptic_params(moments, omega, q0, order, d, params, agm_a, agm_c, long_ru
     z0_hi, z0_lo = _zxz_from_momentum(
         0.0,
         0.0,
-        two_product(i1, w1),
-        two_product(i2, w2),
+        two_product(i1, w1 * scale_a),
+        two_product(i2, w2 * scale_a),
         two_product(i3, w3),
         (params[_E_RNORM], params[_E_RNORM + 1]),
+        1.0 / scale_a,
     )
     order_k, signs_k = params[_E_ORDER : _E_ORDER + 3], params[_E_AXIS_SIGNS : _E_AXIS_SIGNS + 3]
     q_hi, q_lo = _dot2_product(
@@ -660,7 +817,38 @@ def _square_dd(i, w):
 def flow_params(moments, omega, q0, params, agm_a, agm_c, long_run):
     """Build the flow from (moments, omega, q0) (tuples) into params / the AGM tables;
     returns the case (an index of CASES). ``long_run``: the flow will be evaluated far from
-    its anchor (see _elliptic_params); a solution object always is."""
+    its anchor (see _elliptic_params); a solution object always is.
+
+    Euler's equations are homogeneous: moments times a constant change nothing, and omega times c gives
+    omega(t) = omega_c(t / c) / c, q(t) = q_c(t / c). Moments or a largest |omega_k| outside
+    [2^-_RANGE, 2^_RANGE] are brought into it by a power of 2 (exact), the time scale c kept in params."""
+    moments = _in_range(moments)
+    scale = _range_scale(max(abs(omega[0]), abs(omega[1]), abs(omega[2])))
+    omega = (omega[0] * scale, omega[1] * scale, omega[2] * scale)
+    case = _flow_params(moments, omega, q0, params, agm_a, agm_c, long_run)
+    params[_TSCALE] = scale
+    return case
+
+
+@register_jitable
+def _range_scale(top):
+    """1.0 for top (> 0) in [2^-_RANGE, 2^_RANGE] or 0, else the power of 2 that brings it to [1, 2)
+    (or to at least 2^-74 from a subnormal: 2^1074 is not a double)."""
+    if top == 0.0 or 2.0**-_RANGE <= top <= 2.0**_RANGE:
+        return 1.0
+    return math.ldexp(1.0, min(1 - math.frexp(top)[1], 1000))
+
+
+@register_jitable
+def _in_range(moments):
+    """The moments times the power of 2 of :func:`_range_scale` (the motion does not depend on it)."""
+    scale = _range_scale(max(moments[0], moments[1], moments[2]))
+    return (moments[0] * scale, moments[1] * scale, moments[2] * scale)
+
+
+@register_jitable
+def _flow_params(moments, omega, q0, params, agm_a, agm_c, long_run):
+    """flow_params for moments and omega in range."""
     i_min, i_mid, i_max = axes_by_moment(moments[0], moments[1], moments[2])
     tol = _EQUAL_MOMENTS_ULPS * _EPS * moments[i_max]
     low_equal = moments[i_mid] - moments[i_min] <= tol
@@ -683,12 +871,18 @@ def flow_params(moments, omega, q0, params, agm_a, agm_c, long_run):
         for idx in range(4):
             params[_S_Q0 + idx] = q0[idx]
         return _SYMMETRIC
-    d = _separatrix_distance(moments, omega, i_min, i_mid, i_max)
+    # next to the middle axis the other two components may be too small to square: D times a power of 16
+    # (the sign and the zero are what is used here)
+    pair = _tiny_pair_scale(omega[i_min], omega[i_max])
+    scaled = [omega[0], omega[1], omega[2]]
+    scaled[i_min] *= pair
+    scaled[i_max] *= pair
+    d = _separatrix_distance(moments, scaled, i_min, i_mid, i_max)
     # The label allows for rounding in the caller's omega0; the flow itself is the exact
     # solution for the omega0 given (the separatrix closed form only when d is exactly 0).
     scale = (
-        moments[i_max] * (moments[i_max] - moments[i_mid]) * omega[i_max] ** 2
-        + moments[i_min] * (moments[i_mid] - moments[i_min]) * omega[i_min] ** 2
+        moments[i_max] * (moments[i_max] - moments[i_mid]) * scaled[i_max] ** 2
+        + moments[i_min] * (moments[i_mid] - moments[i_min]) * scaled[i_min] ** 2
     )
     if abs(d) <= _SEPARATRIX_ULPS * _EPS * scale:
         case = _SEPARATRIX
@@ -730,8 +924,8 @@ def _rigid_params(omega, q0, params):
 def free_flow(moments, q, omega, tau):
     """Exact free flow over tau (s) from (q, omega) (tuples): ``(q(tau), omega(tau))``."""
     params = np.zeros(PARAMS_SIZE)
-    agm_a = np.zeros(AGM_LEVELS)
-    agm_c = np.zeros(AGM_LEVELS)
+    agm_a = np.zeros(AGM_SIZE)
+    agm_c = np.zeros(AGM_SIZE)
     # beyond about a radian of rotation the phase constants are worth their double-double
     long_run = abs(tau) * math.sqrt(omega[0] ** 2 + omega[1] ** 2 + omega[2] ** 2) > 1.0
     flow_params(moments, omega, q, params, agm_a, agm_c, long_run)
@@ -764,8 +958,8 @@ class _Flow:
 
     def __init__(self, moments: np.ndarray, omega0: np.ndarray, q0: np.ndarray) -> None:
         self.params = np.zeros(PARAMS_SIZE)
-        self.agm_a = np.zeros(AGM_LEVELS)
-        self.agm_c = np.zeros(AGM_LEVELS)
+        self.agm_a = np.zeros(AGM_SIZE)
+        self.agm_c = np.zeros(AGM_SIZE)
         self.case = CASES[
             _build(_floats3(moments), _floats3(omega0), _floats4(q0), self.params, self.agm_a, self.agm_c)
         ]
