@@ -116,7 +116,6 @@ from rigid_rot_sim.core.elliptic import (
     dd_mul,
     dd_reduce,
     dd_rsqrt,
-    dd_sin_cos,
     dd_sin_cos_dd,
     dd_sqrt,
     fast_two_sum,
@@ -146,7 +145,9 @@ _RIGID, _SYMMETRIC_FLOW, _ELLIPTIC = 0.0, 1.0, 2.0
 # rigid rotation: omega (body), q0, |omega| (a double-double), the unit axis (body)
 _R_OMEGA, _R_Q0, _R_RATE, _R_AXIS = 1, 4, 11, 13
 # symmetric: moments, axis, rate_world, beta, l_body, q0
-_S_MOMENTS, _S_AXIS, _S_RATE, _S_BETA, _S_L, _S_Q0 = 1, 4, 5, 8, 9, 12
+# symmetric: moments, axis d, |L| / I_p, beta, L_body(t0) (hi x3, lo x3), q0, L_body(t0) / |L| (hi x3, lo x3);
+# the rates are double-doubles (hi, lo)
+_S_MOMENTS, _S_AXIS, _S_RATE, _S_BETA, _S_L, _S_Q0, _S_LAXIS = 1, 4, 5, 7, 9, 15, 19
 # elliptic (relabelled frame): order, axis signs, moments, amplitudes, signs, 1 / |L|,
 # lam, u0, m1 (1 - m), n, |L|, K, COEFF = |L| (I3 - I1) / (I1 I3 lam), j0, g0, Q = q_WL (x) q_perm
 # (a double-double: hi in QWL, lo in QWL_LO, see _elliptic_state),
@@ -295,12 +296,64 @@ def _separatrix_distance(moments, omega, i_min, i_mid, i_max):
 _SMALL_KP = 0.0625
 
 
+#: Below this k' the Jacobi functions within K / 2 of u = 0 (and, by the reflection, of the turning
+#: points) come from their expansion about m = 1 (:func:`_hyperbolic_jacobi`), not from the AGM
+_HYPERBOLIC_KP = 2.0**-24
+
+
 @register_jitable
-def _reflected_phase(params, agm_a, agm_c, rh, rl):
+def _hyperbolic_jacobi(r, m1):
+    """sn, cn, dn at 0 <= r <= K / 2 for 1 - m = m1 small (A&S 16.15.1-3, to first order in m1):
+
+        sn = tanh r + (m1 / 4) (sinh r cosh r - r) sech^2 r
+        cn = sech r - (m1 / 4) (sinh r cosh r - r) tanh r sech r
+        dn = sech r + (m1 / 4) (sinh r cosh r + r) tanh r sech r
+
+    The neglected terms are of relative order (m1 sinh r cosh r)^2 <= (m1 e^K / 4)^2 = k'^2 (e^K ~ 4 / k'),
+    below 2^-48 for k' < _HYPERBOLIC_KP; cn and dn keep their relative accuracy where they are of order k'
+    (the amplitude near pi / 2 would not)."""
+    t = math.tanh(r)
+    ch = math.cosh(r)
+    sech = 1.0 / ch
+    sc = t * ch * ch  # sinh r cosh r
+    q = 0.25 * m1
+    return t + q * (t - r * sech * sech), sech - q * (sc - r) * t * sech, sech + q * (sc + r) * t * sech
+
+
+@register_jitable
+def _hyperbolic_excess(params, rh, rl, t):
+    """g = Pi(n; am r | m) - r (a double-double) at 0 <= r = rh + rl <= K / 2 for k' < _HYPERBOLIC_KP,
+    t = sn r (to first order): at m = 1, g = (n r + a atan(a tanh r)) / (1 - n), a = sqrt(-n) (the
+    separatrix's closed form), and its first order in 1 - m, from g' = f(sn) with f(s) = n s^2 / (1 - n s^2)
+    and sn's first order s1 (see _hyperbolic_jacobi), ``m1 (n / 2) (A - B)`` with (t = tanh r, J = atan(a t)
+    / a, partial fractions in t^2 and one integration by parts)
+
+        A = r / (1 - n)^2 - n J / (1 - n)^2 - (t / (2 (1 - n t^2)) + J / 2) / (1 - n)
+        B = t^2 r / (2 (1 - n t^2)) - (r - J) / (2 (1 - n))
+
+    (of size m1 K: 2^-48 K at most). The term in r is a double-double product: g is of the size of K."""
+    n_h, n_l = params[_E_N], params[_E_N_LO]
+    one_minus_n = dd_add(1.0, 0.0, -n_h, -n_l)
+    slope = dd_div(n_h, n_l, *one_minus_n)
+    a = math.sqrt(-n_h)
+    tanh = math.tanh(rh)
+    jay = math.atan(a * tanh) / a
+    omn = one_minus_n[0]
+    den = 1.0 - n_h * tanh * tanh
+    big_a = rh / (omn * omn) - n_h * jay / (omn * omn) - (tanh / (2.0 * den) + 0.5 * jay) / omn
+    big_b = tanh * tanh * rh / (2.0 * den) - (rh - jay) / (2.0 * omn)
+    first = params[_E_M1] * 0.5 * n_h * (big_a - big_b)
+    g = dd_mul(*slope, rh, rl)
+    return dd_add_d(*g, a * math.atan(a * tanh) / omn + first)
+
+
+@register_jitable
+def _reflected_phase(params, agm_a, agm_c, rh, rl, hyperbolic):
     """sn, cn, dn (double-doubles) and g = Pi(n; am r | m) - r (g_h, g_l) at r = rh + rl, K / 2 < |r| <= K,
     from v = K - |r| (A&S 16.8): ``sn(K - v) = cn v / dn v``, ``cn(K - v) = k' sn v / dn v``,
     ``dn(K - v) = k' / dn v``; g is odd in r and, with dPi(n; am u) / du = 1 / (1 - n sn^2 u) and
-    sn(K - w) = cd w and ``1 / (1 - n cd^2) = dn^2 / (dn^2 - n cn^2) = (m / n' + (1 - m / n') / (1 - n' sn^2)) / (1 - n)``
+    sn(K - w) = cd w and
+    ``1 / (1 - n cd^2) = dn^2 / (dn^2 - n cn^2) = (m / n' + (1 - m / n') / (1 - n' sn^2)) / (1 - n)``
     integrated from K (the last term is Pi(n'; am v | m) = v + (n' / 3) sn^3 R_J(...)):
 
         g(K - v) = (Pi(n|m) - K) - n v / (1 - n) + n (1 - m) / (3 (1 - n)^2) sn^3 v R_J(cn^2 v, dn^2 v, 1, p')
@@ -313,17 +366,21 @@ def _reflected_phase(params, agm_a, agm_c, rh, rl):
     is the sum of terms in v without a cancellation (the last one is of order 1 - m)."""
     side = _sign(rh)
     vh, vl = dd_add(params[_E_K], params[_E_K_LO], -side * rh, -side * rl)
-    sv, cv, dv = jacobi_dd(
-        vh,
-        vl,
-        agm_a,
-        agm_c,
-        int(params[_E_LEVELS]),
-        params[_E_M1],
-        params[_E_M1_LO],
-        params[_E_AGM_TOP],
-        params[_E_AGM_TOP + 1],
-    )
+    if hyperbolic:
+        sv_h, cv_h, dv_h = _hyperbolic_jacobi(vh, params[_E_M1])
+        sv, cv, dv = (sv_h, 0.0), (cv_h, 0.0), (dv_h, 0.0)
+    else:
+        sv, cv, dv = jacobi_dd(
+            vh,
+            vl,
+            agm_a,
+            agm_c,
+            int(params[_E_LEVELS]),
+            params[_E_M1],
+            params[_E_M1_LO],
+            params[_E_AGM_TOP],
+            params[_E_AGM_TOP + 1],
+        )
     inv = dd_div(1.0, 0.0, *dv)
     kp = (params[_E_KP], params[_E_KP + 1])
     sn = dd_mul(*cv, *inv)
@@ -357,10 +414,17 @@ def _phase(params, agm_a, agm_c, uh, ul):
     # u - 2 K j in double-double: the phase is reduced without the rounding of u or of K j
     ph, pl = two_product(j, 2.0 * k)
     rh, rl = dd_add(uh, ul, -ph, -pl - j * 2.0 * params[_E_K_LO])
+    parity = 1.0 - 2.0 * (j % 2.0)
+    hyperbolic = params[_E_KP] < _HYPERBOLIC_KP
     if params[_E_KP] < _SMALL_KP and abs(rh) > 0.5 * k:
-        sn, cn, dn, g_h, g_l = _reflected_phase(params, agm_a, agm_c, rh, rl)
-        parity = 1.0 - 2.0 * (j % 2.0)
+        sn, cn, dn, g_h, g_l = _reflected_phase(params, agm_a, agm_c, rh, rl, hyperbolic)
         return (parity * sn[0], parity * sn[1]), (parity * cn[0], parity * cn[1]), dn, j, g_h, g_l
+    if hyperbolic:
+        side = _sign(rh)
+        sn_a, cn_a, dn_a = _hyperbolic_jacobi(abs(rh), params[_E_M1])
+        g_h, g_l = _hyperbolic_excess(params, abs(rh), abs(rl), sn_a)
+        sn = (side * parity * sn_a, 0.0)
+        return sn, (parity * cn_a, 0.0), (dn_a, 0.0), j, side * g_h, side * g_l
     else:
         sn, cn, dn = jacobi_dd(
             rh,
@@ -375,7 +439,6 @@ def _phase(params, agm_a, agm_c, uh, ul):
         )
     g_h, g_l = third_kind_excess_dd(sn, cn, dn, n, params[_E_N_LO])
     # sn and cn change sign over each half period 2K (dn does not)
-    parity = 1.0 - 2.0 * (j % 2.0)
     return (parity * sn[0], parity * sn[1]), (parity * cn[0], parity * cn[1]), dn, j, g_h, g_l
 
 
@@ -566,23 +629,74 @@ def _flow_state(params, agm_a, agm_c, tau):
         # the half angle tau |omega| / 2 in double-double, reduced by 2 pi before sin / cos
         half_h, half_l = two_product(0.5 * params[_R_RATE], tau)
         half_h, half_l = dd_reduce(half_h, half_l + 0.5 * params[_R_RATE + 1] * tau, TWO_PI_DD[0], TWO_PI_DD[1])
-        s, c = dd_sin_cos(half_h, half_l)
-        spin = (s * params[_R_AXIS], s * params[_R_AXIS + 1], s * params[_R_AXIS + 2], c)
-        # exp(tau omega_world) q0 = q0 exp(tau omega)
-        q = _compensated_product(q0, (0.0, 0.0, 0.0, 0.0), spin, (0.0, 0.0, 0.0, 0.0))
+        s_h, s_l, c_h, c_l = dd_sin_cos_dd(half_h, half_l)
+        x = dd_mul(s_h, s_l, params[_R_AXIS], 0.0)
+        y = dd_mul(s_h, s_l, params[_R_AXIS + 1], 0.0)
+        z = dd_mul(s_h, s_l, params[_R_AXIS + 2], 0.0)
+        # exp(tau omega_world) q0 = q0 exp(tau omega), the factor a double-double, so the product is rounded once
+        q = _compensated_product(q0, (0.0, 0.0, 0.0, 0.0), (x[0], y[0], z[0], c_h), (x[1], y[1], z[1], c_l))
         return q, (params[_R_OMEGA], params[_R_OMEGA + 1], params[_R_OMEGA + 2])
     if kind == _SYMMETRIC_FLOW:
-        axis = int(params[_S_AXIS])
-        angle = tau * params[_S_BETA]
-        spin = quat.exp_rotation_vector(
-            (angle if axis == 0 else 0.0, angle if axis == 1 else 0.0, angle if axis == 2 else 0.0)
-        )
-        rate = (tau * params[_S_RATE], tau * params[_S_RATE + 1], tau * params[_S_RATE + 2])
-        q0 = (params[_S_Q0], params[_S_Q0 + 1], params[_S_Q0 + 2], params[_S_Q0 + 3])
-        q = quat.normalize(quat.multiply(quat.multiply(quat.exp_rotation_vector(rate), q0), spin))
-        l_now = quat.rotate_inverse(spin, (params[_S_L], params[_S_L + 1], params[_S_L + 2]))
-        return q, (l_now[0] / params[_S_MOMENTS], l_now[1] / params[_S_MOMENTS + 1], l_now[2] / params[_S_MOMENTS + 2])
+        return _symmetric_state(params, tau)
     return _elliptic_state(params, agm_a, agm_c, tau)
+
+
+@register_jitable
+def _half_turn(rate_h, rate_l, tau):
+    """sin and cos (double-doubles) of half the angle (rate_h + rate_l) tau (rad/s times s), reduced by 2 pi
+    in double-double."""
+    h, lo = two_product(0.5 * rate_h, tau)
+    h, lo = dd_reduce(h, lo + 0.5 * rate_l * tau, TWO_PI_DD[0], TWO_PI_DD[1])
+    sh, sl, ch, cl = dd_sin_cos_dd(h, lo)
+    return (sh, sl), (ch, cl)
+
+
+@register_jitable
+def _dd_sum3(a, b, c):
+    return dd_add(*dd_add(*a, *b), *c)
+
+
+@register_jitable
+def _symmetric_state(params, tau):
+    """(q, omega) of the symmetric body: ``q = q0 (x) exp(tau L0 / I_p) (x) exp(tau beta e_d)`` (body frame:
+    exp(tau L_world / I_p) q0 = q0 exp(tau L0 / I_p)) and L_body turning by -tau beta about e_d.
+
+    Both half angles and their sines and cosines are double-doubles, so are the two factors and their
+    product; the product with q0 is then summed without rounding error and normalised (_compensated_product),
+    and L_body(t) comes from the double-double cos and sin of tau beta, so each output is rounded once."""
+    axis = int(params[_S_AXIS])
+    s_a, c_a = _half_turn(params[_S_RATE], params[_S_RATE + 1], tau)
+    s_b, c_b = _half_turn(params[_S_BETA], params[_S_BETA + 1], tau)
+    av = [dd_mul(*s_a, params[_S_LAXIS + k], params[_S_LAXIS + 3 + k]) for k in range(3)]
+    # A (x) B with A = (s_a u, c_a), B = (s_b e_d, c_b): vector c_a s_b e_d + c_b a + s_b (a x e_d),
+    # scalar c_a c_b - s_b a_d
+    nxt, prv = (axis + 1) % 3, (axis + 2) % 3
+    cross = [(0.0, 0.0), (0.0, 0.0), (0.0, 0.0)]
+    cross[nxt] = av[prv]  # a x e_d: component d+1 is a_{d+2}, component d+2 is -a_{d+1}
+    cross[prv] = (-av[nxt][0], -av[nxt][1])
+    vec_hi = [0.0, 0.0, 0.0]
+    vec_lo = [0.0, 0.0, 0.0]
+    for k in range(3):
+        own = dd_mul(*c_a, *s_b) if k == axis else (0.0, 0.0)
+        comp = _dd_sum3(own, dd_mul(*c_b, *av[k]), dd_mul(*s_b, *cross[k]))
+        vec_hi[k], vec_lo[k] = comp
+    w = dd_add(*dd_mul(*c_a, *c_b), *dd_mul(-s_b[0], -s_b[1], *av[axis]))
+    q0 = (params[_S_Q0], params[_S_Q0 + 1], params[_S_Q0 + 2], params[_S_Q0 + 3])
+    q = _compensated_product(
+        q0, (0.0, 0.0, 0.0, 0.0), (vec_hi[0], vec_hi[1], vec_hi[2], w[0]), (vec_lo[0], vec_lo[1], vec_lo[2], w[1])
+    )
+    # L_body(t): the components d+1, d+2 turned by -alpha, alpha = tau beta: cos = 1 - 2 s^2, sin = 2 s c
+    cos_b = dd_add(1.0, 0.0, *dd_mul(-2.0 * s_b[0], -2.0 * s_b[1], *s_b))
+    sin_b = dd_mul(2.0 * s_b[0], 2.0 * s_b[1], *c_b)
+    l_nxt = (params[_S_L + nxt], params[_S_L + 3 + nxt])
+    l_prv = (params[_S_L + prv], params[_S_L + 3 + prv])
+    new_nxt = dd_add(*dd_mul(*cos_b, *l_nxt), *dd_mul(*sin_b, *l_prv))
+    new_prv = dd_add(*dd_mul(*cos_b, *l_prv), *dd_mul(-sin_b[0], -sin_b[1], *l_nxt))
+    omega = [0.0, 0.0, 0.0]
+    omega[axis] = dd_div(params[_S_L + axis], params[_S_L + 3 + axis], params[_S_MOMENTS + axis], 0.0)[0]
+    omega[nxt] = dd_div(*new_nxt, params[_S_MOMENTS + nxt], 0.0)[0]
+    omega[prv] = dd_div(*new_prv, params[_S_MOMENTS + prv], 0.0)[0]
+    return q, (omega[0], omega[1], omega[2])
 
 
 @register_jitable
@@ -858,18 +972,7 @@ def _flow_params(moments, omega, q0, params, agm_a, agm_c, long_run):
         return _SPHERICAL
     if low_equal or high_equal:
         axis = i_max if low_equal else i_min
-        i_perp = moments[(axis + 1) % 3]
-        l_body = (moments[0] * omega[0], moments[1] * omega[1], moments[2] * omega[2])
-        rate = quat.rotate(q0, l_body)
-        params[_KIND] = _SYMMETRIC_FLOW
-        for idx in range(3):
-            params[_S_MOMENTS + idx] = moments[idx]
-            params[_S_RATE + idx] = rate[idx] / i_perp  # rad/s
-            params[_S_L + idx] = l_body[idx]
-        params[_S_AXIS] = axis
-        params[_S_BETA] = (1.0 / moments[axis] - 1.0 / i_perp) * l_body[axis]  # rad/s
-        for idx in range(4):
-            params[_S_Q0 + idx] = q0[idx]
+        _symmetric_params(moments, omega, q0, axis, params)
         return _SYMMETRIC
     # next to the middle axis the other two components may be too small to square: D times a power of 16
     # (the sign and the zero are what is used here)
@@ -897,6 +1000,29 @@ def _flow_params(moments, omega, q0, params, agm_a, agm_c, long_run):
     else:
         _elliptic_params(moments, omega, q0, (i_min, i_mid, i_max), d, params, agm_a, agm_c, long_run)
     return case
+
+
+@register_jitable
+def _symmetric_params(moments, omega, q0, axis, params):
+    """The symmetric body (distinct axis ``axis``): |L| / I_p, beta = (1 / I_d - 1 / I_p) L_d =
+    L_d (I_p - I_d) / (I_d I_p) and L_body(t0) / |L| as double-doubles from the floats given."""
+    i_perp = moments[(axis + 1) % 3]
+    i_d = moments[axis]
+    l_body = [two_product(moments[k], omega[k]) for k in range(3)]
+    sq = _dd_sum3(dd_mul(*l_body[0], *l_body[0]), dd_mul(*l_body[1], *l_body[1]), dd_mul(*l_body[2], *l_body[2]))
+    norm = dd_sqrt(*sq)
+    r_norm = dd_div(1.0, 0.0, *norm) if norm[0] > 0.0 else (0.0, 0.0)  # at rest: no axis
+    params[_KIND] = _SYMMETRIC_FLOW
+    for idx in range(3):
+        params[_S_MOMENTS + idx] = moments[idx]
+        params[_S_L + idx], params[_S_L + 3 + idx] = l_body[idx]
+        params[_S_LAXIS + idx], params[_S_LAXIS + 3 + idx] = dd_mul(*l_body[idx], *r_norm)
+    params[_S_AXIS] = axis
+    params[_S_RATE], params[_S_RATE + 1] = dd_div(*norm, i_perp, 0.0)  # rad/s
+    beta = dd_div(*dd_mul(*l_body[axis], *two_sum(i_perp, -i_d)), *two_product(i_d, i_perp))
+    params[_S_BETA], params[_S_BETA + 1] = beta  # rad/s
+    for idx in range(4):
+        params[_S_Q0 + idx] = q0[idx]
 
 
 @register_jitable
