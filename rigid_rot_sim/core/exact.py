@@ -384,17 +384,22 @@ def _reflected_phase(params, agm_a, agm_c, rh, rl, hyperbolic):
     inv = dd_div(1.0, 0.0, *dv)
     kp = (params[_E_KP], params[_E_KP + 1])
     sn = dd_mul(*cv, *inv)
+    g = _reflected_excess(params, vh, vl, sv[0], cv[0], dv[0])
+    return (side * sn[0], side * sn[1]), dd_mul(*dd_mul(*kp, *sv), *inv), dd_mul(*kp, *inv), side * g[0], side * g[1]
+
+
+@register_jitable
+def _reflected_excess(params, vh, vl, sv, cv, dv):
+    """g(K - v) (a double-double; see _reflected_phase) from v = vh + vl and sn, cn, dn at v."""
     n_h, n_l = params[_E_N], params[_E_N_LO]
     one_minus_n = dd_add(1.0, 0.0, -n_h, -n_l)
     slope = dd_div(n_h, n_l, *one_minus_n)
     g = dd_add(params[_E_EXCESS], params[_E_EXCESS + 1], *dd_mul(-slope[0], -slope[1], vh, vl))
-    c2, d2 = cv[0] * cv[0], dv[0] * dv[0]
-    m1 = params[_E_M1]
-    rest = n_h * m1 / (3.0 * one_minus_n[0] * one_minus_n[0]) * sv[0] ** 3
+    c2, d2 = cv * cv, dv * dv
+    rest = n_h * params[_E_M1] / (3.0 * one_minus_n[0] * one_minus_n[0]) * sv**3
     if rest != 0.0:
         rest *= carlson_rj(c2, d2, 1.0, (d2 - n_h * c2) / one_minus_n[0])
-    g = dd_add_d(*g, rest)
-    return (side * sn[0], side * sn[1]), dd_mul(*dd_mul(*kp, *sv), *inv), dd_mul(*kp, *inv), side * g[0], side * g[1]
+    return dd_add_d(*g, rest)
 
 
 @register_jitable
@@ -437,7 +442,19 @@ def _phase(params, agm_a, agm_c, uh, ul):
             params[_E_AGM_TOP],
             params[_E_AGM_TOP + 1],
         )
-    g_h, g_l = third_kind_excess_dd(sn, cn, dn, n, params[_E_N_LO])
+    if params[_E_KP] < _SMALL_KP and abs(rh) > 0.25 * k:
+        # between ~K / 4 and K / 2 the reflected excess is the better conditioned: cn and dn here, of order
+        # k'^(1/4) to k'^(1/2), carry the amplitude's absolute rounding, which the excess of
+        # third_kind_excess_dd (logarithmic in them) divides by cn ~ 2 e^-r, the reflected one multiplies by
+        # ~ (1 - m) e^(3 v) (its last term); measured, the split at K / 4 does best.
+        # sn, cn, dn at v = K - |r| by the same reflection
+        side = _sign(rh)
+        vh, vl = dd_add(k, params[_E_K_LO], -side * rh, -side * rl)
+        kp = params[_E_KP]
+        g_h, g_l = _reflected_excess(params, vh, vl, cn[0] / dn[0], kp * abs(sn[0]) / dn[0], kp / dn[0])
+        g_h, g_l = side * g_h, side * g_l
+    else:
+        g_h, g_l = third_kind_excess_dd(sn, cn, dn, n, params[_E_N_LO])
     # sn and cn change sign over each half period 2K (dn does not)
     return (parity * sn[0], parity * sn[1]), (parity * cn[0], parity * cn[1]), dn, j, g_h, g_l
 

@@ -36,6 +36,28 @@ def _ulps(sol_q, sol_w, ref_q, ref_w, scale_w):
     return max(_scaled_errors(sign * np.asarray(sol_q), ref_q, 1.0)), max(_scaled_errors(sol_w, ref_w, scale_w))
 
 
+def _one_ulp_references(moments, omega0):
+    """References from omega0 with one component moved by one ulp (each component, both ways)."""
+    out = []
+    for k in range(3):
+        for direction in (-math.inf, math.inf):
+            moved = list(omega0)
+            moved[k] = math.nextafter(moved[k], direction)
+            out.append(Reference(moments, moved, Q0))
+    return out
+
+
+def _bound(t, ref_q, ref_w, others, scale):
+    """4 units, or twice what a 1-ulp change of omega0 moves the exact solution by at t: next to the
+    separatrix the problem itself is ill-conditioned, and the AGM's absolute rounding in the amplitude
+    (a few 1e-16, over up to ~8 levels) is held to that (measured: up to 1.5x there)."""
+    moved = 0.0
+    for other in others:
+        q, w = other.state(t)
+        moved = max(moved, *_ulps([float(x) for x in q], [float(x) for x in w], ref_q, ref_w, scale))
+    return max(BOUND, 2.0 * moved)
+
+
 def _spin(omega, t, q0=Q0):
     """The limiting motion: a rotation by |omega| t about omega (body frame) after q0."""
     return (Rotation.from_quat(q0) * Rotation.from_rotvec(np.asarray(omega, dtype=float) * t)).as_quat()
@@ -96,17 +118,19 @@ def test_tiny_transverse_components_scale_with_the_perturbation(axis):
 @pytest.mark.parametrize("axis", [0, 1, 2])
 @pytest.mark.parametrize("eps", [1e-3, 1e-6, 1e-9, 1e-12])
 def test_near_every_axis_against_mpmath(axis, eps):
-    """Within the ulp bounds of the 40-digit reference over 20 rad (the middle axis: over 4 s, through the
-    first departure for 1e-3)."""
+    """Within 4 units of the 40-digit reference over 20 s (next to the middle axis, through its departures:
+    within what a 1-ulp change of omega0 makes, where that is more)."""
     omega0 = _near_axis(axis, eps)
     ref = Reference(MOMENTS, omega0, Q0)
+    others = _one_ulp_references(MOMENTS, omega0) if axis == 1 else []
     sol = torque_free_solution(MOMENTS, omega0, Q0)
     scale = float(np.linalg.norm(omega0))
-    for t in (0.0, 1.5, 4.0, 9.0, 16.0):
+    for t in (0.0, 1.5, 4.0, 9.0, 16.0, 20.0):
         q, w = sol.state(t)
         q_ref, w_ref = ref.state(t)
         err_q, err_w = _ulps(q, w, q_ref, w_ref, scale)
-        assert err_q <= BOUND and err_w <= BOUND, (t, err_q, err_w)
+        bound = _bound(t, q_ref, w_ref, others, scale)
+        assert err_q <= bound and err_w <= bound, (t, err_q, err_w, bound)
 
 
 @pytest.mark.parametrize("eps", [1e-9, 1e-12, 1e-16])
@@ -130,16 +154,20 @@ def test_exact_split_next_to_the_middle_axis(eps):
 
 @pytest.mark.parametrize("rel", [1e-2, 1e-5, 1e-8, -1e-8, -1e-5, -1e-2])
 def test_both_sides_of_the_separatrix_against_mpmath(rel):
-    """I = (3, 4, 6), omega0 = (1, 0.3, 0.5 (1 + rel)): L^2 - 2 E I2 has the sign of rel."""
+    """I = (3, 4, 6), omega0 = (1, 0.3, 0.5 (1 + rel)): L^2 - 2 E I2 has the sign of rel; within 4 units or
+    what a 1-ulp change of omega0 makes (the problem's own conditioning there)."""
     moments, omega0 = (3.0, 4.0, 6.0), (1.0, 0.3, 0.5 * (1.0 + rel))
     sol = torque_free_solution(moments, omega0, Q0)
     assert sol.case == ("above_separatrix" if rel > 0 else "below_separatrix")
     ref = Reference(moments, omega0, Q0)
+    others = _one_ulp_references(moments, omega0)
     scale = float(np.linalg.norm(omega0))
     for t in (0.0, 2.5, 7.0, 19.0):
         q, w = sol.state(t)
-        err_q, err_w = _ulps(q, w, *ref.state(t), scale)
-        assert err_q <= BOUND and err_w <= BOUND, (t, err_q, err_w)
+        q_ref, w_ref = ref.state(t)
+        err_q, err_w = _ulps(q, w, q_ref, w_ref, scale)
+        bound = _bound(t, q_ref, w_ref, others, scale)
+        assert err_q <= bound and err_w <= bound, (t, err_q, err_w, bound)
 
 
 # -- symmetric bodies (Principia's Euler-solver cases) and spins about an axis ---------------------
@@ -147,7 +175,7 @@ def test_both_sides_of_the_separatrix_against_mpmath(rel):
 # name: (moments, omega0, distinct axis)
 SYMMETRIC = {
     "tall_skinny": ((3.0, 9.0, 9.0), (7.0 / 3.0, 0.0, 5.0 / 9.0), 0),
-    "short_fat": ((3.0, 3.0, 9.0), (0.0, 5.0 / 3.0, 7.0 / 9.0), 2),
+    "short_fat": ((3.0, 3.0, 5.5), (0.0, 5.0 / 3.0, 7.0 / 5.5), 2),  # Principia's I3 = 9 is no rigid body
     "separatrix_constant_momentum": ((2.0, 3.0, 3.0), (0.0, 4.0 / 3.0, 5.0 / 3.0), 0),
     "oblate_general": ((2.0, 2.0, 3.5), (0.3, -0.4, 0.9), 2),
     "prolate_general": ((1.5, 0.4, 1.5), (0.2, 1.1, -0.7), 1),
