@@ -80,7 +80,8 @@ class ExactFlow(Integrator):
         q, omega = solution.state_floats(t)
         if not math.isfinite(sum(q) + sum(omega)):
             raise NonFiniteStateError(
-                f"{self.name}: non-finite state at step {self.n_steps + steps}, t = {t:.9g} s (q = {q}, omega = {omega})"
+                f"{self.name}: non-finite state at step {self.n_steps + steps}, t = {t:.9g} s "
+                f"(q = {q}, omega = {omega})"
             )
         self.q, self.omega, self.t, self._anchor_k = np.array(q), np.array(omega), t, k
         self.n_steps += steps
