@@ -91,6 +91,7 @@ AGM in ``core/elliptic.py``), compiled into the cached entry points below and in
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -106,6 +107,7 @@ from rigid_rot_sim.core.elliptic import (
     FOUR_PI_DD,
     PI_DD,
     TWO_PI_DD,
+    DoubleDouble,
     agm_tables_kp,
     carlson_rf,
     carlson_rj,
@@ -126,6 +128,12 @@ from rigid_rot_sim.core.elliptic import (
     two_sum,
 )
 from rigid_rot_sim.core.jit import compiled
+from rigid_rot_sim.core.validation import FloatArray
+
+#: Float sequences the kernels take (tuples in compiled code, arrays or lists where Python calls them).
+Floats = Sequence[float] | FloatArray
+Quat = tuple[float, float, float, float]
+Vec3 = tuple[float, float, float]
 
 CASES = ("spherical", "symmetric", "below_separatrix", "above_separatrix", "separatrix")
 _SPHERICAL, _SYMMETRIC, _BELOW, _ABOVE, _SEPARATRIX = range(5)
@@ -219,7 +227,7 @@ _RELABELLING = _relabelling_table()
 
 
 @register_jitable
-def _sign(x):
+def _sign(x: float) -> float:
     return 1.0 if x >= 0.0 else -1.0
 
 
@@ -227,7 +235,7 @@ def _sign(x):
 
 
 @register_jitable
-def _exact_term(i, d1, d2, w, terms, start):
+def _exact_term(i: float, d1: float, d2: float, w: float, terms: FloatArray, start: int) -> None:
     """Write 16 floats summing exactly to ``i (d1 - d2) w^2`` into terms[start:start + 16]."""
     s = d1 - d2
     bv = s - d1
@@ -245,7 +253,7 @@ def _exact_term(i, d1, d2, w, terms, start):
 
 
 @register_jitable
-def _exact_sum(values):
+def _exact_sum(values: FloatArray) -> float:
     """The sum of the floats, rounded from the exact value (Shewchuk's partials, as fsum);
     exactly 0.0 when the exact sum is 0."""
     partials = np.zeros(values.size + 1)
@@ -271,7 +279,7 @@ def _exact_sum(values):
 
 
 @register_jitable
-def _separatrix_distance(moments, omega, i_min, i_mid, i_max):
+def _separatrix_distance(moments: Floats, omega: Floats, i_min: int, i_mid: int, i_max: int) -> float:
     """``L^2 - 2 E I2`` from its two terms of opposite sign (exact where they cancel)."""
     d_above = moments[i_max] * (moments[i_max] - moments[i_mid]) * omega[i_max] ** 2
     d_below = moments[i_min] * (moments[i_mid] - moments[i_min]) * omega[i_min] ** 2
@@ -302,7 +310,7 @@ _HYPERBOLIC_KP = 2.0**-24
 
 
 @register_jitable
-def _hyperbolic_jacobi(r, m1):
+def _hyperbolic_jacobi(r: float, m1: float) -> tuple[float, float, float]:
     """sn, cn, dn at 0 <= r <= K / 2 for 1 - m = m1 small (A&S 16.15.1-3, to first order in m1):
 
         sn = tanh r + (m1 / 4) (sinh r cosh r - r) sech^2 r
@@ -321,7 +329,7 @@ def _hyperbolic_jacobi(r, m1):
 
 
 @register_jitable
-def _hyperbolic_excess(params, rh, rl, t):
+def _hyperbolic_excess(params: FloatArray, rh: float, rl: float, t: float) -> DoubleDouble:
     """g = Pi(n; am r | m) - r (a double-double) at 0 <= r = rh + rl <= K / 2 for k' < _HYPERBOLIC_KP,
     t = sn r (to first order): at m = 1, g = (n r + a atan(a tanh r)) / (1 - n), a = sqrt(-n) (the
     separatrix's closed form), and its first order in 1 - m, from g' = f(sn) with f(s) = n s^2 / (1 - n s^2)
@@ -348,7 +356,9 @@ def _hyperbolic_excess(params, rh, rl, t):
 
 
 @register_jitable
-def _reflected_phase(params, agm_a, agm_c, rh, rl, hyperbolic):
+def _reflected_phase(
+    params: FloatArray, agm_a: FloatArray, agm_c: FloatArray, rh: float, rl: float, hyperbolic: bool
+) -> tuple[DoubleDouble, DoubleDouble, DoubleDouble, float, float]:
     """sn, cn, dn (double-doubles) and g = Pi(n; am r | m) - r (g_h, g_l) at r = rh + rl, K / 2 < |r| <= K,
     from v = K - |r| (A&S 16.8): ``sn(K - v) = cn v / dn v``, ``cn(K - v) = k' sn v / dn v``,
     ``dn(K - v) = k' / dn v``; g is odd in r and, with dPi(n; am u) / du = 1 / (1 - n sn^2 u) and
@@ -389,7 +399,7 @@ def _reflected_phase(params, agm_a, agm_c, rh, rl, hyperbolic):
 
 
 @register_jitable
-def _reflected_excess(params, vh, vl, sv, cv, dv):
+def _reflected_excess(params: FloatArray, vh: float, vl: float, sv: float, cv: float, dv: float) -> DoubleDouble:
     """g(K - v) (a double-double; see _reflected_phase) from v = vh + vl and sn, cn, dn at v."""
     n_h, n_l = params[_E_N], params[_E_N_LO]
     one_minus_n = dd_add(1.0, 0.0, -n_h, -n_l)
@@ -403,17 +413,19 @@ def _reflected_excess(params, vh, vl, sv, cv, dv):
 
 
 @register_jitable
-def _phase(params, agm_a, agm_c, uh, ul):
+def _phase(
+    params: FloatArray, agm_a: FloatArray, agm_c: FloatArray, uh: float, ul: float
+) -> tuple[DoubleDouble, DoubleDouble, DoubleDouble, float, float, float]:
     """sn, cn, dn at u = uh + ul and the two parts of Pi(n; am u | m) beyond u: (j, g_h, g_l),
     j the number of half periods 2K from 0 to u and g = g_h + g_l a bounded remainder."""
     n = params[_E_N]
     if params[_E_KP] == 0.0:  # separatrix (k' of any other flow is a normal double)
         u = uh + ul
-        sn = math.tanh(u)
+        tanh = math.tanh(u)
         e = math.exp(-abs(u))
-        cn = 2.0 * e / (1.0 + e * e)
+        sech = 2.0 * e / (1.0 + e * e)
         a = math.sqrt(-n)
-        return (sn, 0.0), (cn, 0.0), (cn, 0.0), 0.0, a * math.atan(a * sn), 0.0
+        return (tanh, 0.0), (sech, 0.0), (sech, 0.0), 0.0, a * math.atan(a * tanh), 0.0
     k = params[_E_K]
     j = math.floor((uh + k) / (2.0 * k))
     # u - 2 K j in double-double: the phase is reduced without the rounding of u or of K j
@@ -428,8 +440,7 @@ def _phase(params, agm_a, agm_c, uh, ul):
         side = _sign(rh)
         sn_a, cn_a, dn_a = _hyperbolic_jacobi(abs(rh), params[_E_M1])
         g_h, g_l = _hyperbolic_excess(params, abs(rh), abs(rl), sn_a)
-        sn = (side * parity * sn_a, 0.0)
-        return sn, (parity * cn_a, 0.0), (dn_a, 0.0), j, side * g_h, side * g_l
+        return (side * parity * sn_a, 0.0), (parity * cn_a, 0.0), (dn_a, 0.0), j, side * g_h, side * g_l
     else:
         sn, cn, dn = jacobi_dd(
             rh,
@@ -460,7 +471,7 @@ def _phase(params, agm_a, agm_c, uh, ul):
 
 
 @register_jitable
-def _elliptic_state(params, agm_a, agm_c, tau):
+def _elliptic_state(params: FloatArray, agm_a: FloatArray, agm_c: FloatArray, tau: float) -> tuple[Quat, Vec3]:
     """(q, omega) of the elliptic flow at tau (s) after its anchor."""
     i3 = params[_E_MOMENTS + 2]
     lam = params[_E_LAM]
@@ -507,7 +518,7 @@ def _elliptic_state(params, agm_a, agm_c, tau):
 
 
 @register_jitable
-def _in_body_frame(z, order, axis_signs):
+def _in_body_frame(z: Floats, order: Floats, axis_signs: Floats) -> Quat:
     """q_perm* (x) z (x) q_perm for the relabelling x' = P x (P = q_perm's matrix): the vector part
     goes to P^T v, (P^T v)[order[k]] = axis_signs[k] v[k], a signed permutation, so exact."""
     v0 = v1 = v2 = 0.0
@@ -522,7 +533,7 @@ def _in_body_frame(z, order, axis_signs):
 
 
 @register_jitable
-def _dot2_product(p_hi, p_lo, q, q_lo):
+def _dot2_product(p_hi: Floats, p_lo: Floats, q: Floats, q_lo: Floats) -> tuple[Quat, Quat]:
     """``(p_hi + p_lo) (x) (q + q_lo)`` as arrays (hi, lo) whose sum is the product to ~1e-32: each
     component's four terms summed by Dot2 (see _compensated_product)."""
     qx, qy, qz, qw = q
@@ -535,7 +546,7 @@ def _dot2_product(p_hi, p_lo, q, q_lo):
 
 
 @register_jitable
-def _dot2(a_hi, a_lo, b, b_lo):
+def _dot2(a_hi: Floats, a_lo: Floats, b: Floats, b_lo: Floats) -> DoubleDouble:
     """``sum_j (a_hi[j] + a_lo[j]) (b[j] + b_lo[j])`` as (s, c), s + c within ~1e-32 of it (Dot2, see
     _compensated_product; the products of the low parts are below that and left out)."""
     s, c = two_product(a_hi[0], b[0])
@@ -548,7 +559,7 @@ def _dot2(a_hi, a_lo, b, b_lo):
 
 
 @register_jitable
-def _compensated_product(p_hi, p_lo, q, q_lo):
+def _compensated_product(p_hi: Floats, p_lo: Floats, q: Floats, q_lo: Floats) -> Quat:
     """``(p_hi + p_lo) (x) (q + q_lo)`` normalised, each component rounded once from ~1e-32 (a unit quaternion).
 
     The Hamilton product's 16 terms are summed without rounding error (Ogita, Rump and Oishi's
@@ -570,7 +581,7 @@ def _compensated_product(p_hi, p_lo, q, q_lo):
 
 
 @register_jitable
-def _half_angles_dd(near_h, near_l, far_h, far_l):
+def _half_angles_dd(near_h: float, near_l: float, far_h: float, far_l: float) -> tuple[DoubleDouble, DoubleDouble]:
     """cos and sin of half the angle a in [0, pi / 2] with cos a = near and sin a = far (double-doubles):
     cos^2 = (1 + near) / 2 and sin = far / (2 cos), free of cancellation."""
     big_h, big_l = two_sum(1.0, near_h)
@@ -580,7 +591,9 @@ def _half_angles_dd(near_h, near_l, far_h, far_l):
 
 
 @register_jitable
-def _dot2_pair(a_h, a_l, b_h, b_l, c_h, c_l, d_h, d_l):
+def _dot2_pair(
+    a_h: float, a_l: float, b_h: float, b_l: float, c_h: float, c_l: float, d_h: float, d_l: float
+) -> DoubleDouble:
     """``a b + c d`` (double-doubles) as a double-double (Dot2; the products of low parts left out)."""
     p, pe = two_product(a_h, b_h)
     q, qe = two_product(c_h, d_h)
@@ -589,7 +602,15 @@ def _dot2_pair(a_h, a_l, b_h, b_l, c_h, c_l, d_h, d_l):
 
 
 @register_jitable
-def _zxz_from_momentum(phi_h, phi_l, l1, l2, l3, r_norm, across):
+def _zxz_from_momentum(
+    phi_h: float,
+    phi_l: float,
+    l1: DoubleDouble,
+    l2: DoubleDouble,
+    l3: DoubleDouble,
+    r_norm: DoubleDouble,
+    across: float,
+) -> tuple[Quat, Quat]:
     """The quaternion of Rz(phi) Rx(theta) Rz(psi) with ``L_body = |L| (sin th sin psi, sin th cos psi, cos th)``
     for L_body = (across l1, across l2, l3) and r_norm = 1 / |L| (double-doubles; ``across`` a power of 2, so
     that l1 and l2 may be given scaled where they would underflow) and phi = phi_h + phi_l (rad), as (hi, lo)
@@ -628,7 +649,7 @@ def _zxz_from_momentum(phi_h, phi_l, l1, l2, l3, r_norm, across):
 
 
 @register_jitable
-def flow_state(params, agm_a, agm_c, tau):
+def flow_state(params: FloatArray, agm_a: FloatArray, agm_c: FloatArray, tau: float) -> tuple[Quat, Vec3]:
     """``(q, omega)`` as tuples, tau (s) after the anchor of the flow ``params`` (its time scale undone)."""
     scale = params[_TSCALE]
     if scale == 1.0:
@@ -638,7 +659,7 @@ def flow_state(params, agm_a, agm_c, tau):
 
 
 @register_jitable
-def _flow_state(params, agm_a, agm_c, tau):
+def _flow_state(params: FloatArray, agm_a: FloatArray, agm_c: FloatArray, tau: float) -> tuple[Quat, Vec3]:
     """flow_state in the flow's own time scale."""
     kind = params[_KIND]
     if kind == _RIGID:
@@ -659,7 +680,7 @@ def _flow_state(params, agm_a, agm_c, tau):
 
 
 @register_jitable
-def _half_turn(rate_h, rate_l, tau):
+def _half_turn(rate_h: float, rate_l: float, tau: float) -> tuple[DoubleDouble, DoubleDouble]:
     """sin and cos (double-doubles) of half the angle (rate_h + rate_l) tau (rad/s times s), reduced by 2 pi
     in double-double."""
     h, lo = two_product(0.5 * rate_h, tau)
@@ -669,12 +690,12 @@ def _half_turn(rate_h, rate_l, tau):
 
 
 @register_jitable
-def _dd_sum3(a, b, c):
+def _dd_sum3(a: DoubleDouble, b: DoubleDouble, c: DoubleDouble) -> DoubleDouble:
     return dd_add(*dd_add(*a, *b), *c)
 
 
 @register_jitable
-def _symmetric_state(params, tau):
+def _symmetric_state(params: FloatArray, tau: float) -> tuple[Quat, Vec3]:
     """(q, omega) of the symmetric body: ``q = q0 (x) exp(tau L0 / I_p) (x) exp(tau beta e_d)`` (body frame:
     exp(tau L_world / I_p) q0 = q0 exp(tau L0 / I_p)) and L_body turning by -tau beta about e_d.
 
@@ -717,7 +738,9 @@ def _symmetric_state(params, tau):
 
 
 @register_jitable
-def _dd_ratio_sum(num_a, num_b, den_a, den_b, x, y):
+def _dd_ratio_sum(
+    num_a: float, num_b: DoubleDouble, den_a: float, den_b: DoubleDouble, x: float, y: float
+) -> DoubleDouble:
     """``(num_a num_b) / (den_a den_b) x^2 + y^2`` in double-double (num_b, den_b double-doubles)."""
     ratio = dd_div(*dd_mul(num_a, 0.0, num_b[0], num_b[1]), *dd_mul(den_a, 0.0, den_b[0], den_b[1]))
     term = dd_mul(*ratio, *two_product(x, x))
@@ -733,7 +756,7 @@ _NEWTON_DN = 0.0625
 
 
 @register_jitable
-def _tiny_pair_scale(x, y):
+def _tiny_pair_scale(x: float, y: float) -> float:
     """A power of 4, S, with max(|x|, |y|) S in [2^-_TINY, 2^(2 - _TINY)) where max(|x|, |y|) is below
     2^-_TINY (and not 0), else 1."""
     top = max(abs(x), abs(y))
@@ -744,7 +767,7 @@ def _tiny_pair_scale(x, y):
 
 
 @register_jitable
-def _asinh_ratio(sn, cn_scaled, scale):
+def _asinh_ratio(sn: float, cn_scaled: float, scale: float) -> float:
     """asinh(sn / cn) for cn = cn_scaled / scale (scale a power of 2), where the ratio may overflow:
     asinh(x) = ln(2 |x|) + O(1 / x^2) with sign beyond 2^27."""
     ratio = sn / cn_scaled  # the true ratio / scale
@@ -754,7 +777,17 @@ def _asinh_ratio(sn, cn_scaled, scale):
 
 
 @register_jitable
-def _elliptic_params(moments, omega, q0, order, d, params, agm_a, agm_c, long_run):
+def _elliptic_params(
+    moments: Floats,
+    omega: Floats,
+    q0: Floats,
+    order: tuple[int, int, int],
+    d: float,
+    params: FloatArray,
+    agm_a: FloatArray,
+    agm_c: FloatArray,
+    long_run: bool,
+) -> None:
     """Fill params / the AGM tables for the triaxial body; ``d`` = L^2 - 2 E I2 (0: separatrix).
 
     The constants of the phase and of the precession (lam, u0, |L| / I1, and with ``long_run``
@@ -939,13 +972,15 @@ def _elliptic_params(moments, omega, q0, order, d, params, agm_a, agm_c, long_ru
 
 
 @register_jitable
-def _square_dd(i, w):
+def _square_dd(i: float, w: float) -> DoubleDouble:
     """(i w)^2 in double-double."""
     return dd_mul(*two_product(i, w), *two_product(i, w))
 
 
 @register_jitable
-def flow_params(moments, omega, q0, params, agm_a, agm_c, long_run):
+def flow_params(
+    moments: Floats, omega: Floats, q0: Floats, params: FloatArray, agm_a: FloatArray, agm_c: FloatArray, long_run: bool
+) -> int:
     """Build the flow from (moments, omega, q0) (tuples) into params / the AGM tables;
     returns the case (an index of CASES). ``long_run``: the flow will be evaluated far from
     its anchor (see _elliptic_params); a solution object always is.
@@ -962,7 +997,7 @@ def flow_params(moments, omega, q0, params, agm_a, agm_c, long_run):
 
 
 @register_jitable
-def _range_scale(top):
+def _range_scale(top: float) -> float:
     """1.0 for top (> 0) in [2^-_RANGE, 2^_RANGE] or 0, else the power of 2 that brings it to [1, 2)
     (or to at least 2^-74 from a subnormal: 2^1074 is not a double)."""
     if top == 0.0 or 2.0**-_RANGE <= top <= 2.0**_RANGE:
@@ -971,14 +1006,16 @@ def _range_scale(top):
 
 
 @register_jitable
-def _in_range(moments):
+def _in_range(moments: Floats) -> Vec3:
     """The moments times the power of 2 of :func:`_range_scale` (the motion does not depend on it)."""
     scale = _range_scale(max(moments[0], moments[1], moments[2]))
     return (moments[0] * scale, moments[1] * scale, moments[2] * scale)
 
 
 @register_jitable
-def _flow_params(moments, omega, q0, params, agm_a, agm_c, long_run):
+def _flow_params(
+    moments: Floats, omega: Floats, q0: Floats, params: FloatArray, agm_a: FloatArray, agm_c: FloatArray, long_run: bool
+) -> int:
     """flow_params for moments and omega in range."""
     i_min, i_mid, i_max = axes_by_moment(moments[0], moments[1], moments[2])
     tol = _EQUAL_MOMENTS_ULPS * _EPS * moments[i_max]
@@ -1020,7 +1057,7 @@ def _flow_params(moments, omega, q0, params, agm_a, agm_c, long_run):
 
 
 @register_jitable
-def _symmetric_params(moments, omega, q0, axis, params):
+def _symmetric_params(moments: Floats, omega: Floats, q0: Floats, axis: int, params: FloatArray) -> None:
     """The symmetric body (distinct axis ``axis``): |L| / I_p, beta = (1 / I_d - 1 / I_p) L_d =
     L_d (I_p - I_d) / (I_d I_p) and L_body(t0) / |L| as double-doubles from the floats given."""
     i_perp = moments[(axis + 1) % 3]
@@ -1043,7 +1080,7 @@ def _symmetric_params(moments, omega, q0, axis, params):
 
 
 @register_jitable
-def _rigid_params(omega, q0, params):
+def _rigid_params(omega: Floats, q0: Floats, params: FloatArray) -> None:
     """omega constant in the body; q(t) = exp(tau omega_world) q0 = q0 exp(tau omega)."""
     params[_KIND] = _RIGID
     rate = dd_sqrt(
@@ -1064,7 +1101,7 @@ def _rigid_params(omega, q0, params):
 
 
 @register_jitable
-def free_flow(moments, q, omega, tau):
+def free_flow(moments: Floats, q: Floats, omega: Floats, tau: float) -> tuple[Quat, Vec3]:
     """Exact free flow over tau (s) from (q, omega) (tuples): ``(q(tau), omega(tau))``."""
     params = np.zeros(PARAMS_SIZE)
     agm_a = np.zeros(AGM_SIZE)
@@ -1076,12 +1113,12 @@ def free_flow(moments, q, omega, tau):
 
 
 @compiled
-def _build(moments, omega, q0, params, agm_a, agm_c):
+def _build(moments: Floats, omega: Floats, q0: Floats, params: FloatArray, agm_a: FloatArray, agm_c: FloatArray) -> int:
     return flow_params(moments, omega, q0, params, agm_a, agm_c, True)
 
 
 @compiled
-def evaluate_flow(params, agm_a, agm_c, taus, out):
+def evaluate_flow(params: FloatArray, agm_a: FloatArray, agm_c: FloatArray, taus: FloatArray, out: FloatArray) -> None:
     """out[k] = (q, omega) at taus[k] (s after the anchor), for every k."""
     for k in range(taus.size):
         q, w = flow_state(params, agm_a, agm_c, taus[k])
@@ -1092,7 +1129,7 @@ def evaluate_flow(params, agm_a, agm_c, taus, out):
 
 
 @compiled
-def _free_flow_compiled(moments, q, omega, tau):
+def _free_flow_compiled(moments: Floats, q: Floats, omega: Floats, tau: float) -> tuple[Quat, Vec3]:
     return free_flow(moments, q, omega, tau)
 
 
@@ -1112,9 +1149,9 @@ class _Flow:
         evaluate_flow(self.params, self.agm_a, self.agm_c, np.ascontiguousarray(tau, dtype=float), out)
         return out[:, :4], out[:, 4:]
 
-    def evaluate_scalar(self, tau: float) -> tuple[tuple, tuple]:
+    def evaluate_scalar(self, tau: float) -> tuple[Quat, Vec3]:
         q, omega = self.evaluate(np.array([float(tau)]))
-        return tuple(q[0].tolist()), tuple(omega[0].tolist())
+        return _floats4(q[0]), _floats3(omega[0])
 
 
 def _floats3(v: Any) -> tuple[float, float, float]:
@@ -1169,9 +1206,10 @@ class TorqueFreeSolution:
         q, w = self._flow.evaluate(tau.reshape(-1))
         return q.reshape(tau.shape + (4,)), w.reshape(tau.shape + (3,))
 
-    def state_floats(self, t: float) -> tuple[tuple, tuple]:
+    def state_floats(self, t: float) -> tuple[Quat, Vec3]:
         """``(q, omega)`` at one time t (s) as float tuples, unchecked: the exact integrator's step."""
-        return self._flow.evaluate_scalar(t - self.t0)
+        result: tuple[Quat, Vec3] = self._flow.evaluate_scalar(t - self.t0)
+        return result
 
     def omega(self, t: Any) -> np.ndarray:
         """Angular velocity at time(s) t (s), rad/s, principal body frame; shape t.shape + (3,)."""
@@ -1228,13 +1266,14 @@ def torque_free_solution(
     return solution_from_state(moments, omega0, q0, t0)
 
 
-def torque_free_flow(moments: np.ndarray, q: Any, omega: Any, tau: float) -> tuple[tuple, tuple]:
+def torque_free_flow(moments: np.ndarray, q: Any, omega: Any, tau: float) -> tuple[Quat, Vec3]:
     """Exact free flow over tau (s) from (q, omega): ``(q(tau), omega(tau))`` as float tuples.
 
     The same as ``torque_free_solution(moments, omega, q).state(tau)`` without the input
     checks, for callers that already checked the state (``q`` a unit quaternion).
     """
-    return _free_flow_compiled(_floats3(moments), _floats4(q), _floats3(omega), float(tau))
+    result: tuple[Quat, Vec3] = _free_flow_compiled(_floats3(moments), _floats4(q), _floats3(omega), float(tau))
+    return result
 
 
 def solution_from_state(moments: np.ndarray, omega0: np.ndarray, q0: np.ndarray, t0: float) -> TorqueFreeSolution:
