@@ -77,10 +77,23 @@ principal axis at 2.3-3.4). Next to the separatrix the problem itself is ill-con
 below that of a 1-ulp change of omega0.
 
 Special cases in closed form: a spherical body (omega constant); a symmetric body
-(I_a = I_b = I_p, distinct axis d): ``q(t) = exp(tau L_world / I_p) q0 exp(tau beta e_d)``
-with ``beta = (1/I_d - 1/I_p) L_d`` (the two flows commute); a spin about a principal axis
-(or a body at rest): omega constant, ``q(t) = q0 (x) exp(tau omega)``, the product compensated as
-above (within ~3 units); about the middle axis it is labelled 'separatrix' because L^2 = 2 E I2 holds.
+(I_a = I_b = I_p, distinct axis d): ``q(t) = q0 exp(tau L0 / I_p) exp(tau beta e_d)`` (body frame; it is
+exp(tau L_world / I_p) q0 exp(tau beta e_d), the two flows commute) with ``beta = (1/I_d - 1/I_p) L_d``,
+L_body turning by -tau beta about e_d; a spin about a principal axis (or a body at rest): omega constant,
+``q(t) = q0 (x) exp(tau omega)``; about the middle axis it is labelled 'separatrix' because L^2 = 2 E I2
+holds. Both are compensated as above: the half angles, their sines and cosines and the factors are
+double-doubles and the product with q0 is rounded once (within ~1 unit of the correctly rounded value).
+
+The edges of the state space (issue 29; the rules and their bounds in docs/numerics.md): moments and a
+largest |omega_k| outside [2^-_RANGE, 2^_RANGE] are rescaled by powers of 2 (Euler's equations are
+homogeneous: omega times c is time over c); two components too small to be squared are scaled by a power
+of 4 where they enter by ratio (next to the axis of circulation the amplitudes and psi, next to the middle
+axis k' = sqrt(1 - m), which then enters the AGM and the complete integrals directly); the AGM's descent
+is written with atan2 so that m near 1 costs no digits; for k' < 1/16 the Jacobi functions within K / 2 of
+a turning point come from the reflection u = K - v and the precession's bounded part from its integral
+from K (_reflected_phase), and for k' < 2^-24 from the expansion about m = 1 (_hyperbolic_jacobi). Within
+1e-307 (relative) of the middle axis but not on it (k' below the normal doubles) a ValueError names the
+corner.
 
 Implementation: the construction of a solution from a state and its evaluation at a time
 are numba kernels on a parameter vector (``register_jitable``; Carlson's integrals and the
@@ -705,24 +718,24 @@ def _symmetric_state(params: FloatArray, tau: float) -> tuple[Quat, Vec3]:
     axis = int(params[_S_AXIS])
     s_a, c_a = _half_turn(params[_S_RATE], params[_S_RATE + 1], tau)
     s_b, c_b = _half_turn(params[_S_BETA], params[_S_BETA + 1], tau)
-    av = [dd_mul(*s_a, params[_S_LAXIS + k], params[_S_LAXIS + 3 + k]) for k in range(3)]
+    av = (
+        dd_mul(*s_a, params[_S_LAXIS], params[_S_LAXIS + 3]),
+        dd_mul(*s_a, params[_S_LAXIS + 1], params[_S_LAXIS + 4]),
+        dd_mul(*s_a, params[_S_LAXIS + 2], params[_S_LAXIS + 5]),
+    )
     # A (x) B with A = (s_a u, c_a), B = (s_b e_d, c_b): vector c_a s_b e_d + c_b a + s_b (a x e_d),
-    # scalar c_a c_b - s_b a_d
+    # scalar c_a c_b - s_b a_d (a x e_d: component d+1 is a_{d+2}, component d+2 is -a_{d+1}, d is 0)
     nxt, prv = (axis + 1) % 3, (axis + 2) % 3
-    cross = [(0.0, 0.0), (0.0, 0.0), (0.0, 0.0)]
-    cross[nxt] = av[prv]  # a x e_d: component d+1 is a_{d+2}, component d+2 is -a_{d+1}
-    cross[prv] = (-av[nxt][0], -av[nxt][1])
-    vec_hi = [0.0, 0.0, 0.0]
-    vec_lo = [0.0, 0.0, 0.0]
-    for k in range(3):
-        own = dd_mul(*c_a, *s_b) if k == axis else (0.0, 0.0)
-        comp = _dd_sum3(own, dd_mul(*c_b, *av[k]), dd_mul(*s_b, *cross[k]))
-        vec_hi[k], vec_lo[k] = comp
+    own = dd_mul(*c_a, *s_b)
+    along = dd_add(*own, *dd_mul(*c_b, *av[axis]))
+    at_nxt = dd_add(*dd_mul(*c_b, *av[nxt]), *dd_mul(*s_b, *av[prv]))
+    at_prv = dd_add(*dd_mul(*c_b, *av[prv]), *dd_mul(-s_b[0], -s_b[1], *av[nxt]))
+    x = along if axis == 0 else (at_nxt if nxt == 0 else at_prv)
+    y = along if axis == 1 else (at_nxt if nxt == 1 else at_prv)
+    z = along if axis == 2 else (at_nxt if nxt == 2 else at_prv)
     w = dd_add(*dd_mul(*c_a, *c_b), *dd_mul(-s_b[0], -s_b[1], *av[axis]))
     q0 = (params[_S_Q0], params[_S_Q0 + 1], params[_S_Q0 + 2], params[_S_Q0 + 3])
-    q = _compensated_product(
-        q0, (0.0, 0.0, 0.0, 0.0), (vec_hi[0], vec_hi[1], vec_hi[2], w[0]), (vec_lo[0], vec_lo[1], vec_lo[2], w[1])
-    )
+    q = _compensated_product(q0, (0.0, 0.0, 0.0, 0.0), (x[0], y[0], z[0], w[0]), (x[1], y[1], z[1], w[1]))
     # L_body(t): the components d+1, d+2 turned by -alpha, alpha = tau beta: cos = 1 - 2 s^2, sin = 2 s c
     cos_b = dd_add(1.0, 0.0, *dd_mul(-2.0 * s_b[0], -2.0 * s_b[1], *s_b))
     sin_b = dd_mul(2.0 * s_b[0], 2.0 * s_b[1], *c_b)
@@ -730,11 +743,13 @@ def _symmetric_state(params: FloatArray, tau: float) -> tuple[Quat, Vec3]:
     l_prv = (params[_S_L + prv], params[_S_L + 3 + prv])
     new_nxt = dd_add(*dd_mul(*cos_b, *l_nxt), *dd_mul(*sin_b, *l_prv))
     new_prv = dd_add(*dd_mul(*cos_b, *l_prv), *dd_mul(-sin_b[0], -sin_b[1], *l_nxt))
-    omega = [0.0, 0.0, 0.0]
-    omega[axis] = dd_div(params[_S_L + axis], params[_S_L + 3 + axis], params[_S_MOMENTS + axis], 0.0)[0]
-    omega[nxt] = dd_div(*new_nxt, params[_S_MOMENTS + nxt], 0.0)[0]
-    omega[prv] = dd_div(*new_prv, params[_S_MOMENTS + prv], 0.0)[0]
-    return q, (omega[0], omega[1], omega[2])
+    w_axis = dd_div(params[_S_L + axis], params[_S_L + 3 + axis], params[_S_MOMENTS + axis], 0.0)[0]
+    w_nxt = dd_div(*new_nxt, params[_S_MOMENTS + nxt], 0.0)[0]
+    w_prv = dd_div(*new_prv, params[_S_MOMENTS + prv], 0.0)[0]
+    w0 = w_axis if axis == 0 else (w_nxt if nxt == 0 else w_prv)
+    w1 = w_axis if axis == 1 else (w_nxt if nxt == 1 else w_prv)
+    w2 = w_axis if axis == 2 else (w_nxt if nxt == 2 else w_prv)
+    return q, (w0, w1, w2)
 
 
 @register_jitable
@@ -1031,9 +1046,11 @@ def _flow_params(
     # next to the middle axis the other two components may be too small to square: D times a power of 16
     # (the sign and the zero are what is used here)
     pair = _tiny_pair_scale(omega[i_min], omega[i_max])
-    scaled = [omega[0], omega[1], omega[2]]
-    scaled[i_min] *= pair
-    scaled[i_max] *= pair
+    scaled = (
+        omega[0] * (1.0 if i_mid == 0 else pair),
+        omega[1] * (1.0 if i_mid == 1 else pair),
+        omega[2] * (1.0 if i_mid == 2 else pair),
+    )
     d = _separatrix_distance(moments, scaled, i_min, i_mid, i_max)
     # The label allows for rounding in the caller's omega0; the flow itself is the exact
     # solution for the omega0 given (the separatrix closed form only when d is exactly 0).
@@ -1062,7 +1079,7 @@ def _symmetric_params(moments: Floats, omega: Floats, q0: Floats, axis: int, par
     L_d (I_p - I_d) / (I_d I_p) and L_body(t0) / |L| as double-doubles from the floats given."""
     i_perp = moments[(axis + 1) % 3]
     i_d = moments[axis]
-    l_body = [two_product(moments[k], omega[k]) for k in range(3)]
+    l_body = (two_product(moments[0], omega[0]), two_product(moments[1], omega[1]), two_product(moments[2], omega[2]))
     sq = _dd_sum3(dd_mul(*l_body[0], *l_body[0]), dd_mul(*l_body[1], *l_body[1]), dd_mul(*l_body[2], *l_body[2]))
     norm = dd_sqrt(*sq)
     r_norm = dd_div(1.0, 0.0, *norm) if norm[0] > 0.0 else (0.0, 0.0)  # at rest: no axis
