@@ -524,13 +524,22 @@ def agm_tables_kp(m: float, kp: float, root_kp: float, a: FloatArray, c: FloatAr
     return levels
 
 
+#: Up to this c_i / a_i the descent takes asin directly (cheaper; the atan2 form is for m near 1).
+_DESCENT_ASIN = 0.875
+
+
 @register_jitable
-def _descent_term(c_i: float, a_i: float, b_i: float, sin_phi: float, cos_phi: float) -> float:
-    """asin(c_i sin(phi) / a_i), the term of one step of the descent (A&S 16.4), as the angle
-    atan2(c_i sin phi, sqrt(a_i^2 cos^2 phi + b_i^2 sin^2 phi)): with a_i^2 - c_i^2 = b_i^2 the
-    cosine has no cancellation, where asin of an argument near 1 (m near 1, the separatrix and the
-    middle axis) would lose half the digits."""
-    return math.atan2(c_i * sin_phi, math.hypot(a_i * cos_phi, b_i * sin_phi))
+def _descent_term(c_i: float, a_i: float, b_i: float, ph: float, pl: float) -> float:
+    """asin(c_i sin(phi) / a_i) for phi = ph + pl, the term of one step of the descent (A&S 16.4). Where
+    c_i / a_i is near 1 (m near 1: the separatrix, the middle axis) as the angle
+    atan2(c_i sin phi, sqrt(a_i^2 cos^2 phi + b_i^2 sin^2 phi)): with a_i^2 - c_i^2 = b_i^2 the cosine has
+    no cancellation, where asin of an argument near 1 would lose half the digits (sin and cos of phi then
+    take pl to first order, :func:`dd_sin_cos`)."""
+    if c_i <= _DESCENT_ASIN * a_i:  # asin's argument at most 7/8: its derivative below 2.1, no digits lost
+        return math.asin(c_i * math.sin(ph) / a_i)
+    sin_phi, cos_phi = dd_sin_cos(ph, pl)
+    x, y = a_i * cos_phi, b_i * sin_phi  # both below 1 in size: no overflow in the squares
+    return math.atan2(c_i * sin_phi, math.sqrt(x * x + y * y))
 
 
 @register_jitable
@@ -538,7 +547,7 @@ def jacobi(r: float, a: FloatArray, c: FloatArray, levels: int, m1: float) -> tu
     """sn, cn, dn of r (|r| <= K) from the AGM tables (Abramowitz & Stegun 16.4)."""
     phi = (2.0**levels * a[levels]) * r
     for i in range(levels, 0, -1):
-        phi = 0.5 * (phi + _descent_term(c[i], a[i], a[AGM_LEVELS + i], math.sin(phi), math.cos(phi)))
+        phi = 0.5 * (phi + _descent_term(c[i], a[i], a[AGM_LEVELS + i], phi, 0.0))
     sn = math.sin(phi)
     cn = math.cos(phi)
     return sn, cn, math.sqrt(cn * cn + m1 * sn * sn)
@@ -553,14 +562,13 @@ def jacobi_amplitude_dd(
     descent phi_{i-1} = (phi_i + asin(c_i sin(phi_i) / a_i)) / 2 (A&S 16.4) adds a bounded term
     to it, so the amplitude keeps the digits of r instead of a few ulps of it. The term is formed as an
     atan2 from sin and cos of phi_i (:func:`_descent_term`), which stays accurate where the asin
-    argument nears 1 (m near 1); sin and cos of phi_i take its low part to first order
-    (:func:`dd_sin_cos`): the term is then within a few ulps of 1 (absolute), halved i times on the way down."""
+    argument nears 1 (m near 1): the term is within a few ulps of 1 (absolute), halved i times on the way
+    down."""
     scale = 2.0**levels
     ph, pl = dd_mul(top_h, top_l, rh, rl)
     ph, pl = scale * ph, scale * pl
     for i in range(levels, 0, -1):
-        sin_phi, cos_phi = dd_sin_cos(ph, pl)
-        ph, pl = dd_add_d(ph, pl, _descent_term(c[i], a[i], a[AGM_LEVELS + i], sin_phi, cos_phi))
+        ph, pl = dd_add_d(ph, pl, _descent_term(c[i], a[i], a[AGM_LEVELS + i], ph, pl))
         ph, pl = 0.5 * ph, 0.5 * pl
     return ph, pl
 
