@@ -91,9 +91,8 @@ of 4 where they enter by ratio (next to the axis of circulation the amplitudes a
 axis k' = sqrt(1 - m), which then enters the AGM and the complete integrals directly); the AGM's descent
 is written with atan2 so that m near 1 costs no digits; for k' < 1/16 the Jacobi functions within K / 2 of
 a turning point come from the reflection u = K - v and the precession's bounded part from its integral
-from K (_reflected_phase), and for k' < 2^-24 from the expansion about m = 1 (_hyperbolic_jacobi). Within
-1e-307 (relative) of the middle axis but not on it (k' below the normal doubles) a ValueError names the
-corner.
+from K (_reflected_phase), and for k' < 2^-24 from the expansion about m = 1 (_hyperbolic_jacobi), which
+also serves k' below the normal doubles (within ~1e-308 of the middle axis): no finite state is refused.
 
 Implementation: the construction of a solution from a state and its evaluation at a time
 are numba kernels on a parameter vector (``register_jitable``; Carlson's integrals and the
@@ -334,11 +333,11 @@ def _hyperbolic_jacobi(r: float, m1: float) -> tuple[float, float, float]:
     below 2^-48 for k' < _HYPERBOLIC_KP; cn and dn keep their relative accuracy where they are of order k'
     (the amplitude near pi / 2 would not)."""
     t = math.tanh(r)
-    ch = math.cosh(r)
+    ch = math.cosh(r)  # below 1e163: r <= K / 2 <= 373
     sech = 1.0 / ch
-    sc = t * ch * ch  # sinh r cosh r
+    sinh = t * ch  # (sinh r cosh r -+ r) sech r = sinh r -+ r sech r: no square of cosh (it would overflow)
     q = 0.25 * m1
-    return t + q * (t - r * sech * sech), sech - q * (sc - r) * t * sech, sech + q * (sc + r) * t * sech
+    return t + q * (t - r * sech * sech), sech - q * t * (sinh - r * sech), sech + q * t * (sinh + r * sech)
 
 
 @register_jitable
@@ -432,7 +431,7 @@ def _phase(
     """sn, cn, dn at u = uh + ul and the two parts of Pi(n; am u | m) beyond u: (j, g_h, g_l),
     j the number of half periods 2K from 0 to u and g = g_h + g_l a bounded remainder."""
     n = params[_E_N]
-    if params[_E_KP] == 0.0:  # separatrix (k' of any other flow is a normal double)
+    if params[_E_K] == math.inf:  # separatrix (k' of another flow may underflow to 0)
         u = uh + ul
         tanh = math.tanh(u)
         e = math.exp(-abs(u))
@@ -496,7 +495,7 @@ def _elliptic_state(params: FloatArray, agm_a: FloatArray, agm_c: FloatArray, ta
     sn, cn, dn, j, g_h, g_l = _phase(params, agm_a, agm_c, uh, ul)
     j0, g0 = params[_E_J0], params[_E_G0]
     coeff = params[_E_COEFF]
-    if params[_E_KP] == 0.0:  # separatrix
+    if params[_E_K] == math.inf:  # separatrix
         phi_h, phi_l = l_norm * tau / i3 + coeff * (lam * tau + (g_h - g0)) / (1.0 - n), 0.0
     else:
         phi_h, phi_l = two_product(params[_E_RATE], tau)
@@ -764,8 +763,6 @@ def _dd_ratio_sum(
 
 #: exact_split's short flows take K and Pi(n|m) - K in double down to this k' (below, in double-double)
 _SHORT_RUN_KP = 2.0**-26
-#: The smallest k' served (the smallest normal double): see _elliptic_params
-_SMALLEST_KP = 2.2250738585072014e-308
 #: The Newton step on u0 where dn(u0) is at least this (it divides am0's rounding by dn)
 _NEWTON_DN = 0.0625
 
@@ -844,13 +841,9 @@ def _elliptic_params(
     root_kp = dd_sqrt(*kps_dd)
     root_kp = (root_kp[0] / root_scale, root_kp[1] / root_scale)
     m1_dd = (m1s_dd[0] / scale_b / scale_b, m1s_dd[1] / scale_b / scale_b)
-    if d != 0.0 and kp_dd[0] < _SMALLEST_KP:
-        # cn and dn around the turning points are of order k': below the normal doubles they lose the
-        # relative accuracy that psi and the precession need
-        raise ValueError(
-            "exact flow: omega0 is within 1e-307 (relative) of the middle principal axis but not on it; "
-            "the elliptic functions there are not served (k' = sqrt(1 - m) below the normal doubles)"
-        )
+    # (k' below the normal doubles, within ~1e-308 of the middle axis, is the expansion about m = 1 all the
+    # way: its cn and dn near the turning points are then subnormal, needed to their absolute accuracy only,
+    # and sqrt(k'), the AGM's first geometric mean, comes from k' S_B)
     m = dd_div(*dd_mul(*dd_mul(i1, 0.0, *d21), *a1_sq), *big)[0] / scale_a / scale_a
     lam_dd = dd_sqrt(*dd_div(*dd_mul(*dd_mul(*d32, *d31), *a3_sq), *two_product(i1, i2)))
     n_dd = dd_div(*dd_mul(-i3, 0.0, *d21), *dd_mul(i1, 0.0, *d32))
