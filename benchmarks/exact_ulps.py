@@ -12,8 +12,10 @@ under a temporary directory and removed afterwards), on the same problems:
 - ``build+evaluate``: the same at 20000 times over 100 s (``free_flow`` far from the anchor,
   as the batch kernel's ``exact`` over a run), ns per call.
 
-Cases: the general triaxial body I = (1, 2, 3) kg*m^2, omega0 = (0.3, 0.5, 1.0) rad/s, and the
-near-sphere I = (1, 1.001, 1.0025), omega0 = (0.6, 0.7, 0.8). Every figure is the best of
+Cases: the general triaxial body I = (1, 2, 3) kg*m^2, omega0 = (0.3, 0.5, 1.0) rad/s, the
+near-sphere I = (1, 1.001, 1.0025), omega0 = (0.6, 0.7, 0.8), the symmetric body I = (2, 2, 3),
+omega0 = (0.3, 0.4, 0.5) and a state 1e-6 above the separatrix (I = (3, 4, 6), omega0 = (1, 0.3,
+0.5 (1 + 1e-6)); issue 29). Every figure is the best of
 --repeats runs; the load average is printed with them.
 
 Usage:
@@ -36,6 +38,8 @@ from pathlib import Path
 CASES = {
     "general": ((1.0, 2.0, 3.0), (0.3, 0.5, 1.0)),
     "near_sphere": ((1.0, 1.001, 1.0025), (0.6, 0.7, 0.8)),
+    "symmetric": ((2.0, 2.0, 3.0), (0.3, 0.4, 0.5)),
+    "near_separatrix": ((3.0, 4.0, 6.0), (1.0, 0.3, 0.5 * (1.0 + 1e-6))),
 }
 Q0 = (0.5, -0.5, 0.5, 0.5)
 N_TIMES = 20000

@@ -27,6 +27,9 @@ _EPS = 2.220446049250313e-16
 DoubleDouble = tuple[float, float]
 #: Most AGM levels kept (the AGM converges quadratically: 40 is never reached for m < 1).
 AGM_LEVELS = 40
+#: Size of the AGM tables: ``a`` holds a_i at i and b_i at AGM_LEVELS + i (the descent needs b_i, see
+#: :func:`jacobi_amplitude_dd`); ``c`` holds c_i.
+AGM_SIZE = 2 * AGM_LEVELS
 #: pi and 2 pi as double-doubles (hi + lo, |lo| <= ulp(hi) / 2).
 PI_DD = (3.141592653589793, 1.2246467991473532e-16)
 TWO_PI_DD = (6.283185307179586, 2.4492935982947064e-16)
@@ -253,14 +256,29 @@ def dd_reduce(h: float, lo: float, period_h: float, period_l: float) -> tuple[fl
 
 @register_jitable
 def dd_complete_integrals(m1h: float, m1l: float, nh: float, nl: float) -> tuple[float, float, float, float]:
-    """Double-double K(m) and Pi(n|m) - K(m) for 1 - m = m1h + m1l in (0, 1] and n = nh + nl < 1.
+    """Double-double K(m) and Pi(n|m) - K(m) for 1 - m = m1h + m1l in (0, 1] and n = nh + nl < 1
+    (:func:`dd_complete_integrals_kp` with k' = sqrt(1 - m))."""
+    kp = dd_sqrt(m1h, m1l)
+    root = dd_sqrt(*kp)
+    return dd_complete_integrals_kp(kp[0], kp[1], root[0], root[1], nh, nl)
+
+
+@register_jitable
+def dd_complete_integrals_kp(
+    kh: float, kl: float, rh: float, rl: float, nh: float, nl: float
+) -> tuple[float, float, float, float]:
+    """Double-double K(m) and Pi(n|m) - K(m) from k' = sqrt(1 - m) = kh + kl in (0, 1] and its square root
+    rh + rl (both passed, so that k' may be as small as the caller can scale it: next to the middle axis
+    1 - m underflows while k' and sqrt(k') do not), and n = nh + nl < 1.
 
     DLMF 19.8.6 (the AGM of 1 and k' with its companion sequence p_j):
     ``Pi(n|m) = pi / (4 M) (2 + n / (1 - n) sum_j Q_j)``, so ``Pi - K = pi / (4 M) n / (1 - n)
-    sum_j Q_j`` without a cancellation; every step is +, *, / or sqrt in double-double.
+    sum_j Q_j`` without a cancellation; every step is +, *, / or sqrt in double-double. The first
+    geometric mean sqrt(1 k') is the root passed.
     """
     ah, al = 1.0, 0.0
-    gh, gl = dd_sqrt(m1h, m1l)
+    gh, gl = kh, kl
+    first = True
     p2h, p2l = dd_add(1.0, 0.0, -nh, -nl)  # p_0^2 = 1 - n
     ph, pl = dd_sqrt(p2h, p2l)
     qh, ql = 1.0, 0.0
@@ -276,7 +294,11 @@ def dd_complete_integrals(m1h: float, m1l: float, nh: float, nl: float) -> tuple
         sh, sl = dd_add(sh, sl, qh, ql)
         gap = abs((ah - gh) + (al - gl))
         sum_h, sum_l = dd_add(ah, al, gh, gl)
-        gh, gl = dd_sqrt(*dd_mul(ah, al, gh, gl))
+        if first:
+            gh, gl = rh, rl
+            first = False
+        else:
+            gh, gl = dd_sqrt(*dd_mul(ah, al, gh, gl))
         ah, al = 0.5 * sum_h, 0.5 * sum_l
         # quadratic convergence: once a - g <= 1e-17 a, the new a is within ~1e-35 of M
         # (and Q_j falls as fast); a tighter test on a - g would wait on rounding
@@ -472,22 +494,52 @@ def third_kind_excess_dd(
 
 @register_jitable
 def agm_tables(m: float, m1: float, a: FloatArray, c: FloatArray) -> int:
-    """Fill a[0..L], c[0..L] with the descending AGM of (1, sqrt(1 - m)); returns L.
+    """Fill the tables with the descending AGM of (1, sqrt(1 - m)) (:func:`agm_tables_kp`); returns L.
+    ``m1`` = 1 - m is passed exactly."""
+    kp = math.sqrt(m1)
+    return agm_tables_kp(m, kp, math.sqrt(kp), a, c)
 
-    ``m1`` = 1 - m is passed exactly; ``c_{i+1} = c_i^2 / (4 a_{i+1})`` avoids the
-    subtraction (a_i - b_i) / 2.
+
+@register_jitable
+def agm_tables_kp(m: float, kp: float, root_kp: float, a: FloatArray, c: FloatArray) -> int:
+    """Fill a[0..L] (a_i), a[AGM_LEVELS..AGM_LEVELS + L] (b_i) and c[0..L] with the descending AGM of
+    (1, k'), k' = sqrt(1 - m), given with its square root (the first geometric mean, passed so that the
+    caller can form it from a scaled k' next to the middle axis); returns L.
+
+    ``c_{i+1} = c_i^2 / (4 a_{i+1})`` avoids the subtraction (a_i - b_i) / 2; the b_i are kept for the
+    descent (a_i^2 - b_i^2 = c_i^2, see :func:`jacobi_amplitude_dd`).
     """
     a[0] = 1.0
     c[0] = math.sqrt(m)
-    b = math.sqrt(m1)
+    b = kp
+    a[AGM_LEVELS] = b
     levels = 0
     while abs(c[levels]) > _EPS * a[levels] and levels + 1 < AGM_LEVELS:
         a_next = 0.5 * (a[levels] + b)
         c[levels + 1] = c[levels] * c[levels] / (4.0 * a_next)
-        b = math.sqrt(a[levels] * b)
+        b = root_kp if levels == 0 else math.sqrt(a[levels] * b)
         a[levels + 1] = a_next
+        a[AGM_LEVELS + levels + 1] = b
         levels += 1
     return levels
+
+
+#: Up to this c_i / a_i the descent takes asin directly (cheaper; the atan2 form is for m near 1).
+_DESCENT_ASIN = 0.875
+
+
+@register_jitable
+def _descent_term(c_i: float, a_i: float, b_i: float, ph: float, pl: float) -> float:
+    """asin(c_i sin(phi) / a_i) for phi = ph + pl, the term of one step of the descent (A&S 16.4). Where
+    c_i / a_i is near 1 (m near 1: the separatrix, the middle axis) as the angle
+    atan2(c_i sin phi, sqrt(a_i^2 cos^2 phi + b_i^2 sin^2 phi)): with a_i^2 - c_i^2 = b_i^2 the cosine has
+    no cancellation, where asin of an argument near 1 would lose half the digits (sin and cos of phi then
+    take pl to first order, :func:`dd_sin_cos`)."""
+    if c_i <= _DESCENT_ASIN * a_i:  # asin's argument at most 7/8: its derivative below 2.1, no digits lost
+        return math.asin(c_i * math.sin(ph) / a_i)
+    sin_phi, cos_phi = dd_sin_cos(ph, pl)
+    x, y = a_i * cos_phi, b_i * sin_phi  # both below 1 in size: no overflow in the squares
+    return math.atan2(c_i * sin_phi, math.sqrt(x * x + y * y))
 
 
 @register_jitable
@@ -495,7 +547,7 @@ def jacobi(r: float, a: FloatArray, c: FloatArray, levels: int, m1: float) -> tu
     """sn, cn, dn of r (|r| <= K) from the AGM tables (Abramowitz & Stegun 16.4)."""
     phi = (2.0**levels * a[levels]) * r
     for i in range(levels, 0, -1):
-        phi = 0.5 * (phi + math.asin(c[i] * math.sin(phi) / a[i]))
+        phi = 0.5 * (phi + _descent_term(c[i], a[i], a[AGM_LEVELS + i], phi, 0.0))
     sn = math.sin(phi)
     cn = math.cos(phi)
     return sn, cn, math.sqrt(cn * cn + m1 * sn * sn)
@@ -508,12 +560,15 @@ def jacobi_amplitude_dd(
     """The amplitude am(r) of r = rh + rl (|r| <= K) as a double-double, from the AGM tables:
     phi_N = 2^N a_N r from a_N = top_h + top_l (a double-double of the AGM limit), and each
     descent phi_{i-1} = (phi_i + asin(c_i sin(phi_i) / a_i)) / 2 (A&S 16.4) adds a bounded term
-    to it, so the amplitude keeps the digits of r instead of a few ulps of it."""
+    to it, so the amplitude keeps the digits of r instead of a few ulps of it. The term is formed as an
+    atan2 from sin and cos of phi_i (:func:`_descent_term`), which stays accurate where the asin
+    argument nears 1 (m near 1): the term is within a few ulps of 1 (absolute), halved i times on the way
+    down."""
     scale = 2.0**levels
     ph, pl = dd_mul(top_h, top_l, rh, rl)
     ph, pl = scale * ph, scale * pl
     for i in range(levels, 0, -1):
-        ph, pl = dd_add_d(ph, pl, math.asin(c[i] * math.sin(ph) / a[i]))
+        ph, pl = dd_add_d(ph, pl, _descent_term(c[i], a[i], a[AGM_LEVELS + i], ph, pl))
         ph, pl = 0.5 * ph, 0.5 * pl
     return ph, pl
 
@@ -531,4 +586,4 @@ def jacobi_dd(
 
 def agm_buffers() -> tuple[FloatArray, FloatArray]:
     """Zeroed (a, c) arrays for :func:`agm_tables`."""
-    return np.zeros(AGM_LEVELS), np.zeros(AGM_LEVELS)
+    return np.zeros(AGM_SIZE), np.zeros(AGM_SIZE)

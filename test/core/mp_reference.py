@@ -182,3 +182,39 @@ def ode_residual(ref: Reference, t: float) -> float:
         ]
         kinematics = _qmul(q, [w[0] / 2, w[1] / 2, w[2] / 2, 0])
         return float(max(max(abs(e) for e in euler), max(abs(dq[k] - kinematics[k]) for k in range(4))))
+
+
+class SymmetricReference:
+    """omega(t) and q(t) of a symmetric body (I_a = I_b = I_p, distinct axis d) from (moments, omega0, q0):
+    the textbook solution, L_body turning about e_d at beta = (1/I_d - 1/I_p) L_d backwards and
+    ``q(t) = q0 exp(t L0 / I_p) exp(t beta e_d)`` (Landau-Lifshitz section 33), with the same interface as
+    :class:`Reference` (so :func:`ode_residual` checks it)."""
+
+    def __init__(self, moments, omega0, q0, axis):
+        with mp.workdps(DIGITS):
+            self.moments = [mp.mpf(float(m)) for m in moments]
+            self.omega0 = [mp.mpf(float(x)) for x in omega0]
+            q0 = [mp.mpf(float(x)) for x in q0]
+            norm = mp.sqrt(sum(c * c for c in q0))
+            self.q0 = [c / norm for c in q0]
+            self.axis = axis
+            i_p = self.moments[(axis + 1) % 3]
+            self.l0 = [self.moments[k] * self.omega0[k] for k in range(3)]
+            self.rate = [c / i_p for c in self.l0]
+            self.beta = (1 / self.moments[axis] - 1 / i_p) * self.l0[axis]
+
+    def state(self, t):
+        """(q, omega) at t (s) as lists of mpf."""
+        with mp.workdps(DIGITS):
+            t = mp.mpf(t)
+            d = self.axis
+            spin = [mp.mpf(0)] * 3
+            spin[d] = self.beta
+            q = _qmul(_qmul(self.q0, _rotvec_quat(self.rate, t)), _rotvec_quat(spin, t))
+            a, b = (d + 1) % 3, (d + 2) % 3
+            c, s = mp.cos(self.beta * t), mp.sin(self.beta * t)
+            lt = [mp.mpf(0)] * 3
+            lt[d] = self.l0[d]
+            lt[a] = c * self.l0[a] + s * self.l0[b]
+            lt[b] = -s * self.l0[a] + c * self.l0[b]
+            return q, [lt[k] / self.moments[k] for k in range(3)]

@@ -11,9 +11,10 @@ ulp(r) where 4 ulp(r) >= 1e-16 (|r| >= 1/8 of the scale), else in units of 2.5e-
 
 Issue 21 asks for 4 units on every component, and that is the bound held here. Measured (101 times
 per case, the __main__ below, and at 2 x 100 random times; 25 times in the tests): omega <= 2.0 on
-every case; q <= 3.4 on the spins about a principal axis (a uniform rotation, the product
-q0 (x) exp(tau omega) compensated) and 0.6 to 2.6 on the triaxial cases (general_scaled the largest),
-where the flow before the double-double phase was at up to 570 (omega) and 1222 (q), and before the
+every case; q <= 0.5 on the spins about a principal axis (a uniform rotation, the product
+q0 (x) exp(tau omega) compensated with the factor a double-double, issue 29; 3.4 before) and 0.6 to
+2.6 on the triaxial cases (general_scaled the largest), where the flow before the double-double phase
+was at up to 570 (omega) and 1222 (q), and before the
 double-double precession and half angles at up to 13.2 (q). What is left is the rounding of the
 remainder of R_J in double (1/4 to 1/256 of it, see third_kind_excess_dd) and of the final components.
 """
@@ -44,7 +45,7 @@ CASES = {
     "general_scaled": ((0.7, 0.9, 1.3), (0.9, -0.8, 0.4), 100.0),
 }
 BOUND_OMEGA = 4.0  # the target
-BOUND_Q_PRINCIPAL = 4.0  # the target, on the spins about a principal axis (3.4 reached)
+BOUND_Q_PRINCIPAL = 1.0  # on the spins about a principal axis (0.49 reached: the factor rounded once, issue 29)
 BOUND_Q = 4.0  # the target, on the triaxial cases (2.6 reached)
 PRINCIPAL = ("about_axis_1", "about_axis_2", "about_axis_3")
 SAMPLES = 24

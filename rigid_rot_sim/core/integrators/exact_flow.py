@@ -32,7 +32,7 @@ from numba.extending import register_jitable
 from rigid_rot_sim.core.exact import TorqueFreeSolution, free_flow, solution_from_state
 from rigid_rot_sim.core.integrators.base import Integrator, NonFiniteStateError, UnsupportedTorqueError
 from rigid_rot_sim.core.integrators.fixed_step import FixedStepIntegrator
-from rigid_rot_sim.core.integrators.splitting import KICK_ERROR, adjoint_kick, kick
+from rigid_rot_sim.core.integrators.splitting import KICK_ERROR, State7, Vector, adjoint_kick, kick
 from rigid_rot_sim.core.integrators.status import KICK_FAILED, OK
 from rigid_rot_sim.core.torque import float_torque, has_torque, torque_at
 
@@ -80,7 +80,8 @@ class ExactFlow(Integrator):
         q, omega = solution.state_floats(t)
         if not math.isfinite(sum(q) + sum(omega)):
             raise NonFiniteStateError(
-                f"{self.name}: non-finite state at step {self.n_steps + steps}, t = {t:.9g} s (q = {q}, omega = {omega})"
+                f"{self.name}: non-finite state at step {self.n_steps + steps}, t = {t:.9g} s "
+                f"(q = {q}, omega = {omega})"
             )
         self.q, self.omega, self.t, self._anchor_k = np.array(q), np.array(omega), t, k
         self.n_steps += steps
@@ -116,7 +117,9 @@ class ExactFlow(Integrator):
 
 
 @register_jitable
-def exact_split_step(t, state, h, moments, torque, coefficients):
+def exact_split_step(
+    t: float, state: State7, h: float, moments: Vector, torque: Any, coefficients: tuple[float, ...]
+) -> tuple[State7, int]:
     """One step of the composition ``coefficients`` of kick(h/2) o free(h) o adjoint kick(h/2)."""
     qx, qy, qz, qw, w1, w2, w3 = state
     q = (qx, qy, qz, qw)

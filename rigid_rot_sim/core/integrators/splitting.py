@@ -53,10 +53,26 @@ COMPOSITIONS: dict[int, tuple[float, ...]] = {
 }
 
 _KICK_ITERATIONS = 50
+#: (qx, qy, qz, qw, w1, w2, w3): the state of a step.
+State7 = tuple[float, float, float, float, float, float, float]
+Vector = tuple[float, float, float]
 
 
 @register_jitable
-def _x_flow(term, half, qx, qy, qz, qw, w1, w2, w3, i1, i2, i3):
+def _x_flow(
+    term: int,
+    half: float,
+    qx: float,
+    qy: float,
+    qz: float,
+    qw: float,
+    w1: float,
+    w2: float,
+    w3: float,
+    i1: float,
+    i2: float,
+    i3: float,
+) -> State7:
     """X_term: the body turns by phi = 2 half about the axis ``term``, L_body by -phi."""
     s, c = math.sin(half), math.cos(half)
     sn, cs = 2.0 * s * c, 1.0 - 2.0 * s * s  # sin, cos of phi
@@ -73,7 +89,19 @@ def _x_flow(term, half, qx, qy, qz, qw, w1, w2, w3, i1, i2, i3):
 
 
 @register_jitable
-def _free_strang(qx, qy, qz, qw, w1, w2, w3, h, i1, i2, i3):
+def _free_strang(
+    qx: float,
+    qy: float,
+    qz: float,
+    qw: float,
+    w1: float,
+    w2: float,
+    w3: float,
+    h: float,
+    i1: float,
+    i2: float,
+    i3: float,
+) -> State7:
     """``X_i(h/2) X_j(h/2) C(h) X_j(h/2) X_i(h/2)`` on (q, omega) in the principal frame.
 
     The X terms are those about the axes other than the median one k (in axis order,
@@ -92,7 +120,22 @@ def _free_strang(qx, qy, qz, qw, w1, w2, w3, h, i1, i2, i3):
 
 
 @register_jitable
-def _x_terms(axes, k, ik, h, qx, qy, qz, qw, w1, w2, w3, i1, i2, i3):
+def _x_terms(
+    axes: tuple[int, int, int],
+    k: int,
+    ik: float,
+    h: float,
+    qx: float,
+    qy: float,
+    qz: float,
+    qw: float,
+    w1: float,
+    w2: float,
+    w3: float,
+    i1: float,
+    i2: float,
+    i3: float,
+) -> State7:
     """The X terms over h/2 in the order ``axes``, skipping the median axis k and any axis
     whose moment equals I_k."""
     for a in axes:
@@ -105,7 +148,9 @@ def _x_terms(axes, k, ik, h, qx, qy, qz, qw, w1, w2, w3, i1, i2, i3):
 
 
 @register_jitable
-def splitting_step(t, state, h, moments, torque, coefficients):
+def splitting_step(
+    t: float, state: State7, h: float, moments: Vector, torque: Any, coefficients: tuple[float, ...]
+) -> tuple[State7, int]:
     """One step of the symmetric composition ``coefficients`` of the kicked Strang step."""
     qx, qy, qz, qw, w1, w2, w3 = state
     i1, i2, i3 = moments
@@ -129,13 +174,26 @@ def splitting_step(t, state, h, moments, torque, coefficients):
 
 
 @register_jitable
-def kick(w1, w2, w3, hk, n1, n2, n3, i1, i2, i3):
+def kick(
+    w1: float, w2: float, w3: float, hk: float, n1: float, n2: float, n3: float, i1: float, i2: float, i3: float
+) -> Vector:
     """The explicit kick ``omega + hk N / I``."""
     return w1 + hk * n1 / i1, w2 + hk * n2 / i2, w3 + hk * n3 / i3
 
 
 @register_jitable
-def adjoint_kick(torque, t, q, w1, w2, w3, hk, i1, i2, i3):
+def adjoint_kick(
+    torque: Any,
+    t: float,
+    q: tuple[float, float, float, float],
+    w1: float,
+    w2: float,
+    w3: float,
+    hk: float,
+    i1: float,
+    i2: float,
+    i3: float,
+) -> tuple[float, float, float, float, float, float, bool]:
     """Solve ``x = w + hk N(t, q, x) / I`` by fixed-point iteration; return x, N(t, q, x), converged."""
     x1, x2, x3 = w1, w2, w3
     n1, n2, n3 = torque_at(torque, t, q, (x1, x2, x3))
