@@ -5,7 +5,9 @@ definition as schema) at its log time, paced by the wall clock at the playback s
 recorded state also updates the body scene entity (:mod:`.foxglove`) and the server's time.
 The app's playback controls (foxglove-sdk's PlaybackControl capability: play, pause, seek,
 speed) drive the player; the app's timeline spans the recording's log times (sim time for a
-recording made with the default ``record_log_time: sim``).
+recording made with the default ``record_log_time: sim``). Playback starts when the first
+client subscribes to a channel, not when the server starts: a client that connects late misses
+nothing, and with ``once`` none gets the end before the beginning.
 """
 
 from __future__ import annotations
@@ -22,7 +24,7 @@ from rigid_rot_sim.recording.definitions import dynamic_decoder
 from rigid_rot_sim.recording.reader import BagReader, RecordedMessage
 from rigid_rot_sim.run.body_view import body_view
 from rigid_rot_sim.scene.scene import parse_scene_text
-from rigid_rot_sim.viewer.foxglove import BodyScene, FoxgloveServer
+from rigid_rot_sim.viewer.foxglove import BodyScene, FoxgloveServer, server_listener
 
 __all__ = ["RecordingPlayer"]
 
@@ -62,12 +64,16 @@ class RecordingPlayer:
         self._lock = threading.Lock()
         self._controls = _Controls(speed=speed)
         self._stop = threading.Event()
+        self._subscribed = threading.Event()  # a client subscribed: playback may start
         self.server = FoxgloveServer(
             host,
             port,
             BodyScene(body_view(scene), scene.frames.world, scene.frames.body),
             scene_topic="/rigid_rot_sim/body_scene",
-            listener=self,
+            listener=server_listener(
+                on_subscribe=lambda client, channel: self._subscribed.set(),
+                on_playback_control_request=self.on_playback_control_request,
+            ),
             playback_range=(self.times[0], self.times[-1]),
         )
 
@@ -117,7 +123,11 @@ class RecordingPlayer:
         self._stop.set()
 
     def play(self, once: bool = False) -> None:
-        """Serve the messages at their log times until stopped (or, with ``once``, the end is reached)."""
+        """Serve the messages at their log times, from the first subscription on, until stopped
+        (or, with ``once``, the end is reached)."""
+        while not self._subscribed.wait(_POLL):
+            if self._stop.is_set():
+                return
         index, position = 0, self.times[0]
         anchor_wall, anchor_position = time.monotonic(), position
         ended = False
