@@ -31,6 +31,9 @@ __all__ = ["RecordingPlayer"]
 _STATE_TYPE = "rigid_rot_msgs/msg/RigidBodyState"
 #: Longest wait between two checks of the controls and of a stop request, s.
 _POLL = 0.05
+#: With ``once``: how long the server stays up after the last message (foxglove-sdk has no flush; a
+#: server stopped at once drops what is still queued for the clients), s.
+END_DRAIN = 1.0
 
 
 @dataclass
@@ -76,6 +79,8 @@ class RecordingPlayer:
             ),
             playback_range=(self.times[0], self.times[-1]),
         )
+        for topic, info in self.topics.items():  # every channel advertised before playback: a client subscribes first
+            self.server.channel(topic, info.type_name, info.definition)
 
     @property
     def port(self) -> int:
@@ -153,6 +158,7 @@ class RecordingPlayer:
                     ended = True
                     self._broadcast("Ended", self.times[-1], controls.speed, False, None)
                     if once:
+                        self._stop.wait(END_DRAIN)
                         return
             else:
                 anchor_wall, anchor_position = time.monotonic(), position

@@ -26,7 +26,9 @@ a page is served.
 
 from __future__ import annotations
 
+import contextlib
 import importlib.util
+import io
 import math
 import threading
 import time
@@ -158,12 +160,18 @@ class BodyPage:
         import viser.uplot
 
         self.view = view
-        self.server = server = viser.ViserServer(host=host, port=port, label=title, verbose=False)
+        with contextlib.redirect_stdout(
+            io.StringIO()
+        ):  # viser prints a banner whatever `verbose` says: ours names the URL
+            server = viser.ViserServer(host=host, port=port, label=title, verbose=False)
+        self.server: Any = server  # None once closed
         # no share button (it would reach viser's tunnel service); nothing else on the page leaves the host
         server.gui.configure_theme(show_share_button=False, show_logo=False, control_width="large")
         server.scene.set_up_direction("+z")
+        # from the side of +x, -y, a little above: the body fills the view (viser's default is 3 m away)
+        server.initial_camera.position = (1.7 * view.size, -1.7 * view.size, 1.1 * view.size)
+        server.initial_camera.look_at = (0.0, 0.0, 0.0)
         server.scene.add_grid("/grid", width=4 * view.size, height=4 * view.size, cell_size=0.25 * view.size)
-        server.scene.add_frame("/world", axes_length=0.4 * view.size, axes_radius=0.01 * view.size)
         self._body = server.scene.add_frame("/body", show_axes=False)
         server.scene.add_box(
             "/body/box",
@@ -251,7 +259,8 @@ class BodyPage:
         """Stop serving (idempotent)."""
         server, self.server = self.server, None
         if server is not None:
-            server.stop()
+            with contextlib.redirect_stdout(io.StringIO()):  # its "Server stopped" (it joins its thread)
+                server.stop()
 
 
 class _Plots:

@@ -100,7 +100,7 @@ class Browser:
             self.requests.append(params["url"])
         self.events.append(message)
 
-    def call(self, method: str, timeout: float = 30.0, **params: Any) -> dict[str, Any]:
+    def call(self, method: str, timeout: float = 60.0, **params: Any) -> dict[str, Any]:
         """Send one command; its result (events that arrive meanwhile are recorded)."""
         ident = next(self._ids)
         self.ws.send(json.dumps({"id": ident, "method": method, "params": params}))

@@ -123,8 +123,16 @@ def test_view_plays_a_recording_in_the_browser(tmp_path, browser):
     from test_resim import record_like_the_node
 
     bag = tmp_path / "run.mcap"
-    record_like_the_node(bag, "free_tumble", 3000, 10, {}, method="rk4")  # 3 s of sim time
-    command = [str(Path(sys.executable).parent / "rigid-rot"), "view", str(bag), "--web", "127.0.0.1:0"]
+    record_like_the_node(bag, "free_tumble", 8000, 10, {}, method="rk4")  # 8 s of sim time: 16 s at half speed
+    command = [
+        str(Path(sys.executable).parent / "rigid-rot"),
+        "view",
+        str(bag),
+        "--web",
+        "127.0.0.1:0",
+        "--speed",
+        "0.5",
+    ]
     process = subprocess.Popen(command, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
     lines: list[str] = []
     try:
@@ -135,7 +143,7 @@ def test_view_plays_a_recording_in_the_browser(tmp_path, browser):
         host = match.group(1)
         box = _open_page(browser, host)
         _check_the_body_turns(browser, box, "recording")
-        assert "playing" in browser.text()
+        assert "playing at 0.5x" in browser.text(), browser.text()
         browser.click_button("Pause")
         browser.until("/paused at/.test(document.body.innerText)", WAIT, "the paused playback")
         t_paused = _sim_time(browser)

@@ -35,9 +35,9 @@ integrator: {method: rk4, dt: 0.01}
 """
 
 
-def _inside_box(view, point) -> bool:
-    local = Rotation.from_quat(view.box_orientation).inv().apply(np.asarray(point) - view.box_center)
-    return bool(np.all(np.abs(local) <= 0.5 * np.asarray(view.box_sides) + 1e-12))
+def _corners(view) -> np.ndarray:
+    signs = np.array([[x, y, z] for x in (-1, 1) for y in (-1, 1) for z in (-1, 1)], dtype=float)
+    return view.box_center + Rotation.from_quat(view.box_orientation).apply(0.5 * signs * view.box_sides)
 
 
 def test_wheels_are_discs_on_their_axes_outside_the_box():
@@ -48,8 +48,9 @@ def test_wheels_are_discs_on_their_axes_outside_the_box():
         offset = np.asarray(center) - view.box_center
         np.testing.assert_allclose(np.cross(offset, axis), 0.0, atol=1e-12)  # on the axis through the centre
         assert np.dot(offset, axis) > 0.0
-        assert _inside_box(view, np.asarray(center) - 1e-6 * np.asarray(axis))  # just outside: its inner face
-        assert not _inside_box(view, np.asarray(center) + 0.5 * view.wheel_thickness * np.asarray(axis))
+        # just outside the box: every corner is behind the disc's inner face, the furthest one by half a thickness
+        behind = (_corners(view) - np.asarray(center)) @ np.asarray(axis) + 0.5 * view.wheel_thickness
+        assert behind.max() == pytest.approx(-0.5 * view.wheel_thickness, abs=1e-12)
         vertices, faces = web.disc_mesh(center, axis, view.wheel_radius, view.wheel_thickness)
         radial = vertices - np.asarray(center)
         radial -= np.outer(radial @ np.asarray(axis), axis)
