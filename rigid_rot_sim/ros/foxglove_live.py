@@ -75,7 +75,12 @@ def start(
         return None, "Foxglove live server (foxglove-sdk not installed: pip install rigid_rot_sim[viewer])"
     scene_topic = f"{namespace.rstrip('/')}/body_scene"
     lives: list[FoxgloveLive] = []  # the listener exists before the server, the server before its FoxgloveLive
-    listener = server_listener(on_subscribe=lambda client, channel: [live.subscribed(channel.topic) for live in lives])
+
+    def on_subscribe(client: Any, channel: Any) -> None:
+        for live in lives:
+            live.subscribed(channel.topic)
+
+    listener = server_listener(on_subscribe=on_subscribe)
     server = FoxgloveServer(
         host, port, BodyScene(view, frames.world, frames.body), scene_topic=scene_topic, listener=listener
     )

@@ -108,7 +108,7 @@ def _rgb(rgba: tuple[float, float, float, float]) -> tuple[int, int, int]:
     return (round(255 * rgba[0]), round(255 * rgba[1]), round(255 * rgba[2]))
 
 
-def _wxyz(q: Sequence[float]) -> tuple[float, float, float, float]:
+def _wxyz(q: Any) -> tuple[float, float, float, float]:
     """viser's scalar-first order from ours (x, y, z, w)."""
     return (float(q[3]), float(q[0]), float(q[1]), float(q[2]))
 
@@ -175,7 +175,7 @@ class BodyPage:
         self._body = server.scene.add_frame("/body", show_axes=False)
         server.scene.add_box(
             "/body/box",
-            dimensions=tuple(max(side, 1e-3) for side in view.box_sides),
+            dimensions=np.maximum(np.asarray(view.box_sides), 1e-3),
             color=_rgb(BOX_COLOR),
             opacity=BOX_COLOR[3],
             position=view.box_center,
@@ -191,13 +191,12 @@ class BodyPage:
         for i, (axis, center) in enumerate(zip(view.wheel_axes, view.wheel_centers, strict=True)):
             vertices, faces = disc_mesh(center, axis, view.wheel_radius, view.wheel_thickness)
             server.scene.add_mesh_simple(f"/body/wheel_{i}", vertices, faces, color=_rgb(WHEEL_COLOR))
-        arrow = {"shaft_radius": 0.5 * view.shaft_diameter, "head_radius": view.shaft_diameter}
-        zero = np.zeros((1, 2, 3))
+        shaft, head, zero = 0.5 * view.shaft_diameter, view.shaft_diameter, np.zeros((1, 2, 3))
         self._omega = server.scene.add_arrows(
-            "/body/omega", zero, _rgb(OMEGA_COLOR), head_length=view.head_size, **arrow
+            "/body/omega", zero, _rgb(OMEGA_COLOR), shaft_radius=shaft, head_radius=head, head_length=view.head_size
         )
         self._momentum = server.scene.add_arrows(
-            "/momentum", zero, _rgb(MOMENTUM_COLOR), head_length=view.head_size, **arrow
+            "/momentum", zero, _rgb(MOMENTUM_COLOR), shaft_radius=shaft, head_radius=head, head_length=view.head_size
         )
         self._trail_points: deque[np.ndarray] = deque(maxlen=TRAIL_POINTS)
         self._trail = server.scene.add_line_segments(
