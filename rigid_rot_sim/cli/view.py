@@ -48,7 +48,7 @@ def run(args) -> int:
     foxglove_address = args.foxglove if args.foxglove is not None or args.web is not None else "8765"
     players: list = []
     if args.web is not None:
-        host, port = foxglove.parse_address(args.web, what="web")
+        host, port = foxglove.parse_address(args.web, what="web page")
         if not web.available():
             raise ValueError("viser is not installed (pip install rigid_rot_sim[web])")
     if foxglove_address is not None:

@@ -82,7 +82,7 @@ def start(address: str, node: Node, sim: Simulator, view: BodyView, title: str) 
 
     ValueError for a malformed address; OSError when the host cannot be bound.
     """
-    host, port = parse_address(address, what="web")
+    host, port = parse_address(address, what="web page")
     if not available():
         return None, missing_line
     page = BodyPage(host, port, view, title)
