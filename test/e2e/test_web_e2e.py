@@ -24,7 +24,7 @@ import numpy as np
 import pytest
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
-pytest.importorskip("viser", reason="the web extra (make setup installs it)")  # noqa: E402
+import viser  # noqa: E402,F401  (the web extra: make setup installs it, so these tests always run)
 from browser import start_browser  # noqa: E402
 from e2e_helpers import WAIT  # noqa: E402
 

@@ -16,6 +16,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+import viser  # noqa: F401  (the web extra: make setup installs it, so these tests always run)
 from scipy.spatial.transform import Rotation
 
 from rigid_rot_sim.run.body_view import body_view
@@ -80,9 +81,6 @@ def test_a_frame_is_the_snapshot():
     assert frame.t == snapshot.t and frame.digest == snapshot.digest != 0
     np.testing.assert_array_equal(frame.orientation, snapshot.orientation)
     np.testing.assert_array_equal(frame.momentum_world, snapshot.angular_momentum_world)
-
-
-viser = pytest.importorskip("viser", reason="the web extra (make setup installs it)")
 
 
 @pytest.fixture
@@ -165,3 +163,19 @@ def test_a_recordings_frames_are_its_states(tmp_path):
     assert len(frames) == len(states) >= 20
     assert [round(f.t * 1e9) for f in frames] == [m.log_time_ns for m in states]
     assert frames[-1].digest != 0
+
+
+def test_without_viser_the_run_goes_on_and_view_says_so_in_one_line(monkeypatch, tmp_path, capsys):
+    from rigid_rot_sim.cli import main
+    from rigid_rot_sim.ros import web_live
+
+    monkeypatch.setitem(sys.modules, "viser", None)  # as if not installed: find_spec finds nothing
+    assert not web_live.available()
+    view = body_view(load_scene(resolve_scene("free_tumble")))
+    live, words = web_live.start("127.0.0.1:0", None, None, view, "t")  # the node is not touched
+    assert live is None and words == web.missing_line  # the start-up line lists it as left out
+    assert main(["view", str(tmp_path / "missing.mcap"), "--web", "0"]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "viser is not installed (pip install rigid_rot_sim[web])" in err
+    with pytest.raises(ValueError, match="web page address 'x:y'"):
+        web_live.start("x:y", None, None, view, "t")
