@@ -116,7 +116,10 @@ def main() -> None:
     print(f"free_tumble, rtf 1, ~/state at 200 Hz; {options.repeats} x {options.seconds:g} s per mode (median)")
     for mode in modes:
         median = statistics.median(shares[mode])
-        print(f"  {label[mode]:32s} {100 * median:6.1f} % of a core  ({median / base:4.2f}x the baseline)")
+        spread = f"{100 * min(shares[mode]):.1f}..{100 * max(shares[mode]):.1f}"
+        print(
+            f"  {label[mode]:32s} {100 * median:6.1f} % of a core  ({median / base:4.2f}x the baseline; runs {spread})"
+        )
     print(f"  {'the browser itself (Chromium)':32s} {100 * statistics.median(browser_shares):6.1f} % of a core")
 
 
