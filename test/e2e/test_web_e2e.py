@@ -5,8 +5,8 @@
   button pauses the node (its ~/state stops);
 * ``rigid-rot view BAG --web``: the same for a recording, with its own play / pause;
 * the page fetches nothing off the host (every request the page makes goes to the server);
-* a browser attached to a lockstep run (connecting, reloading) leaves the run digest equal to
-  that of the same run without a page.
+* a browser attached to a lockstep run (connecting, reloading, leaving mid-run) leaves the run
+  digest equal to that of the same run without a page.
 
 The screenshots are saved under ``out/web_e2e/`` (for the test log). In CI (``CI`` or
 ``RIGID_ROT_SIM_CI`` set) a browser that does not start fails these tests; elsewhere they skip.
@@ -204,14 +204,15 @@ def _lockstep_digest(launch_node, collector, browser=None) -> int:
         node,
         "the loop's graph",
     )
-    if browser is not None:
+    if browser is not None:  # a browser connects, disconnects and connects again (a reload) before the run goes
         host = _address_from(node.log, node.check_alive)
         _open_page(browser, host)
-    reply = collector.call(SetBool, f"{NODE}/pause", SetBool.Request(data=False), process=node, idempotent=True)
-    assert reply.success, reply.message
-    if browser is not None:  # a browser that disconnects and connects again mid-run
         browser.call("Page.reload")
         browser.until("document.body && /sim time/.test(document.body.innerText)", PAGE_WAIT, "the reloaded page")
+    reply = collector.call(SetBool, f"{NODE}/pause", SetBool.Request(data=False), process=node, idempotent=True)
+    assert reply.success, reply.message
+    if browser is not None:  # ... and leaves while it runs
+        browser.goto("about:blank")
     end = round(DURATION * 1e9)
     collector.spin_until(lambda: end in last, 120.0, node, "the last state")
     assert node.process.wait(timeout=30) == 0, node.log()
