@@ -30,6 +30,7 @@ import contextlib
 import importlib.util
 import io
 import math
+import socket
 import threading
 import time
 from collections import deque
@@ -135,6 +136,17 @@ def disc_mesh(
     return vertices.astype(np.float32), np.asarray(faces, dtype=np.uint32)
 
 
+def _check_host(host: str) -> None:
+    """OSError naming ``host`` when this machine cannot listen there (viser would wait for ever: it tries
+    1000 ports on any bind error, then never reports back)."""
+    try:
+        family, kind, proto, _, address = socket.getaddrinfo(host, 0, type=socket.SOCK_STREAM)[0]
+        with socket.socket(family, kind, proto) as probe:
+            probe.bind(address)
+    except OSError as exc:
+        raise OSError(f"cannot listen on host {host!r}: {exc.strerror or exc}") from None
+
+
 def _legend(view: BodyView) -> str:
     """What the arrows' lengths mean (the scales are fixed for the run)."""
     return (
@@ -160,6 +172,7 @@ class BodyPage:
         import viser.uplot
 
         self.view = view
+        _check_host(host)
         with contextlib.redirect_stdout(
             io.StringIO()
         ):  # viser prints a banner whatever `verbose` says: ours names the URL

@@ -179,3 +179,11 @@ def test_without_viser_the_run_goes_on_and_view_says_so_in_one_line(monkeypatch,
     assert err.count("\n") == 1 and "viser is not installed (pip install rigid_rot_sim[web])" in err
     with pytest.raises(ValueError, match="web page address 'x:y'"):
         web_live.start("x:y", None, None, view, "t")
+
+
+def test_a_host_that_is_not_ours_is_a_clear_error_not_a_hang():
+    view = body_view(load_scene(resolve_scene("free_tumble")))
+    start = time.monotonic()
+    with pytest.raises(OSError, match="cannot listen on host '192.0.2.1'"):  # TEST-NET-1: never a local address
+        web.BodyPage("192.0.2.1", 0, view, "t")
+    assert time.monotonic() - start < 10.0
