@@ -187,3 +187,13 @@ def test_a_host_that_is_not_ours_is_a_clear_error_not_a_hang():
     with pytest.raises(OSError, match="cannot listen on host '192.0.2.1'"):  # TEST-NET-1: never a local address
         web.BodyPage("192.0.2.1", 0, view, "t")
     assert time.monotonic() - start < 10.0
+
+
+def test_run_web_becomes_the_nodes_web_parameter():
+    from rigid_rot_sim.cli import build_parser
+    from rigid_rot_sim.cli.run import node_arguments
+
+    argv = node_arguments(build_parser("run").parse_args(["run", "free_tumble", "--web", "127.0.0.1:8080"]))
+    assert argv[argv.index("web:=127.0.0.1:8080") - 1] == "-p"
+    scene = parse_scene_text("body: {principal_moments: [1.0, 2.0, 3.0]}\nweb: 8080\n")
+    assert scene.web == "8080"  # the scene key, the parameter's default
