@@ -322,17 +322,30 @@ class FramePump:
 
     Frames offered in between are dropped: a fast run, a slow or stalled browser or none at all
     cost the simulation the same. ``describe(frame, rtf)`` gives the status panel's text.
+    ``watched()`` (default: a browser is connected) says whether to send anything: while nobody
+    watches, only the plots' history is kept (viser would buffer every update for no one, which
+    docs/viewer.md's benchmark measured), and a browser that connects gets the latest frame at the
+    next tick.
     """
 
-    def __init__(self, page: BodyPage, describe: Callable[[Frame, float | None], str], rate: float = MAX_RATE) -> None:
+    def __init__(
+        self,
+        page: BodyPage,
+        describe: Callable[[Frame, float | None], str],
+        rate: float = MAX_RATE,
+        watched: Callable[[], bool] | None = None,
+    ) -> None:
         self.page = page
         self.describe = describe
+        self.watched = watched if watched is not None else lambda: page.clients() > 0
         self.period = 1.0 / rate
         self.sent = 0  # frames shown (for the tests and the benchmark)
         self.offered = 0
         self.failure: str | None = None  # the first update that failed (reported once)
         self._latest: Any = None
         self._history: deque[Frame] = deque(maxlen=PLOT_SAMPLES)
+        self._rate_anchor: tuple[float, float] | None = None  # (wall s, sim s) of the last rate sample
+        self._rtf: float | None = None
         self._stop = threading.Event()
         self._thread = threading.Thread(target=self._run, name="web-page", daemon=True)
         self._thread.start()
@@ -343,47 +356,45 @@ class FramePump:
         self.offered += 1
 
     def _run(self) -> None:
-        shown: Any = None
-        rate_anchor: tuple[float, float] | None = None
-        rtf: float | None = None
+        converted: Any = None  # the last state turned into a frame (and added to the history)
+        shown: Any = None  # the last state sent to the page
         frame: Frame | None = None
         last_status = 0.0
         while not self._stop.wait(self.period):
             state = self._latest
-            if state is None or state is shown:
-                # nothing new (paused, waiting for a turn): the status panel still follows, twice a second
-                if frame is not None and time.monotonic() - last_status >= 0.5:
-                    last_status = time.monotonic()
-                    self._status(frame, None)
-                continue
-            shown = state
             try:
-                frame = Frame.of(state)
-                now = time.monotonic()
-                if rate_anchor is None or frame.t < rate_anchor[1]:  # the first frame, or a reset
-                    rate_anchor = (now, frame.t)
-                    self._history.clear()
-                    self.page.clear_trail()
-                elif now - rate_anchor[0] >= 1.0:  # the real-time factor over the last second or so
-                    rtf = (frame.t - rate_anchor[1]) / (now - rate_anchor[0])
-                    rate_anchor = (now, frame.t)
-                self._history.append(frame)
-                self.page.show(frame, self._history)
-                self._status(frame, rtf)
-                last_status = now
-                self.sent += 1
+                if state is not None and state is not converted:
+                    frame, converted = self._convert(state), state
+                if frame is None or not self.watched():
+                    continue
+                if state is not shown:
+                    self.page.show(frame, self._history)
+                    self.page.status(self.describe(frame, self._rtf))
+                    shown, last_status = state, time.monotonic()
+                    self.sent += 1
+                elif time.monotonic() - last_status >= 0.5:
+                    # nothing new (paused, waiting for a turn): the status panel still follows, twice a second
+                    self.page.status(self.describe(frame, None))
+                    last_status = time.monotonic()
             except Exception as exc:  # the page must not stop the pump quietly: say it once, go on
                 if self.failure is None:
                     self.failure = repr(exc)
                     print(f"web page: update failed: {exc!r}", flush=True)
 
-    def _status(self, frame: Frame, rtf: float | None) -> None:
-        try:
-            self.page.status(self.describe(frame, rtf))
-        except Exception as exc:  # as above
-            if self.failure is None:
-                self.failure = repr(exc)
-                print(f"web page: status update failed: {exc!r}", flush=True)
+    def _convert(self, state: Any) -> Frame:
+        """The frame of ``state``, added to the plots' history; the real-time factor follows about every second."""
+        frame = Frame.of(state)
+        now = time.monotonic()
+        anchor = self._rate_anchor
+        if anchor is None or frame.t < anchor[1]:  # the first frame, or a reset
+            self._rate_anchor = (now, frame.t)
+            self._history.clear()
+            self.page.clear_trail()
+        elif now - anchor[0] >= 1.0:
+            self._rtf = (frame.t - anchor[1]) / (now - anchor[0])
+            self._rate_anchor = (now, frame.t)
+        self._history.append(frame)
+        return frame
 
     def close(self) -> None:
         """Stop the pump and the page (idempotent)."""

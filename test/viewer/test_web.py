@@ -94,7 +94,7 @@ def page():
 def test_the_pump_shows_at_most_max_rate_frames_a_second_and_the_latest_last(page):
     sim = Simulator(load_scene(resolve_scene("free_tumble")), method="rk4")
     shown: list[float] = []
-    pump = web.FramePump(page, lambda frame, rtf: shown.append(frame.t) or f"t {frame.t}")
+    pump = web.FramePump(page, lambda frame, rtf: shown.append(frame.t) or f"t {frame.t}", watched=lambda: True)
     try:
         start = time.monotonic()
         offered = 0
@@ -117,7 +117,7 @@ def test_the_pump_shows_at_most_max_rate_frames_a_second_and_the_latest_last(pag
 
 
 def test_offering_a_state_costs_an_assignment(page):
-    pump = web.FramePump(page, lambda frame, rtf: "")
+    pump = web.FramePump(page, lambda frame, rtf: "", watched=lambda: True)
     try:
         snapshot = Simulator(load_scene(resolve_scene("free_tumble")), method="rk4").snapshot()
         start = time.perf_counter()
@@ -132,7 +132,7 @@ def test_offering_a_state_costs_an_assignment(page):
 def test_a_stalled_page_does_not_stall_the_offers(page):
     """A page that takes long to update (a slow browser, a busy server) only delays the pump."""
     release = threading.Event()
-    pump = web.FramePump(page, lambda frame, rtf: release.wait(5.0) and "")
+    pump = web.FramePump(page, lambda frame, rtf: release.wait(5.0) and "", watched=lambda: True)
     try:
         snapshot = Simulator(load_scene(resolve_scene("free_tumble")), method="rk4").snapshot()
         deadline = time.monotonic() + 1.0
@@ -197,3 +197,27 @@ def test_run_web_becomes_the_nodes_web_parameter():
     assert argv[argv.index("web:=127.0.0.1:8080") - 1] == "-p"
     scene = parse_scene_text("body: {principal_moments: [1.0, 2.0, 3.0]}\nweb: 8080\n")
     assert scene.web == "8080"  # the scene key, the parameter's default
+
+
+def test_while_nobody_watches_nothing_is_sent_and_the_first_browser_gets_the_latest(page):
+    assert page.clients() == 0  # the default: a browser connected
+    watching = threading.Event()
+    pump = web.FramePump(page, lambda frame, rtf: "", watched=watching.is_set)
+    sim = Simulator(load_scene(resolve_scene("free_tumble")), method="rk4")
+    try:
+        for count in range(1, 11):
+            sim.advance(5)
+            pump.offer(sim.snapshot())
+            deadline = time.monotonic() + 10.0
+            while len(pump._history) < count:  # the plots' history is kept meanwhile
+                assert time.monotonic() < deadline, "the state never reached the history"
+                time.sleep(0.01)
+        assert pump.sent == 0
+        watching.set()
+        deadline = time.monotonic() + 10.0
+        while pump.sent == 0:
+            assert time.monotonic() < deadline, "the watching browser got nothing"
+            time.sleep(0.01)
+    finally:
+        pump.close()
+    assert pump.sent == 1  # the latest, once (nothing new came after)
