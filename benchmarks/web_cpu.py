@@ -9,7 +9,9 @@ The same run three ways, interleaved, in one invocation (the baseline measured b
 showing the page. Figures: the node process's CPU time (user + system, from /proc) over the wall
 time of the measured window (after start-up), as a share of one core; and, in (c), the browser's
 own share (all its processes). The window opens once the node publishes (the start-up line) and
-the browser, in (c), shows the status panel. Needs Debian's chromium (test/e2e/browser.py).
+the browser, in (c), shows the status panel. Part 2 measures the page's own thread in this process
+(less noisy): a simulator offering 200 states a second with no page, to a page nobody watches, and to
+a page that sends every frame. Needs Debian's chromium (test/e2e/browser.py).
 A loaded machine (other engineers' runs) makes every figure noisy: compare within one invocation.
 """
 
@@ -91,6 +93,44 @@ def one_run(mode: str, seconds: float, env: dict[str, str], log_dir: Path) -> tu
         node.wait(timeout=20)
 
 
+def pump_alone(seconds: float) -> dict[str, float]:
+    """Part 2, in this process (less noise than whole nodes): CPU share of offering 200 states a second
+    with no page, to a page nobody watches, and to a page that sends every frame (as to a browser)."""
+    import resource
+
+    from rigid_rot_sim.run.body_view import body_view
+    from rigid_rot_sim.run.simulator import Simulator
+    from rigid_rot_sim.scene.scene import load_scene
+    from rigid_rot_sim.share import resolve_scene
+    from rigid_rot_sim.viewer import web
+
+    def cpu() -> float:
+        usage = resource.getrusage(resource.RUSAGE_SELF)
+        return usage.ru_utime + usage.ru_stime
+
+    scene = load_scene(resolve_scene("free_tumble"))
+    sim = Simulator(scene, method="rk4")
+    page = web.BodyPage("127.0.0.1", 0, body_view(scene), "benchmark")
+    shares = {}
+    try:
+        for label, watched in (("no page", None), ("nobody watching", False), ("sending every frame", True)):
+            pump = None if watched is None else web.FramePump(page, lambda f, r: "", watched=lambda w=watched: w)
+            cpu0, wall0 = cpu(), time.monotonic()
+            while time.monotonic() - wall0 < seconds:
+                sim.advance(1)
+                state = sim.snapshot()
+                if pump is not None:
+                    pump.offer(state)
+                time.sleep(0.005)
+            shares[label] = (cpu() - cpu0) / (time.monotonic() - wall0)
+            if pump is not None:
+                pump._stop.set()
+                pump._thread.join()
+    finally:
+        page.close()
+    return shares
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--seconds", type=float, default=10.0, help="measured window per run, s")
@@ -121,6 +161,9 @@ def main() -> None:
             f"  {label[mode]:32s} {100 * median:6.1f} % of a core  ({median / base:4.2f}x the baseline; runs {spread})"
         )
     print(f"  {'the browser itself (Chromium)':32s} {100 * statistics.median(browser_shares):6.1f} % of a core")
+    print(f"the page's thread alone, in one process, 200 states/s for {options.seconds:g} s each:")
+    for label, share in pump_alone(options.seconds).items():
+        print(f"  {label:32s} {100 * share:6.1f} % of a core")
 
 
 if __name__ == "__main__":
