@@ -323,9 +323,8 @@ class FramePump:
     Frames offered in between are dropped: a fast run, a slow or stalled browser or none at all
     cost the simulation the same. ``describe(frame, rtf)`` gives the status panel's text.
     ``watched()`` (default: a browser is connected) says whether to send anything: while nobody
-    watches, only the plots' history is kept (viser would buffer every update for no one, which
-    docs/viewer.md's benchmark measured), and a browser that connects gets the latest frame at the
-    next tick.
+    watches, only the plots' history is kept (the updates would be serialised and buffered by viser
+    for no one), and a browser that connects gets the latest frame at the next tick.
     """
 
     def __init__(
