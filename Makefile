@@ -6,7 +6,7 @@
 #                its share directory, ament index entry and lib/rigid_rot_sim/ (ros2 run);
 #                `. .venv/bin/activate` then gives a
 #                shell that is a sourced ROS 2 workspace (AMENT_PREFIX_PATH & co.)
-#   make demo    setup, then the main job
+#   make demo    setup, then the main job (WEB=1: with the body's web page; docs/viewer.md)
 #   make test    setup, then the whole test suite
 #   make clean   remove build/ and the set-up stamps (keeps the downloaded .venv packages)
 #
@@ -42,6 +42,9 @@ PY_PINS := \
 SWEEP_PINS := dask==2026.8.0 distributed==2026.8.0 pyarrow==26.0.1
 # The viewer extra (pip install rigid_rot_sim[viewer]): Foxglove's SDK, a live WebSocket server without ROS.
 VIEWER_PINS := foxglove-sdk==0.30.3
+# The web extra (pip install rigid_rot_sim[web]): viser serves the body's page (three.js, its client bundled in
+# the wheel) from Python, no internet needed; the browser tests drive Debian's chromium (.ci/run installs it).
+WEB_PINS := viser==1.1.1
 # websockets: the tests' Foxglove ws-protocol client. The gates' tools (test/test_lint.py, test/test_mypy.py;
 # configured in pyproject.toml): scipy-stubs 1.17.1.x are the stubs of scipy 1.17.1 and work with numpy 2.4
 # (they pull in optype and numpy-typing-compat). mpmath: the 40-digit reference of test/core/test_exact_ulps.py.
@@ -79,7 +82,7 @@ $(VPY):
 # Rewritten only when the pins change, so that its timestamp drives the pip step.
 $(STAMPS)/requirements.txt: FORCE | $(VPY)
 	@mkdir -p $(STAMPS)
-	@printf '%s\n' $(ROS_PINS) $(PY_PINS) $(SWEEP_PINS) $(VIEWER_PINS) $(TEST_PINS) > $@.new
+	@printf '%s\n' $(ROS_PINS) $(PY_PINS) $(SWEEP_PINS) $(VIEWER_PINS) $(WEB_PINS) $(TEST_PINS) > $@.new
 	@if cmp -s $@.new $@; then rm $@.new; else mv $@.new $@; fi
 
 $(STAMPS)/pip: $(STAMPS)/requirements.txt
@@ -152,6 +155,9 @@ $(STAMPS)/workspace: $(STAMPS)/package tools/install_workspace.py $(VENV)/bin/ac
 # recording is summarised, re-simulated bit for bit without DDS, and plotted.
 DEMO_SCENE := free_tumble
 DEMO_BAG := out/demo_$(DEMO_SCENE).mcap
+# `make demo WEB=1`: the demo's run at wall-clock pace with its web page, then the recording served on it.
+WEB ?=
+WEB_PORT ?= 8080
 # The closed loop of `make demo`: the shipped controller and the node in lockstep (config/scenes).
 LOOP_SCENE := closed_loop_lockstep
 LOOP_SECONDS := 8
@@ -171,8 +177,10 @@ export LOOP_DIGESTS
 demo: setup
 	@mkdir -p out && rm -f $(DEMO_BAG)
 	@echo "== rigid-rot run $(DEMO_SCENE): the node over DDS, recorded to $(DEMO_BAG) =="
+	@if [ -n "$(WEB)" ]; then echo "web page: open http://127.0.0.1:$(WEB_PORT)/ in a browser (offline; docs/viewer.md)"; fi
 	@export ROS_DOMAIN_ID=$$(( ($$$$ % 100) + 1 )) ROS_AUTOMATIC_DISCOVERY_RANGE=LOCALHOST; \
-	"$(VENV)/bin/rigid-rot" run $(DEMO_SCENE) --duration 12 --realtime-factor 4 --echo 1 --record $(DEMO_BAG)
+	"$(VENV)/bin/rigid-rot" run $(DEMO_SCENE) --duration 12 --realtime-factor $(if $(WEB),1,4) --echo 1 --record $(DEMO_BAG) \
+		$(if $(WEB),--web 127.0.0.1:$(WEB_PORT))
 	@echo
 	@echo "== rigid-rot bag info $(DEMO_BAG) =="
 	@"$(VENV)/bin/rigid-rot" bag info $(DEMO_BAG)
@@ -199,6 +207,11 @@ demo: setup
 	@echo
 	@echo "recorded: $(CURDIR)/$(DEMO_BAG)"
 	@echo "inspect:  .venv/bin/rigid-rot bag info|plot|resim|replay $(DEMO_BAG); ros2 bag info/play and Foxglove open it as is"
+	@echo "see it:   .venv/bin/rigid-rot view $(DEMO_BAG) --web $(WEB_PORT), then open http://127.0.0.1:$(WEB_PORT)/ (make demo WEB=1 does both)"
+	@if [ -n "$(WEB)" ]; then \
+		echo "== the recording on the web page: open http://127.0.0.1:$(WEB_PORT)/ (Ctrl-C ends) =="; \
+		"$(VENV)/bin/rigid-rot" view $(DEMO_BAG) --web 127.0.0.1:$(WEB_PORT) || true; \
+	fi
 
 # An explicit path, so the suite is the same from any directory. pytest's exit code 5 (nothing
 # collected) must never pass for green: it is reported and turned into a failure.

@@ -40,7 +40,8 @@ setup(
     ],  # jsonschema: Draft 2020-12
     # sweeps (`rigid-rot sweep`, --scheduler): no rosdep keys exist for these; pip installs them
     # viewer (`--foxglove`, `rigid-rot view`): the Foxglove live server, without ROS
-    extras_require={"sweep": ["dask[distributed]", "pyarrow"], "viewer": ["foxglove-sdk"]},
+    # web (`--web`): the body's own web page (viser), offline, without ROS for `rigid-rot view`
+    extras_require={"sweep": ["dask[distributed]", "pyarrow"], "viewer": ["foxglove-sdk"], "web": ["viser"]},
     zip_safe=True,
     maintainer="rigid_rot_sim maintainers",
     maintainer_email="maintainers@rigid-rot-sim.org",

@@ -39,13 +39,15 @@ PYTHON_KEYS: dict[str, set[str]] = {
 }
 #: Modules without any rosdep key (rosdistro's python.yaml has no dask, distributed or pyarrow):
 #: optional, for sweeps only; declared for pip as setup.py's `sweep` extra, installed by make setup.
-#: psutil (used by the distributed-sweep tests) is a dependency of distributed.
+#: psutil (used by the distributed-sweep tests) is a dependency of distributed. foxglove-sdk and viser: the
+#: viewer and web extras (no rosdep keys either).
 PIP_ONLY = {
     "dask": "dask[distributed]",
     "distributed": "dask[distributed]",
     "psutil": "dask[distributed]",
     "pyarrow": "pyarrow",
     "foxglove": "foxglove-sdk",
+    "viser": "viser",
 }
 #: ROS packages imported as Python modules: the key is the package name.
 ROS_PACKAGES = {

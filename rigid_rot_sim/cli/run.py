@@ -7,7 +7,8 @@
 SCENE is a path, or the name of a scene shipped in config/scenes (found through the ament
 index: the installed share directory, or the checkout when not installed). The options become
 node parameters (``scene``, ``duration``, ``real_time_factor``, ``integrator``, ``dt``,
-``record_path``, ``record_log_time``); anything after ``--ros-args`` goes to ROS unchanged, so a params file,
+``record_path``, ``record_log_time``, ``foxglove``, ``web``); anything after ``--ros-args`` goes to ROS
+unchanged, so a params file,
 ``-p`` or remappings work as with ``ros2 run`` (and win over the options). ``--echo PERIOD`` adds a subscriber
 in the same process that prints the received ~/state every PERIOD s of sim time: what
 the node published, through DDS. Exit code 0 when the duration is reached or on Ctrl-C.
@@ -54,6 +55,11 @@ def add_parser(subparsers) -> None:
         help="serve the run live to Foxglove (WebSocket, host default 127.0.0.1); needs foxglove-sdk",
     )
     parser.add_argument(
+        "--web",
+        metavar="[HOST:]PORT",
+        help="serve the body's web page (http, host default 127.0.0.1; any browser, offline); needs viser",
+    )
+    parser.add_argument(
         "--echo", type=positive_number, metavar="PERIOD", help="print the received ~/state every PERIOD s of sim time"
     )
     add_ros_args(parser)
@@ -73,6 +79,7 @@ def node_arguments(args: argparse.Namespace) -> list[str]:
         (p.RECORD_PATH, None if args.record is None else os.path.abspath(args.record)),
         (p.RECORD_LOG_TIME, args.record_log_time),
         (p.FOXGLOVE, args.foxglove),
+        (p.WEB, args.web),
     ]
     argv = ["rigid_rot_sim_node", "--ros-args"]
     for spec, value in options:

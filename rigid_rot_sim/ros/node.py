@@ -103,6 +103,7 @@ from rigid_rot_sim.share import ensure_ament_prefix_path, resolve_scene
 if TYPE_CHECKING:  # imported when recording only: the mcap packages are optional at run time
     from rigid_rot_sim.ros.foxglove_live import FoxgloveLive
     from rigid_rot_sim.ros.recording import NodeRecording
+    from rigid_rot_sim.ros.web_live import WebLive
 
 NODE_NAME = "rigid_rot_sim"
 #: Most wall time (s) to wait at shutdown for a service in flight (a ~/step request is at most 0.25 s).
@@ -173,8 +174,11 @@ class SceneRun:
             self.recording = self._start_recording(node, settings[params.RECORD_PATH], settings[params.RECORD_LOG_TIME])
         self.foxglove: FoxgloveLive | None = None
         self.foxglove_words = ""
+        self.web: WebLive | None = None
+        self.web_words = ""
         try:
             self.foxglove, self.foxglove_words = self._start_foxglove(node, settings[params.FOXGLOVE])
+            self.web, self.web_words = self._start_web(node, settings[params.WEB])
             sim.pause(settings[params.START_PAUSED])
             self.driver.pacer.anchor(sim.t)
             # the run loop's turns (run_loop): paced on the steady clock, never on /clock, which this node publishes
@@ -232,6 +236,21 @@ class SceneRun:
             self.outputs.listeners.append(live)  # every message published, as the bytes published
         return live, words
 
+    def _start_web(self, node: Node, address: str) -> tuple[WebLive | None, str]:
+        """The web page, an observer of the run driver (None without an address or viser)."""
+        if not address:
+            return None, ""
+        from rigid_rot_sim.ros import web_live
+
+        title = f"rigid_rot_sim: {self.scene.name}"
+        try:
+            live, words = web_live.start(address, node, self.sim, self.outputs.body_view, title)
+        except (OSError, RuntimeError) as exc:  # the host is not ours
+            raise ValueError(f"web: cannot serve on {address}: {exc}") from None
+        if live is not None:
+            self.driver.observers.append(live)  # the states the outputs publish, as snapshots (no copy)
+        return live, words
+
     def _startup_line(self, auto: bool, record_path: str, log_time: str) -> str:
         """What was built and what was left out (and why), in one line."""
         sim, scene, pacer, duration = self.sim, self.scene, self.driver.pacer, self.driver.duration
@@ -270,6 +289,8 @@ class SceneRun:
             left_out.append("recorder (nothing recorded)")
         if self.foxglove_words:
             (built if self.foxglove is not None else left_out).append(self.foxglove_words)
+        if self.web_words:
+            (built if self.web is not None else left_out).append(self.web_words)
         return (
             f"scene {scene.name!r} ({scene.source}), rtf {pacer.real_time_factor:g}, {'paused, ' if sim.paused else ''}"
             f"duration {'unbounded' if duration is None else f'{duration:g} s'}; "
@@ -327,6 +348,8 @@ class SceneRun:
             self.recording.close()
         if self.foxglove is not None:
             self.foxglove.close()
+        if self.web is not None:
+            self.web.close()
         action = self.simulation_services.simulate_steps if self.simulation_services is not None else None
         if action is not None and not self._action_destroyed:
             # rclpy's destroy_node leaves action servers alone; one left holds the node, which then

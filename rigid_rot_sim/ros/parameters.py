@@ -267,6 +267,14 @@ FOXGLOVE = ParamSpec(
     "(needs foxglove-sdk: pip install rigid_rot_sim[viewer])",
     read_only=True,
 )
+WEB = ParamSpec(
+    "web",
+    str,
+    lambda scene: scene.web or "",
+    "Web page address [HOST:]PORT (host default 127.0.0.1): the body in any browser, offline; empty = no page "
+    "(needs viser: pip install rigid_rot_sim[web])",
+    read_only=True,
+)
 WORLD_FRAME = ParamSpec(
     "world_frame",
     str,
@@ -380,6 +388,7 @@ PARAMETERS: tuple[ParamSpec[Any], ...] = (
     RECORD_PATH,
     RECORD_LOG_TIME,
     FOXGLOVE,
+    WEB,
     WORLD_FRAME,
     BODY_FRAME,
     GROUND_TRUTH_VARIANCE,

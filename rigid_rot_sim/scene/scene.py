@@ -371,6 +371,7 @@ class Scene:
     qos: OutputQos = OutputQos()
     recording: str | None = None
     foxglove: str | None = None  # [HOST:]PORT of a Foxglove live server (a node setting; see ros/foxglove_live)
+    web: str | None = None  # [HOST:]PORT of the body's web page (a node setting; see ros/web_live)
     commands: CommandSettings = CommandSettings()
     lockstep: LockstepSpec | None = None
     spacecraft: Spacecraft = Spacecraft()
@@ -495,6 +496,7 @@ def _scene(spec: Mapping[str, Any], source: str, text: str) -> Scene:
     commands = spec.get("commands") or {}
     recording = spec.get("recording")
     foxglove = spec.get("foxglove")
+    web = spec.get("web")
     sensors = _sensors(spec.get("sensors") or {})
     outputs = spec.get("outputs") or {}
     joint_state_topics = spec.get("joint_state_topics")
@@ -522,6 +524,7 @@ def _scene(spec: Mapping[str, Any], source: str, text: str) -> Scene:
         ),
         recording=None if recording is None else recording.strip(),
         foxglove=None if foxglove is None else str(foxglove).strip(),
+        web=None if web is None else str(web).strip(),
         commands=CommandSettings(
             max_torque=float(commands.get("max_torque", 0.0)),
             qos_depth=commands.get("qos_depth", limits.DEFAULT_COMMAND_DEPTH),

@@ -443,6 +443,16 @@ SCENE_SCHEMA: dict[str, Any] = {
                     "maximum": 65535,
                 }
             ),
+            "web": nullable(
+                {
+                    "description": "Serve the body's web page at [HOST:]PORT (http; host default 127.0.0.1, "
+                    "loopback): any browser, offline; needs viser (pip install rigid_rot_sim[web]).",
+                    "type": ["string", "integer"],
+                    "pattern": r"^(\S+:)?[0-9]{1,5}$",
+                    "minimum": 0,
+                    "maximum": 65535,
+                }
+            ),
             "sensors": _SENSORS,
             "joint_state_topics": nullable(
                 mapping(

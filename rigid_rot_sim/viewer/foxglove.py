@@ -29,7 +29,15 @@ import numpy as np
 from rigid_rot_sim.recording.definitions import complete_definition
 from rigid_rot_sim.run.body_view import BOX_COLOR, MOMENTUM_COLOR, OMEGA_COLOR, BodyView
 
-__all__ = ["DEFAULT_HOST", "DEFAULT_PORT", "BodyScene", "FoxgloveServer", "available", "parse_address"]
+__all__ = [
+    "DEFAULT_HOST",
+    "DEFAULT_PORT",
+    "BodyScene",
+    "FoxgloveServer",
+    "available",
+    "parse_address",
+    "server_listener",
+]
 
 DEFAULT_HOST = "127.0.0.1"  # loopback: a viewer on another machine needs HOST given explicitly
 DEFAULT_PORT = 8765  # Foxglove's default WebSocket port
@@ -43,16 +51,16 @@ def available() -> bool:
     return importlib.util.find_spec("foxglove") is not None
 
 
-def parse_address(text: str) -> tuple[str, int]:
-    """``[HOST:]PORT`` -> (host, port); the host defaults to loopback. ValueError names what is wrong."""
+def parse_address(text: str, what: str = "foxglove") -> tuple[str, int]:
+    """``[HOST:]PORT`` -> (host, port); the host defaults to loopback. ValueError names ``what`` is wrong."""
     host, _, port_text = text.strip().rpartition(":")
     host = host.strip("[]") or DEFAULT_HOST
     try:
         port = int(port_text)
     except ValueError:
-        raise ValueError(f"foxglove address {text!r}: expected [HOST:]PORT, e.g. 8765 or 127.0.0.1:8765") from None
+        raise ValueError(f"{what} address {text!r}: expected [HOST:]PORT, e.g. 8765 or 127.0.0.1:8765") from None
     if not 0 <= port <= 65535:
-        raise ValueError(f"foxglove address {text!r}: port must be 0..65535 (0: any free port)")
+        raise ValueError(f"{what} address {text!r}: port must be 0..65535 (0: any free port)")
     return host, port
 
 
@@ -134,6 +142,31 @@ class BodyScene:
             "arrows": [self._arrow(*view.momentum_arrow(momentum_world), MOMENTUM_COLOR)],
         }
         return {"deletions": [], "entities": [body, momentum]}
+
+
+def server_listener(
+    on_subscribe: Any = None, on_playback_control_request: Any = None, on_unsubscribe: Any = None
+) -> Any:
+    """A foxglove-sdk ``ServerListener`` calling the given functions (the others answer as the SDK's defaults).
+
+    The SDK calls every method of the listener it is given: an object that is not a
+    ``ServerListener`` fails with AttributeError for each one it lacks.
+    """
+    from foxglove.websocket import ServerListener
+
+    class _Listener(ServerListener):
+        def on_subscribe(self, client: Any, channel: Any) -> None:
+            if on_subscribe is not None:
+                on_subscribe(client, channel)
+
+        def on_unsubscribe(self, client: Any, channel: Any) -> None:
+            if on_unsubscribe is not None:
+                on_unsubscribe(client, channel)
+
+        def on_playback_control_request(self, request: Any) -> Any:
+            return None if on_playback_control_request is None else on_playback_control_request(request)
+
+    return _Listener()
 
 
 class FoxgloveServer:

@@ -5,7 +5,9 @@ definition as schema) at its log time, paced by the wall clock at the playback s
 recorded state also updates the body scene entity (:mod:`.foxglove`) and the server's time.
 The app's playback controls (foxglove-sdk's PlaybackControl capability: play, pause, seek,
 speed) drive the player; the app's timeline spans the recording's log times (sim time for a
-recording made with the default ``record_log_time: sim``).
+recording made with the default ``record_log_time: sim``). Playback starts when the first
+client subscribes to a channel, not when the server starts: a client that connects late misses
+nothing, and with ``once`` none gets the end before the beginning.
 """
 
 from __future__ import annotations
@@ -22,13 +24,16 @@ from rigid_rot_sim.recording.definitions import dynamic_decoder
 from rigid_rot_sim.recording.reader import BagReader, RecordedMessage
 from rigid_rot_sim.run.body_view import body_view
 from rigid_rot_sim.scene.scene import parse_scene_text
-from rigid_rot_sim.viewer.foxglove import BodyScene, FoxgloveServer
+from rigid_rot_sim.viewer.foxglove import BodyScene, FoxgloveServer, server_listener
 
 __all__ = ["RecordingPlayer"]
 
 _STATE_TYPE = "rigid_rot_msgs/msg/RigidBodyState"
 #: Longest wait between two checks of the controls and of a stop request, s.
 _POLL = 0.05
+#: With ``once``: how long the server stays up after the last message (foxglove-sdk has no flush; a
+#: server stopped at once drops what is still queued for the clients), s.
+END_DRAIN = 1.0
 
 
 @dataclass
@@ -62,14 +67,20 @@ class RecordingPlayer:
         self._lock = threading.Lock()
         self._controls = _Controls(speed=speed)
         self._stop = threading.Event()
+        self._subscribed = threading.Event()  # a client subscribed: playback may start
         self.server = FoxgloveServer(
             host,
             port,
             BodyScene(body_view(scene), scene.frames.world, scene.frames.body),
             scene_topic="/rigid_rot_sim/body_scene",
-            listener=self,
+            listener=server_listener(
+                on_subscribe=lambda client, channel: self._subscribed.set(),
+                on_playback_control_request=self.on_playback_control_request,
+            ),
             playback_range=(self.times[0], self.times[-1]),
         )
+        for topic, info in self.topics.items():  # every channel advertised before playback: a client subscribes first
+            self.server.channel(topic, info.type_name, info.definition)
 
     @property
     def port(self) -> int:
@@ -117,7 +128,11 @@ class RecordingPlayer:
         self._stop.set()
 
     def play(self, once: bool = False) -> None:
-        """Serve the messages at their log times until stopped (or, with ``once``, the end is reached)."""
+        """Serve the messages at their log times, from the first subscription on, until stopped
+        (or, with ``once``, the end is reached)."""
+        while not self._subscribed.wait(_POLL):
+            if self._stop.is_set():
+                return
         index, position = 0, self.times[0]
         anchor_wall, anchor_position = time.monotonic(), position
         ended = False
@@ -143,6 +158,7 @@ class RecordingPlayer:
                     ended = True
                     self._broadcast("Ended", self.times[-1], controls.speed, False, None)
                     if once:
+                        self._stop.wait(END_DRAIN)
                         return
             else:
                 anchor_wall, anchor_position = time.monotonic(), position

@@ -190,4 +190,71 @@ def test_view_serves_a_recording(tmp_path):
         client.close()
     finally:
         process.send_signal(2)
-        assert process.wait(timeout=10) == 0
+        output, _ = process.communicate(timeout=10)
+    assert process.returncode == 0, output
+    # the player is a real ServerListener: the SDK finds every callback it calls (subscribe, unsubscribe)
+    assert "Callback failed" not in output and "AttributeError" not in output, output
+
+
+def test_view_once_starts_playing_when_a_client_subscribes(tmp_path):
+    """A client that connects after the recording's own duration still gets all of it, then the close."""
+    sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "recording"))
+    from test_resim import record_like_the_node
+
+    bag = tmp_path / "run.mcap"
+    record_like_the_node(bag, "free_tumble", 400, 10, {}, method="rk4")
+    recorded = [m.log_time_ns for m in BagReader(bag).messages(["/rigid_rot_sim/state"])]
+    command = [str(Path(sys.executable).parent / "rigid-rot"), "view", str(bag), "--foxglove", "127.0.0.1:0", "--once"]
+    process = subprocess.Popen(command, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
+    try:
+        line = process.stdout.readline()
+        match = re.search(r"ws://127\.0\.0\.1:(\d+)", line)
+        assert match, line
+        # longer than the whole recording at speed 1: a player that started with the server has ended
+        time.sleep(2.0 + (recorded[-1] - recorded[0]) / 1e9)
+        assert process.poll() is None, "view --once ended before any client connected"
+        client = FoxgloveClient(f"ws://127.0.0.1:{match.group(1)}")
+        client.until(lambda: client.channel_of("/rigid_rot_sim/state") is not None, WAIT, "the state channel")
+        client.subscribe("/rigid_rot_sim/state")
+        client.until(lambda: len(client.received("/rigid_rot_sim/state")) == len(recorded), WAIT, "every state")
+        assert [t for t, _ in client.received("/rigid_rot_sim/state")] == recorded
+        client.close()
+        output, _ = process.communicate(timeout=WAIT)  # --once: it ends by itself after the last message
+    finally:
+        if process.poll() is None:
+            process.kill()
+            process.wait()
+    assert process.returncode == 0, output
+    assert "Callback failed" not in output, output
+
+
+def test_a_client_that_connects_late_gets_the_latched_mass_properties(launch_node, ros_node, collector):
+    from rclpy.qos import QoSProfile, ReliabilityPolicy
+
+    from rigid_rot_msgs.msg import RigidBodyState
+
+    node = launch_node("--ros-args", "-p", "scene:=free_tumble", "-p", "foxglove:=127.0.0.1:0")
+    port = _port_from_log(node)
+    states: list = []
+    ros_node.create_subscription(
+        RigidBodyState,
+        "/rigid_rot_sim/state",
+        states.append,
+        QoSProfile(depth=10, reliability=ReliabilityPolicy.RELIABLE),
+    )
+    # long after start-up, when ~/mass_properties went out once
+    collector.spin_until(lambda: len(states) >= 20, WAIT, node, "20 states over DDS")
+    topic = "/rigid_rot_sim/mass_properties"
+    for _ in range(2):  # the first client, then one more after it: each gets it on subscribing
+        _latched_reaches(FoxgloveClient(f"ws://127.0.0.1:{port}"), topic, node)
+    assert node.stop() == 0
+
+
+def _latched_reaches(client: FoxgloveClient, topic: str, node) -> None:
+    try:
+        client.until(lambda: client.channel_of(topic) is not None, WAIT, f"the channel {topic}", node.check_alive)
+        client.subscribe(topic)
+        client.until(lambda: len(client.received(topic)) >= 1, WAIT, f"the latched {topic}", node.check_alive)
+        assert client.channel_of(topic)["schemaName"] == "geometry_msgs/msg/InertiaStamped"
+    finally:
+        client.close()
