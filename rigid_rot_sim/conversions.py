@@ -10,6 +10,7 @@ messages carry SI units (REP 103) and quaternions are (x, y, z, w) on both sides
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from typing import TYPE_CHECKING
 
 import numpy as np
@@ -51,13 +52,13 @@ def point_to_array(point: Point) -> np.ndarray:
     return np.array([point.x, point.y, point.z], dtype=float)
 
 
-def array_to_point(vector: np.ndarray) -> Point:
+def array_to_point(vector: np.ndarray | Sequence[float]) -> Point:
     """ndarray (3,) -> geometry_msgs/Point, m."""
     x, y, z = (float(value) for value in np.asarray(vector, dtype=float).reshape(3))
     return Point(x=x, y=y, z=z)
 
 
-def array_to_quaternion(quat_xyzw: np.ndarray) -> Quaternion:
+def array_to_quaternion(quat_xyzw: np.ndarray | Sequence[float]) -> Quaternion:
     """ndarray (4,) scalar-last -> geometry_msgs/Quaternion (same order, no renormalisation)."""
     x, y, z, w = (float(value) for value in np.asarray(quat_xyzw, dtype=float).reshape(4))
     return Quaternion(x=x, y=y, z=z, w=w)
@@ -231,8 +232,8 @@ def snapshot_to_top_state(snapshot: StateSnapshot, world_frame: str) -> HeavyTop
         precession=phi,
         nutation=theta,
         spin=psi,
-        p_phi=float(snapshot.p_phi),
-        p_psi=float(snapshot.p_psi),
+        p_phi=float(snapshot.p_phi or 0.0),
+        p_psi=float(snapshot.p_psi or 0.0),
         energy=float(snapshot.energy),
     )
     msg.header.stamp = seconds_to_time(snapshot.t)

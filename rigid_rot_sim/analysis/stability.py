@@ -459,6 +459,6 @@ def _run_on_cluster(client, cases, methods, long_methods, long_steps, quick, bar
     if not bisect_args:
         bar.update(1)
     case_runs: dict[str, dict[str, Any]] = {}
-    for (name, _, method), run in zip(runs_args, results[:first_bisection]):
+    for (name, _, method), run in zip(runs_args, results[:first_bisection], strict=True):
         case_runs.setdefault(name, {})[method] = run
     return case_runs, results[first_bisection:first_horizon], results[first_horizon:]

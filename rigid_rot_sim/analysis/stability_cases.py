@@ -87,12 +87,17 @@ class Case:
         return max(1, round(self.problem.t_end / self.dt))
 
 
+def _triple(values: Any) -> tuple[float, float, float]:
+    x, y, z = (float(v) for v in values)
+    return (x, y, z)
+
+
 def _free(key: str, title: str, moments, omega0, t_end: float, **kw: Any) -> Problem:
     return Problem(
         key=key,
         title=title,
-        principal_moments=tuple(float(m) for m in moments),
-        omega0=tuple(float(w) for w in omega0),
+        principal_moments=_triple(moments),
+        omega0=_triple(omega0),
         t_end=t_end,
         reference_factory=exact_reference,
         **kw,
@@ -128,7 +133,7 @@ def _scaled_p2(scale: float) -> Problem:
         P2,
         key=f"P2x{scale:g}",
         title=f"P2 scaled by {scale:g}",
-        principal_moments=tuple(scale * m for m in P2.principal_moments),
+        principal_moments=_triple(scale * m for m in P2.principal_moments),
         torque=ConstantTorque(scale * P2.torque.value),
         reference_factory=lambda problem: P2.reference(),
     )

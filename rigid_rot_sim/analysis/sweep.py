@@ -375,7 +375,7 @@ def _simulate(spec: SweepSpec, bodies: _Bodies, method: str, dt: float) -> _Outc
     track.observe(0.0, omega)
     last_torque: tuple[Any, np.ndarray, np.ndarray] = (None, np.empty(0), np.empty(0))
     world_frame = any(schedule.frame == "world" for schedule in spec.scene.schedules)
-    segments = [(int(a), int(b)) for a, b in zip(marks[:-1], marks[1:]) if b > a]
+    segments = [(int(a), int(b)) for a, b in zip(marks[:-1], marks[1:], strict=False) if b > a]
     if last > 0.0:
         segments.append((n_full, n_full + 1))  # the last, shorter step landing on the duration
     k = 0
@@ -413,7 +413,7 @@ def _simulate(spec: SweepSpec, bodies: _Bodies, method: str, dt: float) -> _Outc
             except (NonFiniteStateError, ArithmeticError):
                 cut_until = k + len(joined)  # run them one at a time: the failing bodies fail alone
                 continue
-            for (a_j, b_j), omega_j in zip(joined, omega_at):
+            for (a_j, b_j), omega_j in zip(joined, omega_at, strict=True):
                 impulse += impulse_rate * (b_j - a_j)
                 if b_j in checkpoint_set:
                     track.observe(time_of(b_j), omega_j)

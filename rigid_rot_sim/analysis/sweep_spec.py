@@ -290,7 +290,8 @@ def _dispersions(spec: Mapping[str, Any], moments: np.ndarray) -> Dispersions:
         worst = values["torque_scale"].extreme()
         if worst.max() >= 1.0:
             raise ValueError(
-                f"dispersions.torque_scale.relative: {worst.max():g} at the extremes can reverse the torque (must stay < 1)"
+                f"dispersions.torque_scale.relative: {worst.max():g} at the extremes "
+                "can reverse the torque (must stay < 1)"
             )
     noise = spec.get("torque_noise")
     if noise is not None:
@@ -301,14 +302,16 @@ def _dispersions(spec: Mapping[str, Any], moments: np.ndarray) -> Dispersions:
 
 def _per_axis(value: Any) -> tuple[float, float, float]:
     sizes = _floats(value)
-    return sizes if len(sizes) == 3 else (sizes[0],) * 3  # type: ignore[return-value]
+    x, y, z = sizes if len(sizes) == 3 else (sizes[0],) * 3
+    return (x, y, z)
 
 
 def _check_moment_dispersion(moments: np.ndarray, dispersion: Dispersion) -> None:
     """Every moment stays > 0 and the triangle inequality holds at the dispersion's extremes."""
     key = "dispersions.principal_moments.relative"
     extreme = dispersion.extreme()
-    how = f"{dispersion.distribution}{', cut at %g sigma' % NORMAL_CUT_SIGMAS if dispersion.distribution == 'normal' else ''}"
+    cut = f", cut at {NORMAL_CUT_SIGMAS:g} sigma" if dispersion.distribution == "normal" else ""
+    how = f"{dispersion.distribution}{cut}"
     low, high = moments * (1.0 - extreme), moments * (1.0 + extreme)
     for i in range(3):
         if not low[i] > 0.0:
@@ -319,6 +322,7 @@ def _check_moment_dispersion(moments: np.ndarray, dispersion: Dispersion) -> Non
         i, j = (k + 1) % 3, (k + 2) % 3
         if low[i] + low[j] < high[k] - TRIANGLE_RTOL * float(high.sum()):
             raise ValueError(
-                f"{key}: {list(dispersion.size)} ({how}) can break the triangle inequality I{i + 1} + I{j + 1} >= I{k + 1} "
+                f"{key}: {list(dispersion.size)} ({how}) can break the triangle inequality "
+                f"I{i + 1} + I{j + 1} >= I{k + 1} "
                 f"of a rigid body ({low[i]:.6g} + {low[j]:.6g} < {high[k]:.6g} kg*m^2 at the extremes)"
             )

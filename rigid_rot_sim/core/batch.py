@@ -10,13 +10,15 @@ Methods (:data:`BATCH_METHODS`): ``'rk4'``, ``'implicit_midpoint'``, ``'splittin
 (order 2) and ``'exact_split'`` (order 2: the exact free flow with torque kicks), and for
 torque-free bodies ``'exact'`` (:data:`FREE_BODY_METHODS`: one evaluation of the exact flow
 at ``n_steps * dt``; a torque is refused) run the single-body kernels of
-:mod:`rigid_rot_sim.core.integrators` with the same names, body by body, in one compiled loop spread over the cores (numba ``prange``); so a body advanced
-here has the same bits as the same body advanced alone by ``get_method(name)`` with a
-:class:`~rigid_rot_sim.core.torque.ConstantTorque`, and there is no second copy of any
-formula. The compiled loop is cached like the single-body one (``make setup`` builds it).
+:mod:`rigid_rot_sim.core.integrators` with the same names, body by body, in one compiled
+loop spread over the cores (numba ``prange``); so a body advanced here has the same bits as
+the same body advanced alone by ``get_method(name)`` with a
+:class:`~rigid_rot_sim.core.torque.ConstantTorque`. The compiled loop is cached like the
+single-body one (``make setup`` builds it). The one second copy of a formula is deliberate:
 ``rk4`` (the sweeps' workhorse) runs by default in chunks of bodies laid out for SIMD
-(structure of arrays, the inner loops over bodies, see ``_rk4_soa_chunk``): rk4_step's
-operations in its order, so the same bits as the per-body loop (``layout="per_body"``).
+(structure of arrays, the inner loops over bodies, see ``_rk4_soa_chunk``), which re-writes
+rk4_step's operations in its order, so the same bits as the per-body loop
+(``layout="per_body"``; ``test/core/test_batch.py`` pins the two bit for bit).
 :func:`advance_batch_recording` runs several stretches in one call and keeps the rates at the
 end of each (a sweep's checkpoints), with the bits of calls cut there.
 """
@@ -523,6 +525,7 @@ def _advance(
         bad = int(np.argmin(np.where(failed_step > 0, failed_step, np.iinfo(np.int64).max)))
         step = int(failed_step[bad])
         raise NonFiniteStateError(
-            f"{method}: {_FAILURES.get(int(failure[bad]), 'failure')} at step {step}, t = {step * dt:.9g} s (body {bad})"
+            f"{method}: {_FAILURES.get(int(failure[bad]), 'failure')} at step {step}, "
+            f"t = {step * dt:.9g} s (body {bad})"
         )
     return q, omega, omega_at

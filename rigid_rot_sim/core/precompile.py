@@ -51,7 +51,7 @@ def exercise() -> None:
         PolynomialTorque(np.array([[0.1, 0.0, 0.0], [0.0, 0.01, 0.0]])),
         GravityTorque(np.array([0.0, 0.0, 0.1]), 1.0),
     ]
-    for name, cls in METHODS.items():
+    for cls in METHODS.values():
         for torque in torques:
             try:
                 integrator = cls(moments, 1e-3, torque, omega0=(1.0, 0.1, 0.5))

@@ -79,7 +79,7 @@ class Trajectory:
     @functools.cached_property
     def energy(self) -> np.ndarray:
         """Rotational kinetic energy T = 1/2 omega . L, J, shape (n,)."""
-        return kinetic_energy(self.principal_moments, self.omega_principal)
+        return np.asarray(kinetic_energy(self.principal_moments, self.omega_principal))
 
     @functools.cached_property
     def L_world(self) -> np.ndarray:

@@ -26,7 +26,7 @@ from __future__ import annotations
 import json
 from collections.abc import Sequence
 from pathlib import Path
-from typing import Any
+from typing import Any, cast
 
 from rclpy.impl.rcutils_logger import RcutilsLogger
 from rclpy.node import Node
@@ -105,11 +105,17 @@ class NodeRecording(SimulationObserver):
         for name in [n for n in publishers if n not in _LATER] + [n for n in _LATER if n in publishers]:
             publisher = publishers[name]
             file.add_topic(
-                publisher.topic_name, publisher.msg_type, publisher.qos_profile, role=name if name in _ROLES else None
+                publisher.topic_name,
+                cast(type, publisher.msg_type),
+                publisher.qos_profile,
+                role=name if name in _ROLES else None,
             )
         for subscription in subscriptions:
             file.add_topic(
-                subscription.topic_name, subscription.msg_type, _subscription_qos(subscription), role="torque"
+                subscription.topic_name,
+                cast(type, subscription.msg_type),
+                _subscription_qos(subscription),
+                role="torque",
             )
         return cls(file, sim, log)
 
@@ -168,7 +174,8 @@ class NodeRecording(SimulationObserver):
         self._event(
             "apply_torque",
             step,
-            f"apply_torque: {list(command.torque)} N*m ({command.frame}) for {command.duration:g} s from t = {command.effective_time:.9g} s",
+            f"apply_torque: {list(command.torque)} N*m ({command.frame}) for {command.duration:g} s "
+            f"from t = {command.effective_time:.9g} s",
             frame=command.frame,
             torque=tuple(float(v) for v in command.torque),
             duration=float(command.duration or 0.0),
@@ -212,7 +219,9 @@ class NodeRecording(SimulationObserver):
                     {
                         "digest": format_digest(digest[0]),
                         "stamp": f"{digest[1]}.{digest[2]:09d}",
-                        "definition": "rigid_rot_sim.run.digest (FNV-1a 64 over the float64 words of every step's t, q, omega)",
+                        "definition": (
+                            "rigid_rot_sim.run.digest (FNV-1a 64 over the float64 words of every step's t, q, omega)"
+                        ),
                     },
                 )
             self.file.close()

@@ -54,7 +54,8 @@ class InertiaService:
         if len(request.frame_id) > limits.MAX_NAME_LENGTH:
             return self._refuse(
                 response,
-                f"invalid request: frame_id of {len(request.frame_id)} characters exceeds the limit of {limits.MAX_NAME_LENGTH}",
+                f"invalid request: frame_id of {len(request.frame_id)} characters "
+                f"exceeds the limit of {limits.MAX_NAME_LENGTH}",
             )
         try:
             masses, positions, origin = conversions.compute_inertia_request_to_arrays(request)

@@ -124,11 +124,11 @@ def clamp_wheel_torques(wheels: Any, source: str, torques: Any) -> tuple[tuple[f
             source, f"{len(values)} torque(s) for {len(wheels)} wheel(s) [{', '.join(w.name for w in wheels)}]"
         )
     clamped = []
-    for value, wheel in zip(values, wheels):
+    for value, wheel in zip(values, wheels, strict=True):
         if not math.isfinite(value):
             raise CommandRejected(source, f"non-finite torque for wheel {wheel.name!r}: {value}")
         clamped.append(min(max(value, -wheel.max_torque), wheel.max_torque))
-    return tuple(clamped), tuple(i for i, (a, b) in enumerate(zip(values, clamped)) if a != b)
+    return tuple(clamped), tuple(i for i, (a, b) in enumerate(zip(values, clamped, strict=True)) if a != b)
 
 
 class CommandSchedule:
@@ -195,13 +195,15 @@ class CommandSchedule:
         if frame_id and frame_id not in names:
             raise CommandRejected(
                 source,
-                f"frame {frame_id!r} is neither the body frame {self.frames.body!r} nor the world frame {self.frames.world!r}",
+                f"frame {frame_id!r} is neither the body frame {self.frames.body!r} "
+                f"nor the world frame {self.frames.world!r}",
             )
         if policy == "header":
             if not frame_id:
                 raise CommandRejected(
                     source,
-                    f"empty header.frame_id: this input takes the frame from the header ({self.frames.body!r} or {self.frames.world!r})",
+                    f"empty header.frame_id: this input takes the frame from the header "
+                    f"({self.frames.body!r} or {self.frames.world!r})",
                 )
             return names[frame_id]
         if frame_id and names[frame_id] != policy:
@@ -212,7 +214,7 @@ class CommandSchedule:
     def finite_torque(self, source: str, torque: Any, what: str = "torque") -> Torque:
         """``torque`` (3 components) as floats, or CommandRejected: not finite, beyond the limits or max_torque."""
         values = tuple(float(v) for v in np.asarray(torque, dtype=float).reshape(3))
-        for axis, value in zip("xyz", values):
+        for axis, value in zip("xyz", values, strict=True):
             if not math.isfinite(value):
                 raise CommandRejected(source, f"non-finite {what}.{axis} = {value}")
             if abs(value) > limits.MAX_MAGNITUDE:
@@ -226,7 +228,10 @@ class CommandSchedule:
     def submit_wheels(
         self, source: str, torques: Any, effective_time: float
     ) -> tuple[int, tuple[float, ...], tuple[int, ...]]:
-        """Hold wheel motor torques (:func:`clamp_wheel_torques`) from ``effective_time`` (s): (step, clamped, which)."""
+        """Hold wheel motor torques (:func:`clamp_wheel_torques`) from ``effective_time`` (s).
+
+        Returns (step, clamped, which).
+        """
         clamped, which = clamp_wheel_torques(self.spacecraft.wheels, source, torques)
         effective_time = validation.finite_scalar("effective_time", effective_time)
         step = self.clock.step_at_or_after(effective_time)

@@ -81,7 +81,7 @@ class Observables:
     def __init__(self, scene: Scene, body: RigidBody) -> None:
         self.body = body
         self.gravity: GravityTorque | None = None
-        self.com_body: np.ndarray | None = None
+        self.com_body = np.zeros(3)  # m; no gravity: no weight, so no torque from it
         self.weight = 0.0
         if scene.gravity is not None:
             assert scene.body.mass is not None and scene.body.center_of_mass is not None
@@ -129,7 +129,7 @@ class Observables:
         if self.gravity is not None:
             potential = self.weight * quat.rotate(q, self.com_body)[2]
             gravity = quat.rotate(body_from_principal, self.gravity(0.0, np.array(q_principal), np.array((w1, w2, w3))))
-            torque_body = tuple(a + b for a, b in zip(torque_body, gravity))
+            torque_body = tuple(a + b for a, b in zip(torque_body, gravity, strict=True))
             euler = np.array(quat.quaternion_to_zxz(quat.multiply(q, self._body_from_top)))
             p_phi = momentum_world[2]
             p_psi = float(np.dot(momentum_body, self._symmetry_axis))

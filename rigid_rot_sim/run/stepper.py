@@ -256,13 +256,13 @@ class Stepper:
             done += chunk
         return done, None
 
-    def _saved_state(self) -> tuple:
+    def _saved_state(self) -> tuple[Any, ...]:
         """What :meth:`_restore` puts back: (t, q, omega, steps taken)."""
         integrator = self.integrator
         assert integrator is not None
         return (integrator.t, integrator.q, integrator.omega, integrator.n_steps)
 
-    def _restore(self, saved: tuple) -> None:
+    def _restore(self, saved: tuple[Any, ...]) -> None:
         assert self.integrator is not None
         self.integrator.set_state(*saved[:3])
         self.integrator.n_steps = saved[3]
@@ -274,7 +274,8 @@ class Stepper:
         rotation = math.hypot(*omega.tolist()) * self.clock.dt
         if rotation > limits.MAX_ROTATION_PER_STEP:
             raise ValueError(
-                f"angular_velocity of norm {rotation / self.clock.dt:.3g} rad/s turns the body {rotation:.3g} rad per step of "
+                f"angular_velocity of norm {rotation / self.clock.dt:.3g} rad/s "
+                f"turns the body {rotation:.3g} rad per step of "
                 f"{self.clock.dt:g} s (limit {limits.MAX_ROTATION_PER_STEP:g} rad per step)"
             )
 
@@ -285,7 +286,10 @@ class Stepper:
         return self.commands.norm_bound()
 
     def rotation_failure(self, dt_ahead: float) -> str | None:
-        """Why the state violates the rotation limit after ``dt_ahead`` s under the current torque (None: it does not)."""
+        """Why the state violates the rotation limit after ``dt_ahead`` s under the current torque.
+
+        None: it does not.
+        """
         dt = self.clock.dt
         omega = math.hypot(*self.integrator.omega.tolist())  # type: ignore[union-attr]
         reach = omega + dt_ahead * self._torque_bound() / self._i_min

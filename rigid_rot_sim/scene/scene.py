@@ -210,7 +210,7 @@ class TorqueSchedule:
         Zero before the first segment takes effect.
         """
         value: Vector3 = (0.0, 0.0, 0.0)
-        for segment, step in zip(self.segments, self.change_steps(dt)):
+        for segment, step in zip(self.segments, self.change_steps(dt), strict=True):
             if step <= k:
                 value = segment.torque
         return value
@@ -445,7 +445,7 @@ def _scene(spec: Mapping[str, Any], source: str, text: str) -> Scene:
                 )
         else:
             body = Body(inertia=body.inertia, given_as=body.given_as, mass=mass, center_of_mass=com)
-    topics, schedules = _torque_inputs(spec.get("torque_inputs") or ())
+    topics, schedules = _torque_inputs(spec.get("torque_inputs") or [])
     if gravity is not None and (topics or schedules):
         # the integrators expand gravity or a piecewise-constant torque exactly, not their sum
         raise ValueError("torque_inputs: not supported in a gravity (heavy top) scene; drop gravity or the inputs")
@@ -532,7 +532,8 @@ def _frames(spec: Mapping[str, Any]) -> Frames:
     }
     for role, name in given.items():
         _at(f"frames.{role}", names.check_frame_id, name, "frame name")
-    return _at("frames", Frames(**given).checked)
+    frames: Frames = _at("frames", Frames(**given).checked)
+    return frames
 
 
 def _body(spec: Mapping[str, Any], under_gravity: bool) -> Body:
@@ -594,7 +595,7 @@ def _gravity(spec: Mapping[str, Any], point_masses: bool) -> tuple[Gravity, floa
 
 def _initial(spec: Mapping[str, Any]) -> InitialState:
     """A non-zero quaternion, normalised (or the attitude from Euler angles)."""
-    orientation = InitialState.orientation
+    orientation: tuple[float, ...] = InitialState.orientation
     if "orientation" in spec:
         orientation = _floats(validation.quaternion("initial.orientation", _floats(spec["orientation"])))
     elif "euler_zxz" in spec:
@@ -653,16 +654,17 @@ def _integrator(spec: Mapping[str, Any], spacecraft: bool = False) -> Integrator
     )
 
 
+def _gyro_fields(gyro: Mapping[str, Any]) -> dict[str, Any]:
+    """The gyro section's keys as GyroModel's fields (lists become tuples of floats)."""
+    return {name: _floats(value) if isinstance(value, list) else float(value) for name, value in gyro.items()}
+
+
 def _sensors(spec: Mapping[str, Any]) -> Sensors:
     gyro = spec.get("gyro")
     star_tracker = spec.get("star_tracker")
     return Sensors(
         seed=spec.get("seed"),
-        gyro=None
-        if gyro is None
-        else GyroModel(
-            **{name: _floats(value) if isinstance(value, list) else float(value) for name, value in gyro.items()}
-        ),
+        gyro=None if gyro is None else GyroModel(**_gyro_fields(gyro)),
         star_tracker=None
         if star_tracker is None
         else StarTrackerModel(

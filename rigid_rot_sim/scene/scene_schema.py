@@ -99,7 +99,8 @@ OUTPUTS: dict[str, OutputSpec] = {
     "wheels": OutputSpec(100.0, "sensor_msgs/JointState on ~/wheels (scenes with reaction wheels only)"),
     "torque_breakdown": OutputSpec(
         100.0,
-        "rigid_rot_msgs/TorqueBreakdown on ~/torque_breakdown (N*m, body frame; every torque by source: scenes where a torque acts)",
+        "rigid_rot_msgs/TorqueBreakdown on ~/torque_breakdown "
+        "(N*m, body frame; every torque by source: scenes where a torque acts)",
     ),
 }
 

@@ -106,7 +106,7 @@ def test_implicit_midpoint_conserves_what_the_physics_conserves(mixed):
     midpoint = np.array([m == "implicit_midpoint" for m in rows["method"]])
     # torque-free: T and |L| conserved to round-off by the midpoint rule at any step
     assert np.all(rows["energy_drift"][midpoint] < 1e-12) and np.all(rows["momentum_drift"][midpoint] < 1e-12)
-    assert all(v == "stable" for v, m in zip(rows["verdict"], midpoint) if m)
+    assert all(v == "stable" for v, m in zip(rows["verdict"], midpoint, strict=True) if m)
     # near a major-axis spin the nutation angle stays small and bounded; no intermediate flip at 2 rad/s in 4 s
     assert np.all(rows["nutation_range"][midpoint] < 0.2)
 
@@ -190,7 +190,8 @@ metric: first_flip
         "flip.yaml",
     )
     rows = run_local(spec)
-    flip = {(float(dt), float(spin)): t for dt, spin, t in zip(rows["dt"], rows["spin_rate"], rows["first_flip"])}
+    triples = zip(rows["dt"], rows["spin_rate"], rows["first_flip"], strict=True)
+    flip = {(float(dt), float(spin)): t for dt, spin, t in triples}
     slow, fast = flip[(0.008, 2.0)], flip[(0.002, 8.0)]
     assert 1.0 < fast < slow < 7.0
     assert slow / fast == pytest.approx(4.0, rel=1e-9)
