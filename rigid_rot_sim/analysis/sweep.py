@@ -43,8 +43,7 @@ from rigid_rot_sim.core import quaternion as quat
 from rigid_rot_sim.core.batch import advance_batch, advance_batch_recording
 from rigid_rot_sim.core.dynamics import RigidBody
 from rigid_rot_sim.core.integrators.base import NonFiniteStateError
-from rigid_rot_sim.core.simulate import step_grid
-from rigid_rot_sim.core.steps import step_at_or_after, step_at_or_before
+from rigid_rot_sim.core.steps import step_at_or_after, step_at_or_before, step_grid
 
 __all__ = [
     "Chunk",

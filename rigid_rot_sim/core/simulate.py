@@ -23,7 +23,6 @@ trajectory then carries the wheel speeds. Example: ``docs/spacecraft.md``.
 from __future__ import annotations
 
 import functools
-import math
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -33,10 +32,8 @@ from rigid_rot_sim.core import quaternion as quat
 from rigid_rot_sim.core import validation
 from rigid_rot_sim.core.dynamics import RigidBody, angular_momentum_world, kinetic_energy
 from rigid_rot_sim.core.integrators import get_method
+from rigid_rot_sim.core.steps import step_grid
 from rigid_rot_sim.core.torque import ConstantTorque, GravityTorque, PolynomialTorque
-
-# t_end / dt within this relative distance of an integer m means m full steps
-_GRID_RTOL = 1e-9
 
 
 @dataclass(frozen=True)
@@ -115,16 +112,6 @@ class GyrostatTrajectory(Trajectory):
             self.principal_moments, self.wheels_principal, self.omega_principal, self.wheel_speeds
         )
         return body_to_world(self.q_principal, momentum)
-
-
-def step_grid(t_end: float, dt: float) -> tuple[int, float]:
-    """Number of full steps of ``dt`` in [0, t_end] and the length of the last partial step (0 if none)."""
-    ratio = t_end / dt
-    n = round(ratio)
-    if n > 0 and abs(ratio - n) <= _GRID_RTOL * n:
-        return n, 0.0
-    n = math.floor(ratio)
-    return n, t_end - n * dt
 
 
 def principal_torque(body: RigidBody, torque: Any, is_principal: bool | None = None) -> Any:

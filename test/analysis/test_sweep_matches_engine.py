@@ -19,7 +19,7 @@ import pytest
 
 from rigid_rot_sim.analysis.sweep import run_nominal
 from rigid_rot_sim.analysis.sweep_spec import SweepSpec, parse_sweep_text
-from rigid_rot_sim.core.simulate import step_grid
+from rigid_rot_sim.core.steps import step_grid
 from rigid_rot_sim.run.simulator import Simulator
 from rigid_rot_sim.scene.scene import load_scene
 
