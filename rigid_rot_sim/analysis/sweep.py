@@ -39,6 +39,7 @@ from scipy.spatial.transform import Rotation
 from rigid_rot_sim.analysis.checkpoints import CheckpointTrack, row_norms
 from rigid_rot_sim.analysis.streams import StreamDraws
 from rigid_rot_sim.analysis.sweep_spec import NORMAL_CUT_SIGMAS, Dispersion, SweepSpec
+from rigid_rot_sim.core import frames
 from rigid_rot_sim.core import quaternion as quat
 from rigid_rot_sim.core.batch import advance_batch, advance_batch_recording
 from rigid_rot_sim.core.dynamics import RigidBody
@@ -353,7 +354,7 @@ def _simulate(spec: SweepSpec, bodies: _Bodies, method: str, dt: float) -> _Outc
     marks, checkpoints = _boundaries(spec, dt, n_full)
     checkpoint_set = set(checkpoints.tolist())
     bp = bodies.body_from_principal
-    principal_from_body = _rows(quat.conjugate, bp.as_quat(canonical=False))
+    principal_from_body = _rows(frames.principal_from_body, bp.as_quat(canonical=False))
     moments = bodies.moments
     q = quat.compose_rotations(Rotation.from_quat(bodies.q0_body), bp).as_quat()  # principal -> world
     omega = bp.apply(bodies.omega0_body, inverse=True)
@@ -387,7 +388,7 @@ def _simulate(spec: SweepSpec, bodies: _Bodies, method: str, dt: float) -> _Outc
         step = last if partial else dt
         everyone = len(errors) == 0  # no body has failed yet: no subsets to copy
         live = slice(None) if everyone else alive
-        q_body = _rows(quat.multiply, q[live], principal_from_body[live]) if world_frame else None
+        q_body = _rows(frames.attitude_from_principal, q[live], principal_from_body[live]) if world_frame else None
         torque_body = _body_torque(spec, bodies if everyone else _subset(bodies, alive), a, dt, q_body)
         # most segments of a run repeat the last one's torques (a torque-free run: all of them)
         key = (step, torque_body.tobytes()) if everyone else None
@@ -395,7 +396,7 @@ def _simulate(spec: SweepSpec, bodies: _Bodies, method: str, dt: float) -> _Outc
             last_torque = (
                 key,
                 row_norms(torque_body) * step,
-                _rows(quat.rotate, principal_from_body[live], torque_body),
+                _rows(frames.vector_to_principal, principal_from_body[live], torque_body),
             )
         _, impulse_rate, torque_p = last_torque
         # the following segments under the same torques join this one in a call that records the
@@ -441,9 +442,10 @@ def _simulate(spec: SweepSpec, bodies: _Bodies, method: str, dt: float) -> _Outc
     with np.errstate(divide="ignore", invalid="ignore"):
         energy_drift = np.abs(energy - energy0) / np.where(energy0 > 0, energy0, 1.0)
         momentum_drift = np.abs(momentum - momentum0) / np.where(momentum0 > 0, momentum0, 1.0)
-    q_body = _rows(quat.multiply, np.where(alive[:, None], q, [0.0, 0.0, 0.0, 1.0]), principal_from_body)
+    q_alive = np.where(alive[:, None], q, [0.0, 0.0, 0.0, 1.0])
+    q_body = _rows(frames.attitude_from_principal, q_alive, principal_from_body)
     q_body[~alive] = np.nan
-    omega_body = _rows(quat.rotate, bp.as_quat(canonical=False), np.where(alive[:, None], omega, 0.0))
+    omega_body = _rows(frames.vector_from_principal, bp.as_quat(canonical=False), np.where(alive[:, None], omega, 0.0))
     omega_body[~alive] = np.nan
     omega_bound = (momentum0 + impulse) / moments.min(axis=1)
     return _Outcome(

@@ -28,8 +28,7 @@ from typing import Any
 
 import numpy as np
 
-from rigid_rot_sim.core import quaternion as quat
-from rigid_rot_sim.core import validation
+from rigid_rot_sim.core import frames, validation
 from rigid_rot_sim.core.dynamics import RigidBody, angular_momentum_world, kinetic_energy
 from rigid_rot_sim.core.integrators import get_method
 from rigid_rot_sim.core.steps import step_grid
@@ -142,10 +141,11 @@ class _UserFrameTorque:
 
     def __call__(self, t: float, q: np.ndarray, omega: np.ndarray) -> np.ndarray:
         bp = self.body_from_principal
-        q_body = quat.multiply(q, quat.conjugate(bp))
-        omega_body = quat.rotate(bp, omega)
+        pb = frames.principal_from_body(bp)
+        q_body = frames.attitude_from_principal(q, pb)
+        omega_body = frames.vector_from_principal(bp, omega)
         n_body = np.asarray(self.torque(t, np.array(q_body), np.array(omega_body)), dtype=float).reshape(3)
-        return np.array(quat.rotate_inverse(bp, n_body.tolist()))
+        return np.array(frames.vector_to_principal(pb, n_body.tolist()))
 
 
 def simulate(

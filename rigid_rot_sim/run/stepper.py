@@ -20,7 +20,7 @@ from typing import Any
 
 import numpy as np
 
-from rigid_rot_sim.core import limits, validation
+from rigid_rot_sim.core import frames, limits, validation
 from rigid_rot_sim.core import quaternion as quat
 from rigid_rot_sim.core.dynamics import RigidBody
 from rigid_rot_sim.core.integrators import get_method
@@ -194,14 +194,14 @@ class Stepper:
         body = self.commands.body_sum
         world = self.commands.world_sum
         if world is not None:
-            q_body = quat.multiply(tuple(integrator.q), principal_from_body)
+            q_body = frames.attitude_from_principal(tuple(integrator.q), principal_from_body)
             world_in_body = quat.rotate_inverse(q_body, world)
             body = (body[0] + world_in_body[0], body[1] + world_in_body[1], body[2] + world_in_body[2])
         self.step_torque_body = body
         if not any(body):
             torque = None
         else:
-            torque = ConstantTorque(np.array(quat.rotate(principal_from_body, body)))
+            torque = ConstantTorque(np.array(frames.vector_to_principal(principal_from_body, body)))
         integrator.torque = torque
 
     # ------------------------------------------------------------------ stepping
