@@ -43,10 +43,11 @@ from concurrent.futures import ProcessPoolExecutor
 
 import numpy as np
 
-from rigid_rot_sim.analysis.cluster import one_numba_thread, open_client, run_local, run_sweep
-from rigid_rot_sim.analysis.sweep import choose_chunk_size
-from rigid_rot_sim.analysis.sweep_spec import parse_sweep_text
+from rigid_rot_sim.cluster import one_numba_thread, open_client
 from rigid_rot_sim.core.batch import advance_batch
+from rigid_rot_sim.sweep.chunks import choose_chunk_size
+from rigid_rot_sim.sweep.runner import run_local, run_sweep
+from rigid_rot_sim.sweep.spec import parse_sweep_text
 
 SPEC = """
 name: scaling

@@ -110,10 +110,10 @@ LAYERS = (
     ("core",),
     ("scene",),
     ("run",),
-    ("message_fields", "share"),
+    ("message_fields", "share", "cluster"),
     ("recording",),
     ("conversions", "viewer"),
-    ("ros", "analysis"),
+    ("ros", "analysis", "sweep"),
     ("cli",),
     ("console_scripts",),
 )
@@ -153,7 +153,8 @@ def test_rooms_import_only_downwards():
 
 def test_layer_order_is_the_documented_one():
     assert _floor("core") < _floor("scene") < _floor("run") < _floor("recording") < _floor("ros") < _floor("cli")
-    assert _floor("ros") == _floor("analysis")
+    assert _floor("ros") == _floor("analysis") == _floor("sweep")
+    assert _floor("cluster") < _floor("analysis")
 
 
 def _third_party_imports(path: Path) -> set[str]:

@@ -37,10 +37,10 @@ from typing import Any, Literal
 
 import numpy as np
 
-from rigid_rot_sim.analysis.cluster import map_tasks, open_client, wants_cluster
 from rigid_rot_sim.analysis.metrics import attitude_error_angle, omega_error, relative_change
 from rigid_rot_sim.analysis.problems import P1, Problem
 from rigid_rot_sim.analysis.stability_cases import Case, Criterion, case_named
+from rigid_rot_sim.cluster import map_tasks, open_client, wants_cluster
 from rigid_rot_sim.core.exact import torque_free_solution
 from rigid_rot_sim.core.integrators import METHODS, get_method
 from rigid_rot_sim.core.integrators.base import NonFiniteStateError

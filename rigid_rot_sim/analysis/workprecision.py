@@ -44,9 +44,9 @@ from typing import Any, Literal
 import numpy as np
 from scipy.integrate import solve_ivp
 
-from rigid_rot_sim.analysis.cluster import map_tasks, open_client
 from rigid_rot_sim.analysis.metrics import attitude_error_angle, omega_error, relative_change
 from rigid_rot_sim.analysis.problems import Problem, get_problem, scipy_rhs
+from rigid_rot_sim.cluster import map_tasks, open_client
 from rigid_rot_sim.core import quaternion as quat
 from rigid_rot_sim.core.integrators import METHODS
 from rigid_rot_sim.core.integrators.base import NonFiniteStateError
@@ -441,7 +441,7 @@ def run_problems(
     """Every line's sweep on each problem, in order; ``bar`` (tqdm) counts the points.
 
     With ``cluster`` every line of every problem is one Dask task (:func:`line_task`) on
-    :func:`~rigid_rot_sim.analysis.cluster.open_client` ``(scheduler, workers)``, each point
+    :func:`~rigid_rot_sim.cluster.open_client` ``(scheduler, workers)``, each point
     timed with the scipy baseline in that task.
     """
     if not cluster:

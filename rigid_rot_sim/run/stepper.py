@@ -31,6 +31,7 @@ from rigid_rot_sim.run.clock import StepClock
 from rigid_rot_sim.run.commands import CommandSchedule
 from rigid_rot_sim.run.digest import DIGEST_SEED, fold_steps
 from rigid_rot_sim.run.observables import Observables, StateSnapshot
+from rigid_rot_sim.run.timeline import world_in_body
 from rigid_rot_sim.scene.scene import Scene
 
 __all__ = ["Stepper"]
@@ -194,9 +195,8 @@ class Stepper:
         body = self.commands.body_sum
         world = self.commands.world_sum
         if world is not None:
-            q_body = frames.attitude_from_principal(tuple(integrator.q), principal_from_body)
-            world_in_body = quat.rotate_inverse(q_body, world)
-            body = (body[0] + world_in_body[0], body[1] + world_in_body[1], body[2] + world_in_body[2])
+            in_body = world_in_body(tuple(integrator.q), principal_from_body, world)
+            body = (body[0] + in_body[0], body[1] + in_body[1], body[2] + in_body[2])
         self.step_torque_body = body
         if not any(body):
             torque = None

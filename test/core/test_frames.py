@@ -54,7 +54,7 @@ def test_columns_give_each_row_the_bits_of_a_per_body_call():
         "rigid_rot_sim/run/observables.py",
         "rigid_rot_sim/run/stepper.py",
         "rigid_rot_sim/core/simulate.py",
-        "rigid_rot_sim/analysis/sweep.py",
+        "rigid_rot_sim/sweep/chunks.py",
     ],
 )
 def test_the_users_ask_the_one_home(module):

@@ -22,10 +22,10 @@ from typing import Any
 
 import numpy as np
 
-from rigid_rot_sim.analysis.cluster import SweepResult
-from rigid_rot_sim.analysis.sweep import COLUMNS
-from rigid_rot_sim.analysis.sweep_spec import METRICS
 from rigid_rot_sim.recording.provenance import package_versions
+from rigid_rot_sim.sweep.chunks import COLUMNS
+from rigid_rot_sim.sweep.runner import SweepResult
+from rigid_rot_sim.sweep.spec import METRICS
 
 __all__ = [
     "to_table",

@@ -1,6 +1,6 @@
 """Sweep specs: a base scene plus dispersions and grids, validated into frozen dataclasses.
 
-The format is one JSON Schema, :data:`rigid_rot_sim.analysis.sweep_schema.SWEEP_SCHEMA`
+The format is one JSON Schema, :data:`rigid_rot_sim.sweep.schema.SWEEP_SCHEMA`
 (exported as ``config/schema/sweep.schema.json``). :func:`load_sweep_spec` validates a
 spec against it, then checks what a schema cannot express: the base scene (found, valid,
 torque-free or scheduled), batch method, event and metric names, and dispersions that
@@ -50,13 +50,13 @@ from typing import Any
 
 import numpy as np
 
-from rigid_rot_sim.analysis.sweep_schema import DISPERSION_KINDS, SWEEP_SCHEMA
 from rigid_rot_sim.core.batch import BATCH_METHODS
 from rigid_rot_sim.core.validation import TRIANGLE_RTOL
 from rigid_rot_sim.scene.bounded_yaml import load_input, read_input
 from rigid_rot_sim.scene.scene import Scene, SceneError, load_scene
 from rigid_rot_sim.scene.schema import validated
 from rigid_rot_sim.share import resolve_scene
+from rigid_rot_sim.sweep.schema import DISPERSION_KINDS, SWEEP_SCHEMA
 
 __all__ = [
     "SweepSpecError",

@@ -6,10 +6,11 @@ import numpy as np
 import pyarrow.parquet as pq
 import pytest
 
-from rigid_rot_sim.analysis.cluster import SweepResult, run_local, scheduler_address
-from rigid_rot_sim.analysis.sweep import COLUMNS, Chunk, _sample_draws, plan_chunks, run_chunk, sample_inputs
-from rigid_rot_sim.analysis.sweep_output import METADATA_KEY, write_outputs
-from rigid_rot_sim.analysis.sweep_spec import parse_sweep_text
+from rigid_rot_sim.cluster import scheduler_address
+from rigid_rot_sim.sweep.chunks import COLUMNS, Chunk, _sample_draws, plan_chunks, run_chunk, sample_inputs
+from rigid_rot_sim.sweep.output import METADATA_KEY, write_outputs
+from rigid_rot_sim.sweep.runner import SweepResult, run_local
+from rigid_rot_sim.sweep.spec import parse_sweep_text
 
 # rk4 at dt = 0.5 s on a 30 rad/s spin blows up; the other grid points do not
 MIXED = """
@@ -69,8 +70,8 @@ def test_rows_do_not_depend_on_chunking(mixed):
 def test_rows_do_not_depend_on_how_a_run_is_cut_into_kernel_calls(text, monkeypatch):
     """Stretches under unchanged torques run as one recording call, at most _RECORDED_BYTES of rates per call,
     and as one call per segment after a failure: every way gives the same bits, failed runs and errors included."""
-    from rigid_rot_sim.analysis import sweep
     from rigid_rot_sim.core.integrators.base import NonFiniteStateError
+    from rigid_rot_sim.sweep import chunks as sweep
 
     spec = parse_sweep_text(text, "cuts.yaml")
     joined = run_local(spec, chunk_size=7)
