@@ -2,7 +2,7 @@
 
 :data:`SCENE_SCHEMA` says which keys a scene file may hold, their types, required keys,
 choices, bounds and defaults, with a description of each for editors. It is exported as
-``config/schema/scene.schema.json`` (the README shows how editors use it)::
+``config/schema/scene.schema.json`` (docs/scenes.md shows how editors use it)::
 
     python -m rigid_rot_sim.scene.scene_schema > config/schema/scene.schema.json
 

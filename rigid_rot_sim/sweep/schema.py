@@ -2,7 +2,7 @@
 
 :data:`SWEEP_SCHEMA` says which keys a sweep spec may hold, their types, required keys,
 choices and bounds, with a description of each for editors. It is exported as
-``config/schema/sweep.schema.json`` (the README shows how editors use it)::
+``config/schema/sweep.schema.json`` (docs/scenes.md shows how editors use it)::
 
     python -m rigid_rot_sim.sweep.schema > config/schema/sweep.schema.json
 

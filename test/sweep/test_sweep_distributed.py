@@ -20,6 +20,8 @@ from rigid_rot_sim.sweep.chunks import COLUMNS
 from rigid_rot_sim.sweep.runner import run_local, run_sweep
 from rigid_rot_sim.sweep.spec import load_sweep_spec
 
+pytestmark = pytest.mark.slow
+
 DASK = str(Path(sys.executable).parent / "dask")
 START_TIMEOUT = 120.0
 
