@@ -187,7 +187,7 @@ def simulate(
         Keep every ``save_every``-th step (>= 1).
     wheels : WheelModel, optional
         Reaction wheels (:func:`rigid_rot_sim.core.wheels.wheel_model`, axes in the body frame; the
-        inertia includes them). Only the gyrostat methods (``rk4``, ``dopri5``) run them; ``torque``
+        inertia includes them). Only the gyrostat methods (``gyrostat_rk4``, ``dopri5``) run them; ``torque``
         is then None or constant.
     wheel_speeds0 : array_like, shape (n_wheels,), optional
         Initial wheel speeds, rad/s relative to the body (default 0).

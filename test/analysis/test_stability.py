@@ -103,18 +103,18 @@ def test_bisected_rk4_step_matches_linear_theory(suite):
 
 
 def test_fast_wheel_case_is_run_by_the_gyrostat_methods_within_rk4_theory(suite):
-    """Stable and passing for rk4 and dopri5, refused by the others; rk4's omega error is the nutation phase
+    """Stable and passing for gyrostat_rk4 and dopri5, refused by the others; gyrostat_rk4's omega error is the nutation phase
     error its linear theory predicts (the limit), not far below it: the limit is not slack."""
     _, _, cases = suite
     case = cases["fast wheel, slow body"]
     limit = next(c for c in catalogue(quick=True) if c.name == "fast wheel, slow body").criterion.omega_error
     for method, run in case["runs"].items():
-        if method in ("rk4", "dopri5"):
+        if method in ("gyrostat_rk4", "dopri5"):
             assert run["status"] == "stable" and run["passed"], (method, run)
             assert run["energy_drift"] < 1e-8 and run["momentum_drift"] < 1e-8
         else:
-            assert run["status"] == "refused" and "valid methods: dopri5, rk4" in run["message"], method
-    assert 0.5 * limit < case["runs"]["rk4"]["omega_error"] <= limit
+            assert run["status"] == "refused" and "valid methods: dopri5, gyrostat_rk4" in run["message"], method
+    assert 0.5 * limit < case["runs"]["gyrostat_rk4"]["omega_error"] <= limit
     assert case["runs"]["dopri5"]["omega_error"] < 1e-4 * limit  # order 5 at rtol 1e-10
     for name, other in cases.items():
         if name != "fast wheel, slow body":
