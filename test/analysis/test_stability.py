@@ -103,8 +103,8 @@ def test_bisected_rk4_step_matches_linear_theory(suite):
 
 
 def test_fast_wheel_case_is_run_by_the_gyrostat_methods_within_rk4_theory(suite):
-    """Stable and passing for gyrostat_rk4 and dopri5, refused by the others; gyrostat_rk4's omega error is the nutation phase
-    error its linear theory predicts (the limit), not far below it: the limit is not slack."""
+    """Stable and passing for gyrostat_rk4 and dopri5, refused by the others; gyrostat_rk4's omega error is the
+    nutation phase error its linear theory predicts (the limit), not far below it: the limit is not slack."""
     _, _, cases = suite
     case = cases["fast wheel, slow body"]
     limit = next(c for c in catalogue(quick=True) if c.name == "fast wheel, slow body").criterion.omega_error

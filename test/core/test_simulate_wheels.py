@@ -149,7 +149,13 @@ def test_gravity_gradient_pitch_libration_through_simulate():
     theta0 = 1e-3
     t_end = 4 * 2 * math.pi / expected
     traj = simulate(
-        moments, (0.0, 0.0, n), t_end, 2.0, "gyrostat_rk4", (0.0, 0.0, math.sin(theta0 / 2), math.cos(theta0 / 2)), orbit=orbit
+        moments,
+        (0.0, 0.0, n),
+        t_end,
+        2.0,
+        "gyrostat_rk4",
+        (0.0, 0.0, math.sin(theta0 / 2), math.cos(theta0 / 2)),
+        orbit=orbit,
     )
     assert traj.wheel_speeds is None
     pitch = np.unwrap(2 * np.arctan2(traj.q[:, 2], traj.q[:, 3])) - n * traj.t
