@@ -173,15 +173,26 @@ def test_core_imports_only_numpy_scipy_numba():
             assert _third_party_imports(path) <= {"numpy", "scipy", "numba"}, name
 
 
-def test_no_class_is_over_the_size_limit():
-    too_long = []
+#: Classes reviewed over the size rule: qualified name -> (statement lines at the review, why it stays one
+#: class). The rule is a trigger for a review, not a cap to dodge (no mixins or one-line folds to get under
+#: it): split what is separable; what reads well as one is recorded here, and fails again if it grows.
+REVIEWED_CLASSES: dict[str, tuple[int, str]] = {}
+
+
+def test_a_class_over_the_size_rule_has_been_reviewed():
+    unreviewed = []
     for name, path in _modules().items():
         for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"))):
             if isinstance(node, ast.ClassDef):
                 lines = len({stmt.lineno for stmt in ast.walk(node) if isinstance(stmt, ast.stmt)})
-                if lines > MAX_CLASS_LINES:
-                    too_long.append(f"{name}.{node.name}: {lines} statement lines")
-    assert too_long == []
+                qualified = f"{name}.{node.name}"
+                limit = REVIEWED_CLASSES.get(qualified, (MAX_CLASS_LINES, ""))[0]
+                if lines > limit:
+                    unreviewed.append(f"{qualified}: {lines} statement lines (review trigger at {limit})")
+    assert unreviewed == [], (
+        "review these classes: split what is separable, or record the class in REVIEWED_CLASSES with its size "
+        "and why it stays one class (never a mixin or a fold to get under the count):\n" + "\n".join(unreviewed)
+    )
 
 
 @pytest.mark.parametrize(
