@@ -18,9 +18,9 @@ Users: :mod:`rigid_rot_sim.run.observables` (outputs), :mod:`rigid_rot_sim.run.s
 callable) and the sweep's chunks.
 
 >>> q_bp = (0.0, 0.0, 0.5**0.5, 0.5**0.5)  # principal axes turned 90 deg about z
->>> [round(c, 12) for c in vector_from_principal(q_bp, (1.0, 0.0, 0.0))]
+>>> [round(c, 12) + 0.0 for c in vector_from_principal(q_bp, (1.0, 0.0, 0.0))]
 [0.0, 1.0, 0.0]
->>> [round(c, 12) for c in vector_to_principal(principal_from_body(q_bp), (0.0, 1.0, 0.0))]
+>>> [round(c, 12) + 0.0 for c in vector_to_principal(principal_from_body(q_bp), (0.0, 1.0, 0.0))]
 [1.0, 0.0, 0.0]
 >>> attitude_from_principal((0.0, 0.0, 0.0, 1.0), principal_from_body(q_bp)) == principal_from_body(q_bp)
 True

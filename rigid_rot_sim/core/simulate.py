@@ -314,7 +314,7 @@ def simulate_gyrostat(
 
     >>> from rigid_rot_sim.core.wheels import wheel_model
     >>> rw = wheel_model(np.diag([10.0, 12.0, 15.0]), ["rw_z"], [[0, 0, 1]], [0.5], [0.1], [1000.0])
-    >>> traj = simulate((10.0, 12.0, 15.0), (0.0, 0.0, 0.2), 10.0, 0.01, "rk4", wheels=rw,
+    >>> traj = simulate((10.0, 12.0, 15.0), (0.0, 0.0, 0.2), 10.0, 0.01, "gyrostat_rk4", wheels=rw,
     ...                 wheel_speeds0=[10.0], wheel_torque=[0.05])
     >>> traj.wheel_speeds.shape, round(float(traj.omega[-1, 2]), 9)    # (I3 - J) dw/dt = -u
     ((1001, 1), 0.165517241)
