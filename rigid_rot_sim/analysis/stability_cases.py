@@ -371,7 +371,8 @@ def _fast_wheel_case(quick: bool) -> Case:
     return Case(
         name="fast wheel, slow body",
         description=f"gyrostat: I = (100, 120, 150) kg m², ω0 ≈ 0.02 rad/s, a 5 kg m² wheel about (1, 1, 1) at "
-        f"600 rad/s (nutation {rate:.3g} rad/s, {rate * dt:.2g} rad per step), dt = 10 ms; run by rk4 and dopri5",
+        f"600 rad/s (nutation {rate:.3g} rad/s, {rate * dt:.2g} rad per step), dt = 10 ms; "
+        "run by gyrostat_rk4 and dopri5",
         problem=problem,
         dt=dt,
         criterion=Criterion(

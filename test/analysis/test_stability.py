@@ -40,7 +40,7 @@ def test_outputs_exist(suite):
     assert (out / "stability.png").read_bytes()[:4] == b"\x89PNG"
     text = (out / "stability.md").read_text()
     assert "## Pass / fail overview" in text and "## Largest stable step" in text and "## Long horizon" in text
-    assert data["methods"] == S.method_labels() == list(METHODS) + ["dopri5"]
+    assert data["methods"] == S.method_labels() == list(METHODS) + ["gyrostat_rk4", "dopri5"]
 
 
 def test_every_run_is_classified_and_never_nan_silently(suite):
@@ -132,9 +132,9 @@ def test_fast_wheel_case_is_stiff_rk4_stability_is_set_by_the_nutation():
     rate = nutation_rate(case.problem.moments, case.problem.wheels, case.problem.wheel_speeds0)
     assert rate == pytest.approx(24.85, rel=1e-3)
     theory = 2 * math.sqrt(2) / rate
-    assert S.largest_stable_step(case, "rk4", steps=200) == pytest.approx(theory, rel=0.02)
+    assert S.largest_stable_step(case, "gyrostat_rk4", steps=200) == pytest.approx(theory, rel=0.02)
     unstable = dataclasses.replace(case, dt=1.1 * theory)
-    run = S.run_case(unstable, "rk4")
+    run = S.run_case(unstable, "gyrostat_rk4")
     assert run.status == "unstable" and not run.passed
 
 
