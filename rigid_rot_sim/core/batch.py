@@ -74,8 +74,20 @@ def _as_batch(name: str, value: Any, n: int | None, width: int) -> np.ndarray:
 
 @register_jitable
 def _advance_body(
-    b, method, moments, q, omega, torque, dt, n_steps, normalize_q, failed_step, failure, record_steps, omega_at
-):
+    b: Any,
+    method: Any,
+    moments: Any,
+    q: Any,
+    omega: Any,
+    torque: Any,
+    dt: Any,
+    n_steps: Any,
+    normalize_q: Any,
+    failed_step: Any,
+    failure: Any,
+    record_steps: Any,
+    omega_at: Any,
+) -> None:
     """Advance body b in place; if it fails it keeps its last good state and records the
     (1-based) failing step and the status. After each of ``record_steps`` (increasing, 1-based)
     its rates go to ``omega_at[r, b]``: the run is cut there into calls as separate
@@ -100,7 +112,7 @@ def _advance_body(
             # as ExactFlow.advance(span): one evaluation of the flow at span * dt
             done, status = span, OK
             if span > 0:
-                q_end, w_end = free_flow(
+                q_end, w_end = free_flow(  # type: ignore[no-untyped-call]  # exact.py's kernels are untyped
                     body_moments, (state[0], state[1], state[2], state[3]), (state[4], state[5], state[6]), span * dt
                 )
                 finite = True
@@ -111,7 +123,7 @@ def _advance_body(
                 else:
                     done, status = span - 1, NON_FINITE
         else:
-            state, done, status, bad = kernels.advance_steps(
+            state, done, status, bad = kernels.advance_steps(  # type: ignore[no-untyped-call]
                 method, 0.0, 0, dt, span, state, body_moments, body_torque, 0, no_saves
             )
         if status != OK:
@@ -130,8 +142,19 @@ def _advance_body(
 
 @compiled(parallel=True)
 def _advance_bodies_parallel(
-    method, moments, q, omega, torque, dt, n_steps, normalize_q, failed_step, failure, record_steps, omega_at
-):
+    method: Any,
+    moments: Any,
+    q: Any,
+    omega: Any,
+    torque: Any,
+    dt: Any,
+    n_steps: Any,
+    normalize_q: Any,
+    failed_step: Any,
+    failure: Any,
+    record_steps: Any,
+    omega_at: Any,
+) -> None:
     for b in prange(q.shape[0]):
         _advance_body(
             b, method, moments, q, omega, torque, dt, n_steps, normalize_q, failed_step, failure, record_steps, omega_at
@@ -142,8 +165,19 @@ def _advance_bodies_parallel(
 # (milliseconds) when the cores are busy with other work.
 @compiled
 def _advance_bodies_serial(
-    method, moments, q, omega, torque, dt, n_steps, normalize_q, failed_step, failure, record_steps, omega_at
-):
+    method: Any,
+    moments: Any,
+    q: Any,
+    omega: Any,
+    torque: Any,
+    dt: Any,
+    n_steps: Any,
+    normalize_q: Any,
+    failed_step: Any,
+    failure: Any,
+    record_steps: Any,
+    omega_at: Any,
+) -> None:
     for b in range(q.shape[0]):
         _advance_body(
             b, method, moments, q, omega, torque, dt, n_steps, normalize_q, failed_step, failure, record_steps, omega_at
@@ -171,8 +205,20 @@ _SOA_CHUNK = 512  # bodies per chunk: its scratch rows stay in the L1/L2 cache
 
 @register_jitable
 def _rk4_soa_chunk(
-    start, stop, moments, q, omega, torque, dt, n_steps, normalize_q, failed_step, failure, record_steps, omega_at
-):
+    start: Any,
+    stop: Any,
+    moments: Any,
+    q: Any,
+    omega: Any,
+    torque: Any,
+    dt: Any,
+    n_steps: Any,
+    normalize_q: Any,
+    failed_step: Any,
+    failure: Any,
+    record_steps: Any,
+    omega_at: Any,
+) -> None:
     m = stop - start
     # state and per-body constants, one row per component
     x = np.empty((7, m))  # qx, qy, qz, qw, w1, w2, w3
@@ -302,8 +348,18 @@ def _rk4_soa_chunk(
 # quaternion norm, whose zero gives a non-finite state, reported as such.
 @compiled(parallel=True, error_model="numpy")
 def _rk4_soa_parallel(
-    moments, q, omega, torque, dt, n_steps, normalize_q, failed_step, failure, record_steps, omega_at
-):
+    moments: Any,
+    q: Any,
+    omega: Any,
+    torque: Any,
+    dt: Any,
+    n_steps: Any,
+    normalize_q: Any,
+    failed_step: Any,
+    failure: Any,
+    record_steps: Any,
+    omega_at: Any,
+) -> None:
     n = q.shape[0]
     for c in prange((n + _SOA_CHUNK - 1) // _SOA_CHUNK):
         start = c * _SOA_CHUNK
@@ -325,7 +381,19 @@ def _rk4_soa_parallel(
 
 
 @compiled(error_model="numpy")
-def _rk4_soa_serial(moments, q, omega, torque, dt, n_steps, normalize_q, failed_step, failure, record_steps, omega_at):
+def _rk4_soa_serial(
+    moments: Any,
+    q: Any,
+    omega: Any,
+    torque: Any,
+    dt: Any,
+    n_steps: Any,
+    normalize_q: Any,
+    failed_step: Any,
+    failure: Any,
+    record_steps: Any,
+    omega_at: Any,
+) -> None:
     n = q.shape[0]
     for start in range(0, n, _SOA_CHUNK):
         _rk4_soa_chunk(
