@@ -123,7 +123,7 @@ def _advance_body(
                 else:
                     done, status = span - 1, NON_FINITE
         else:
-            state, done, status, bad = kernels.advance_steps(  # type: ignore[no-untyped-call]
+            state, done, status, bad = kernels.advance_steps(
                 method, 0.0, 0, dt, span, state, body_moments, body_torque, 0, no_saves
             )
         if status != OK:
