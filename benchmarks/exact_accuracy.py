@@ -18,9 +18,11 @@ from scipy.spatial.transform import Rotation
 from rigid_rot_sim.core.exact import torque_free_solution
 
 LD = np.longdouble
+#: The reference's step (s): 1/32 in long double.
+REFERENCE_STEP = LD(1) / 32
 
 
-def taylor_reference(moments, omega0, q0, t_end, h=LD(1) / 32, order=28):
+def taylor_reference(moments, omega0, q0, t_end, h=REFERENCE_STEP, order=28):
     i1, i2, i3 = (LD(m) for m in moments)
     c = np.array([(i2 - i3) / i1, (i3 - i1) / i2, (i1 - i2) / i3], dtype=LD)
     w = np.array([LD(x) for x in omega0], dtype=LD)
@@ -85,7 +87,8 @@ def main() -> None:
         qr = (q_ref / np.sqrt(np.sum(q_ref * q_ref))).astype(float)
         qerr = float(min(np.linalg.norm(q - qr), np.linalg.norm(q + qr)))
         print(
-            f"{str(moments):18s} {str(omega0):32s} {sol.case:17s} T={T:g} s  |dw|/|w0| = {werr:.2e}  |dq| = {qerr:.2e}  (ref {el:.1f} s)"
+            f"{str(moments):18s} {str(omega0):32s} {sol.case:17s} T={T:g} s  "
+            f"|dw|/|w0| = {werr:.2e}  |dq| = {qerr:.2e}  (ref {el:.1f} s)"
         )
 
 

@@ -414,13 +414,15 @@ def main() -> int:
         scenes = scene_campaign(args, rng, work)
         print("part 2, scene files:")
         print(
-            f"  scenes {scenes['scenes']}: started and finished {scenes['started']}, refused (exit 2) {scenes['refused']}, "
+            f"  scenes {scenes['scenes']}: started and finished {scenes['started']}, "
+            f"refused (exit 2) {scenes['refused']}, "
             f"other exit codes {scenes['other_exit']}; tracebacks {scenes['tracebacks']}, hangs {scenes['hangs']}; "
             f"refusals not one line <= {limits.MAX_ERROR_CHARS} chars on stderr: {scenes['bad_error_lines']} "
             f"(longest {scenes['longest_error']} chars)"
         )
         print(
-            f"  Ctrl-C while loading {limits.MAX_POINT_MASSES} point masses: exit in {scenes['ctrl_c_during_load_s']:.2f} s"
+            f"  Ctrl-C while loading {limits.MAX_POINT_MASSES} point masses: "
+            f"exit in {scenes['ctrl_c_during_load_s']:.2f} s"
         )
     bad = node["tracebacks"] + node["hangs"] + node["non_finite"] + scenes["tracebacks"] + scenes["hangs"]
     bad += scenes["bad_error_lines"] + (not node["alive"])

@@ -120,7 +120,7 @@ def main() -> None:
             step = t_end if dt is None else dt
             label = " ".join(f"{k}={v:g}" if isinstance(v, float) else f"{k}={v}" for k, v in options.items())
 
-            def run():
+            def run(step=step, name=name, options=options):
                 return simulate(MOMENTS, OMEGA0, t_end, step, name, Q0, torque, save_every=ONE_OUTPUT, **options)
 
             try:
@@ -133,7 +133,7 @@ def main() -> None:
     for rtol in (1e-6, 1e-9, 1e-12):
         rhs = float_rhs(torque)
 
-        def run_scipy():
+        def run_scipy(rhs=rhs, rtol=rtol):
             return solve_ivp(rhs, (0.0, t_end), [*Q0, *OMEGA0], method="DOP853", rtol=rtol, atol=rtol * 1e-2)
 
         seconds, sol = best_time(run_scipy, repeats)

@@ -27,8 +27,8 @@ misalignment and rate dispersions), the same rows each time. Measured, in one ru
 The measurements run in ``--repeats`` rounds (3), each round the raw kernel, this process and
 each cluster one after the other (each the fastest of ``--best-of`` runs, 2), so that a slower
 spell of a shared or virtual machine touches a whole round; each round's ratios are printed,
-and the fastest round's rates. Then, on paper, what a 1e9-run sweep of the shipped slew (6000 steps per run) needs at the
-measured per-worker rate. Printed, never asserted. With ``--scheduler`` the 1/2-worker
+and the fastest round's rates. Then, on paper, what a 1e9-run sweep of the shipped slew
+(6000 steps per run) needs at the measured per-worker rate. Printed, never asserted. With ``--scheduler`` the 1/2-worker
 steps are replaced by one measurement on that cluster.
 """
 
@@ -43,10 +43,11 @@ from concurrent.futures import ProcessPoolExecutor
 
 import numpy as np
 
-from rigid_rot_sim.analysis.cluster import one_numba_thread, open_client, run_local, run_sweep
-from rigid_rot_sim.analysis.sweep import choose_chunk_size
-from rigid_rot_sim.analysis.sweep_spec import parse_sweep_text
+from rigid_rot_sim.cluster import one_numba_thread, open_client
 from rigid_rot_sim.core.batch import advance_batch
+from rigid_rot_sim.sweep.chunks import choose_chunk_size
+from rigid_rot_sim.sweep.runner import run_local, run_sweep
+from rigid_rot_sim.sweep.spec import parse_sweep_text
 
 SPEC = """
 name: scaling
@@ -228,7 +229,8 @@ def main() -> None:
     baseline = max(b for _, b, _ in rounds)
     print(
         f"raw batch kernel, rk4, N = {n_chunk}, {steps:.0f} steps, 1 thread, {calls} calls (the workload): "
-        f"{raw:.3g} body-steps/s (fastest round; fastest single call {raw_call:.3g}); in 2 processes at once each ran at "
+        f"{raw:.3g} body-steps/s (fastest round; fastest single call {raw_call:.3g}); "
+        f"in 2 processes at once each ran at "
         f"{', '.join(f'{p:.0%}' for p in pair_shares)} of it per round: the most 2 workers could scale"
     )
     print(

@@ -143,7 +143,7 @@ def sweep(name: str, spec: dict, repeats: int, quick: bool) -> dict[str, list[tu
             spent[i] += elapsed
     results: dict[str, list[tuple[str, float, float]]] = {method: [] for method in runs}
     print(f"   {'method':22s} {'setting':12s} {'time/ms':>9s} {'omega error':>12s}")
-    for (method, label, _), elapsed, omega in zip(flat, best, omegas):
+    for (method, label, _), elapsed, omega in zip(flat, best, omegas, strict=True):
         error = float(np.max(np.abs(omega - omega_ref)))
         results[method].append((label, elapsed, error))
         print(f"   {method:22s} {label:12s} {elapsed * 1e3:9.3f} {error:12.2e}")
@@ -159,7 +159,7 @@ def fastest_reaching(points: list[tuple[str, float, float]], target: float) -> t
 def interpolated_time(points: list[tuple[str, float, float]], target: float) -> float | None:
     """Run time at error = target, log-log interpolated between the two sweep points around it."""
     ordered = sorted(points, key=lambda p: -p[2])  # loosest first
-    for (_, t_a, e_a), (_, t_b, e_b) in zip(ordered, ordered[1:]):
+    for (_, t_a, e_a), (_, t_b, e_b) in zip(ordered, ordered[1:], strict=False):
         if e_a > target >= e_b and e_b > 0.0:
             w = math.log(e_a / target) / math.log(e_a / e_b)
             return math.exp((1.0 - w) * math.log(t_a) + w * math.log(t_b))

@@ -33,14 +33,14 @@ from sensor_msgs.msg import Imu, JointState
 from std_msgs.msg import ColorRGBA
 from visualization_msgs.msg import Marker, MarkerArray
 
-from rigid_rot_msgs.msg import (  # type: ignore[attr-defined]  # generated, untyped
+from rigid_rot_msgs.msg import (  # generated, untyped
     HeavyTopState,
     RejectedCommand,
     RigidBodyState,
     TorqueBreakdown,
     WheelTorques,
 )
-from rigid_rot_msgs.srv import ComputeInertia  # type: ignore[attr-defined]  # generated, untyped
+from rigid_rot_msgs.srv import ComputeInertia  # generated, untyped
 from rigid_rot_sim.core import quaternion
 from rigid_rot_sim.core.inertia import MassProperties, principal_orientation
 from rigid_rot_sim.message_fields import (  # noqa: F401 (the readers are part of this module's API)
@@ -240,8 +240,8 @@ def snapshot_to_top_state(snapshot: StateSnapshot, world_frame: str) -> HeavyTop
         precession=phi,
         nutation=theta,
         spin=psi,
-        p_phi=float(snapshot.p_phi),
-        p_psi=float(snapshot.p_psi),
+        p_phi=float(snapshot.p_phi or 0.0),
+        p_psi=float(snapshot.p_psi or 0.0),
         energy=float(snapshot.energy),
     )
     msg.header.stamp = seconds_to_time(snapshot.t)
@@ -465,7 +465,7 @@ def gyro_to_imu(reading, t: float, body_frame: str, variance: float) -> Imu:
 
 
 def star_tracker_pose(
-    orientation: Sequence[float], t: float, world_frame: str, covariance_body: np.ndarray
+    orientation: np.ndarray | Sequence[float], t: float, world_frame: str, covariance_body: np.ndarray
 ) -> PoseWithCovarianceStamped:
     """geometry_msgs/PoseWithCovarianceStamped of a star tracker attitude (x, y, z, w; body -> world).
 

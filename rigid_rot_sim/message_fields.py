@@ -27,7 +27,7 @@ def quaternion_to_array(q: Any) -> np.ndarray:
     return np.array([q.x, q.y, q.z, q.w], dtype=float)
 
 
-def state_to_arrays(msg: Any) -> dict[str, np.ndarray | float]:
+def state_to_arrays(msg: Any) -> dict[str, Any]:
     """RigidBodyState -> {t, orientation (4,), angular_velocity_body (3,), ...} (clients, tests)."""
     return {
         "t": time_to_seconds(msg.header.stamp),

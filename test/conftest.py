@@ -68,3 +68,12 @@ os.environ["ROS_DOMAIN_ID"] = str(ROS_DOMAIN_ID)
 os.environ["RIGID_ROT_SIM_IN_PROCESS_DOMAIN_ID"] = str(_claim_domain_id())
 os.environ.setdefault("ROS_LOG_DIR", tempfile.mkdtemp(prefix="rigid_rot_ros_log_"))
 os.environ["PYTHONUNBUFFERED"] = "1"  # a subprocess's prints reach its log even if it is killed
+
+
+def pytest_collection_modifyitems(config, items):
+    """Every test under test/e2e/ is marked ``e2e`` (setup.cfg registers the markers)."""
+    import pytest
+
+    for item in items:
+        if "e2e" in item.path.parent.parts:
+            item.add_marker(pytest.mark.e2e)

@@ -17,7 +17,10 @@ def test_readers_take_any_object_with_the_message_fields():
 
 
 def test_the_readers_import_no_ros():
-    code = "import sys, rigid_rot_sim.message_fields; print(sorted(m for m in sys.modules if m.startswith(('rclpy', 'rigid_rot_msgs', 'geometry_msgs'))))"
+    code = (
+        "import sys, rigid_rot_sim.message_fields; "
+        "print(sorted(m for m in sys.modules if m.startswith(('rclpy', 'rigid_rot_msgs', 'geometry_msgs'))))"
+    )
     result = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=60, check=True)
     assert result.stdout.strip() == "[]"
 

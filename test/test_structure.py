@@ -110,10 +110,10 @@ LAYERS = (
     ("core",),
     ("scene",),
     ("run", "envs"),
-    ("message_fields", "share"),
+    ("message_fields", "share", "cluster"),
     ("recording",),
     ("conversions", "viewer"),
-    ("ros", "analysis", "identify"),
+    ("ros", "analysis", "sweep", "identify"),
     ("cli",),
     ("console_scripts",),
 )
@@ -153,7 +153,8 @@ def test_rooms_import_only_downwards():
 
 def test_layer_order_is_the_documented_one():
     assert _floor("core") < _floor("scene") < _floor("run") < _floor("recording") < _floor("ros") < _floor("cli")
-    assert _floor("ros") == _floor("analysis")
+    assert _floor("ros") == _floor("analysis") == _floor("sweep")
+    assert _floor("cluster") < _floor("analysis")
 
 
 def _third_party_imports(path: Path) -> set[str]:
@@ -172,15 +173,26 @@ def test_core_imports_only_numpy_scipy_numba():
             assert _third_party_imports(path) <= {"numpy", "scipy", "numba"}, name
 
 
-def test_no_class_is_over_the_size_limit():
-    too_long = []
+#: Classes reviewed over the size rule: qualified name -> (statement lines at the review, why it stays one
+#: class). The rule is a trigger for a review, not a cap to dodge (no mixins or one-line folds to get under
+#: it): split what is separable; what reads well as one is recorded here, and fails again if it grows.
+REVIEWED_CLASSES: dict[str, tuple[int, str]] = {}
+
+
+def test_a_class_over_the_size_rule_has_been_reviewed():
+    unreviewed = []
     for name, path in _modules().items():
         for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"))):
             if isinstance(node, ast.ClassDef):
                 lines = len({stmt.lineno for stmt in ast.walk(node) if isinstance(stmt, ast.stmt)})
-                if lines > MAX_CLASS_LINES:
-                    too_long.append(f"{name}.{node.name}: {lines} statement lines")
-    assert too_long == []
+                qualified = f"{name}.{node.name}"
+                limit = REVIEWED_CLASSES.get(qualified, (MAX_CLASS_LINES, ""))[0]
+                if lines > limit:
+                    unreviewed.append(f"{qualified}: {lines} statement lines (review trigger at {limit})")
+    assert unreviewed == [], (
+        "review these classes: split what is separable, or record the class in REVIEWED_CLASSES with its size "
+        "and why it stays one class (never a mixin or a fold to get under the count):\n" + "\n".join(unreviewed)
+    )
 
 
 @pytest.mark.parametrize(
@@ -220,3 +232,71 @@ def test_kernel_cache_is_keyed_on_the_numerics_only(tmp_path):
     with open(copy / "core" / "dynamics.py", "a", encoding="utf-8") as f:
         f.write("\n# an edit to the numerics\n")
     assert fingerprint() != before
+
+
+# ---------------------------------------------------------------- rooms and docs that cannot drift
+
+#: Rooms whose package docstring is their table of contents (cli's is SUBCOMMANDS; the top level's the
+#: layer list in docs/architecture.md).
+DOCUMENTED_ROOMS = (
+    "core",
+    "core.integrators",
+    "scene",
+    "run",
+    "recording",
+    "analysis",
+    "sweep",
+    "ros",
+    "viewer",
+    "envs",
+    "identify",
+)
+#: Files whose pointers into the README name sections that moved to docs/, left to the branch that owns
+#: them (issue 27 rewrites ros/node.py and ros/qos.py). A ratchet: the test fails when one is fixed.
+STALE_POINTERS = {"rigid_rot_sim/ros/node.py", "rigid_rot_sim/ros/qos.py"}
+
+
+@pytest.mark.parametrize("room", DOCUMENTED_ROOMS)
+def test_every_module_is_named_in_its_rooms_docstring(room):
+    """A room's docstring lists its modules (``:mod:`.name``` or the dotted name), each one, new ones too."""
+    package = PACKAGE.joinpath(*room.split("."))
+    doc = ast.get_docstring(ast.parse((package / "__init__.py").read_text(encoding="utf-8"))) or ""
+    members = [path.stem for path in package.glob("*.py") if path.stem != "__init__"]
+    members += [path.parent.name for path in package.glob("*/__init__.py")]
+    missing = sorted(name for name in members if f".{name}`" not in doc and f"rigid_rot_sim.{room}.{name}" not in doc)
+    assert not missing, f"rigid_rot_sim/{room.replace('.', '/')}/__init__.py does not name: {', '.join(missing)}"
+
+
+def _pointers(text: str) -> list[tuple[str, str | None]]:
+    """(file, section or None) of every pointer in ``text``: ``README, "Section"``, ``README (section "Section")``,
+    ``docs/page.md`` with an optional ``(section "Section")`` or ``, section "Section"``."""
+    import re
+
+    found = []
+    for match in re.finditer(r'\bREADME(?:\.md)?(?:,| \(section)\s*(?:section\s*)?"([^"]+)"', text):
+        found.append(("README.md", match.group(1)))
+    for match in re.finditer(r'\b(docs/[\w-]+\.md)(?:\s*(?:\(|,)\s*section\s*"([^"]+)")?', text):
+        if "rosbag2" not in text[max(0, match.start() - 12) : match.start()]:  # another project's docs
+            found.append((match.group(1), match.group(2)))
+    return found
+
+
+def _sections(path: Path) -> set[str]:
+    return {line.lstrip("#").strip() for line in path.read_text(encoding="utf-8").splitlines() if line.startswith("#")}
+
+
+def test_every_pointer_into_the_readme_or_docs_resolves():
+    """A docstring or comment naming a README or docs/ section names one that exists (sections move)."""
+    root = PACKAGE.parent
+    broken, stale = [], set()
+    for path in sorted(PACKAGE.rglob("*.py")):
+        relative = path.relative_to(root).as_posix()
+        for page, section in _pointers(path.read_text(encoding="utf-8")):
+            target = root / page
+            if not target.is_file() or (section is not None and section not in _sections(target)):
+                if relative in STALE_POINTERS:
+                    stale.add(relative)
+                else:
+                    broken.append(f"{relative}: {page}" + (f', section "{section}"' if section else ""))
+    assert not broken, "pointers to missing files or sections:\n" + "\n".join(broken)
+    assert stale == STALE_POINTERS, f"fixed: remove from STALE_POINTERS: {sorted(STALE_POINTERS - stale)}"

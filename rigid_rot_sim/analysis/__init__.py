@@ -1,4 +1,4 @@
-"""Analysis of the numerical core: work-precision report and stability suite.
+"""Analysis of the numerical core: work-precision report and stability suite (sweeps: :mod:`rigid_rot_sim.sweep`).
 
 * :mod:`.problems`: the benchmark problems P1 to P4 as data, with their references, and
   :meth:`~.problems.Problem.final_state`, a method's run of a problem to its end.
@@ -10,11 +10,10 @@
   the long horizon; :mod:`.stability_report` runs the suite and writes its outputs.
 * :mod:`.report_io`: machine facts, number formats, markdown tables and JSON of both reports.
 * :mod:`.plot`: matplotlib (Agg) figures of both (as :mod:`rigid_rot_sim.recording.plot` draws a recording).
-* :mod:`.sweep_spec`: sweep specs (a base scene, dispersions, grids) validated from YAML.
-* :mod:`.sweep`: a sweep's seeded inputs, its chunks, and the batch simulation of one chunk.
-* :mod:`.cluster`: dask.distributed (local or existing cluster) for sweeps, report and stability.
-* :mod:`.sweep_output`: the Parquet file, summary.md and plots of a sweep.
 
-Nothing here is imported by the core or the node; the ``rigid-rot report``,
-``rigid-rot stability`` and ``rigid-rot sweep`` commands drive it.
+Both run their independent tasks on :mod:`rigid_rot_sim.cluster` (dask.distributed, local or
+an existing cluster), as the sweeps do; nothing here loads the sweep.
+
+Nothing here is imported by the core or the node; the ``rigid-rot report`` and
+``rigid-rot stability`` commands drive it.
 """

@@ -136,7 +136,9 @@ def long_horizon_plot(rows: Sequence[dict[str, Any]], path: str | Path) -> Path:
     ax.bar(x + 0.2, last, 0.4, label="mean over the last tenth")
     ax.set_yscale("log")
     ax.set_xticks(
-        x, labels=[f"{m}\n({'secular' if r['secular'] else 'bounded'})" for m, r in zip(labels, rows)], fontsize=8
+        x,
+        labels=[f"{m}\n({'secular' if r['secular'] else 'bounded'})" for m, r in zip(labels, rows, strict=True)],
+        fontsize=8,
     )
     steps = rows[0]["steps"] if rows else 0
     ax.set_ylabel("relative energy error |E − E0| / E0 [-]")

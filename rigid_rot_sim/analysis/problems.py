@@ -14,7 +14,7 @@ P5     gyrostat: P1's body with a free wheel (J = 0.05 kg m^2 about            D
        (1, 1, 1)/sqrt(3), 40 rad/s), w0 = (1, 0.1, 0.5) rad/s, 20 s             certified by our dopri5
 =====  =====================================================================  ==============================
 
-P5 is run by the gyrostat methods only (``rk4``; the others are refused): its state carries
+P5 is run by the gyrostat methods only (``gyrostat_rk4``; the others are refused): its state carries
 the wheel speed, the report compares the body's final (q, omega).
 
 Every problem starts at t = 0 from the identity attitude unless stated; states are in the

@@ -46,7 +46,7 @@ def machine_info() -> dict[str, Any]:
     try:
         affinity = len(os.sched_getaffinity(0))
     except AttributeError:
-        affinity = os.cpu_count()
+        affinity = os.cpu_count() or 1
     return {
         "cpu": cpu,
         "cpu_count": os.cpu_count(),

@@ -37,10 +37,10 @@ from typing import Any, Literal
 
 import numpy as np
 
-from rigid_rot_sim.analysis.cluster import map_tasks, open_client, wants_cluster
 from rigid_rot_sim.analysis.metrics import attitude_error_angle, omega_error, relative_change
 from rigid_rot_sim.analysis.problems import P1, Problem
 from rigid_rot_sim.analysis.stability_cases import Case, Criterion, case_named
+from rigid_rot_sim.cluster import map_tasks, open_client, wants_cluster
 from rigid_rot_sim.core.exact import torque_free_solution
 from rigid_rot_sim.core.integrators import METHODS, get_method
 from rigid_rot_sim.core.integrators.base import NonFiniteStateError
@@ -459,6 +459,6 @@ def _run_on_cluster(client, cases, methods, long_methods, long_steps, quick, bar
     if not bisect_args:
         bar.update(1)
     case_runs: dict[str, dict[str, Any]] = {}
-    for (name, _, method), run in zip(runs_args, results[:first_bisection]):
+    for (name, _, method), run in zip(runs_args, results[:first_bisection], strict=True):
         case_runs.setdefault(name, {})[method] = run
     return case_runs, results[first_bisection:first_horizon], results[first_horizon:]

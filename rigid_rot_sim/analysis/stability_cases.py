@@ -87,12 +87,17 @@ class Case:
         return max(1, round(self.problem.t_end / self.dt))
 
 
+def _triple(values: Any) -> tuple[float, float, float]:
+    x, y, z = (float(v) for v in values)
+    return (x, y, z)
+
+
 def _free(key: str, title: str, moments, omega0, t_end: float, **kw: Any) -> Problem:
     return Problem(
         key=key,
         title=title,
-        principal_moments=tuple(float(m) for m in moments),
-        omega0=tuple(float(w) for w in omega0),
+        principal_moments=_triple(moments),
+        omega0=_triple(omega0),
         t_end=t_end,
         reference_factory=exact_reference,
         **kw,
@@ -128,7 +133,7 @@ def _scaled_p2(scale: float) -> Problem:
         P2,
         key=f"P2x{scale:g}",
         title=f"P2 scaled by {scale:g}",
-        principal_moments=tuple(scale * m for m in P2.principal_moments),
+        principal_moments=_triple(scale * m for m in P2.principal_moments),
         torque=ConstantTorque(scale * P2.torque.value),
         reference_factory=lambda problem: P2.reference(),
     )
@@ -366,7 +371,8 @@ def _fast_wheel_case(quick: bool) -> Case:
     return Case(
         name="fast wheel, slow body",
         description=f"gyrostat: I = (100, 120, 150) kg m², ω0 ≈ 0.02 rad/s, a 5 kg m² wheel about (1, 1, 1) at "
-        f"600 rad/s (nutation {rate:.3g} rad/s, {rate * dt:.2g} rad per step), dt = 10 ms; run by rk4 and dopri5",
+        f"600 rad/s (nutation {rate:.3g} rad/s, {rate * dt:.2g} rad per step), dt = 10 ms; "
+        "run by gyrostat_rk4 and dopri5",
         problem=problem,
         dt=dt,
         criterion=Criterion(

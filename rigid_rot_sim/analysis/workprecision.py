@@ -44,9 +44,9 @@ from typing import Any, Literal
 import numpy as np
 from scipy.integrate import solve_ivp
 
-from rigid_rot_sim.analysis.cluster import map_tasks, open_client
 from rigid_rot_sim.analysis.metrics import attitude_error_angle, omega_error, relative_change
 from rigid_rot_sim.analysis.problems import Problem, get_problem, scipy_rhs
+from rigid_rot_sim.cluster import map_tasks, open_client
 from rigid_rot_sim.core import quaternion as quat
 from rigid_rot_sim.core.integrators import METHODS
 from rigid_rot_sim.core.integrators.base import NonFiniteStateError
@@ -122,7 +122,7 @@ class Settings:
 
     @classmethod
     def quick_mode(cls, **overrides: Any) -> Settings:
-        values = dict(
+        values: dict[str, Any] = dict(
             quick=True,
             repeats=2,
             budget_seconds=0.2,
@@ -192,13 +192,15 @@ def _best_time(run: Callable[[], Any], repeats: int) -> tuple[Any, float, int]:
 
 def _runner(
     problem: Problem, line: DiagramLine, value: float
-) -> tuple[Callable[[], tuple[np.ndarray, np.ndarray, int]], str]:
+) -> tuple[Callable[[], tuple[np.ndarray, np.ndarray, int]], Literal["dt", "tol"]]:
     """A zero-argument callable doing the full timed run, and the sweep parameter name."""
     if line.family == "scipy":
         y0 = problem.initial_vector()
 
         def run_scipy() -> tuple[np.ndarray, np.ndarray, int]:
-            sol = solve_ivp(scipy_rhs(problem), (0.0, problem.t_end), y0, method=line.method, rtol=value, atol=value)
+            # scipy-stubs' overloads want Literal method names; ours come from the diagram's data
+            settings: dict[str, Any] = {"method": line.method, "rtol": value, "atol": value}
+            sol = solve_ivp(scipy_rhs(problem), (0.0, problem.t_end), y0, **settings)
             if not sol.success:
                 raise NonFiniteStateError(f"solve_ivp {line.method}: {sol.message}")
             y = sol.y[:, -1]
@@ -209,6 +211,7 @@ def _runner(
         return run_scipy, "tol"
 
     options = dict(line.options)
+    parameter: Literal["dt", "tol"]
     if line.sweep == "tol":
         options.update(TOLERANCE_OPTIONS[line.method](value))
         dt = problem.t_end
@@ -438,7 +441,7 @@ def run_problems(
     """Every line's sweep on each problem, in order; ``bar`` (tqdm) counts the points.
 
     With ``cluster`` every line of every problem is one Dask task (:func:`line_task`) on
-    :func:`~rigid_rot_sim.analysis.cluster.open_client` ``(scheduler, workers)``, each point
+    :func:`~rigid_rot_sim.cluster.open_client` ``(scheduler, workers)``, each point
     timed with the scipy baseline in that task.
     """
     if not cluster:
@@ -461,7 +464,7 @@ def run_problems(
     for key, problem in problems.items():
         ref = problem.reference()
         result = ProblemResult(key, problem.title, problem.t_end, ref.method, ref.certified_to)
-        for (task_key, _, _), points in zip(tasks, lines_points):
+        for (task_key, _, _), points in zip(tasks, lines_points, strict=True):
             if task_key == key:
                 result.points += points
         results.append(result)

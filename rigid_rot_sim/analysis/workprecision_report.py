@@ -15,7 +15,6 @@ from pathlib import Path
 
 from tqdm import tqdm
 
-from rigid_rot_sim.analysis.cluster import wants_cluster
 from rigid_rot_sim.analysis.plot import work_precision_plot
 from rigid_rot_sim.analysis.problems import PROBLEMS, Problem, get_problem
 from rigid_rot_sim.analysis.report_io import machine_info, machine_line, markdown_table, number, write_json
@@ -28,6 +27,7 @@ from rigid_rot_sim.analysis.workprecision import (
     run_problems,
     summary,
 )
+from rigid_rot_sim.cluster import wants_cluster
 
 
 def run_report(

@@ -227,7 +227,7 @@ def max_difference(a: MassProperties, b: MassProperties) -> float:
         (a.principal_moments, b.principal_moments),
         (a.inertia_com, rebuilt_b),
     ]
-    return max(float(np.max(np.abs(np.subtract(x, y)))) for x, y in pairs)
+    return max(float(np.max(np.abs(np.asarray(x, dtype=float) - np.asarray(y, dtype=float)))) for x, y in pairs)
 
 
 def as_dict(body: BodyInput, props: MassProperties) -> dict:

@@ -57,7 +57,7 @@ class RejectionWatch:
 
     def discover(self) -> None:
         """Subscribe to the ~/rejected of each node now subscribed to the command topic."""
-        from rigid_rot_msgs.msg import RejectedCommand  # type: ignore[attr-defined]  # generated, untyped
+        from rigid_rot_msgs.msg import RejectedCommand  # generated, untyped
         from rigid_rot_sim.ros.qos import REJECTED_QOS
 
         for info in self.node.get_subscriptions_info_by_topic(self.topic):

@@ -47,11 +47,12 @@ def add_parser(subparsers) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from rigid_rot_sim.analysis.cluster import require, run_sweep
+    from rigid_rot_sim.cluster import require
+    from rigid_rot_sim.sweep.runner import run_sweep
 
     require("distributed", "pyarrow", "matplotlib")
-    from rigid_rot_sim.analysis.sweep_output import summary_markdown, write_outputs
-    from rigid_rot_sim.analysis.sweep_spec import load_sweep_spec
+    from rigid_rot_sim.sweep.output import summary_markdown, write_outputs
+    from rigid_rot_sim.sweep.spec import load_sweep_spec
 
     spec = load_sweep_spec(args.spec, quick=args.quick)
     out = args.out or f"out/sweeps/{spec.name}"

@@ -9,6 +9,22 @@ importing :mod:`rigid_rot_sim.core.limits` does not load numba)::
 
     from rigid_rot_sim.core import simulate, get_method, METHODS, torque_free_solution
 
+Modules, one job each:
+
+* :mod:`.dynamics` - the body (principal axes), Euler's equations, invariants; :mod:`.frames` -
+  the principal <-> user body frame conversion on floats; :mod:`.inertia` - mass properties;
+* :mod:`.integrators` - one step API, the registry ``METHODS``; :mod:`.simulate` - one body over
+  [0, t_end]; :mod:`.simulate_wheels` - its wheel inputs; :mod:`.batch` - N bodies at once;
+  :mod:`.batch_gyrostat` - N spacecraft with wheels at once; :mod:`.slew` - the slew task's
+  observation, reward and hold test, compiled (the Gymnasium environments');
+* :mod:`.exact` - the closed-form torque-free motion, on :mod:`.elliptic`; :mod:`.heavy_top` -
+  the heavy symmetric top; :mod:`.wheels` - a spacecraft with reaction wheels (a gyrostat);
+* :mod:`.torque` - torque models; :mod:`.sensors` - a rate gyro and a star tracker;
+* :mod:`.quaternion` - quaternion helpers on floats; :mod:`.steps` - which step a time lands on
+  and how many steps a duration takes;
+* :mod:`.jit` - numba with an on-disk cache; :mod:`.precompile` - fills that cache;
+  :mod:`.limits` - every documented input limit; :mod:`.validation` - argument checks.
+
 The rooms above it: :mod:`rigid_rot_sim.scene` reads scene files into frozen dataclasses (PyYAML,
 jsonschema); :mod:`rigid_rot_sim.run` is the run engine (commands, clock, pacing) over these
 numerics. Neither is imported from here (``test/test_structure.py`` checks the layer order).

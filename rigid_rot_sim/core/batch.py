@@ -10,13 +10,15 @@ Methods (:data:`BATCH_METHODS`): ``'rk4'``, ``'implicit_midpoint'``, ``'splittin
 (order 2) and ``'exact_split'`` (order 2: the exact free flow with torque kicks), and for
 torque-free bodies ``'exact'`` (:data:`FREE_BODY_METHODS`: one evaluation of the exact flow
 at ``n_steps * dt``; a torque is refused) run the single-body kernels of
-:mod:`rigid_rot_sim.core.integrators` with the same names, body by body, in one compiled loop spread over the cores (numba ``prange``); so a body advanced
-here has the same bits as the same body advanced alone by ``get_method(name)`` with a
-:class:`~rigid_rot_sim.core.torque.ConstantTorque`, and there is no second copy of any
-formula. The compiled loop is cached like the single-body one (``make setup`` builds it).
+:mod:`rigid_rot_sim.core.integrators` with the same names, body by body, in one compiled
+loop spread over the cores (numba ``prange``); so a body advanced here has the same bits as
+the same body advanced alone by ``get_method(name)`` with a
+:class:`~rigid_rot_sim.core.torque.ConstantTorque`. The compiled loop is cached like the
+single-body one (``make setup`` builds it). The one second copy of a formula is deliberate:
 ``rk4`` (the sweeps' workhorse) runs by default in chunks of bodies laid out for SIMD
-(structure of arrays, the inner loops over bodies, see ``_rk4_soa_chunk``): rk4_step's
-operations in its order, so the same bits as the per-body loop (``layout="per_body"``).
+(structure of arrays, the inner loops over bodies, see ``_rk4_soa_chunk``), which re-writes
+rk4_step's operations in its order, so the same bits as the per-body loop
+(``layout="per_body"``; ``test/core/test_batch.py`` pins the two bit for bit).
 :func:`advance_batch_recording` runs several stretches in one call and keeps the rates at the
 end of each (a sweep's checkpoints), with the bits of calls cut there.
 """
@@ -72,8 +74,20 @@ def _as_batch(name: str, value: Any, n: int | None, width: int) -> np.ndarray:
 
 @register_jitable
 def _advance_body(
-    b, method, moments, q, omega, torque, dt, n_steps, normalize_q, failed_step, failure, record_steps, omega_at
-):
+    b: Any,
+    method: Any,
+    moments: Any,
+    q: Any,
+    omega: Any,
+    torque: Any,
+    dt: Any,
+    n_steps: Any,
+    normalize_q: Any,
+    failed_step: Any,
+    failure: Any,
+    record_steps: Any,
+    omega_at: Any,
+) -> None:
     """Advance body b in place; if it fails it keeps its last good state and records the
     (1-based) failing step and the status. After each of ``record_steps`` (increasing, 1-based)
     its rates go to ``omega_at[r, b]``: the run is cut there into calls as separate
@@ -98,7 +112,7 @@ def _advance_body(
             # as ExactFlow.advance(span): one evaluation of the flow at span * dt
             done, status = span, OK
             if span > 0:
-                q_end, w_end = free_flow(
+                q_end, w_end = free_flow(  # exact.py's kernels are untyped
                     body_moments, (state[0], state[1], state[2], state[3]), (state[4], state[5], state[6]), span * dt
                 )
                 finite = True
@@ -128,8 +142,19 @@ def _advance_body(
 
 @compiled(parallel=True)
 def _advance_bodies_parallel(
-    method, moments, q, omega, torque, dt, n_steps, normalize_q, failed_step, failure, record_steps, omega_at
-):
+    method: Any,
+    moments: Any,
+    q: Any,
+    omega: Any,
+    torque: Any,
+    dt: Any,
+    n_steps: Any,
+    normalize_q: Any,
+    failed_step: Any,
+    failure: Any,
+    record_steps: Any,
+    omega_at: Any,
+) -> None:
     for b in prange(q.shape[0]):
         _advance_body(
             b, method, moments, q, omega, torque, dt, n_steps, normalize_q, failed_step, failure, record_steps, omega_at
@@ -140,8 +165,19 @@ def _advance_bodies_parallel(
 # (milliseconds) when the cores are busy with other work.
 @compiled
 def _advance_bodies_serial(
-    method, moments, q, omega, torque, dt, n_steps, normalize_q, failed_step, failure, record_steps, omega_at
-):
+    method: Any,
+    moments: Any,
+    q: Any,
+    omega: Any,
+    torque: Any,
+    dt: Any,
+    n_steps: Any,
+    normalize_q: Any,
+    failed_step: Any,
+    failure: Any,
+    record_steps: Any,
+    omega_at: Any,
+) -> None:
     for b in range(q.shape[0]):
         _advance_body(
             b, method, moments, q, omega, torque, dt, n_steps, normalize_q, failed_step, failure, record_steps, omega_at
@@ -169,8 +205,20 @@ _SOA_CHUNK = 512  # bodies per chunk: its scratch rows stay in the L1/L2 cache
 
 @register_jitable
 def _rk4_soa_chunk(
-    start, stop, moments, q, omega, torque, dt, n_steps, normalize_q, failed_step, failure, record_steps, omega_at
-):
+    start: Any,
+    stop: Any,
+    moments: Any,
+    q: Any,
+    omega: Any,
+    torque: Any,
+    dt: Any,
+    n_steps: Any,
+    normalize_q: Any,
+    failed_step: Any,
+    failure: Any,
+    record_steps: Any,
+    omega_at: Any,
+) -> None:
     m = stop - start
     # state and per-body constants, one row per component
     x = np.empty((7, m))  # qx, qy, qz, qw, w1, w2, w3
@@ -300,8 +348,18 @@ def _rk4_soa_chunk(
 # quaternion norm, whose zero gives a non-finite state, reported as such.
 @compiled(parallel=True, error_model="numpy")
 def _rk4_soa_parallel(
-    moments, q, omega, torque, dt, n_steps, normalize_q, failed_step, failure, record_steps, omega_at
-):
+    moments: Any,
+    q: Any,
+    omega: Any,
+    torque: Any,
+    dt: Any,
+    n_steps: Any,
+    normalize_q: Any,
+    failed_step: Any,
+    failure: Any,
+    record_steps: Any,
+    omega_at: Any,
+) -> None:
     n = q.shape[0]
     for c in prange((n + _SOA_CHUNK - 1) // _SOA_CHUNK):
         start = c * _SOA_CHUNK
@@ -323,7 +381,19 @@ def _rk4_soa_parallel(
 
 
 @compiled(error_model="numpy")
-def _rk4_soa_serial(moments, q, omega, torque, dt, n_steps, normalize_q, failed_step, failure, record_steps, omega_at):
+def _rk4_soa_serial(
+    moments: Any,
+    q: Any,
+    omega: Any,
+    torque: Any,
+    dt: Any,
+    n_steps: Any,
+    normalize_q: Any,
+    failed_step: Any,
+    failure: Any,
+    record_steps: Any,
+    omega_at: Any,
+) -> None:
     n = q.shape[0]
     for start in range(0, n, _SOA_CHUNK):
         _rk4_soa_chunk(
@@ -523,6 +593,7 @@ def _advance(
         bad = int(np.argmin(np.where(failed_step > 0, failed_step, np.iinfo(np.int64).max)))
         step = int(failed_step[bad])
         raise NonFiniteStateError(
-            f"{method}: {_FAILURES.get(int(failure[bad]), 'failure')} at step {step}, t = {step * dt:.9g} s (body {bad})"
+            f"{method}: {_FAILURES.get(int(failure[bad]), 'failure')} at step {step}, "
+            f"t = {step * dt:.9g} s (body {bad})"
         )
     return q, omega, omega_at

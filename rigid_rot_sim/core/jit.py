@@ -19,7 +19,7 @@ import functools
 import hashlib
 from collections.abc import Callable
 from pathlib import Path
-from typing import Any
+from typing import Any, TypeVar, overload
 
 from numba import njit
 from numba.core import caching, config
@@ -51,10 +51,12 @@ class _CoreInTreeLocator(caching.InTreeCacheLocator):
         return sources_fingerprint()
 
     @classmethod
-    def from_function(cls, py_func: Callable, py_file: str) -> Any:
-        if config.CACHE_DIR or not _ours(py_file):
+    def from_function(cls, py_func: Callable[..., Any], py_file: str) -> Any:
+        numba_config: Any = config  # numba's config fills its names at import: no types to read
+        if numba_config.CACHE_DIR or not _ours(py_file):
             return None
-        return super().from_function(py_func, py_file)
+        parent: Any = super().from_function  # numba's caching API is untyped
+        return parent(py_func, py_file)
 
 
 class _CoreUserDirLocator(caching.UserProvidedCacheLocator):
@@ -64,10 +66,11 @@ class _CoreUserDirLocator(caching.UserProvidedCacheLocator):
         return sources_fingerprint()
 
     @classmethod
-    def from_function(cls, py_func: Callable, py_file: str) -> Any:
+    def from_function(cls, py_func: Callable[..., Any], py_file: str) -> Any:
         if not _ours(py_file):
             return None
-        return super().from_function(py_func, py_file)
+        parent: Any = super().from_function  # numba's caching API is untyped
+        return parent(py_func, py_file)
 
 
 for _locator in (_CoreInTreeLocator, _CoreUserDirLocator):
@@ -75,7 +78,18 @@ for _locator in (_CoreInTreeLocator, _CoreUserDirLocator):
         caching.CacheImpl._locator_classes.insert(0, _locator)
 
 
-def compiled(function: Callable | None = None, **options: Any) -> Any:
+_F = TypeVar("_F", bound=Callable[..., Any])
+
+
+@overload
+def compiled(function: _F) -> _F: ...
+
+
+@overload
+def compiled(function: None = None, **options: Any) -> Callable[[_F], _F]: ...
+
+
+def compiled(function: Callable[..., Any] | None = None, **options: Any) -> Any:
     """``numba.njit(cache=True, **options)`` (usable bare or with options); never fastmath."""
     if options.get("fastmath"):
         raise ValueError("core kernels are compiled without fastmath (bit-reproducible results)")

@@ -1,4 +1,4 @@
-"""Documented limits of every input (README, "Limits and failure behaviour"): the one place for them.
+"""Documented limits of every input (docs/limits.md): the one place for them.
 
 Scene files, service requests, torque commands and parameters are checked against these
 numbers before anything else sees them; what is beyond a limit is refused with a message

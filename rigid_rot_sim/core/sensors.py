@@ -177,12 +177,13 @@ class GyroState:
 def gyro_turn_on_bias(model: GyroModel, seed: int) -> np.ndarray:
     """The constant bias (rad/s, body axes): the given one plus the seeded draw of sigma per axis."""
     draw = standard_normals(seed, Stream.GYRO_TURN_ON, 0, 1, 3)[0]
-    return np.asarray(model.turn_on_bias, dtype=float) + model.turn_on_bias_sigma * draw
+    bias: np.ndarray = np.asarray(model.turn_on_bias, dtype=float) + model.turn_on_bias_sigma * draw
+    return bias
 
 
 def _measure(model: GyroModel, omega: np.ndarray, error: np.ndarray) -> np.ndarray:
     """Scale factor, errors, then quantisation and saturation (what the converter outputs)."""
-    measured = (1.0 + np.asarray(model.scale_factor, dtype=float)) * omega + error
+    measured: np.ndarray = (1.0 + np.asarray(model.scale_factor, dtype=float)) * omega + error
     if model.quantization > 0.0:
         measured = model.quantization * np.round(measured / model.quantization)
     if model.saturation > 0.0:
@@ -212,7 +213,7 @@ def gyro_sample(
         bias = math.exp(-step) * np.asarray(state.bias) + sigma * math.sqrt(-math.expm1(-2.0 * step)) * w[:3]
     noise = model.angle_random_walk / math.sqrt(interval) * w[3:]
     measured = _measure(model, np.asarray(omega, dtype=float), turn_on_bias + bias + noise)
-    return measured, GyroState(index=state.index + 1, t=float(t), bias=tuple(float(b) for b in bias))
+    return measured, GyroState(index=state.index + 1, t=float(t), bias=(float(bias[0]), float(bias[1]), float(bias[2])))
 
 
 def gyro_batch(model: GyroModel, seed: int, omega: np.ndarray) -> np.ndarray:

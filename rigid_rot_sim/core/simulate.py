@@ -23,20 +23,16 @@ trajectory then carries the wheel speeds. Example: ``docs/spacecraft.md``.
 from __future__ import annotations
 
 import functools
-import math
 from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
 
-from rigid_rot_sim.core import quaternion as quat
-from rigid_rot_sim.core import validation
+from rigid_rot_sim.core import frames, validation
 from rigid_rot_sim.core.dynamics import RigidBody, angular_momentum_world, kinetic_energy
 from rigid_rot_sim.core.integrators import get_method
+from rigid_rot_sim.core.steps import step_grid
 from rigid_rot_sim.core.torque import ConstantTorque, GravityTorque, PolynomialTorque
-
-# t_end / dt within this relative distance of an integer m means m full steps
-_GRID_RTOL = 1e-9
 
 
 @dataclass(frozen=True)
@@ -79,7 +75,7 @@ class Trajectory:
     @functools.cached_property
     def energy(self) -> np.ndarray:
         """Rotational kinetic energy T = 1/2 omega . L, J, shape (n,)."""
-        return kinetic_energy(self.principal_moments, self.omega_principal)
+        return np.asarray(kinetic_energy(self.principal_moments, self.omega_principal))
 
     @functools.cached_property
     def L_world(self) -> np.ndarray:
@@ -117,16 +113,6 @@ class GyrostatTrajectory(Trajectory):
         return body_to_world(self.q_principal, momentum)
 
 
-def step_grid(t_end: float, dt: float) -> tuple[int, float]:
-    """Number of full steps of ``dt`` in [0, t_end] and the length of the last partial step (0 if none)."""
-    ratio = t_end / dt
-    n = round(ratio)
-    if n > 0 and abs(ratio - n) <= _GRID_RTOL * n:
-        return n, 0.0
-    n = math.floor(ratio)
-    return n, t_end - n * dt
-
-
 def principal_torque(body: RigidBody, torque: Any, is_principal: bool | None = None) -> Any:
     """A user body-frame torque (None, vector, torque model or callable) as a principal-frame model."""
     if torque is None:
@@ -155,10 +141,11 @@ class _UserFrameTorque:
 
     def __call__(self, t: float, q: np.ndarray, omega: np.ndarray) -> np.ndarray:
         bp = self.body_from_principal
-        q_body = quat.multiply(q, quat.conjugate(bp))
-        omega_body = quat.rotate(bp, omega)
+        pb = frames.principal_from_body(bp)
+        q_body = frames.attitude_from_principal(q, pb)
+        omega_body = frames.vector_from_principal(bp, omega)
         n_body = np.asarray(self.torque(t, np.array(q_body), np.array(omega_body)), dtype=float).reshape(3)
-        return np.array(quat.rotate_inverse(bp, n_body.tolist()))
+        return np.array(frames.vector_to_principal(pb, n_body.tolist()))
 
 
 def simulate(
@@ -200,7 +187,7 @@ def simulate(
         Keep every ``save_every``-th step (>= 1).
     wheels : WheelModel, optional
         Reaction wheels (:func:`rigid_rot_sim.core.wheels.wheel_model`, axes in the body frame; the
-        inertia includes them). Only the gyrostat methods (``rk4``, ``dopri5``) run them; ``torque``
+        inertia includes them). Only the gyrostat methods (``gyrostat_rk4``, ``dopri5``) run them; ``torque``
         is then None or constant.
     wheel_speeds0 : array_like, shape (n_wheels,), optional
         Initial wheel speeds, rad/s relative to the body (default 0).
@@ -327,7 +314,7 @@ def simulate_gyrostat(
 
     >>> from rigid_rot_sim.core.wheels import wheel_model
     >>> rw = wheel_model(np.diag([10.0, 12.0, 15.0]), ["rw_z"], [[0, 0, 1]], [0.5], [0.1], [1000.0])
-    >>> traj = simulate((10.0, 12.0, 15.0), (0.0, 0.0, 0.2), 10.0, 0.01, "rk4", wheels=rw,
+    >>> traj = simulate((10.0, 12.0, 15.0), (0.0, 0.0, 0.2), 10.0, 0.01, "gyrostat_rk4", wheels=rw,
     ...                 wheel_speeds0=[10.0], wheel_torque=[0.05])
     >>> traj.wheel_speeds.shape, round(float(traj.omega[-1, 2]), 9)    # (I3 - J) dw/dt = -u
     ((1001, 1), 0.165517241)

@@ -10,6 +10,13 @@ The run engine's clock (:class:`rigid_rot_sim.run.clock.StepClock`), the scene's
 schedules (:meth:`rigid_rot_sim.scene.scene.TorqueSchedule.change_steps`) and the sweep
 all place changes with these functions, so they agree to the step.
 
+A run's duration follows the same rule (:func:`step_grid`): a duration on the grid (within
+:data:`BOUNDARY_SLACK` of a step of a boundary) takes that many full steps; a duration off
+the grid takes one more step, which :func:`rigid_rot_sim.core.simulate.simulate` and the
+sweep shorten to end exactly on the duration and the node (:class:`rigid_rot_sim.run.pacing.RunDriver`)
+takes in full, ending at the next boundary. So all three take
+``step_at_or_after(duration, dt)`` steps.
+
 >>> 30 * 0.03  # boundary 30 of a 0.03 s grid is not at 0.9 s, but 0.9 s lands on it
 0.8999999999999999
 >>> step_at_or_after(0.9, 0.03), step_at_or_after(0.3, 0.1)  # 0.3 / 0.1 = 2.9999999999999996
@@ -18,13 +25,15 @@ all place changes with these functions, so they agree to the step.
 (31, 30)
 >>> time_of_step(5, 0.25, t0=0.3, k0=3)
 0.8
+>>> step_grid(1.0, 0.1), step_grid(0.25, 0.1)  # on the grid; off it: 2 full steps and one of ~0.05 s
+((10, 0.0), (2, 0.04999999999999999))
 """
 
 from __future__ import annotations
 
 import math
 
-__all__ = ["BOUNDARY_SLACK", "step_at_or_after", "step_at_or_before", "time_of_step"]
+__all__ = ["BOUNDARY_SLACK", "step_at_or_after", "step_at_or_before", "step_grid", "time_of_step"]
 
 #: A time within this fraction of a step of a boundary counts as on it (t / dt is rarely an
 #: exact integer in floating point: 0.3 / 0.1 = 2.9999999999999996).
@@ -44,3 +53,15 @@ def step_at_or_before(t: float, dt: float, *, t0: float = 0.0, k0: int = 0) -> i
 def time_of_step(k: int, dt: float, *, t0: float = 0.0, k0: int = 0) -> float:
     """Sim time (s) of boundary ``k`` on the grid of step ``dt`` (s) with boundary ``k0`` at ``t0``."""
     return t0 + (k - k0) * dt
+
+
+def step_grid(duration: float, dt: float) -> tuple[int, float]:
+    """Full steps of ``dt`` (s) in a run of ``duration`` (s) from 0, and the length (s) of a last, shorter step.
+
+    The last step is 0.0 when the duration is on the grid (within :data:`BOUNDARY_SLACK` of a step of a
+    boundary); otherwise the run takes ``n + 1 = step_at_or_after(duration, dt)`` steps in all.
+    """
+    n = step_at_or_before(duration, dt)
+    if step_at_or_after(duration, dt) == n:
+        return n, 0.0
+    return n, duration - n * dt

@@ -9,6 +9,9 @@ Importing this package registers, under the ``RigidRot`` namespace::
 
 (the ``module:`` prefix imports this package first). Keyword arguments of ``make`` and
 ``make_vec`` are the fields of :class:`~rigid_rot_sim.envs.task.SlewTask` and ``sensors``.
+
+Modules: :mod:`.task` - the slew task (dispersions, reward, bounds); :mod:`.attitude` - the single
+environments; :mod:`.vector` - the native vector environment on the batch kernels.
 """
 
 from __future__ import annotations

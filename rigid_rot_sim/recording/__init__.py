@@ -11,7 +11,8 @@ Modules, one job each:
 * :mod:`.events` - the simulation event log that makes re-simulation exact;
 * :mod:`.reader` - reading, crash recovery (scan) and ``repair``, ``info``;
 * :mod:`.replay`, :mod:`.resim`, :mod:`.plot` - what the ``rigid-rot`` subcommands run;
-* :mod:`.provenance` - package and dependency versions stored with each recording.
+* :mod:`.provenance` - package and dependency versions stored with each recording;
+* :mod:`.aem` - CCSDS Attitude Ephemeris Messages from a recording.
 
 Nothing here is imported by :mod:`rigid_rot_sim.core`, :mod:`rigid_rot_sim.scene` or
 :mod:`rigid_rot_sim.run`. The node's side of recording (an observer of the simulator and a

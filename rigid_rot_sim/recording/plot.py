@@ -242,13 +242,13 @@ def _sensor_errors(reader: BagReader):
         for role, (_, field) in SENSOR_TYPES.items()
         if getattr(models, field) is not None
     }
-    topics = {role: topic for role, topic in topics.items() if topic is not None}
+    found = {role: topic for role, topic in topics.items() if topic is not None}
     state_topic = reader.find_topic("state", STATE_TYPE)
-    if not topics or state_topic is None:
+    if not found or state_topic is None:
         return None
     truth = {time_to_seconds(m.header.stamp): m for _, m in reader.decoded([state_topic])}
-    fig, axes = plt.subplots(len(topics), 1, figsize=(9, 3.6 * len(topics)), squeeze=False)
-    for ax, (role, topic) in zip(axes[:, 0], topics.items()):
+    fig, axes = plt.subplots(len(found), 1, figsize=(9, 3.6 * len(found)), squeeze=False)
+    for ax, (role, topic) in zip(axes[:, 0], found.items(), strict=True):
         rows = []
         for _, msg in reader.decoded([topic]):
             state = truth.get(time_to_seconds(msg.header.stamp))
@@ -265,10 +265,12 @@ def _sensor_errors(reader: BagReader):
         for i, axis in enumerate("xyz"):
             ax.plot(data[:, 0], data[:, i + 1], ".", markersize=2, color=_AXIS_COLOURS[i], label=axis)
         if role == "imu":
+            assert models.gyro is not None  # a topic is found only for a sensor the scene names
             sigma = np.full(3, np.sqrt(models.gyro.reading_variance))
             note = "dashed: 1 sigma beyond the constant biases"
             ax.set(ylabel="reading - true ω (rad/s)", title=f"Gyro error ({len(data)} readings at state stamps)")
         else:
+            assert models.star_tracker is not None
             sigma = np.asarray(models.star_tracker.noise_equivalent_angle)
             note = "dashed: noise equivalent angle"
             ax.set(

@@ -200,12 +200,12 @@ class BagReader:
         assert self._scan is not None
         ordered = sorted(self._scan.messages, key=lambda m: m.log_time)
         for message in ordered:
-            channel = self._channels.get(message.channel_id)
-            if channel is None or (wanted is not None and channel.topic not in wanted):
+            scanned = self._channels.get(message.channel_id)
+            if scanned is None or (wanted is not None and scanned.topic not in wanted):
                 continue
             yield RecordedMessage(
-                channel.topic,
-                self.topics[channel.topic].type_name,
+                scanned.topic,
+                self.topics[scanned.topic].type_name,
                 message.log_time,
                 message.publish_time,
                 bytes(message.data),
@@ -309,11 +309,12 @@ def info(path: str | os.PathLike[str]) -> str:
     counts = reader.counts()
     times = [(m.log_time_ns) for m in reader.messages()]
     size = reader.path.stat().st_size
-    lines = [
-        f"File:       {reader.path}",
-        f"Size:       {size / 1e6:.3f} MB",
-        f"Index:      {'complete (summary, statistics, chunk and message indexes)' if reader.complete else 'MISSING (crashed recording: run `rigid-rot bag repair`)'}",
-    ]
+    index = (
+        "complete (summary, statistics, chunk and message indexes)"
+        if reader.complete
+        else "MISSING (crashed recording: run `rigid-rot bag repair`)"
+    )
+    lines = [f"File:       {reader.path}", f"Size:       {size / 1e6:.3f} MB", f"Index:      {index}"]
     base = log_time_base(reader)
     if times:
         start, end = min(times), max(times)
@@ -348,7 +349,8 @@ def info(path: str | os.PathLike[str]) -> str:
     digest = reader.metadata.get("digest", {})
     if digest:
         lines.append(
-            f"Digest:     {digest.get('digest', '?')} (run digest at the last ~/state, stamp {digest.get('stamp', '?')} s)"
+            f"Digest:     {digest.get('digest', '?')} "
+            f"(run digest at the last ~/state, stamp {digest.get('stamp', '?')} s)"
         )
     versions = reader.metadata.get("versions", {})
     if versions:

@@ -243,7 +243,8 @@ def resimulate(path: str | os.PathLike[str], method: str | None = None) -> Resim
     max_att = max_omega = max_l = max_e = 0.0
     identical = True
     first_difference: float | None = None
-    t_first = t_last = None
+    t_first: float | None = None
+    t_last = 0.0
     digest = recorded_digest = None
     for message, decoded in reader.decoded(topics):
         if message.topic == events_topic:

@@ -7,9 +7,20 @@
 * :mod:`.inputs`: the torque subscriptions and ``~/rejected``;
 * :mod:`.services`: ``~/compute_inertia`` and the run's services; :mod:`.simulation_services`:
   the standard ``simulation_interfaces`` ones, through the same actions;
+* :mod:`.wheel_inputs`: ``~/wheel_torque`` for the reaction wheels; :mod:`.lockstep`: the
+  read-only ``lockstep.*`` parameters and the turn engine's wiring; :mod:`.simulate_steps`: the
+  standard ``SimulateSteps`` action; :mod:`.recording`: the node's recorder;
+  :mod:`.foxglove_live`: the Foxglove live server;
+* :mod:`.run_loop`: the run loop (steps, commands, outputs; services on an executor thread);
+  :mod:`.intake`: every command topic taken by the run loop in arrival order, losses counted;
+* :mod:`.joint_state_door`: the wheels' JointState door for ros2_control; :mod:`.paused_clock`: /clock
+  while paused; :mod:`.sim_events`: the live ``~/sim_events``; :mod:`.topic_types`: publishers of a
+  wrong type on a command topic, named in the log; :mod:`.web_live`: the body's web page of a live run;
 * :mod:`.qos`: the QoS profiles. Message <-> numpy conversions: :mod:`rigid_rot_sim.conversions`.
+* :mod:`.controller`: apart from the node, ``rigid-rot-controller``, a quaternion-feedback
+  attitude controller and the template for a user's own.
 
-The physics and the pacing are in :mod:`rigid_rot_sim.core` (no ROS): the
+The physics is in :mod:`rigid_rot_sim.core`, the run and its pacing in :mod:`rigid_rot_sim.run` (no ROS): the
 :class:`~rigid_rot_sim.run.simulator.Simulator` and the
 :class:`~rigid_rot_sim.run.pacing.RunDriver` that advances it against the wall clock.
 Both report to observers (:class:`~rigid_rot_sim.run.observer.SimulationObserver`): the

@@ -49,7 +49,7 @@ from rclpy.node import Node
 from rclpy.qos import QoSProfile, ReliabilityPolicy
 from rclpy.signals import SignalHandlerOptions
 
-from rigid_rot_msgs.msg import RigidBodyState  # type: ignore[attr-defined]  # generated, untyped
+from rigid_rot_msgs.msg import RigidBodyState
 from rigid_rot_sim.core import quaternion as quat
 from rigid_rot_sim.share import ensure_ament_prefix_path
 

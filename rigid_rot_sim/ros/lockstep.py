@@ -17,62 +17,40 @@ from __future__ import annotations
 
 from typing import Any
 
-from rcl_interfaces.msg import FloatingPointRange, ParameterDescriptor
 from rclpy.node import Node
 
-from rigid_rot_sim.core import limits
-from rigid_rot_sim.ros.parameters import JOINT_STATE_COMMANDS
+from rigid_rot_sim.ros import parameters as params
 from rigid_rot_sim.run.lockstep import TURN_OUTPUTS, Lockstep
 from rigid_rot_sim.run.pacing import RunDriver
 from rigid_rot_sim.scene.scene import LockstepSpec, Scene, lockstep_spec
-from rigid_rot_sim.scene.scene_schema import LOCKSTEP_ON_TIMEOUT
 
-#: name -> (description, read from the scene); the block to move into the parameter table.
-LOCKSTEP_PARAMETERS = {
-    "lockstep.period": "Lockstep: s of sim time between controller turns, a whole number of steps; 0 = off",
-    "lockstep.inputs": "Lockstep: the torque topic inputs (or joint_state_topics.commands) waited for at every turn",
-    "lockstep.timeout": "Lockstep: s of wall time to wait for a turn's commands",
-    "lockstep.on_timeout": "Lockstep: pause | hold, what a turn that timed out does",
-}
+#: The ``lockstep.*`` parameters' names (their entries are in the parameter table, ros/parameters.py).
+LOCKSTEP_PARAMETERS = tuple(spec.name for spec in params.LOCKSTEP)
 
 
 def declare_lockstep_parameters(node: Node, scene: Scene) -> None:
-    """Declare the read-only ``lockstep.*`` parameters, the scene's section (or off) as defaults."""
-    spec = scene.lockstep
-    topics = [t.topic for t in scene.topic_inputs] or ["~/torque"]
-    defaults = {
-        "lockstep.period": spec.period if spec else 0.0,
-        "lockstep.inputs": list(spec.inputs) if spec else topics,
-        "lockstep.timeout": spec.timeout if spec else LockstepSpec.timeout,
-        "lockstep.on_timeout": spec.on_timeout if spec else LockstepSpec.on_timeout,
-    }
-    ranges = {"lockstep.period": (0.0, limits.DURATION_RANGE[1]), "lockstep.timeout": (1e-3, limits.DURATION_RANGE[1])}
-    for name, description in LOCKSTEP_PARAMETERS.items():
-        extra: dict[str, Any] = {}
-        if name in ranges:
-            extra["floating_point_range"] = [FloatingPointRange(from_value=ranges[name][0], to_value=ranges[name][1])]
-        if name == "lockstep.on_timeout":
-            extra["additional_constraints"] = " | ".join(LOCKSTEP_ON_TIMEOUT)
-        descriptor = ParameterDescriptor(description=description, read_only=True, **extra)
-        node.declare_parameter(name, defaults[name], descriptor)
+    """Declare the read-only ``lockstep.*`` parameters of the table, the scene's section (or off) as defaults."""
+    params.declare_parameters(node, scene, params.LOCKSTEP)
 
 
 def lockstep_from_parameters(node: Node, scene: Scene, dt: float) -> LockstepSpec | None:
     """The lockstep the parameters ask for (None: off); ValueError as the scene loader words it."""
-    value = lambda name: node.get_parameter(name).value  # noqa: E731
-    period = float(value("lockstep.period"))
+
+    def value(spec: params.ParamSpec[Any]) -> Any:
+        return node.get_parameter(spec.name).value
+
+    period = float(value(params.LOCKSTEP_PERIOD))
     if period <= 0.0:
         return None
-    on_timeout = value("lockstep.on_timeout")
-    if on_timeout not in LOCKSTEP_ON_TIMEOUT:
-        raise ValueError(f"lockstep.on_timeout must be one of {', '.join(LOCKSTEP_ON_TIMEOUT)}, got {on_timeout!r}")
+    on_timeout = value(params.LOCKSTEP_ON_TIMEOUT_PARAM)
+    params.LOCKSTEP_ON_TIMEOUT_PARAM.check_choice(on_timeout)
     section = {
         "period": period,
-        "inputs": list(value("lockstep.inputs")),
-        "timeout": float(value("lockstep.timeout")),
+        "inputs": list(value(params.LOCKSTEP_INPUTS)),
+        "timeout": float(value(params.LOCKSTEP_TIMEOUT)),
         "on_timeout": on_timeout,
     }
-    commands = value(JOINT_STATE_COMMANDS.name)  # the wheels' JointState door may be a turn input too
+    commands = value(params.JOINT_STATE_COMMANDS)  # the wheels' JointState door may be a turn input too
     return lockstep_spec(section, scene.topic_inputs, dt, (commands,) if commands else ())
 
 

@@ -37,7 +37,7 @@ from rigid_rot_sim import conversions
 from rigid_rot_sim.core.inertia import principal_frame_pose
 from rigid_rot_sim.ros.qos import CLOCK_QOS, LATCHED_QOS, REJECTED_QOS, TF_QOS, TF_STATIC_QOS
 from rigid_rot_sim.ros.qos import describe as describe_qos
-from rigid_rot_sim.run.body_view import body_view
+from rigid_rot_sim.run.body_view import BodyView, body_view
 from rigid_rot_sim.run.observer import SimulationObserver
 from rigid_rot_sim.run.sensors import SensorSuite
 from rigid_rot_sim.run.simulator import StateSnapshot
@@ -47,7 +47,7 @@ from rigid_rot_sim.scene.scene import OUTPUT_NAMES, Frames, Scene
 MessageBuilder = Callable[[StateSnapshot, "Outputs"], Any]
 
 #: Scene output name -> (message type, builder). Topics: :func:`output_topic`.
-OUTPUTS: dict[str, tuple[Any, MessageBuilder]] = {
+OUTPUTS: dict[str, tuple[Any, MessageBuilder | None]] = {
     "state": (RigidBodyState, lambda s, o: conversions.snapshot_to_state(s, o.frames.world, o.frames.body)),
     "orientation": (QuaternionStamped, lambda s, o: conversions.snapshot_to_orientation(s, o.frames.world)),
     "angular_velocity": (
@@ -79,21 +79,22 @@ assert tuple(OUTPUTS) == OUTPUT_NAMES, "one entry per scene output, in the scene
 #: A sensor reading's message from the sensors, the state, the frames and the ground-truth variance.
 SensorBuilder = Callable[[SensorSuite, StateSnapshot, Frames, float], Any]
 
+
 #: Outputs that carry a sensor's reading when the scene has that sensor (``~/imu``: the gyro's,
 #: instead of the ideal rate): output name -> (sensor, builder). Each message is one reading.
+def _gyro_reading(sensors: SensorSuite, s: StateSnapshot, f: Frames, v: float) -> Any:
+    assert sensors.gyro is not None  # built only when the scene has the gyro
+    return conversions.gyro_to_imu(sensors.read_gyro(s), s.t, f.body, sensors.gyro.reading_variance or v)
+
+
+def _star_tracker_reading(sensors: SensorSuite, s: StateSnapshot, f: Frames, v: float) -> Any:
+    assert sensors.star_tracker is not None  # built only when the scene has the star tracker
+    return conversions.star_tracker_pose(sensors.read_star_tracker(s), s.t, f.world, sensors.star_tracker.covariance)
+
+
 SENSOR_OUTPUTS: dict[str, tuple[str, SensorBuilder]] = {
-    "imu": (
-        "gyro",
-        lambda sensors, s, f, v: conversions.gyro_to_imu(
-            sensors.read_gyro(s), s.t, f.body, sensors.gyro.reading_variance or v
-        ),
-    ),
-    "star_tracker": (
-        "star_tracker",
-        lambda sensors, s, f, v: conversions.star_tracker_pose(
-            sensors.read_star_tracker(s), s.t, f.world, sensors.star_tracker.covariance
-        ),
-    ),
+    "imu": ("gyro", _gyro_reading),
+    "star_tracker": ("star_tracker", _star_tracker_reading),
 }
 
 
@@ -115,6 +116,11 @@ class Outputs(SimulationObserver):
     ``rates`` (Hz of sim time) says which outputs to build (rate > 0); :attr:`rates` keeps
     those built. ``state_qos``: the profile of the state-like outputs.
     """
+
+    # declared here: the builders of OUTPUTS, above, read them
+    frames: Frames
+    ground_truth_variance: float
+    body_view: BodyView
 
     def __init__(
         self,
@@ -214,6 +220,9 @@ class Outputs(SimulationObserver):
         for name in names:
             reading = self.readings.get(name)
             if reading is not None:
+                assert self.sensors is not None  # readings are built from the sensors
                 self.publish(name, reading(self.sensors, snapshot, self.frames, self.ground_truth_variance))
             else:
-                self.publish(name, OUTPUTS[name][1](snapshot, self))
+                builder = OUTPUTS[name][1]
+                assert builder is not None  # a sensor's output is built only with its sensor
+                self.publish(name, builder(snapshot, self))

@@ -64,7 +64,8 @@ from rigid_rot_sim.recording import LOG_TIME_BASES  # the package itself is ligh
 from rigid_rot_sim.ros.outputs import output_topic
 from rigid_rot_sim.run.lockstep import Lockstep
 from rigid_rot_sim.run.pacing import RunDriver
-from rigid_rot_sim.scene.scene import MAX_QOS_DEPTH, OUTPUT_NAMES, QOS_RELIABILITIES, Frames, Scene
+from rigid_rot_sim.scene.scene import MAX_QOS_DEPTH, OUTPUT_NAMES, QOS_RELIABILITIES, Frames, LockstepSpec, Scene
+from rigid_rot_sim.scene.scene_schema import LOCKSTEP_ON_TIMEOUT
 
 #: Logged when ``use_sim_time`` is set true (a launch-wide ``use_sim_time:=true``, as Nav2 and
 #: Gazebo bringups set it): accepted, since nothing in this node reads its ROS clock.
@@ -75,7 +76,7 @@ USE_SIM_TIME_NOTE = (
     "the ones that need use_sim_time)"
 )
 
-V = TypeVar("V", bool, int, float, str)
+V = TypeVar("V", bool, int, float, str, list)  # list: a string array
 
 
 class Change:
@@ -102,7 +103,7 @@ Action = Callable[["RunParameters", Change], None]
 class ParamSpec(Generic[V]):
     """One node parameter: what :func:`declare_parameters` declares and the callbacks act on.
 
-    ``type``: bool, int, float or str (an integer given for a float is stored as a float).
+    ``type``: bool, int, float, str or list (a string array; an integer given for a float is stored as a float).
     ``default``: its default from the scene. ``range``: inclusive (low, high), for int and
     float. ``choices``: the accepted strings. ``read_only``: set at start-up only.
     """
@@ -401,6 +402,69 @@ PARAMETERS: tuple[ParamSpec[Any], ...] = (
     JOINT_STATE_COMMANDS,
     JOINT_STATE_STATES,
 )
+
+
+def _lockstep_inputs(scene: Scene) -> list[str]:
+    if scene.lockstep is not None:
+        return list(scene.lockstep.inputs)
+    return [t.topic for t in scene.topic_inputs] or ["~/torque"]
+
+
+#: ``lockstep.*``: read-only, the scene's ``lockstep`` section (or off) as defaults; declared by
+#: :func:`rigid_rot_sim.ros.lockstep.declare_lockstep_parameters` and checked by the scene loader's rules
+#: (:func:`rigid_rot_sim.ros.lockstep.lockstep_from_parameters`).
+LOCKSTEP_PERIOD = ParamSpec(
+    "lockstep.period",
+    float,
+    lambda scene: scene.lockstep.period if scene.lockstep else 0.0,
+    "Lockstep: s of sim time between controller turns, a whole number of steps; 0 = off",
+    range=(0.0, limits.DURATION_RANGE[1]),
+    read_only=True,
+)
+LOCKSTEP_INPUTS = ParamSpec(
+    "lockstep.inputs",
+    list,
+    _lockstep_inputs,
+    "Lockstep: the torque topic inputs (or joint_state_topics.commands) waited for at every turn",
+    read_only=True,
+)
+LOCKSTEP_TIMEOUT = ParamSpec(
+    "lockstep.timeout",
+    float,
+    lambda scene: scene.lockstep.timeout if scene.lockstep else LockstepSpec.timeout,
+    "Lockstep: s of wall time to wait for a turn's commands",
+    range=(1e-3, limits.DURATION_RANGE[1]),
+    read_only=True,
+)
+LOCKSTEP_ON_TIMEOUT_PARAM = ParamSpec(
+    "lockstep.on_timeout",
+    str,
+    lambda scene: scene.lockstep.on_timeout if scene.lockstep else LockstepSpec.on_timeout,
+    "Lockstep: pause | hold, what a turn that timed out does",
+    choices=LOCKSTEP_ON_TIMEOUT,
+    read_only=True,
+)
+LOCKSTEP: tuple[ParamSpec[Any], ...] = (LOCKSTEP_PERIOD, LOCKSTEP_INPUTS, LOCKSTEP_TIMEOUT, LOCKSTEP_ON_TIMEOUT_PARAM)
+#: The whole table: the run's parameters, then ``lockstep.*`` (docs/node.md's parameter table is tested
+#: against it).
+ALL_PARAMETERS: tuple[ParamSpec[Any], ...] = PARAMETERS + LOCKSTEP
+
+
+def markdown_table(specs: Iterable[ParamSpec[Any]] = ALL_PARAMETERS) -> str:
+    """The parameter table of docs/node.md, generated from the specs (``test/ros/test_parameters.py`` compares)."""
+    names = {bool: "bool", int: "int", float: "double", str: "string", list: "string[]"}
+    rows = ["| parameter | type | read only | range or choices | description |", "|---|---|---|---|---|"]
+    for spec in specs:
+        bounds = ""
+        if spec.range is not None:
+            bounds = f"[{spec.range[0]:g}, {spec.range[1]:g}]"
+        elif spec.choices:
+            bounds = ", ".join(spec.choices)
+        description = spec.description.replace("|", "\\|")
+        read_only = "yes" if spec.read_only else ""
+        rows.append(f"| `{spec.name}` | {names[spec.type]} | {read_only} | {bounds} | {description} |")
+    return "\n".join(rows) + "\n"
+
 
 #: Declared first, with or without a scene (default empty: no simulation); not in the table.
 SCENE = ParamSpec(

@@ -15,7 +15,7 @@ from rclpy.callback_groups import MutuallyExclusiveCallbackGroup
 from rclpy.node import Node
 from std_srvs.srv import SetBool, Trigger
 
-from rigid_rot_msgs.srv import (  # type: ignore[attr-defined]  # generated, untyped
+from rigid_rot_msgs.srv import (  # generated, untyped
     ApplyTorque,
     ComputeInertia,
     SetState,

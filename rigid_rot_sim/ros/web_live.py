@@ -17,7 +17,7 @@ from typing import Any
 from rclpy.node import Node
 from std_srvs.srv import SetBool, Trigger
 
-from rigid_rot_msgs.srv import Step  # type: ignore[attr-defined]  # generated, untyped (as ros/controller.py)
+from rigid_rot_msgs.srv import Step  # generated, untyped (as ros/controller.py)
 from rigid_rot_sim.run.body_view import BodyView
 from rigid_rot_sim.run.digest import format_digest
 from rigid_rot_sim.run.observer import SimulationObserver

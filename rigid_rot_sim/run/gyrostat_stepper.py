@@ -114,11 +114,11 @@ class GyrostatStepper(Stepper):
         assert isinstance(self.integrator, GyrostatIntegrator)
         self.integrator.set_wheel_commands(self.commands.wheel_torques)
 
-    def _saved_state(self) -> tuple:
+    def _saved_state(self) -> tuple[Any, ...]:
         assert isinstance(self.integrator, GyrostatIntegrator)
         return (*super()._saved_state(), self.integrator.wheel_speeds.copy(), self.integrator.wheel_angles.copy())
 
-    def _restore(self, saved: tuple) -> None:
+    def _restore(self, saved: tuple[Any, ...]) -> None:
         assert isinstance(self.integrator, GyrostatIntegrator)
         self.integrator.set_state(saved[0], saved[1], saved[2], wheel_speeds=saved[4], wheel_angles=saved[5])
         self.integrator.n_steps = saved[3]
@@ -199,7 +199,9 @@ class WheelInputs:
     """The :class:`~rigid_rot_sim.run.simulator.Simulator`'s wheel-command entry (a mixin: it uses the
     simulator's clock, commands, observers and ``_report_rejected``)."""
 
-    def submit_wheel_torques(self, source: str, torques: Any, effective_time: float | None = None) -> tuple:
+    def submit_wheel_torques(
+        self, source: str, torques: Any, effective_time: float | None = None
+    ) -> tuple[int, tuple[float, ...], tuple[int, ...]]:
         """Hold wheel motor torques (N*m, scene order) from now or ``effective_time`` (s, resim's entry).
 
         Returns (step it takes effect, torques as clamped to max_torque, indices of the wheels clamped);
@@ -209,7 +211,9 @@ class WheelInputs:
         sim: Any = self
         step, effective = sim.clock.k, sim.clock.t if effective_time is None else effective_time
         try:
-            result = sim.commands.submit_wheels(source, torques, effective)
+            result: tuple[int, tuple[float, ...], tuple[int, ...]] = sim.commands.submit_wheels(
+                source, torques, effective
+            )
         except CommandRejected as rejected:
             sim._report_rejected(rejected, "", torques)
             raise

@@ -16,6 +16,7 @@ from typing import Any
 import numpy as np
 from scipy.spatial.transform import Rotation
 
+from rigid_rot_sim.core import frames
 from rigid_rot_sim.core import quaternion as quat
 from rigid_rot_sim.core.dynamics import RigidBody
 from rigid_rot_sim.core.torque import GravityTorque
@@ -83,7 +84,7 @@ class Observables:
     def __init__(self, scene: Scene, body: RigidBody) -> None:
         self.body = body
         self.gravity: GravityTorque | None = None
-        self.com_body: np.ndarray | None = None
+        self.com_body = np.zeros(3)  # m; no gravity: no weight, so no torque from it
         self.weight = 0.0
         if scene.gravity is not None:
             assert scene.body.mass is not None and scene.body.center_of_mass is not None
@@ -96,7 +97,7 @@ class Observables:
             self._body_from_top = tuple(float(v) for v in align.as_quat())
         self._body_from_principal = tuple(float(v) for v in body.body_from_principal)
         #: Rotation from the user body frame to the principal frame (x, y, z, w).
-        self.principal_from_body = quat.conjugate(self._body_from_principal)
+        self.principal_from_body = frames.principal_from_body(self._body_from_principal)
         self._energy_ref = 0.0
         self._momentum_ref = 0.0
 
@@ -119,18 +120,19 @@ class Observables:
         q_principal = tuple(float(v) for v in q_principal)
         w1, w2, w3 = (float(v) for v in omega_principal)
         body_from_principal = self._body_from_principal
-        q = quat.multiply(q_principal, self.principal_from_body)
+        q = frames.attitude_from_principal(q_principal, self.principal_from_body)
         if q[3] < 0.0:
             q = (-q[0], -q[1], -q[2], -q[3])  # same rotation; w >= 0 keeps outputs continuous near identity
-        omega_body = quat.rotate(body_from_principal, (w1, w2, w3))
-        momentum_body = quat.rotate(body_from_principal, (i1 * w1, i2 * w2, i3 * w3))
+        omega_body = frames.vector_from_principal(body_from_principal, (w1, w2, w3))
+        momentum_body = frames.vector_from_principal(body_from_principal, (i1 * w1, i2 * w2, i3 * w3))
         momentum_world = quat.rotate(q, momentum_body)
         kinetic = 0.5 * (i1 * w1 * w1 + i2 * w2 * w2 + i3 * w3 * w3)
         potential = 0.0
         euler = p_phi = p_psi = None
         if self.gravity is not None:
             potential = self.weight * quat.rotate(q, self.com_body)[2]
-            gravity = quat.rotate(body_from_principal, self.gravity(0.0, np.array(q_principal), np.array((w1, w2, w3))))
+            gravity_principal = self.gravity(0.0, np.array(q_principal), np.array((w1, w2, w3)))
+            gravity = frames.vector_from_principal(body_from_principal, gravity_principal)
             torque_body = tuple(a + b for a, b in zip(torque_body, gravity, strict=True))
             euler = np.array(quat.quaternion_to_zxz(quat.multiply(q, self._body_from_top)))
             p_phi = momentum_world[2]

@@ -44,6 +44,7 @@ class SensorSuite:
         """The next gyro reading (rad/s, body axes) of the state ``snapshot``."""
         if self.gyro is None:
             raise ValueError("the scene has no sensors.gyro")
+        assert self.turn_on_bias is not None  # drawn with the gyro
         reading, self.gyro_state = models.gyro_sample(
             self.gyro, self.seed, self.turn_on_bias, self.gyro_state, snapshot.angular_velocity_body, snapshot.t
         )

@@ -183,7 +183,10 @@ class Simulator(WheelInputs):
     # ------------------------------------------------------------------ commands (the schedule)
 
     def resolve_frame(self, source: str, frame_id: str, policy: str) -> str:
-        """``body`` or ``world`` for ``frame_id`` under an input's frame policy (:meth:`CommandSchedule.resolve_frame`)."""
+        """``body`` or ``world`` for ``frame_id`` under an input's frame policy.
+
+        See :meth:`CommandSchedule.resolve_frame`.
+        """
         return self.commands.resolve_frame(source, frame_id, policy)
 
     def receive_torque(

@@ -20,7 +20,7 @@ from typing import Any
 
 import numpy as np
 
-from rigid_rot_sim.core import limits, validation
+from rigid_rot_sim.core import frames, limits, validation
 from rigid_rot_sim.core import quaternion as quat
 from rigid_rot_sim.core.dynamics import RigidBody
 from rigid_rot_sim.core.integrators import get_method
@@ -31,6 +31,7 @@ from rigid_rot_sim.run.clock import StepClock
 from rigid_rot_sim.run.commands import CommandSchedule
 from rigid_rot_sim.run.digest import DIGEST_SEED, fold_steps
 from rigid_rot_sim.run.observables import Observables, StateSnapshot
+from rigid_rot_sim.run.timeline import world_in_body
 from rigid_rot_sim.scene.scene import Scene
 
 __all__ = ["Stepper"]
@@ -194,14 +195,13 @@ class Stepper:
         body = self.commands.body_sum
         world = self.commands.world_sum
         if world is not None:
-            q_body = quat.multiply(tuple(integrator.q), principal_from_body)
-            world_in_body = quat.rotate_inverse(q_body, world)
-            body = (body[0] + world_in_body[0], body[1] + world_in_body[1], body[2] + world_in_body[2])
+            in_body = world_in_body(tuple(integrator.q), principal_from_body, world)
+            body = (body[0] + in_body[0], body[1] + in_body[1], body[2] + in_body[2])
         self.step_torque_body = body
         if not any(body):
             torque = None
         else:
-            torque = ConstantTorque(np.array(quat.rotate(principal_from_body, body)))
+            torque = ConstantTorque(np.array(frames.vector_to_principal(principal_from_body, body)))
         integrator.torque = torque
 
     # ------------------------------------------------------------------ stepping
@@ -256,13 +256,13 @@ class Stepper:
             done += chunk
         return done, None
 
-    def _saved_state(self) -> tuple:
+    def _saved_state(self) -> tuple[Any, ...]:
         """What :meth:`_restore` puts back: (t, q, omega, steps taken)."""
         integrator = self.integrator
         assert integrator is not None
         return (integrator.t, integrator.q, integrator.omega, integrator.n_steps)
 
-    def _restore(self, saved: tuple) -> None:
+    def _restore(self, saved: tuple[Any, ...]) -> None:
         assert self.integrator is not None
         self.integrator.set_state(*saved[:3])
         self.integrator.n_steps = saved[3]
@@ -274,7 +274,8 @@ class Stepper:
         rotation = math.hypot(*omega.tolist()) * self.clock.dt
         if rotation > limits.MAX_ROTATION_PER_STEP:
             raise ValueError(
-                f"angular_velocity of norm {rotation / self.clock.dt:.3g} rad/s turns the body {rotation:.3g} rad per step of "
+                f"angular_velocity of norm {rotation / self.clock.dt:.3g} rad/s "
+                f"turns the body {rotation:.3g} rad per step of "
                 f"{self.clock.dt:g} s (limit {limits.MAX_ROTATION_PER_STEP:g} rad per step)"
             )
 
@@ -285,7 +286,10 @@ class Stepper:
         return self.commands.norm_bound()
 
     def rotation_failure(self, dt_ahead: float) -> str | None:
-        """Why the state violates the rotation limit after ``dt_ahead`` s under the current torque (None: it does not)."""
+        """Why the state violates the rotation limit after ``dt_ahead`` s under the current torque.
+
+        None: it does not.
+        """
         dt = self.clock.dt
         omega = math.hypot(*self.integrator.omega.tolist())  # type: ignore[union-attr]
         reach = omega + dt_ahead * self._torque_bound() / self._i_min

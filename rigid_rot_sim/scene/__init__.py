@@ -4,7 +4,9 @@
 * :mod:`.scene_schema` - the scene format as one JSON Schema, the output table;
 * :mod:`.schema` - schema helpers and jsonschema errors as one-line English;
 * :mod:`.bounded_yaml` - YAML read within size and depth limits, without aliases;
-* :mod:`.names` - ROS topic and frame names checked as ROS checks them (no ROS import).
+* :mod:`.names` - ROS topic and frame names checked as ROS checks them (no ROS import);
+* :mod:`.spacecraft` and :mod:`.spacecraft_schema` - a spacecraft's reaction wheels, their
+  torque schedule and the gravity gradient, and their schema.
 
 Built on :mod:`rigid_rot_sim.core` (limits, inertia, the integrator registry); imports nothing
 from :mod:`rigid_rot_sim.run` or above.

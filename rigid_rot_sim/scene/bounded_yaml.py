@@ -58,7 +58,8 @@ def check_events(text: str, *, max_depth: int = limits.MAX_YAML_DEPTH, max_items
         for event in yaml.parse(text, Loader=_Loader):
             if isinstance(event, yaml.AliasEvent):
                 raise BoundedYAMLError(
-                    f"{_line(event)}YAML aliases (*{limits.clip_text(str(event.anchor), 40)}) are not accepted; write the value out"
+                    f"{_line(event)}YAML aliases (*{limits.clip_text(str(event.anchor), 40)}) are not accepted; "
+                    "write the value out"
                 )
             if isinstance(event, yaml.DocumentStartEvent):
                 documents += 1

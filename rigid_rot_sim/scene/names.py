@@ -54,7 +54,10 @@ def check_topic_name(name: str) -> str:
 
 
 def check_frame_id(name: str, what: str = "frame_id") -> str:
-    """Return ``name`` if it is a usable frame name: at most MAX_NAME_LENGTH characters, no whitespace or control characters."""
+    """Return ``name`` if it is a usable frame name.
+
+    At most MAX_NAME_LENGTH characters, no whitespace or control characters.
+    """
     if len(name) > limits.MAX_NAME_LENGTH:
         raise ValueError(f"{what} of {len(name)} characters exceeds the limit of {limits.MAX_NAME_LENGTH}")
     if any(c.isspace() or not c.isprintable() for c in name):

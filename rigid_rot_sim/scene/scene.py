@@ -470,7 +470,7 @@ def _scene(spec: Mapping[str, Any], source: str, text: str) -> Scene:
                 )
         else:
             body = Body(inertia=body.inertia, given_as=body.given_as, mass=mass, center_of_mass=com)
-    topics, schedules = _torque_inputs(spec.get("torque_inputs") or ())
+    topics, schedules = _torque_inputs(spec.get("torque_inputs") or [])
     if gravity is not None and (topics or schedules):
         # the integrators expand gravity or a piecewise-constant torque exactly, not their sum
         raise ValueError("torque_inputs: not supported in a gravity (heavy top) scene; drop gravity or the inputs")
@@ -589,7 +589,8 @@ def _frames(spec: Mapping[str, Any]) -> Frames:
     }
     for role, name in given.items():
         _at(f"frames.{role}", names.check_frame_id, name, "frame name")
-    return _at("frames", Frames(**given).checked)
+    frames: Frames = _at("frames", Frames(**given).checked)
+    return frames
 
 
 def _body(spec: Mapping[str, Any], under_gravity: bool) -> Body:
@@ -710,15 +711,17 @@ def _integrator(spec: Mapping[str, Any], spacecraft: bool = False) -> Integrator
     )
 
 
+def _gyro_fields(gyro: Mapping[str, Any]) -> dict[str, Any]:
+    """The gyro section's keys as GyroModel's fields (lists become tuples of floats)."""
+    return {name: _floats(value) if isinstance(value, list) else float(value) for name, value in gyro.items()}
+
+
 def _sensors(spec: Mapping[str, Any]) -> Sensors:
     gyro = spec.get("gyro")
     star_tracker = spec.get("star_tracker")
-    gyro_options: dict[str, Any] = {
-        name: _floats(value) if isinstance(value, list) else float(value) for name, value in (gyro or {}).items()
-    }
     return Sensors(
         seed=spec.get("seed"),
-        gyro=None if gyro is None else GyroModel(**gyro_options),
+        gyro=None if gyro is None else GyroModel(**_gyro_fields(gyro)),
         star_tracker=None
         if star_tracker is None
         else StarTrackerModel(

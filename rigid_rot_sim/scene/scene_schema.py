@@ -2,7 +2,7 @@
 
 :data:`SCENE_SCHEMA` says which keys a scene file may hold, their types, required keys,
 choices, bounds and defaults, with a description of each for editors. It is exported as
-``config/schema/scene.schema.json`` (the README shows how editors use it)::
+``config/schema/scene.schema.json`` (docs/scenes.md shows how editors use it)::
 
     python -m rigid_rot_sim.scene.scene_schema > config/schema/scene.schema.json
 
@@ -99,8 +99,8 @@ OUTPUTS: dict[str, OutputSpec] = {
     "wheels": OutputSpec(100.0, "sensor_msgs/JointState on ~/wheels (scenes with reaction wheels only)"),
     "torque_breakdown": OutputSpec(
         100.0,
-        "rigid_rot_msgs/TorqueBreakdown on ~/torque_breakdown (N*m, body frame; every torque by source: "
-        "scenes where a torque acts)",
+        "rigid_rot_msgs/TorqueBreakdown on ~/torque_breakdown "
+        "(N*m, body frame; every torque by source: scenes where a torque acts)",
     ),
 }
 

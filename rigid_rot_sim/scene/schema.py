@@ -266,7 +266,8 @@ def _fits(branch: Mapping[str, Any], instance: Any) -> bool:
 def _keys_alternatives(branches: Sequence[Mapping[str, Any]]) -> list[str] | None:
     """The key names when each branch is ``{"required": [name]}`` (exactly one of these keys)."""
     names = [branch.get("required") for branch in branches]
-    if all(len(branch) == 1 and isinstance(name, list) and len(name) == 1 for branch, name in zip(branches, names)):
+    pairs = zip(branches, names, strict=True)
+    if all(len(branch) == 1 and isinstance(name, list) and len(name) == 1 for branch, name in pairs):
         return [name[0] for name in names]  # type: ignore[index]
     return None
 

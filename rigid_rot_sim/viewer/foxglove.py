@@ -70,15 +70,15 @@ def _time(t_ns: int) -> dict[str, int]:
 
 
 def _color(rgba: tuple[float, float, float, float]) -> dict[str, float]:
-    return dict(zip("rgba", (float(c) for c in rgba)))
+    return dict(zip("rgba", (float(c) for c in rgba), strict=True))
 
 
 def _vector(v: Any) -> dict[str, float]:
-    return dict(zip("xyz", (float(c) for c in v)))
+    return dict(zip("xyz", (float(c) for c in v), strict=True))
 
 
 def _quaternion(q: Any) -> dict[str, float]:
-    return dict(zip("xyzw", (float(c) for c in q)))
+    return dict(zip("xyzw", (float(c) for c in q), strict=True))
 
 
 def _x_to(direction: np.ndarray) -> np.ndarray:

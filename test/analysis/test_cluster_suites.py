@@ -89,7 +89,7 @@ def test_stability_suite_on_a_cluster_matches_a_local_run(tmp_path, cluster):
     here = run_suite(tmp_path / "here", **kwargs)
     there = run_suite(tmp_path / "there", scheduler=cluster, **kwargs)
     assert [c["name"] for c in here["cases"]] == [c["name"] for c in there["cases"]]
-    for a, b in zip(here["cases"], there["cases"]):
+    for a, b in zip(here["cases"], there["cases"], strict=True):
         assert {m: without_times(r) for m, r in a["runs"].items()} == {
             m: without_times(r) for m, r in b["runs"].items()
         }

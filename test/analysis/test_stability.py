@@ -40,7 +40,7 @@ def test_outputs_exist(suite):
     assert (out / "stability.png").read_bytes()[:4] == b"\x89PNG"
     text = (out / "stability.md").read_text()
     assert "## Pass / fail overview" in text and "## Largest stable step" in text and "## Long horizon" in text
-    assert data["methods"] == S.method_labels() == list(METHODS) + ["dopri5"]
+    assert data["methods"] == S.method_labels() == list(METHODS) + ["gyrostat_rk4", "dopri5"]
 
 
 def test_every_run_is_classified_and_never_nan_silently(suite):
@@ -103,18 +103,18 @@ def test_bisected_rk4_step_matches_linear_theory(suite):
 
 
 def test_fast_wheel_case_is_run_by_the_gyrostat_methods_within_rk4_theory(suite):
-    """Stable and passing for rk4 and dopri5, refused by the others; rk4's omega error is the nutation phase
-    error its linear theory predicts (the limit), not far below it: the limit is not slack."""
+    """Stable and passing for gyrostat_rk4 and dopri5, refused by the others; gyrostat_rk4's omega error is the
+    nutation phase error its linear theory predicts (the limit), not far below it: the limit is not slack."""
     _, _, cases = suite
     case = cases["fast wheel, slow body"]
     limit = next(c for c in catalogue(quick=True) if c.name == "fast wheel, slow body").criterion.omega_error
     for method, run in case["runs"].items():
-        if method in ("rk4", "dopri5"):
+        if method in ("gyrostat_rk4", "dopri5"):
             assert run["status"] == "stable" and run["passed"], (method, run)
             assert run["energy_drift"] < 1e-8 and run["momentum_drift"] < 1e-8
         else:
-            assert run["status"] == "refused" and "valid methods: dopri5, rk4" in run["message"], method
-    assert 0.5 * limit < case["runs"]["rk4"]["omega_error"] <= limit
+            assert run["status"] == "refused" and "valid methods: dopri5, gyrostat_rk4" in run["message"], method
+    assert 0.5 * limit < case["runs"]["gyrostat_rk4"]["omega_error"] <= limit
     assert case["runs"]["dopri5"]["omega_error"] < 1e-4 * limit  # order 5 at rtol 1e-10
     for name, other in cases.items():
         if name != "fast wheel, slow body":
@@ -132,9 +132,9 @@ def test_fast_wheel_case_is_stiff_rk4_stability_is_set_by_the_nutation():
     rate = nutation_rate(case.problem.moments, case.problem.wheels, case.problem.wheel_speeds0)
     assert rate == pytest.approx(24.85, rel=1e-3)
     theory = 2 * math.sqrt(2) / rate
-    assert S.largest_stable_step(case, "rk4", steps=200) == pytest.approx(theory, rel=0.02)
+    assert S.largest_stable_step(case, "gyrostat_rk4", steps=200) == pytest.approx(theory, rel=0.02)
     unstable = dataclasses.replace(case, dt=1.1 * theory)
-    run = S.run_case(unstable, "rk4")
+    run = S.run_case(unstable, "gyrostat_rk4")
     assert run.status == "unstable" and not run.passed
 
 

@@ -13,7 +13,7 @@ OMEGA0 = np.array([1.0, 0.1, 0.5])
 IDENTITY = np.array([0.0, 0.0, 0.0, 1.0])
 
 
-def reference(moments, omega0, q0, t_end, torque=np.zeros(3)):
+def reference(moments, omega0, q0, t_end, torque=(0.0, 0.0, 0.0)):
     """Tight DOP853 on Euler's equations and q' = 1/2 q (x) (omega, 0), written out here."""
 
     def rhs(t, y):

@@ -25,10 +25,10 @@ def wrapped(a):
 
 
 def test_pivot_moments_by_parallel_axis_theorem():
-    m, l = 0.5, 0.04
-    np.testing.assert_allclose(TOP.pivot_moments, [4e-4 + m * l * l, 4e-4 + m * l * l, 6e-4], rtol=1e-15)
+    m, arm = 0.5, 0.04
+    np.testing.assert_allclose(TOP.pivot_moments, [4e-4 + m * arm * arm, 4e-4 + m * arm * arm, 6e-4], rtol=1e-15)
     torque = TOP.torque
-    np.testing.assert_array_equal(torque.lever_arm, [0.0, 0.0, l])
+    np.testing.assert_array_equal(torque.lever_arm, [0.0, 0.0, arm])
     assert torque.weight == m * 9.81
 
 

@@ -437,7 +437,7 @@ def test_implicit_midpoint_is_stable_on_stiff_damping():
     for _ in range(50):
         integrator.step()
         norms.append(np.linalg.norm(integrator.omega))
-    assert all(b < a for a, b in zip(norms, norms[1:]))
+    assert all(b < a for a, b in zip(norms, norms[1:], strict=False))
     explicit = make("rk4", {}, MOMENTS, 0.1, damping, q0=Q0, omega0=OMEGA0)
     with pytest.raises(NonFiniteStateError):
         explicit.advance(1000)

@@ -11,7 +11,8 @@ from scipy.spatial.transform import Rotation
 from rigid_rot_sim.core.dynamics import RigidBody
 from rigid_rot_sim.core.exact import torque_free_solution
 from rigid_rot_sim.core.integrators import METHODS, NonFiniteStateError
-from rigid_rot_sim.core.simulate import Trajectory, simulate, step_grid
+from rigid_rot_sim.core.simulate import Trajectory, simulate
+from rigid_rot_sim.core.steps import step_grid
 from rigid_rot_sim.core.torque import ConstantTorque, GravityTorque
 
 MOMENTS = (1.0, 2.0, 3.0)

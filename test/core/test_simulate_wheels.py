@@ -129,7 +129,7 @@ def test_schedule_starts_take_effect_at_the_next_boundary_and_torques_are_clampe
 
     def run(start, torques):
         schedule = [(0.0, [0.1, 0, 0]), (start, torques)]
-        return simulate(MOMENTS, (0.1, 0.3, -0.2), 2.0, 0.01, "rk4", wheel_torque=schedule, **kwargs)
+        return simulate(MOMENTS, (0.1, 0.3, -0.2), 2.0, 0.01, "gyrostat_rk4", wheel_torque=schedule, **kwargs)
 
     a = run(1.0031, [5.0, -9.0, 0.0])  # clamped to +-0.2 N*m, from boundary 101
     b = run(1.01, [0.2, -0.2, 0.0])
@@ -149,7 +149,13 @@ def test_gravity_gradient_pitch_libration_through_simulate():
     theta0 = 1e-3
     t_end = 4 * 2 * math.pi / expected
     traj = simulate(
-        moments, (0.0, 0.0, n), t_end, 2.0, "rk4", (0.0, 0.0, math.sin(theta0 / 2), math.cos(theta0 / 2)), orbit=orbit
+        moments,
+        (0.0, 0.0, n),
+        t_end,
+        2.0,
+        "gyrostat_rk4",
+        (0.0, 0.0, math.sin(theta0 / 2), math.cos(theta0 / 2)),
+        orbit=orbit,
     )
     assert traj.wheel_speeds is None
     pitch = np.unwrap(2 * np.arctan2(traj.q[:, 2], traj.q[:, 3])) - n * traj.t
@@ -166,7 +172,7 @@ def test_gravity_gradient_pitch_libration_through_simulate():
 
 def test_wheels_with_a_method_that_cannot_run_them_name_those_that_can():
     for method in ("taylor", "exact", "splitting", "dop853"):
-        with pytest.raises(ValueError, match="cannot run wheels.*dopri5, rk4"):
+        with pytest.raises(ValueError, match="cannot run wheels.*dopri5, gyrostat_rk4"):
             simulate(MOMENTS, (0.1, 0.2, 0.3), 1.0, 0.1, method, wheels=three_wheels())
 
 
@@ -186,13 +192,13 @@ def test_wheels_with_a_method_that_cannot_run_them_name_those_that_can():
 )
 def test_bad_wheel_inputs_are_value_errors_naming_them(kwargs, match):
     with pytest.raises(ValueError, match=match):
-        simulate(MOMENTS, (0.1, 0.2, 0.3), 1.0, 0.1, "rk4", **kwargs)
+        simulate(MOMENTS, (0.1, 0.2, 0.3), 1.0, 0.1, "gyrostat_rk4", **kwargs)
 
 
 def test_wheels_that_leave_no_body_for_this_inertia_are_refused():
     wheels = wheel_model(np.diag(MOMENTS), ["big"], [[1, 0, 0]], [9.0], [0.1], [100.0])
     with pytest.raises(ValueError, match="positive definite"):
-        simulate((5.0, 12.0, 15.0), (0.1, 0.2, 0.3), 1.0, 0.1, "rk4", wheels=wheels)
+        simulate((5.0, 12.0, 15.0), (0.1, 0.2, 0.3), 1.0, 0.1, "gyrostat_rk4", wheels=wheels)
 
 
 def test_the_documented_examples_run():

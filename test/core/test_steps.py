@@ -4,9 +4,11 @@ import doctest
 import math
 
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 from rigid_rot_sim.core import steps
-from rigid_rot_sim.core.steps import step_at_or_after, step_at_or_before, time_of_step
+from rigid_rot_sim.core.steps import step_at_or_after, step_at_or_before, step_grid, time_of_step
 
 
 def test_the_module_examples_run():
@@ -37,3 +39,40 @@ def test_an_epoch_shifts_the_grid():
     assert step_at_or_after(0.81, 0.25, t0=0.3, k0=3) == 6
     assert step_at_or_before(0.79, 0.25, t0=0.3, k0=3) == 4
     assert math.isclose(time_of_step(3, 0.25, t0=0.3, k0=3), 0.3)
+
+
+# the review's two durations where simulate() and the sweep (relative grid tolerance) took one step
+# fewer than the node (absolute BOUNDARY_SLACK), before the one rule
+REVIEW_CASES = [(10.000000005, 0.01, 1001), (100.00000005, 1e-4, 1_000_001)]
+
+
+@pytest.mark.parametrize(("duration", "dt", "steps_taken"), REVIEW_CASES)
+def test_a_duration_just_off_the_grid_takes_one_more_step_on_every_path(duration, dt, steps_taken):
+    n_full, last = step_grid(duration, dt)
+    assert last > 0.0 and n_full + 1 == steps_taken  # simulate() and the sweep: a short last step
+    assert step_at_or_after(duration, dt) == steps_taken  # the node's end step (RunDriver.run)
+
+
+def test_a_duration_on_the_grid_takes_its_full_steps_and_no_short_one():
+    assert step_grid(1.0, 0.1) == (10, 0.0)  # 1.0 / 0.1 is 10 up to rounding
+    assert step_grid(0.9, 0.03) == (30, 0.0)  # 30 * 0.03 < 0.9, yet on the grid
+    assert step_grid(0.0, 0.1) == (0, 0.0)
+    n, last = step_grid(0.03, 0.1)
+    assert n == 0 and last == pytest.approx(0.03)
+
+
+@settings(max_examples=400, deadline=None)
+@given(
+    steps=st.integers(min_value=0, max_value=2_000_000),
+    dt=st.floats(min_value=1e-5, max_value=1.0),
+    offset=st.one_of(st.just(0.0), st.floats(min_value=-0.999, max_value=0.999)),
+)
+def test_simulate_the_sweep_and_the_node_take_the_same_number_of_steps(steps, dt, offset):
+    duration = (steps + offset) * dt
+    if duration < 0.0:
+        duration = 0.0
+    n_full, last = step_grid(duration, dt)
+    assert n_full + (last > 0.0) == step_at_or_after(duration, dt)
+    assert 0.0 <= last < dt * (1.0 + 1e-9)
+    if last > 0.0:  # the short last step ends on the duration
+        assert math.isclose(time_of_step(n_full, dt) + last, duration, rel_tol=1e-12, abs_tol=1e-15)

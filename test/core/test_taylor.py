@@ -428,7 +428,7 @@ def test_simulate_with_a_full_inertia_tensor_matches_dop853():
     dop = simulate(tensor, OMEGA0, method="dop853", rtol=1e-13, atol=1e-13, **kwargs)
     np.testing.assert_allclose(taylor.t, dop.t, rtol=0, atol=0)
     assert np.max(np.abs(taylor.omega - dop.omega)) < 1e-10
-    assert max(quaternion_distance(a, b) for a, b in zip(taylor.q, dop.q)) < 1e-10
+    assert max(quaternion_distance(a, b) for a, b in zip(taylor.q, dop.q, strict=True)) < 1e-10
 
 
 def test_class_order_is_the_default_series_order():

@@ -40,7 +40,7 @@ WHEEL_SCENE = {
             for n, a in (("rw_x", [1, 0, 0]), ("rw_y", [0, 1, 0]), ("rw_z", [0, 0, 1]))
         ]
     },
-    "integrator": {"method": "rk4", "dt": 0.001},
+    "integrator": {"method": "gyrostat_rk4", "dt": 0.001},
     "real_time_factor": 1.0,
     "commands": {"qos_depth": 1000},  # as torque_driven: 1 s of commands at 1 kHz while the node has no core
     "outputs": {"state": 100, "orientation": 0, "angular_velocity": 0, "angular_momentum": 0, "tf": 0, "clock": 100},

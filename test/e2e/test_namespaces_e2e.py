@@ -66,7 +66,7 @@ def test_two_namespaced_nodes_run_side_by_side_without_cross_talk(launch_node, c
     )
     for ns, process in nodes.items():  # each node subscribes to its own torque topic only (graph data: awaited)
         collector.spin_until(
-            lambda: collector.node.count_subscribers(f"/{ns}/rigid_rot_sim/torque") >= 1,
+            lambda ns=ns: collector.node.count_subscribers(f"/{ns}/rigid_rot_sim/torque") >= 1,
             WAIT,
             process,
             f"/{ns}/rigid_rot_sim/torque's subscriber",

@@ -195,13 +195,13 @@ def test_heavy_top_nutation_stays_between_the_turning_points(launch_node, collec
     names = ("precession", "nutation", "spin", "p_phi", "p_psi", "energy")
     assert received and all(same_fields(m, published[round(stamp(m), 9)], names) for m in received)
 
-    mass, l = scene.body.mass, scene.body.center_of_mass[2]
+    mass, arm = scene.body.mass, scene.body.center_of_mass[2]
     pivot = np.diag(scene.body.inertia_array)
     top = HeavyTop(
         mass=mass,
         gravity=scene.gravity.acceleration,
-        com_distance=l,
-        com_moments=[pivot[0] - mass * l * l, pivot[1] - mass * l * l, pivot[2]],
+        com_distance=arm,
+        com_moments=[pivot[0] - mass * arm * arm, pivot[1] - mass * arm * arm, pivot[2]],
     )
     reference = heavy_top_reference(top, scene.initial.orientation, scene.initial.angular_velocity)
     theta_min, theta_max = reference.theta_range

@@ -50,7 +50,7 @@ SCENE = {
         ]
     },
     "joint_state_topics": {"commands": COMMANDS, "states": STATES},
-    "integrator": {"method": "rk4", "dt": 0.001},
+    "integrator": {"method": "gyrostat_rk4", "dt": 0.001},
     "real_time_factor": 2.0,
     "outputs": {"state": 50, "wheels": 50, "clock": 50, "tf": 0, "orientation": 0, "angular_velocity": 0},
 }

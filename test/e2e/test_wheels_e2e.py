@@ -35,7 +35,7 @@ SCENE = {
         ]
     },
     "environment": {"gravity_gradient": {"mu": 3.986004418e14, "orbit": {"radius": 6778137.0, "inclination": 0.5}}},
-    "integrator": {"method": "rk4", "dt": 0.01},
+    "integrator": {"method": "gyrostat_rk4", "dt": 0.01},
     "real_time_factor": 1.0,
     "outputs": {
         "state": 20,

@@ -15,6 +15,8 @@ from rigid_rot_sim.core.inertia import mass_properties
 from rigid_rot_sim.run.simulator import CommandRejected, Simulator
 from rigid_rot_sim.scene.scene import SceneError, parse_scene_text
 
+pytestmark = pytest.mark.slow
+
 
 def snapshot_finite(snapshot) -> bool:
     for field in dataclasses.fields(snapshot):

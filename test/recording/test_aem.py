@@ -160,7 +160,7 @@ def test_export_round_trips_the_recording(tmp_path, scene, commands, angvel):
     assert any("'odom'" in c for c in segment["comments"]) and any("'base_link'" in c for c in segment["comments"])
     states = _recorded_states(bag)
     assert len(segment["rows"]) == len(states)
-    for (tag, values), state in zip(segment["rows"], states):
+    for (tag, values), state in zip(segment["rows"], states, strict=True):
         t = state.header.stamp.sec + state.header.stamp.nanosec * 1e-9
         assert _seconds_after("2000-01-01T12:00:00Z", tag) == pytest.approx(t, abs=1e-9)
         q = [state.orientation.x, state.orientation.y, state.orientation.z, state.orientation.w]

@@ -35,7 +35,10 @@ def test_project_types_resolve_with_their_dependencies():
 
 
 def test_field_types_skip_constants_primitives_and_comments():
-    text = "uint8 MODE=1  # const\nstring<=8 name\nint32[<=5] a\nPoint[] points  # nested\nstd_msgs/Header header\n# geometry_msgs/Pose commented\n"
+    text = (
+        "uint8 MODE=1  # const\nstring<=8 name\nint32[<=5] a\nPoint[] points  # nested\n"
+        "std_msgs/Header header\n# geometry_msgs/Pose commented\n"
+    )
     assert definitions.field_types(text, "geometry_msgs") == ["geometry_msgs/msg/Point", "std_msgs/msg/Header"]
 
 

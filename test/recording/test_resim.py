@@ -145,12 +145,12 @@ def record_wheels(path: Path, tamper_angle_at: int | None = None):
 
     scene_path = SCENES / "wheel_slew.yaml"
     scene = load_scene(scene_path)
-    sim = Simulator(scene, method="rk4")
+    sim = Simulator(scene, method="gyrostat_rk4")
     with RunRecorder(
         path,
         scene_text=scene_path.read_text(),
         scene_file=str(scene_path),
-        parameters={"integrator": "rk4"},
+        parameters={"integrator": "gyrostat_rk4"},
         events_topic="/rigid_rot_sim/sim_events",
         integrator={"method": sim.method, "dt": sim.dt, "options": sim.options},
         sim_seconds=lambda: sim.t,

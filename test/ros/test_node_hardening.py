@@ -6,18 +6,23 @@ import time
 
 import pytest
 import rclpy  # noqa: E402  (test/conftest.py has set the session's ROS_DOMAIN_ID)
+import test_node  # noqa: E402
 from builtin_interfaces.msg import Duration  # noqa: E402
 from geometry_msgs.msg import Point, Vector3, WrenchStamped  # noqa: E402
 from rclpy.clock_type import ClockType  # noqa: E402
 from rclpy.parameter import Parameter  # noqa: E402
 from std_srvs.srv import SetBool, Trigger  # noqa: E402
-from test_node import SCENES, Harness, context, harness  # noqa: E402,F401  (fixtures)
+from test_node import SCENES  # noqa: E402
 
 from rigid_rot_msgs.msg import RejectedCommand, RigidBodyState  # noqa: E402
 from rigid_rot_msgs.srv import ApplyTorque, ComputeInertia, SetState, Step  # noqa: E402
 from rigid_rot_sim.core import limits  # noqa: E402
 from rigid_rot_sim.ros.node import RigidRotSimNode  # noqa: E402
 from rigid_rot_sim.ros.qos import COMMAND_QOS, REJECTED_QOS, STATE_QOS  # noqa: E402
+
+# test_node's fixtures, used here by name
+context = test_node.context
+harness = test_node.harness
 
 STATE_FIELDS = (
     "angular_velocity_body",

@@ -20,6 +20,7 @@ TYPES = {
     int: ParameterType.PARAMETER_INTEGER,
     float: ParameterType.PARAMETER_DOUBLE,
     str: ParameterType.PARAMETER_STRING,
+    list: ParameterType.PARAMETER_STRING_ARRAY,
 }
 #: String literals in ros/ and cli/ equal to a parameter name that are NOT that parameter:
 #: the recording's integrator record and event kind, and argparse's names for the CLI options.
@@ -50,10 +51,9 @@ def test_the_table_is_what_the_node_declares(node):
     # lockstep.* are one block of their own (ros/lockstep.py): lockstep.inputs is a string array
     lockstep = set(LOCKSTEP_PARAMETERS)
     assert declared == set(names) | lockstep | {parameters.SCENE.name, "use_sim_time", "start_type_description_service"}
-    for name in lockstep:
-        assert node.describe_parameter(name).read_only, name
+    assert lockstep == {spec.name for spec in parameters.LOCKSTEP}  # the table's entries
     scene = load_scene(resolve_scene("heavy_top"))
-    for spec in parameters.PARAMETERS:
+    for spec in parameters.ALL_PARAMETERS:
         described = node.describe_parameter(spec.name)
         assert described.type == TYPES[spec.type], spec.name
         assert described.read_only == spec.read_only and described.description == spec.description, spec.name
@@ -118,3 +118,35 @@ def test_a_rate_with_no_period_in_steps_is_refused_at_run_time_and_at_start_up(n
             RigidRotSimNode(context=context, parameter_overrides=overrides)
     finally:
         rclpy.shutdown(context=context)
+
+
+DOCS = PACKAGE.parent / "docs" / "node.md"
+
+
+def test_the_parameter_table_of_docs_node_md_is_generated_from_the_table():
+    """docs/node.md's table is ``markdown_table()`` verbatim: a parameter added, renamed or re-described
+    fails here until the docs follow (paste the expected text printed below between the markers)."""
+    text = DOCS.read_text(encoding="utf-8")
+    start = text.index("-->\n", text.index("<!-- generated from rigid_rot_sim.ros.parameters.markdown_table()")) + 4
+    end = text.index("<!-- end of the generated table -->")
+    expected = parameters.markdown_table()
+    assert text[start:end] == expected, f"docs/node.md's parameter table is stale; it should read:\n{expected}"
+    for name in ("scene", *(spec.name for spec in parameters.ALL_PARAMETERS if not spec.name.startswith("rates."))):
+        assert f"`{name}`" in text
+
+
+def test_the_topic_table_of_docs_node_md_names_every_output():
+    """Every output of the table (scene_schema's OUTPUTS, ros/outputs' publishers) has its row, and every
+    row names an output, an input or a static topic."""
+    from rigid_rot_sim.ros.outputs import output_topic
+
+    text = DOCS.read_text(encoding="utf-8")
+    section = text[text.index("## Topics") : text.index("## Frames")]
+    rows = [line.split("|")[1].strip() for line in section.splitlines() if line.startswith("| `")]
+    topics = {row.split("`")[1] for row in rows}
+    outputs = {output_topic(name) for name in OUTPUT_NAMES}
+    assert outputs <= topics, sorted(outputs - topics)
+    # not rates.<output>: the static and event topics, the inputs, and the JointState door's (named by parameters)
+    others = {"~/mass_properties", "~/rejected", "/tf_static", "~/wheel_torque", "~/sim_events"}
+    others |= {"joint_state_topics.commands", "joint_state_topics.states"}
+    assert topics - outputs == others, sorted(topics - outputs)

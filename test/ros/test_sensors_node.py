@@ -87,10 +87,10 @@ def test_readings_are_noisy_ground_truth_exact_star_tracker_covariance_is_nea_sq
     bag, _ = recorded
     reader = BagReader(bag)
     truth = {}
-    for message, decoded in reader.decoded([STATE]):
+    for _, decoded in reader.decoded([STATE]):
         truth[time_to_seconds(decoded.header.stamp)] = decoded
     errors = []
-    for message, imu in reader.decoded([IMU]):
+    for _, imu in reader.decoded([IMU]):
         state = truth.get(time_to_seconds(imu.header.stamp))
         if state is not None:
             errors.append(vector3_to_array(imu.angular_velocity) - vector3_to_array(state.angular_velocity_body))
@@ -106,7 +106,7 @@ def test_readings_are_noisy_ground_truth_exact_star_tracker_covariance_is_nea_sq
     # the white part: ARW / sqrt(1/rate) = 1e-3 / sqrt(0.005 s) (the bias moves little in 0.3 s)
     assert np.std(errors - errors.mean(axis=0), axis=0) == pytest.approx([1e-3 / np.sqrt(0.005)] * 3, rel=0.3)
     attitude_errors = []
-    for message, pose in reader.decoded([STAR_TRACKER]):
+    for _, pose in reader.decoded([STAR_TRACKER]):
         covariance = np.array(pose.pose.covariance).reshape(6, 6)
         # about the fixed (world) axes, as PoseWithCovariance defines it: R diag(NEA^2) R^T
         matrix = Rotation.from_quat(quaternion_to_array(pose.pose.pose.orientation)).as_matrix()

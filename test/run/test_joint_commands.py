@@ -75,7 +75,7 @@ actuators:
 joint_state_topics: {commands: /rw_joint_commands, states: /rw_joint_states}
 simulation_interfaces_namespace: /
 lockstep: {period: 0.1, inputs: [/rw_joint_commands]}
-integrator: {method: rk4, dt: 0.01}
+integrator: {method: gyrostat_rk4, dt: 0.01}
 """
 
 

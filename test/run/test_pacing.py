@@ -254,3 +254,26 @@ def test_a_run_loop_takes_its_commands_between_the_chunks_of_a_long_call():
     run.between_chunks = lambda: calls.append(sim.step_index) or 0
     run.run(12, None)  # three chunks: 0-4, 4-8, 8-12
     assert calls == [4, 8, 12]  # after each chunk (none before the first: the caller took them just before)
+
+
+@pytest.mark.parametrize("duration", [10.000000005, 10.0, 9.995])
+def test_the_node_simulate_and_the_sweep_take_the_same_number_of_steps(duration):
+    """One duration rule (core/steps.step_grid): the run engine ends on step_at_or_after(duration), simulate()
+    takes the same count with a shorter last step; 10.000000005 s at dt 0.01 is the review's disagreeing case."""
+    from rigid_rot_sim.core.simulate import simulate
+    from rigid_rot_sim.core.steps import step_grid
+    from rigid_rot_sim.run.simulator import Simulator
+    from rigid_rot_sim.scene.scene import parse_scene_text
+
+    dt = 0.01
+    scene = parse_scene_text(f"body: {{principal_moments: [1.0, 2.0, 3.0]}}\nintegrator: {{method: rk4, dt: {dt}}}\n")
+    sim = Simulator(scene)
+    clock = FakeClock()
+    run = RunDriver(sim, OutputSchedule({}), Pacer(0.0, clock), duration)
+    run.pacer.anchor(sim.t)
+    while not run.tick().finished:
+        pass
+    trajectory = simulate([1.0, 2.0, 3.0], [0.0, 0.0, 0.0], t_end=duration, dt=dt, method="rk4", save_every=1)
+    n_full, last = step_grid(duration, dt)  # what the sweep's chunks take
+    assert sim.step_index == len(trajectory.t) - 1 == n_full + (last > 0.0)
+    assert trajectory.t[-1] == duration

@@ -52,7 +52,7 @@ class Heard(SimulationObserver):
         self.rejected.append((source, reason))
 
 
-@pytest.mark.parametrize("method", ["rk4", "dopri5", "auto"])
+@pytest.mark.parametrize("method", ["gyrostat_rk4", "dopri5", "auto"])
 def test_a_wheel_schedule_turns_body_and_wheel_as_the_closed_form_says(method):
     sim = Simulator(parse_scene_text(SINGLE_WHEEL % method))
     sim.advance(1000)
@@ -66,7 +66,7 @@ def test_a_wheel_schedule_turns_body_and_wheel_as_the_closed_form_says(method):
 
 
 def test_wheel_commands_are_clamped_and_a_wrong_count_is_rejected_with_the_reason():
-    sim = Simulator(parse_scene_text(SPACECRAFT % "rk4"))
+    sim = Simulator(parse_scene_text(SPACECRAFT % "gyrostat_rk4"))
     heard = Heard()
     sim.add_observer(heard)
     step, torques, clamped = sim.submit_wheel_torques("~/wheel_torque", [0.5, -0.1, -1.0])
@@ -81,7 +81,7 @@ def test_wheel_commands_are_clamped_and_a_wrong_count_is_rejected_with_the_reaso
     np.testing.assert_allclose(sim.snapshot().wheel_torques, [0.2, -0.1, -0.2])
 
 
-@pytest.mark.parametrize("method", ["rk4", "dopri5"])
+@pytest.mark.parametrize("method", ["gyrostat_rk4", "dopri5"])
 def test_commands_and_chunking_give_the_same_bits(method):
     """Two runs fed the same commands (body torque, wheel torques) give the same bits, however they are stepped."""
     scene = parse_scene_text(SPACECRAFT % method)
@@ -104,7 +104,7 @@ def test_commands_and_chunking_give_the_same_bits(method):
 
 
 def test_reset_restores_the_wheel_speeds_and_drops_wheel_commands():
-    sim = Simulator(parse_scene_text(SPACECRAFT % "rk4"))
+    sim = Simulator(parse_scene_text(SPACECRAFT % "gyrostat_rk4"))
     first = sim.snapshot()
     sim.submit_wheel_torques("~/wheel_torque", [0.1, 0.1, 0.1])
     sim.advance(100)
@@ -116,7 +116,7 @@ def test_reset_restores_the_wheel_speeds_and_drops_wheel_commands():
 
 
 def test_wheel_angles_integrate_the_speeds_and_survive_set_state_and_an_integrator_change():
-    sim = Simulator(parse_scene_text(SINGLE_WHEEL % "rk4"))
+    sim = Simulator(parse_scene_text(SINGLE_WHEEL % "gyrostat_rk4"))
     assert sim.snapshot().wheel_angles.tolist() == [0.0]
     sim.advance(1000)  # 10 s: 5 s at 0.05 N*m, then coasting
     a = 0.05 * 15.0 / (0.5 * 14.5)
@@ -134,7 +134,7 @@ def test_wheel_angles_integrate_the_speeds_and_survive_set_state_and_an_integrat
 def test_a_topic_wheel_command_holds_until_the_next_schedule_segment_replaces_it():
     """The rule (docs/spacecraft.md): the latest wheel command, from the topic, the JointState door or a
     schedule segment starting, sets every wheel torque it gives; a segment gives all of them at its start."""
-    sim = Simulator(parse_scene_text(SINGLE_WHEEL % "rk4"))  # segments: 0.05 N*m from t = 0, 0 from t = 5 s
+    sim = Simulator(parse_scene_text(SINGLE_WHEEL % "gyrostat_rk4"))  # segments: 0.05 N*m from t = 0, 0 from t = 5 s
     sim.advance(100)
     assert sim.snapshot().wheel_torques.tolist() == [0.05]
     sim.submit_wheel_torques("~/wheel_torque", [-0.08])  # replaces the schedule's torque from now on
@@ -153,7 +153,7 @@ def test_a_topic_wheel_command_holds_until_the_next_schedule_segment_replaces_it
     "change, message",
     [
         (("torques: [0.05]", "torques: [0.05, 0.1]"), "2 values for 1 wheel"),
-        (("method: rk4", "method: taylor"), "cannot run wheels"),
+        (("method: gyrostat_rk4", "method: taylor"), "cannot run wheels"),
         (("inertia: 0.5", "inertia: 20.0"), "positive definite"),
         (("initial_speed: 10", "initial_speed: 2000"), "exceeds max_speed"),
         (
@@ -167,7 +167,7 @@ def test_a_topic_wheel_command_holds_until_the_next_schedule_segment_replaces_it
 )
 def test_invalid_spacecraft_scenes_are_refused_with_the_key(change, message):
     with pytest.raises(SceneError, match=message):
-        parse_scene_text((SINGLE_WHEEL % "rk4").replace(*change))
+        parse_scene_text((SINGLE_WHEEL % "gyrostat_rk4").replace(*change))
 
 
 @pytest.mark.parametrize("name", ["wheel_slew", "gravity_gradient_satellite"])

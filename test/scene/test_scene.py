@@ -151,7 +151,8 @@ def test_output_qos_is_read_and_validated():
         ),
         (
             MINIMAL
-            + "torque_inputs: [{schedule: {segments: [{start: 1, torque: [0, 0, 1]}, {start: 1, torque: [0, 0, 0]}]}}]\n",
+            + "torque_inputs: [{schedule: {segments: [{start: 1, torque: [0, 0, 1]}, "
+            + "{start: 1, torque: [0, 0, 0]}]}}]\n",
             "bad.yaml: torque_inputs[0].schedule.segments[1].start: must be later",
         ),
         (
@@ -238,7 +239,10 @@ def test_point_masses_give_the_hand_computed_tensor_about_the_centre_of_mass():
 
 
 def test_point_masses_under_gravity_use_the_tensor_about_the_pivot():
-    text = "body: {point_masses: {masses: [1.0, 1.0, 1.0], positions: [[0.1, 0, 1.0], [-0.1, 0, 1.0], [0, 0.1, 1.0]]}}\ngravity: {acceleration: 9.81}\n"
+    text = (
+        "body: {point_masses: {masses: [1.0, 1.0, 1.0], positions: [[0.1, 0, 1.0], [-0.1, 0, 1.0], [0, 0.1, 1.0]]}}\n"
+        "gravity: {acceleration: 9.81}\n"
+    )
     scene = parse(text)
     com = np.array([0.0, 0.1 / 3, 1.0])
     assert np.allclose(scene.body.center_of_mass, com)

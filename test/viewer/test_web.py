@@ -32,7 +32,7 @@ actuators:
   reaction_wheels:
     - {name: a, axis: [1, 0, 0], inertia: 0.1, max_torque: 0.2, max_speed: 600.0}
     - {name: b, axis: [0, 0.6, 0.8], inertia: 0.1, max_torque: 0.2, max_speed: 600.0}
-integrator: {method: rk4, dt: 0.01}
+integrator: {method: gyrostat_rk4, dt: 0.01}
 """
 
 

@@ -1,5 +1,11 @@
 """The integrator registry: every method by name, all with the step API of ``base.py``.
 
+Modules: :mod:`.base` (the step API), :mod:`.explicit` (``euler``, ``rk4``), :mod:`.lie`
+(``lie_rk4``), :mod:`.implicit` (``implicit_midpoint``), :mod:`.splitting`, :mod:`.taylor`,
+:mod:`.adaptive` (``dop853``), :mod:`.exact_flow` (``exact``, ``exact_split``);
+:mod:`.fixed_step`, :mod:`.kernels` and :mod:`.status` (the compiled loop and its kernels'
+contract); :mod:`.gyrostat` (the spacecraft with reaction wheels: a state with wheel speeds).
+
 >>> from rigid_rot_sim.core.integrators import get_method
 >>> get_method("rk4").orders, get_method("splitting").orders, get_method("splitting").stability
 ((4,), (2, 4, 6), 'unconditional')

@@ -12,10 +12,10 @@ Rules for whoever implements a method:
   it, counts the steps in ``n_steps``, checks each new state and restores the last good
   one on failure); or :meth:`advance` itself, a faster loop that keeps the same
   per-step semantics: it counts the steps it takes, stops at the first bad one with the
-  state left at the last good step, and raises. :meth:`step` is ``advance(1)``. State lives in the *principal* body frame: ``q`` is a
-  unit quaternion (x, y, z, w) rotating principal -> world, ``omega`` (rad/s) and the
-  torque (N*m, from ``self.torque(t, q, omega)`` or ``None`` for a free body) are in
-  principal coordinates. ``self.moments`` holds (I1, I2, I3) in kg*m^2.
+  state left at the last good step, and raises. :meth:`step` is ``advance(1)``. State lives
+  in the *principal* body frame: ``q`` is a unit quaternion (x, y, z, w) rotating
+  principal -> world, ``omega`` (rad/s) and the torque (N*m, from ``self.torque(t, q, omega)``
+  or ``None`` for a free body) are in principal coordinates. ``self.moments`` holds (I1, I2, I3) in kg*m^2.
 * Accept method-specific options as keyword arguments in ``__init__`` and reject
   unknown ones with a ValueError naming them.
 * Never return NaN: a step whose new state is not finite raises
@@ -57,11 +57,11 @@ class UnsupportedTorqueError(ValueError):
 _STEP_ERRORS = (ArithmeticError, ValueError)
 
 
-def _failing_as_non_finite(method: Callable) -> Callable:
+def _failing_as_non_finite(method: Callable[..., Any]) -> Callable[..., Any]:
     """``method`` with every step error turned into NonFiniteStateError (the documented failure)."""
 
     @functools.wraps(method)
-    def wrapper(self, *args, **kwargs):
+    def wrapper(self: Any, *args: Any, **kwargs: Any) -> Any:
         try:
             return method(self, *args, **kwargs)
         except (NonFiniteStateError, UnsupportedTorqueError):

@@ -378,7 +378,7 @@ class GyrostatIntegrator(Integrator):
 class GyrostatRK4(GyrostatIntegrator):
     """Classical RK4 on (q, omega, Omega), compiled; order 4."""
 
-    name = "rk4"
+    name = "gyrostat_rk4"
     order = 4
 
     def __init__(self, *args: Any, **kwargs: Any) -> None:
@@ -473,7 +473,7 @@ class GyrostatDopri5(GyrostatIntegrator):
 
 
 #: The methods that can run a scene with wheels or gravity gradient, by name.
-GYROSTAT_METHODS: dict[str, type[GyrostatIntegrator]] = {"rk4": GyrostatRK4, "dopri5": GyrostatDopri5}
+GYROSTAT_METHODS: dict[str, type[GyrostatIntegrator]] = {"gyrostat_rk4": GyrostatRK4, "dopri5": GyrostatDopri5}
 
 
 def get_gyrostat_method(name: str) -> type[GyrostatIntegrator]:

@@ -12,6 +12,7 @@ installs both in ``fixed_step.py`` (:func:`~.fixed_step.install_kernel_loop`), w
 from __future__ import annotations
 
 import math
+from typing import Any
 
 from numba.extending import register_jitable
 
@@ -45,7 +46,7 @@ _SPLITTING6 = COMPOSITIONS[6]
 
 
 @register_jitable
-def step_kernel(method, t, state, dt, moments, torque):
+def step_kernel(method: Any, t: Any, state: Any, dt: Any, moments: Any, torque: Any) -> Any:
     """One step of the kernel ``method`` (an id of KERNEL_IDS): (new_state, status)."""
     if method == RK4:
         return rk4_step(t, state, dt, moments, torque)
@@ -67,7 +68,18 @@ def step_kernel(method, t, state, dt, moments, torque):
 
 
 @register_jitable
-def advance_steps(method, t_anchor, k0, dt, n, state, moments, torque, save_every, saved):
+def advance_steps(
+    method: Any,
+    t_anchor: Any,
+    k0: Any,
+    dt: Any,
+    n: Any,
+    state: Any,
+    moments: Any,
+    torque: Any,
+    save_every: Any,
+    saved: Any,
+) -> Any:
     """Steps k0 .. k0 + n - 1 from ``state``: returns (state, steps done, status, bad state).
 
     Stops at the first step whose kernel reports a failure or whose state is not finite,

@@ -101,7 +101,7 @@ def euler_coefficients(i1: float, i2: float, i3: float) -> tuple[float, float, f
 
 
 @functools.lru_cache(maxsize=256)
-def recurrence_tables(key: tuple) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+def recurrence_tables(key: tuple[Any, ...]) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """(pairs, terms, term_values, b) for the compiled recurrence, cached per body (and gravity).
 
     ``key`` is ``(I1, I2, I3)`` or ``(I1, I2, I3, lever_arm, weight)`` with gravity. Without gravity
@@ -195,7 +195,7 @@ def taylor_coefficients(x0: np.ndarray, order: int, c: np.ndarray, forcing: np.n
     for k in range(order):
         products = x[: k + 1].T @ x[k::-1]
         f = c_flat @ products.ravel()
-        if k < n_forcing:
+        if forcing is not None and k < n_forcing:
             f = f + forcing[k]
         x[k + 1] = f / (k + 1)
     return x
@@ -319,7 +319,7 @@ class Taylor(Integrator):
 
     def _on_state_change(self) -> None:
         self._rho = None
-        self._series = None
+        self._series: bool | None = None
 
     def advance(self, n: int) -> None:
         """Take ``n`` API steps of ``dt`` in one compiled loop (the same bits as n calls of
@@ -434,7 +434,9 @@ _OK, _NON_FINITE_STATE, _NON_FINITE_SERIES, _UNDERFLOW = 0, 1, 2, 3
 
 
 @register_jitable
-def taylor_forcing(t0, binom, poly, const_forcing, inverse_orders, series_order, out):
+def taylor_forcing(
+    t0: Any, binom: Any, poly: Any, const_forcing: Any, inverse_orders: Any, series_order: Any, out: Any
+) -> Any:
     """Fill out[:n] with the coefficients of b(t0 + s), pre-divided by (k + 1); returns n."""
     n = poly.shape[0]
     if n == 0:
@@ -461,7 +463,7 @@ def taylor_forcing(t0, binom, poly, const_forcing, inverse_orders, series_order,
 
 
 @register_jitable
-def taylor_evaluate(coeffs, p, s, out):
+def taylor_evaluate(coeffs: Any, p: Any, s: Any, out: Any) -> Any:
     """The series (order p) at s (Horner), quaternion renormalised, into out."""
     for c in range(_STATE_SIZE):
         value = coeffs[p, c]
@@ -475,25 +477,25 @@ def taylor_evaluate(coeffs, p, s, out):
 
 @register_jitable
 def taylor_substep(
-    t0,
-    x0,
-    h_cap,
-    h_fallback,
-    controlled,
-    tol,
-    series_order,
-    rho_box,
-    coeffs,
-    pairs,
-    terms,
-    term_values,
-    inverse_orders,
-    forcing,
-    binom,
-    poly,
-    const_forcing,
-    x_end,
-):
+    t0: Any,
+    x0: Any,
+    h_cap: Any,
+    h_fallback: Any,
+    controlled: Any,
+    tol: Any,
+    series_order: Any,
+    rho_box: Any,
+    coeffs: Any,
+    pairs: Any,
+    terms: Any,
+    term_values: Any,
+    inverse_orders: Any,
+    forcing: Any,
+    binom: Any,
+    poly: Any,
+    const_forcing: Any,
+    x_end: Any,
+) -> Any:
     """One Taylor step of length <= h_cap from (t0, x0): (h, order, status); x(t0 + h) into x_end.
 
     ``rho_box[0]`` holds the convergence radius estimate (< 0: none) and is updated.
@@ -519,7 +521,7 @@ def taylor_substep(
 
 
 @register_jitable
-def rigid_body_series(coeffs, p, euler, forcing, n_forced, inverse_orders):
+def rigid_body_series(coeffs: Any, p: Any, euler: Any, forcing: Any, n_forced: Any, inverse_orders: Any) -> Any:
     """coeffs[1..p] from coeffs[0] for Euler's equations and q' = 1/2 q (x) (omega, 0), written out.
 
     ``euler = ((I2 - I3) / I1, (I3 - I1) / I2, (I1 - I2) / I3)``; ``forcing`` (torque / I, pre-divided
@@ -567,7 +569,9 @@ def rigid_body_series(coeffs, p, euler, forcing, n_forced, inverse_orders):
 
 
 @register_jitable
-def general_series(coeffs, p, pairs, terms, term_values, forcing, n_forced, inverse_orders):
+def general_series(
+    coeffs: Any, p: Any, pairs: Any, terms: Any, term_values: Any, forcing: Any, n_forced: Any, inverse_orders: Any
+) -> Any:
     """coeffs[1..p] from coeffs[0] for any ``x' = C:x x + b`` given by its non-zero entries (gravity)."""
     n_pairs = pairs.shape[0]
     products = np.empty(n_pairs)
@@ -590,7 +594,18 @@ def general_series(coeffs, p, pairs, terms, term_values, forcing, n_forced, inve
 
 
 @register_jitable
-def _step_from_series(h_cap, h_fallback, controlled, tol, series_order, p, omega_scale, rho_box, coeffs, x_end):
+def _step_from_series(
+    h_cap: Any,
+    h_fallback: Any,
+    controlled: Any,
+    tol: Any,
+    series_order: Any,
+    p: Any,
+    omega_scale: Any,
+    rho_box: Any,
+    coeffs: Any,
+    x_end: Any,
+) -> Any:
     """The step from the series' last two terms (see the module docstring); x(t0 + h) into x_end."""
     h = h_cap
     if controlled:
@@ -621,27 +636,27 @@ def _step_from_series(h_cap, h_fallback, controlled, tol, series_order, p, omega
 
 @register_jitable
 def _taylor_advance(
-    n,
-    dt,
-    state,
-    series,
-    x_end,
-    landing_first,
-    controlled,
-    tol,
-    max_step,
-    series_order,
-    coeffs,
-    pairs,
-    terms,
-    term_values,
-    inverse_orders,
-    forcing,
-    binom,
-    poly,
-    const_forcing,
-    counters,
-):
+    n: Any,
+    dt: Any,
+    state: Any,
+    series: Any,
+    x_end: Any,
+    landing_first: Any,
+    controlled: Any,
+    tol: Any,
+    max_step: Any,
+    series_order: Any,
+    coeffs: Any,
+    pairs: Any,
+    terms: Any,
+    term_values: Any,
+    inverse_orders: Any,
+    forcing: Any,
+    binom: Any,
+    poly: Any,
+    const_forcing: Any,
+    counters: Any,
+) -> Any:
     """n API steps: state = (omega, q, t, rho, t of a failure) updated in place; series = (t, h, order, valid)
     of the last internal step, whose end state is x_end; counters = (done, substeps, status)."""
     rho_box = np.empty(1)

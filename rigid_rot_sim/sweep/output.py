@@ -22,10 +22,10 @@ from typing import Any
 
 import numpy as np
 
-from rigid_rot_sim.analysis.cluster import SweepResult
-from rigid_rot_sim.analysis.sweep import COLUMNS
-from rigid_rot_sim.analysis.sweep_spec import METRICS
 from rigid_rot_sim.recording.provenance import package_versions
+from rigid_rot_sim.sweep.chunks import COLUMNS
+from rigid_rot_sim.sweep.runner import SweepResult
+from rigid_rot_sim.sweep.spec import METRICS
 
 __all__ = [
     "to_table",
@@ -148,7 +148,8 @@ def summary_markdown(result: SweepResult, files: dict[str, str] | None = None) -
         spec.description,
         "",
         f"Base scene `{spec.scene.name}`, {spec.duration:g} s; seed {spec.seed}; {spec.samples} samples × "
-        f"{len(spec.grid)} grid point(s) = {n} runs. Verdicts: {verdicts['stable']} stable, {verdicts['drifting']} drifting, "
+        f"{len(spec.grid)} grid point(s) = {n} runs. "
+        f"Verdicts: {verdicts['stable']} stable, {verdicts['drifting']} drifting, "
         f"{verdicts['unstable']} unstable (failed numerically: their rows carry the error).",
         "",
         "## All runs",
@@ -166,7 +167,7 @@ def summary_markdown(result: SweepResult, files: dict[str, str] | None = None) -
     metric = np.asarray(columns[spec.metric], dtype=float)
     for g, label in _grid_points(columns):
         lines.append(_percentile_row(label, metric[grid_point == g]))
-    errors = [(int(r), e) for r, e in zip(columns["run"], columns["error"]) if e]
+    errors = [(int(r), e) for r, e in zip(columns["run"], columns["error"], strict=True) if e]
     if errors:
         lines += ["", f"## Failed runs ({len(errors)}; first 5)", ""]
         lines += [f"- run {r}: {e}" for r, e in errors[:5]]
@@ -180,7 +181,8 @@ def summary_markdown(result: SweepResult, files: dict[str, str] | None = None) -
             f"{engine.get('chunk_size')} bodies, {engine.get('elapsed_seconds', float('nan')):.1f} s"
             + (
                 f"; batch step cost measured {engine['fixed_step_seconds'] * 1e6:.0f} µs + "
-                f"{engine['per_body_step_seconds'] * 1e6:.2f} µs per body (fixed part {engine['overhead_fraction']:.0%} of a step)"
+                f"{engine['per_body_step_seconds'] * 1e6:.2f} µs per body "
+                f"(fixed part {engine['overhead_fraction']:.0%} of a step)"
                 if "fixed_step_seconds" in engine
                 else ""
             )
@@ -212,7 +214,7 @@ def write_plots(result: SweepResult, out: Path) -> dict[str, str]:
         if log:
             values = values[values > 0]
         if values.size:
-            bins = np.geomspace(positive.min(), positive.max(), 40) if log else 40
+            bins: Any = np.geomspace(positive.min(), positive.max(), 40) if log else 40
             ax.hist(values, bins=bins, histtype="step", label=label)
     if log:
         ax.set_xscale("log")
@@ -235,7 +237,7 @@ def write_plots(result: SweepResult, out: Path) -> dict[str, str]:
         cols = min(4, len(inputs))
         rows = math.ceil(len(inputs) / cols)
         fig, axes = plt.subplots(rows, cols, figsize=(3.2 * cols, 2.8 * rows), dpi=100, squeeze=False)
-        for ax, name in zip(axes.flat, inputs):
+        for ax, name in zip(axes.flat, inputs, strict=False):
             x = np.asarray(columns[name], dtype=float)
             ax.scatter(x, metric, s=4, alpha=0.5)
             ax.set_xlabel(name)
@@ -263,7 +265,7 @@ def _stability_map(result: SweepResult, path: Path, plt: Any) -> Path:
     stable = np.array([v == "stable" for v in columns["verdict"]])
     metric = np.asarray(columns[spec.metric], dtype=float)
     grid_point = np.asarray(columns["grid_point"])
-    for ax, method in zip(axes[0], spec.methods):
+    for ax, method in zip(axes[0], spec.methods, strict=True):
         share = np.full((len(spins), len(spec.dts)), np.nan)
         for g, (m, dt, spin) in enumerate(spec.grid):
             if m != method:

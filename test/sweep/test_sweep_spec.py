@@ -4,8 +4,8 @@ from pathlib import Path
 
 import pytest
 
-from rigid_rot_sim.analysis.sweep_spec import SweepSpecError, load_sweep_spec, parse_sweep_text
 from rigid_rot_sim.cli import main
+from rigid_rot_sim.sweep.spec import SweepSpecError, load_sweep_spec, parse_sweep_text
 
 SWEEPS = Path(__file__).resolve().parents[2] / "config" / "sweeps"
 

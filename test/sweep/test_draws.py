@@ -3,7 +3,7 @@
 import numpy as np
 import pytest
 
-from rigid_rot_sim.analysis.streams import StreamDraws, pcg64_states
+from rigid_rot_sim.sweep.draws import StreamDraws, pcg64_states
 
 SAMPLES = np.array([0, 1, 2, 7, 255, 65536, 2**31 - 1, 2**32 - 1, 2**32, 2**32 + 5, 2**40 + 3, 123456789])
 

@@ -6,7 +6,7 @@ computed here for a whole chunk of samples in one compiled loop (~50 ns a sample
 SeedSequence hash (its ``mix_entropy`` and ``generate_state``, 32-bit words in uint64) and
 PCG64's seeding (``pcg_setseq_128_srandom_r``, 128-bit arithmetic on two uint64 words).
 :class:`StreamDraws` loads each state into one generator in turn, so every draw is numpy's
-own, bit for bit (``test/analysis/test_streams.py`` compares the states and draws with numpy's).
+own, bit for bit (``test/sweep/test_draws.py`` compares the states and draws with numpy's).
 
 A sweep's draws are a few numbers per sample and stream. Drawn from Python, each sample
 costs ~2 µs of calls, as much as the physics of a short run; :meth:`StreamDraws.normals`

@@ -1,6 +1,6 @@
 """A sweep's nominal body is the run engine's body: same steps, same torque on each, same bits.
 
-With no dispersions, the sweep's nominal run (:func:`rigid_rot_sim.analysis.sweep.run_nominal`,
+With no dispersions, the sweep's nominal run (:func:`rigid_rot_sim.sweep.chunks.run_nominal`,
 the batch core) and :class:`rigid_rot_sim.run.simulator.Simulator` (the node's engine) step
 the same scene with rk4, whose batch kernel is the single-body kernel (core/batch.py): so
 they must agree bit for bit at every checkpoint, which holds only if they switch each
@@ -17,11 +17,12 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from rigid_rot_sim.analysis.sweep import run_nominal
-from rigid_rot_sim.analysis.sweep_spec import SweepSpec, parse_sweep_text
-from rigid_rot_sim.core.simulate import step_grid
+from rigid_rot_sim.core.steps import step_at_or_after, step_grid
 from rigid_rot_sim.run.simulator import Simulator
+from rigid_rot_sim.run.timeline import stretches
 from rigid_rot_sim.scene.scene import load_scene
+from rigid_rot_sim.sweep.chunks import run_nominal
+from rigid_rot_sim.sweep.spec import SweepSpec, parse_sweep_text
 
 SCENES = Path(__file__).resolve().parents[2] / "config" / "scenes"
 SHIPPED_WITH_SCHEDULE = sorted(path.name for path in SCENES.glob("*.yaml") if load_scene(str(path)).schedules)
@@ -91,3 +92,39 @@ def test_a_switch_at_0_9_s_happens_on_the_engines_step(tmp_path, frame, dt):
     path = tmp_path / f"switch_{frame}.yaml"
     path.write_text(SWITCHING.format(frame=frame))
     _check_equal_at_checkpoints(_spec(str(path), dt, None), dt)
+
+
+def _engine_changes(scene, dt: float, end: int) -> list[tuple[int, tuple[float, ...], tuple[float, ...]]]:
+    """(step, body sum, world sum) at each step where the engine's command schedule changes the torque."""
+    sim = Simulator(scene, method="rk4", dt=dt)
+    changes = []
+    for k in range(1, end + 1):
+        sim.advance_to(k)  # the sums now are those that acted over step k - 1
+        world = sim.commands.world_sum or (0.0, 0.0, 0.0)
+        if not changes or changes[-1][1:] != (sim.commands.body_sum, world):
+            changes.append((k - 1, sim.commands.body_sum, world))
+    return changes
+
+
+def _timeline_changes(scene, dt: float, end: int) -> list[tuple[int, tuple[float, ...], tuple[float, ...]]]:
+    changes = []
+    for stretch in stretches(scene.schedules, dt, end):
+        world = stretch.world or (0.0, 0.0, 0.0)
+        if not changes or changes[-1][1:] != (stretch.body, world):
+            changes.append((stretch.start, stretch.body, world))
+    return changes
+
+
+@pytest.mark.parametrize("dt", DTS)
+@pytest.mark.parametrize("scene", [*SHIPPED_WITH_SCHEDULE, "switch_body", "switch_world"])
+def test_the_timeline_changes_the_torque_where_the_engines_command_schedule_does(tmp_path, scene, dt):
+    """run/timeline.stretches, which the sweep runs on, against the steps the node's CommandSchedule switches on."""
+    if scene.startswith("switch_"):
+        path = tmp_path / f"{scene}.yaml"
+        path.write_text(SWITCHING.format(frame=scene.removeprefix("switch_")))
+        loaded = load_scene(str(path))
+    else:
+        loaded = load_scene(str(SCENES / scene))
+    end = step_at_or_after(loaded.duration, dt)
+    assert len(_engine_changes(loaded, dt, end)) > 1  # the scene does switch
+    assert _timeline_changes(loaded, dt, end) == _engine_changes(loaded, dt, end)

@@ -15,10 +15,12 @@ import numpy as np
 import pyarrow.parquet as pq
 import pytest
 
-from rigid_rot_sim.analysis.cluster import run_local, run_sweep
-from rigid_rot_sim.analysis.sweep import COLUMNS
-from rigid_rot_sim.analysis.sweep_spec import load_sweep_spec
 from rigid_rot_sim.cli import main
+from rigid_rot_sim.sweep.chunks import COLUMNS
+from rigid_rot_sim.sweep.runner import run_local, run_sweep
+from rigid_rot_sim.sweep.spec import load_sweep_spec
+
+pytestmark = pytest.mark.slow
 
 DASK = str(Path(sys.executable).parent / "dask")
 START_TIMEOUT = 120.0
@@ -250,7 +252,7 @@ def test_tasks_run_their_kernels_on_one_thread(dask_cluster):
     import numba
     from distributed import Client
 
-    from rigid_rot_sim.analysis.cluster import map_tasks
+    from rigid_rot_sim.cluster import map_tasks
 
     with Client(dask_cluster.address, timeout=START_TIMEOUT) as client:
 
@@ -284,7 +286,7 @@ def test_local_workers_keep_glibcs_malloc_and_skip_the_profiler(monkeypatch):
     """Dask's nanny would set MALLOC_TRIM_THRESHOLD_ (page faults on every chunk-sized array) and sample stacks;
     its monitors would wake the scheduler's and the workers' event loops 5x as often; results would come
     through the scheduler."""
-    from rigid_rot_sim.analysis.cluster import open_client
+    from rigid_rot_sim.cluster import open_client
 
     # a plain LocalCluster started earlier in this process (test_cluster_suites) leaves the variable in
     # os.environ, where workers would inherit it (a variable the user exports is theirs to keep)

@@ -7,9 +7,9 @@ from pathlib import Path
 import pytest
 from jsonschema import Draft202012Validator
 
-from rigid_rot_sim.analysis.sweep_schema import SWEEP_SCHEMA
-from rigid_rot_sim.analysis.sweep_spec import SweepSpecError, parse_sweep_text
 from rigid_rot_sim.scene import schema
+from rigid_rot_sim.sweep.schema import SWEEP_SCHEMA
+from rigid_rot_sim.sweep.spec import SweepSpecError, parse_sweep_text
 
 ROOT = Path(__file__).resolve().parents[2]
 EXPORTED = ROOT / "config" / "schema" / "sweep.schema.json"
@@ -17,7 +17,7 @@ GOOD = "scene: free_tumble\nseed: 1\nsamples: 4\nduration: 1.0\ngrid: {method: [
 
 
 def test_the_committed_json_is_the_schema():
-    # regenerate with: python -m rigid_rot_sim.analysis.sweep_schema > config/schema/sweep.schema.json
+    # regenerate with: python -m rigid_rot_sim.sweep.schema > config/schema/sweep.schema.json
     assert EXPORTED.read_text() == schema.dump(SWEEP_SCHEMA)
 
 

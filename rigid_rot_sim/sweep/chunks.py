@@ -23,11 +23,12 @@ Time: a schedule segment acts from the step its scene says
 (:meth:`~rigid_rot_sim.scene.scene.TorqueSchedule.change_steps`, the run engine's rule),
 and torques and states change frames with the engine's quaternion formulas
 (:mod:`rigid_rot_sim.core.quaternion`), so an undispersed body is the node's body, bit for
-bit (``test/analysis/test_sweep_matches_engine.py``).
+bit (``test/sweep/test_sweep_matches_engine.py``).
 """
 
 from __future__ import annotations
 
+import bisect
 import math
 import time
 from dataclasses import dataclass, fields
@@ -36,15 +37,16 @@ from typing import Any
 import numpy as np
 from scipy.spatial.transform import Rotation
 
-from rigid_rot_sim.analysis.checkpoints import CheckpointTrack, row_norms
-from rigid_rot_sim.analysis.streams import StreamDraws
-from rigid_rot_sim.analysis.sweep_spec import NORMAL_CUT_SIGMAS, Dispersion, SweepSpec
+from rigid_rot_sim.core import frames
 from rigid_rot_sim.core import quaternion as quat
 from rigid_rot_sim.core.batch import advance_batch, advance_batch_recording
 from rigid_rot_sim.core.dynamics import RigidBody
 from rigid_rot_sim.core.integrators.base import NonFiniteStateError
-from rigid_rot_sim.core.simulate import step_grid
-from rigid_rot_sim.core.steps import step_at_or_after, step_at_or_before
+from rigid_rot_sim.core.steps import step_at_or_after, step_at_or_before, step_grid
+from rigid_rot_sim.run.timeline import Stretch, stretches, world_in_body
+from rigid_rot_sim.sweep.checkpoints import CheckpointTrack, row_norms
+from rigid_rot_sim.sweep.draws import StreamDraws
+from rigid_rot_sim.sweep.spec import NORMAL_CUT_SIGMAS, Dispersion, SweepSpec
 
 __all__ = [
     "Chunk",
@@ -145,7 +147,7 @@ def _sample_draws(spec: SweepSpec, samples: np.ndarray) -> dict[str, np.ndarray]
     """:func:`sample_inputs` of many samples, stacked: (N, 3) per key, noise (N, intervals, 3).
 
     Stream ``k`` of sample ``s`` is ``PCG64(SeedSequence(seed, spawn_key=(s, k)))``, built for
-    all the samples at once (:mod:`~rigid_rot_sim.analysis.streams`); only the dispersed
+    all the samples at once (:mod:`~rigid_rot_sim.sweep.draws`); only the dispersed
     streams are built, and each one's draws are its own either way.
     """
     d = spec.dispersions
@@ -280,14 +282,15 @@ def _advance_isolated(
     return np.concatenate(qs), np.concatenate(omegas), errors
 
 
-def _boundaries(spec: SweepSpec, dt: float, n_full: int) -> tuple[np.ndarray, np.ndarray]:
+def _boundaries(
+    spec: SweepSpec, dt: float, n_full: int, timeline: tuple[Stretch, ...]
+) -> tuple[np.ndarray, np.ndarray]:
     """Step indices where the torque may change or a checkpoint is taken, and the checkpoint steps."""
     checkpoints = np.unique(np.linspace(0, n_full, spec.checkpoints + 1).round().astype(np.int64))
-    marks = {0, n_full, *checkpoints.tolist()}
-    for schedule in spec.scene.schedules:
-        if schedule.frame == "world" and any(any(s.torque) for s in schedule.segments):
-            marks.update(range(n_full + 1))  # re-expressed in the body frame at every step
-        marks.update(schedule.change_steps(dt))
+    marks = {0, n_full, *checkpoints.tolist(), *(stretch.start for stretch in timeline)}
+    worlds = [schedule for schedule in spec.scene.schedules if schedule.frame == "world"]
+    if any(any(segment.torque) for schedule in worlds for segment in schedule.segments):
+        marks.update(range(n_full + 1))  # re-expressed in the body frame at every step
     if spec.dispersions.torque_noise_sigma is not None:
         interval = spec.dispersions.torque_noise_interval
         marks.update(step_at_or_after(k * interval, dt) for k in range(math.ceil(spec.duration / interval)))
@@ -304,24 +307,25 @@ def _rows(helper: Any, *arrays: np.ndarray) -> np.ndarray:
     return np.stack(helper(*(array.T for array in arrays)), axis=-1)
 
 
-def _body_torque(spec: SweepSpec, bodies: _Bodies, k: int, dt: float, q_body: np.ndarray | None) -> np.ndarray:
-    """(N, 3) N*m in the body frame acting over step k (of ``dt`` s): schedules (scaled) plus noise.
+def _body_torque(
+    spec: SweepSpec,
+    bodies: _Bodies,
+    stretch: Stretch,
+    k: int,
+    dt: float,
+    attitude: tuple[np.ndarray, np.ndarray] | None,
+) -> np.ndarray:
+    """(N, 3) N*m in the body frame acting over step k (of ``dt`` s, in ``stretch``): schedules (scaled) plus noise.
 
-    ``q_body`` (N, 4) is needed for world-frame schedules only. As in the run engine, the
-    body-frame schedules are summed, then the world-frame ones re-expressed and added.
+    ``attitude`` (q principal -> world (N, 4), principal_from_body (N, 4)) is needed for
+    world-frame schedules only: as in the run engine, the world-frame sum is re-expressed
+    (:func:`rigid_rot_sim.run.timeline.world_in_body`) and added to the body-frame one.
     """
     n = bodies.moments.shape[0]
-    torque = np.zeros((n, 3))
-    world = np.zeros(3)
-    for schedule in spec.scene.schedules:
-        value = np.asarray(schedule.torque_at_step(k, dt), dtype=float)
-        if schedule.frame == "world":
-            world += value
-        else:
-            torque += value
-    if world.any():
-        assert q_body is not None
-        torque += _rows(quat.rotate_inverse, q_body, np.broadcast_to(world, (n, 3)))
+    torque = np.zeros((n, 3)) + np.asarray(stretch.body, dtype=float)
+    if stretch.world is not None and any(stretch.world):
+        assert attitude is not None
+        torque += _rows(world_in_body, *attitude, np.broadcast_to(np.asarray(stretch.world, dtype=float), (n, 3)))
     torque *= bodies.torque_scale
     if bodies.noise.shape[1]:
         index = min(step_at_or_before(k * dt, spec.dispersions.torque_noise_interval), bodies.noise.shape[1] - 1)
@@ -351,10 +355,11 @@ def _simulate(spec: SweepSpec, bodies: _Bodies, method: str, dt: float) -> _Outc
     """Run the bodies over the spec's duration; failed bodies end as NaN with their error."""
     n = bodies.moments.shape[0]
     n_full, last = step_grid(spec.duration, dt)
-    marks, checkpoints = _boundaries(spec, dt, n_full)
+    timeline = stretches(spec.scene.schedules, dt, n_full + (last > 0.0))
+    marks, checkpoints = _boundaries(spec, dt, n_full, timeline)
     checkpoint_set = set(checkpoints.tolist())
     bp = bodies.body_from_principal
-    principal_from_body = _rows(quat.conjugate, bp.as_quat(canonical=False))
+    principal_from_body = _rows(frames.principal_from_body, bp.as_quat(canonical=False))
     moments = bodies.moments
     q = quat.compose_rotations(Rotation.from_quat(bodies.q0_body), bp).as_quat()  # principal -> world
     omega = bp.apply(bodies.omega0_body, inverse=True)
@@ -375,7 +380,7 @@ def _simulate(spec: SweepSpec, bodies: _Bodies, method: str, dt: float) -> _Outc
     track.observe(0.0, omega)
     last_torque: tuple[Any, np.ndarray, np.ndarray] = (None, np.empty(0), np.empty(0))
     world_frame = any(schedule.frame == "world" for schedule in spec.scene.schedules)
-    segments = [(int(a), int(b)) for a, b in zip(marks[:-1], marks[1:]) if b > a]
+    segments = [(int(a), int(b)) for a, b in zip(marks[:-1], marks[1:], strict=False) if b > a]
     if last > 0.0:
         segments.append((n_full, n_full + 1))  # the last, shorter step landing on the duration
     k = 0
@@ -388,15 +393,16 @@ def _simulate(spec: SweepSpec, bodies: _Bodies, method: str, dt: float) -> _Outc
         step = last if partial else dt
         everyone = len(errors) == 0  # no body has failed yet: no subsets to copy
         live = slice(None) if everyone else alive
-        q_body = _rows(quat.multiply, q[live], principal_from_body[live]) if world_frame else None
-        torque_body = _body_torque(spec, bodies if everyone else _subset(bodies, alive), a, dt, q_body)
+        attitude = (q[live], principal_from_body[live]) if world_frame else None
+        live_bodies = bodies if everyone else _subset(bodies, alive)
+        torque_body = _body_torque(spec, live_bodies, _stretch_at(timeline, a), a, dt, attitude)
         # most segments of a run repeat the last one's torques (a torque-free run: all of them)
         key = (step, torque_body.tobytes()) if everyone else None
         if key is None or key != last_torque[0]:
             last_torque = (
                 key,
                 row_norms(torque_body) * step,
-                _rows(quat.rotate, principal_from_body[live], torque_body),
+                _rows(frames.vector_to_principal, principal_from_body[live], torque_body),
             )
         _, impulse_rate, torque_p = last_torque
         # the following segments under the same torques join this one in a call that records the
@@ -404,7 +410,7 @@ def _simulate(spec: SweepSpec, bodies: _Bodies, method: str, dt: float) -> _Outc
         # do not depend on the state unless a schedule is in the world frame
         joined = [(a, b)]
         if key is not None and not world_frame and not partial and k >= cut_until:  # key: no body has failed
-            joined = _same_torques(spec, bodies, segments[k : k + max_joined], dt, n_full, key)
+            joined = _same_torques(spec, bodies, timeline, segments[k : k + max_joined], dt, n_full, key)
         if len(joined) > 1:
             try:
                 q, omega, omega_at = advance_batch_recording(
@@ -413,7 +419,7 @@ def _simulate(spec: SweepSpec, bodies: _Bodies, method: str, dt: float) -> _Outc
             except (NonFiniteStateError, ArithmeticError):
                 cut_until = k + len(joined)  # run them one at a time: the failing bodies fail alone
                 continue
-            for (a_j, b_j), omega_j in zip(joined, omega_at):
+            for (a_j, b_j), omega_j in zip(joined, omega_at, strict=True):
                 impulse += impulse_rate * (b_j - a_j)
                 if b_j in checkpoint_set:
                     track.observe(time_of(b_j), omega_j)
@@ -442,9 +448,10 @@ def _simulate(spec: SweepSpec, bodies: _Bodies, method: str, dt: float) -> _Outc
     with np.errstate(divide="ignore", invalid="ignore"):
         energy_drift = np.abs(energy - energy0) / np.where(energy0 > 0, energy0, 1.0)
         momentum_drift = np.abs(momentum - momentum0) / np.where(momentum0 > 0, momentum0, 1.0)
-    q_body = _rows(quat.multiply, np.where(alive[:, None], q, [0.0, 0.0, 0.0, 1.0]), principal_from_body)
+    q_alive = np.where(alive[:, None], q, [0.0, 0.0, 0.0, 1.0])
+    q_body = _rows(frames.attitude_from_principal, q_alive, principal_from_body)
     q_body[~alive] = np.nan
-    omega_body = _rows(quat.rotate, bp.as_quat(canonical=False), np.where(alive[:, None], omega, 0.0))
+    omega_body = _rows(frames.vector_from_principal, bp.as_quat(canonical=False), np.where(alive[:, None], omega, 0.0))
     omega_body[~alive] = np.nan
     omega_bound = (momentum0 + impulse) / moments.min(axis=1)
     return _Outcome(
@@ -461,16 +468,27 @@ def _simulate(spec: SweepSpec, bodies: _Bodies, method: str, dt: float) -> _Outc
 
 
 def _same_torques(
-    spec: SweepSpec, bodies: _Bodies, segments: list[tuple[int, int]], dt: float, n_full: int, key: tuple[float, bytes]
+    spec: SweepSpec,
+    bodies: _Bodies,
+    timeline: tuple[Stretch, ...],
+    segments: list[tuple[int, int]],
+    dt: float,
+    n_full: int,
+    key: tuple[float, bytes],
 ) -> list[tuple[int, int]]:
     """The first of ``segments`` and those right after it whose torques are the first's (``key``: its step and
     torques' bytes), full steps only; the torques must not depend on the state (no world-frame schedule)."""
     joined = segments[:1]
     for a, b in segments[1:]:
-        if a == n_full or (dt, _body_torque(spec, bodies, a, dt, None).tobytes()) != key:
+        if a == n_full or (dt, _body_torque(spec, bodies, _stretch_at(timeline, a), a, dt, None).tobytes()) != key:
             break
         joined.append((a, b))
     return joined
+
+
+def _stretch_at(timeline: tuple[Stretch, ...], k: int) -> Stretch:
+    """The stretch of ``timeline`` holding step ``k``."""
+    return timeline[bisect.bisect_right([stretch.start for stretch in timeline], k) - 1]
 
 
 def _subset(bodies: _Bodies, mask: np.ndarray) -> _Bodies:

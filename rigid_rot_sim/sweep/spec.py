@@ -1,6 +1,6 @@
 """Sweep specs: a base scene plus dispersions and grids, validated into frozen dataclasses.
 
-The format is one JSON Schema, :data:`rigid_rot_sim.analysis.sweep_schema.SWEEP_SCHEMA`
+The format is one JSON Schema, :data:`rigid_rot_sim.sweep.schema.SWEEP_SCHEMA`
 (exported as ``config/schema/sweep.schema.json``). :func:`load_sweep_spec` validates a
 spec against it, then checks what a schema cannot express: the base scene (found, valid,
 torque-free or scheduled), batch method, event and metric names, and dispersions that
@@ -50,13 +50,13 @@ from typing import Any
 
 import numpy as np
 
-from rigid_rot_sim.analysis.sweep_schema import DISPERSION_KINDS, SWEEP_SCHEMA
 from rigid_rot_sim.core.batch import BATCH_METHODS
 from rigid_rot_sim.core.validation import TRIANGLE_RTOL
 from rigid_rot_sim.scene.bounded_yaml import load_input, read_input
 from rigid_rot_sim.scene.scene import Scene, SceneError, load_scene
 from rigid_rot_sim.scene.schema import validated
 from rigid_rot_sim.share import resolve_scene
+from rigid_rot_sim.sweep.schema import DISPERSION_KINDS, SWEEP_SCHEMA
 
 __all__ = [
     "SweepSpecError",
@@ -290,7 +290,8 @@ def _dispersions(spec: Mapping[str, Any], moments: np.ndarray) -> Dispersions:
         worst = values["torque_scale"].extreme()
         if worst.max() >= 1.0:
             raise ValueError(
-                f"dispersions.torque_scale.relative: {worst.max():g} at the extremes can reverse the torque (must stay < 1)"
+                f"dispersions.torque_scale.relative: {worst.max():g} at the extremes "
+                "can reverse the torque (must stay < 1)"
             )
     noise = spec.get("torque_noise")
     if noise is not None:
@@ -301,14 +302,16 @@ def _dispersions(spec: Mapping[str, Any], moments: np.ndarray) -> Dispersions:
 
 def _per_axis(value: Any) -> tuple[float, float, float]:
     sizes = _floats(value)
-    return sizes if len(sizes) == 3 else (sizes[0],) * 3  # type: ignore[return-value]
+    x, y, z = sizes if len(sizes) == 3 else (sizes[0],) * 3
+    return (x, y, z)
 
 
 def _check_moment_dispersion(moments: np.ndarray, dispersion: Dispersion) -> None:
     """Every moment stays > 0 and the triangle inequality holds at the dispersion's extremes."""
     key = "dispersions.principal_moments.relative"
     extreme = dispersion.extreme()
-    how = f"{dispersion.distribution}{', cut at %g sigma' % NORMAL_CUT_SIGMAS if dispersion.distribution == 'normal' else ''}"
+    cut = f", cut at {NORMAL_CUT_SIGMAS:g} sigma" if dispersion.distribution == "normal" else ""
+    how = f"{dispersion.distribution}{cut}"
     low, high = moments * (1.0 - extreme), moments * (1.0 + extreme)
     for i in range(3):
         if not low[i] > 0.0:
@@ -319,6 +322,7 @@ def _check_moment_dispersion(moments: np.ndarray, dispersion: Dispersion) -> Non
         i, j = (k + 1) % 3, (k + 2) % 3
         if low[i] + low[j] < high[k] - TRIANGLE_RTOL * float(high.sum()):
             raise ValueError(
-                f"{key}: {list(dispersion.size)} ({how}) can break the triangle inequality I{i + 1} + I{j + 1} >= I{k + 1} "
+                f"{key}: {list(dispersion.size)} ({how}) can break the triangle inequality "
+                f"I{i + 1} + I{j + 1} >= I{k + 1} "
                 f"of a rigid body ({low[i]:.6g} + {low[j]:.6g} < {high[k]:.6g} kg*m^2 at the extremes)"
             )

@@ -6,10 +6,11 @@ import numpy as np
 import pyarrow.parquet as pq
 import pytest
 
-from rigid_rot_sim.analysis.cluster import SweepResult, run_local, scheduler_address
-from rigid_rot_sim.analysis.sweep import COLUMNS, Chunk, _sample_draws, plan_chunks, run_chunk, sample_inputs
-from rigid_rot_sim.analysis.sweep_output import METADATA_KEY, write_outputs
-from rigid_rot_sim.analysis.sweep_spec import parse_sweep_text
+from rigid_rot_sim.cluster import scheduler_address
+from rigid_rot_sim.sweep.chunks import COLUMNS, Chunk, _sample_draws, plan_chunks, run_chunk, sample_inputs
+from rigid_rot_sim.sweep.output import METADATA_KEY, write_outputs
+from rigid_rot_sim.sweep.runner import SweepResult, run_local
+from rigid_rot_sim.sweep.spec import parse_sweep_text
 
 # rk4 at dt = 0.5 s on a 30 rad/s spin blows up; the other grid points do not
 MIXED = """
@@ -69,8 +70,8 @@ def test_rows_do_not_depend_on_chunking(mixed):
 def test_rows_do_not_depend_on_how_a_run_is_cut_into_kernel_calls(text, monkeypatch):
     """Stretches under unchanged torques run as one recording call, at most _RECORDED_BYTES of rates per call,
     and as one call per segment after a failure: every way gives the same bits, failed runs and errors included."""
-    from rigid_rot_sim.analysis import sweep
     from rigid_rot_sim.core.integrators.base import NonFiniteStateError
+    from rigid_rot_sim.sweep import chunks as sweep
 
     spec = parse_sweep_text(text, "cuts.yaml")
     joined = run_local(spec, chunk_size=7)
@@ -106,7 +107,7 @@ def test_implicit_midpoint_conserves_what_the_physics_conserves(mixed):
     midpoint = np.array([m == "implicit_midpoint" for m in rows["method"]])
     # torque-free: T and |L| conserved to round-off by the midpoint rule at any step
     assert np.all(rows["energy_drift"][midpoint] < 1e-12) and np.all(rows["momentum_drift"][midpoint] < 1e-12)
-    assert all(v == "stable" for v, m in zip(rows["verdict"], midpoint) if m)
+    assert all(v == "stable" for v, m in zip(rows["verdict"], midpoint, strict=True) if m)
     # near a major-axis spin the nutation angle stays small and bounded; no intermediate flip at 2 rad/s in 4 s
     assert np.all(rows["nutation_range"][midpoint] < 0.2)
 
@@ -190,7 +191,8 @@ metric: first_flip
         "flip.yaml",
     )
     rows = run_local(spec)
-    flip = {(float(dt), float(spin)): t for dt, spin, t in zip(rows["dt"], rows["spin_rate"], rows["first_flip"])}
+    triples = zip(rows["dt"], rows["spin_rate"], rows["first_flip"], strict=True)
+    flip = {(float(dt), float(spin)): t for dt, spin, t in triples}
     slow, fast = flip[(0.008, 2.0)], flip[(0.002, 8.0)]
     assert 1.0 < fast < slow < 7.0
     assert slow / fast == pytest.approx(4.0, rel=1e-9)

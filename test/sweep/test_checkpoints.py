@@ -2,7 +2,7 @@
 
 import numpy as np
 
-from rigid_rot_sim.analysis.checkpoints import CheckpointTrack, row_norms
+from rigid_rot_sim.sweep.checkpoints import CheckpointTrack, row_norms
 
 
 def _numpy_trackers(moments, omegas, times):

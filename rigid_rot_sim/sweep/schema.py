@@ -2,11 +2,11 @@
 
 :data:`SWEEP_SCHEMA` says which keys a sweep spec may hold, their types, required keys,
 choices and bounds, with a description of each for editors. It is exported as
-``config/schema/sweep.schema.json`` (the README shows how editors use it)::
+``config/schema/sweep.schema.json`` (docs/scenes.md shows how editors use it)::
 
-    python -m rigid_rot_sim.analysis.sweep_schema > config/schema/sweep.schema.json
+    python -m rigid_rot_sim.sweep.schema > config/schema/sweep.schema.json
 
-and :mod:`rigid_rot_sim.analysis.sweep_spec` validates every spec against it before the
+and :mod:`rigid_rot_sim.sweep.spec` validates every spec against it before the
 checks a schema cannot express (the base scene, batch method, event and metric names, a
 moment dispersion that stays physical).
 """

@@ -1,11 +1,12 @@
-"""The cluster that runs sweeps, the work-precision report and the stability suite: dask.distributed.
+"""Dask clusters for independent tasks: the sweep, the work-precision report and the stability suite.
 
-No engine of our own: work is cut into tasks submitted to a ``distributed.Client``, on
-a local cluster by default or an existing one. For a sweep every chunk is one task
-(:func:`rigid_rot_sim.analysis.sweep.run_chunk`, a pure function of the spec and the
-chunk); the scheduler reschedules the tasks of a worker that dies, and since a chunk's
-rows depend only on the spec and the chunk, a re-run gives the same bits.
-:func:`map_tasks` runs the report's and the stability suite's independent tasks.
+Generic (nothing here knows a sweep or a report), on the ground floor so that
+:mod:`rigid_rot_sim.analysis` and :mod:`rigid_rot_sim.sweep` both use it and neither loads
+the other; dask and numba are imported inside the functions that need them. No engine of
+our own: work is cut into tasks submitted to a ``distributed.Client``, on a local cluster by
+default or an existing one, and :func:`map_tasks` gathers their results in order; the
+scheduler reschedules the tasks of a worker that dies. (A sweep's tasks are its chunks:
+:mod:`rigid_rot_sim.sweep.runner`.)
 
 Where the cluster comes from:
 
@@ -21,28 +22,17 @@ from __future__ import annotations
 
 import contextlib
 import importlib.util
-import itertools
 import logging
 import os
 import signal
 import threading
-import time
 import uuid
 from collections.abc import Callable, Iterator
-from dataclasses import dataclass, field
 from typing import Any
 
-import numpy as np
-from tqdm import tqdm
-
-from rigid_rot_sim.analysis.sweep import COLUMNS, Chunk, choose_chunk_size, plan_chunks, run_chunk, run_nominal
-from rigid_rot_sim.analysis.sweep_spec import SweepSpec
-
 __all__ = [
-    "SweepResult",
     "require",
     "open_client",
-    "run_sweep",
     "map_tasks",
     "wants_cluster",
     "scheduler_address",
@@ -53,16 +43,6 @@ __all__ = [
 #: How long to wait for a scheduler to answer, and for ``workers`` workers to join, s.
 CONNECT_TIMEOUT = 30.0
 WORKERS_TIMEOUT = 120.0
-
-
-@dataclass
-class SweepResult:
-    """The rows of a sweep (columns in :data:`COLUMNS` order, sorted by run) and how it ran."""
-
-    spec: SweepSpec
-    columns: dict[str, Any]
-    quick: bool
-    engine: dict[str, Any] = field(default_factory=dict)
 
 
 def require(*modules: str) -> None:
@@ -271,89 +251,3 @@ def _kill_worker_processes(cluster: Any) -> None:
         if pid:
             with contextlib.suppress(OSError):
                 os.kill(pid, signal.SIGKILL)
-
-
-def _assemble(parts: list[dict[str, Any]]) -> dict[str, Any]:
-    columns: dict[str, Any] = {}
-    for name, kind in COLUMNS.items():
-        if kind == "string":
-            columns[name] = list(itertools.chain.from_iterable(part[name] for part in parts))
-        else:
-            columns[name] = np.concatenate([np.asarray(part[name]) for part in parts])
-    if np.all(np.diff(columns["run"]) > 0):  # the chunks came in run order (the usual case): nothing to move
-        return columns
-    order = np.argsort(columns["run"], kind="stable")
-    return {
-        name: (values[order] if isinstance(values, np.ndarray) else [values[i] for i in order])
-        for name, values in columns.items()
-    }
-
-
-def run_sweep(
-    spec: SweepSpec,
-    *,
-    scheduler: str | None = None,
-    workers: int | None = None,
-    chunk_size: int | None = None,
-    quick: bool = False,
-    progress: bool = True,
-    on_chunk_done: Callable[[int, int], None] | None = None,
-    client: Any = None,
-) -> SweepResult:
-    """Run every chunk of ``spec`` on Dask and gather the rows.
-
-    ``chunk_size`` (bodies per task) defaults to :func:`choose_chunk_size` from a cost
-    measured here; the rows do not depend on it. ``on_chunk_done(done, total)`` is called
-    in this thread as chunks finish. ``client``: an open ``distributed.Client`` to use
-    instead of opening one from ``scheduler`` / ``workers``.
-    """
-    start = time.perf_counter()
-    local = client is None and scheduler_address(scheduler) is None
-    with contextlib.ExitStack() as stack:
-        if client is None:
-            client = stack.enter_context(open_client(scheduler, workers))
-        n_workers = len(client.scheduler_info(n_workers=-1)["workers"])
-        figures: dict[str, float] = {}
-        if chunk_size is None:
-            chunk_size, figures = choose_chunk_size(spec, n_workers)
-        chunks = plan_chunks(spec, chunk_size)
-        nominals = {}
-        if spec.nominal_method is not None:
-            # one nominal run per spin rate, a dependency of the chunks of that spin rate
-            token = uuid.uuid4().hex[:12]
-            for spin in dict.fromkeys(s for _, _, s in spec.grid):
-                nominals[spin] = client.submit(
-                    run_nominal, spec, spin, key=f"rigid-rot-nominal-{token}-{spin}", pure=False
-                )
-        calls = [(run_chunk, (spec, chunk, nominals.get(spec.grid[chunk.grid_point][2]))) for chunk in chunks]
-        try:
-            with tqdm(total=spec.n_runs, desc=f"sweep {spec.name}", unit="run", disable=not progress) as bar:
-                finished = 0
-
-                def chunk_done(index: int, _: Any) -> None:
-                    nonlocal finished
-                    finished += 1
-                    bar.update(chunks[index].size)
-                    if on_chunk_done is not None:
-                        on_chunk_done(finished, len(chunks))
-
-                parts = map_tasks(client, calls, on_done=chunk_done)
-        finally:
-            # done, interrupted (Ctrl-C) or failed: leave nothing running on a shared cluster
-            with contextlib.suppress(Exception):
-                client.cancel(list(nominals.values()), force=True)
-        engine = {
-            "scheduler": client.scheduler.address,
-            "local_cluster": local,
-            "workers": n_workers,
-            "chunks": len(chunks),
-            "chunk_size": chunk_size,
-            **figures,
-        }
-    engine["elapsed_seconds"] = time.perf_counter() - start
-    return SweepResult(spec=spec, columns=_assemble(parts), quick=quick, engine=engine)
-
-
-def run_local(spec: SweepSpec, chunks: list[Chunk] | None = None, chunk_size: int = 64) -> dict[str, Any]:
-    """The rows of ``spec`` computed in this process, without Dask (tests, debugging)."""
-    return _assemble([run_chunk(spec, chunk) for chunk in (chunks or plan_chunks(spec, chunk_size))])
