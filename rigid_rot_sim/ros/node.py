@@ -291,6 +291,7 @@ class SceneRun:
         """
         try:
             turns = self.lockstep.turns if self.lockstep is not None else None
+            self._paused_clock_follows()
             if turns is None or not turns.waiting:  # a waiting lockstep turn has nothing to step before its answers
                 self.tick()
             self.intake.drain()
@@ -305,6 +306,18 @@ class SceneRun:
             self.logger.error(f"simulation paused: internal error {exc!r} (reset or set_state to continue)")
             self.sim.fail(f"internal error: {exc!r}")
             return None
+
+    def _paused_clock_follows(self) -> None:
+        """The paused /clock's timer runs only while the run is paused: while it plays, its ticks (on the
+        executor's thread, at up to 50 Hz) would publish nothing and cost a share of a core at every one.
+        Every change of pause is followed by a turn (a service or parameter wakes the loop; a paused loop
+        looks every POLL_WALL), which starts or stops it here."""
+        clock = self.paused_clock
+        if clock is not None and clock.timer.is_canceled() == self.sim.paused:
+            if self.sim.paused:
+                clock.timer.reset()
+            else:
+                clock.timer.cancel()
 
     def tick(self) -> None:
         """Advance the run by one slice (at most ``SLICE_WALL`` of wall time) and publish what is due."""
