@@ -309,15 +309,13 @@ class SceneRun:
 
     def _paused_clock_follows(self) -> None:
         """The paused /clock's timer runs only while the run is paused: while it plays, its ticks (on the
-        executor's thread, at up to 50 Hz) would publish nothing and cost a share of a core at every one.
-        Every change of pause is followed by a turn (a service or parameter wakes the loop; a paused loop
-        looks every POLL_WALL), which starts or stops it here."""
+        executor's thread, at up to 50 Hz) would publish nothing and cost a share of a core at every one. Its
+        first tick while playing cancels it (:meth:`.paused_clock.PausedClock.tick`, on the executor's thread);
+        every change of pause is followed by a turn (a service or parameter wakes the loop; a paused loop
+        looks every POLL_WALL), which re-arms it here."""
         clock = self.paused_clock
-        if clock is not None and clock.timer.is_canceled() == self.sim.paused:
-            if self.sim.paused:
-                clock.timer.reset()
-            else:
-                clock.timer.cancel()
+        if clock is not None and self.sim.paused and clock.timer.is_canceled():
+            clock.timer.reset()
 
     def tick(self) -> None:
         """Advance the run by one slice (at most ``SLICE_WALL`` of wall time) and publish what is due."""

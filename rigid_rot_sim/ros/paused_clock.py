@@ -45,6 +45,11 @@ class PausedClock:
     def tick(self) -> None:
         if self.sim.paused:
             self.publisher.publish(conversions.clock_message(self.sim.t))
+        else:
+            # playing: no tick until the run is paused again (the run loop re-arms it then:
+            # SceneRun._paused_clock_follows). Cancelled here, on the executor's thread, never from the run
+            # loop's: rclpy raises when an executor calls a timer cancelled after it found it ready.
+            self.timer.cancel()
 
 
 def start(node: Node, sim: Simulator, publishers: dict[str, Any], rates: dict[str, float]) -> PausedClock | None:
