@@ -18,8 +18,9 @@ in a process of its own, as a user runs it; this process publishes and listens.
    the same node paused (start_paused), and with ``use_sim_time:=true`` (steps per wall second, to
    see it never stalls). Beside it, a bare rclpy process that publishes a RigidBodyState and takes a
    WrenchStamped at 1 kHz each (SingleThreadedExecutor, a 1 ms timer): the floor for this traffic.
-3. **Lockstep turns/s** (node + shipped controller, ``benchmarks/lockstep_turns.py``) against the bare
-   rclpy round trip between two processes, measured around it.
+3. **Lockstep turns/s** (node + shipped controller, ``benchmarks/lockstep_turns.py``: the node's own count of
+   its turns, nothing else on the wire) against the bare rclpy round trip between two processes, measured
+   around it.
 
 Figures on a shared machine are noisy: the load average is printed with each block.
 """

@@ -303,23 +303,40 @@ class SceneRun:
         return self.driver.finished
 
     def turn(self) -> float | None:
-        """One turn of the run loop (:mod:`.run_loop`): step to the step due now, take every command in
-        arrival order (they act from the step due now), and in lockstep step again if one came (the turn it
-        answered goes on at once).
+        """One turn of the run loop (:mod:`.run_loop`): step to the step due now (none while a lockstep turn
+        waits for its answers), take every command in arrival order (they act from the step due now), and in
+        lockstep decide the turn the run stands on (answered: it goes on at once, so a turn costs one round
+        trip).
 
         Returns the wall time (s) until the run needs the next turn (None: only when woken).
         """
         try:
-            self.tick()
-            if self.intake.drain() and self.lockstep is not None:
-                self.tick()  # the answer of a lockstep turn: the run goes on at once
-            if self.lockstep is not None and self.lockstep.turns.waiting:
-                return self.lockstep.turns.next_decision()
+            turns = self.lockstep.turns if self.lockstep is not None else None
+            self._paused_clock_follows()
+            if turns is None or not turns.waiting:  # a waiting lockstep turn has nothing to step before its answers
+                self.tick()
+            self.intake.drain()
+            if turns is not None and turns.waiting:
+                # decide the open turn now, whoever took its answers: answered, the run goes on at once (a turn
+                # costs one round trip); else its resend or timeout, or it waits
+                self.tick()
+                if turns.waiting:
+                    return turns.next_decision()
             return self.driver.next_wait()
         except Exception as exc:  # never out of the loop: the run pauses with the reason, the node serves on
             self.logger.error(f"simulation paused: internal error {exc!r} (reset or set_state to continue)")
             self.sim.fail(f"internal error: {exc!r}")
             return None
+
+    def _paused_clock_follows(self) -> None:
+        """The paused /clock's timer runs only while the run is paused: while it plays, its ticks (on the
+        executor's thread, at up to 50 Hz) would publish nothing and cost a share of a core at every one. Its
+        first tick while playing cancels it (:meth:`.paused_clock.PausedClock.tick`, on the executor's thread);
+        every change of pause is followed by a turn (a service or parameter wakes the loop; a paused loop
+        looks every POLL_WALL), which re-arms it here."""
+        clock = self.paused_clock
+        if clock is not None and self.sim.paused and clock.timer.is_canceled():
+            clock.timer.reset()
 
     def tick(self) -> None:
         """Advance the run by one slice (at most ``SLICE_WALL`` of wall time) and publish what is due."""

@@ -343,9 +343,6 @@ class RunDriver:
         end_step = sim.step_at_or_after(self.duration) if self.duration is not None else None
         first = True
         while True:
-            if not first and self.between_chunks is not None:
-                self.between_chunks()  # between two chunks of one call (the caller takes them before and after)
-            first = False
             k = sim.step_index
             if end_step is not None and k >= end_step:
                 self.publish_due(rest=True)  # every output ends on the final state, none twice
@@ -360,6 +357,12 @@ class RunDriver:
                 stop = min(stop, end_step)
             if stop <= k:
                 break
+            if not first and self.between_chunks is not None:
+                # only between two chunks that both step; the caller takes what came before and after the call.
+                # Never after the last chunk: a lockstep answer to the state just published would be taken
+                # here, unseen by the caller's turn, which would then wait for it (issue 27b).
+                self.between_chunks()
+            first = False
             began, cpu_began = self.clock(), self.cpu_clock()
             steps = sim.advance_to(stop)
             stepped, cpu_stepped = self.clock(), self.cpu_clock()

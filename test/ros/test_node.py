@@ -569,3 +569,52 @@ def test_a_destroyed_node_leaves_the_graph(harness):
     h.executor.remove_node(h.node)
     h.node.destroy_node()
     assert h.spin_until(lambda: ours() == before - 1, timeout=10.0), "the node is still on the graph after destroy_node"
+
+
+def test_a_lockstep_answer_that_comes_while_the_turn_steps_is_never_left_undecided(harness):
+    """The controller answers each state before the node has finished the turn that published it (a fast
+    controller): the answer must not be taken inside the stepping and then left waiting for the next look
+    (POLL_WALL) with the turn answered but not decided. After every turn the answer to the state it published
+    is still in the reader, so the loop's wait wakes at once, and the next turn goes on."""
+    h = harness("closed_loop_lockstep")
+    run = h.node.run
+    run.loop.detach()  # the turns are run here, one by one
+    turns = run.lockstep.turns
+    publisher = h.client.create_publisher(WrenchStamped, "/rigid_rot_sim/torque", COMMAND_QOS)
+    deadline = time.monotonic() + 30.0
+    while publisher.get_subscription_count() == 0:
+        assert time.monotonic() < deadline, "the node's torque subscription never matched"
+        time.sleep(0.01)
+
+    with run.intake.waiting() as wait:
+        wait(0.0)  # the start-up's wake-up
+
+        def answer(stamp_ns: int) -> None:
+            """Publish the answer and return once it is in the node's reader (not taken)."""
+            msg = WrenchStamped()
+            msg.header.frame_id = "base_link"
+            msg.header.stamp.sec, msg.header.stamp.nanosec = divmod(stamp_ns, 1_000_000_000)
+            msg.wrench.torque.z = 1e-3
+            publisher.publish(msg)
+            until = time.monotonic() + 10.0
+            while not wait(0.1):
+                assert time.monotonic() < until, "the answer never reached the node's reader"
+
+        class Controller:
+            def published(self, name, topic, data, msg):
+                if name == "state":  # answered before the node goes on
+                    answer(msg.header.stamp.sec * 1_000_000_000 + msg.header.stamp.nanosec)
+
+        answer(0)  # turn 0's state was published at start-up
+        run.outputs.listeners.append(Controller())
+        until = time.monotonic() + 60.0
+        while turns.turns < 5:
+            assert time.monotonic() < until, f"only {turns.turns} turns in 60 s"
+            wait_s = run.turn()
+            if turns.waiting:  # the turn stands on a boundary: its answer is not taken yet, and the loop wakes at once
+                assert turns.missing() == ["~/torque"], "an answer was taken but its turn left undecided"
+                assert wait_s is not None and wait_s > 0.0
+                assert wait(0.0), "the answer to the state just published is in the reader"
+            else:  # a slice cut by SLICE_WALL (the first one loads the kernels): at rtf 0 the next turn comes at once
+                assert wait_s == 0.0
+    assert turns.timeouts == 0 and run.sim.step_index >= 5 * turns.period_steps

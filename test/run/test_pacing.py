@@ -253,7 +253,12 @@ def test_a_run_loop_takes_its_commands_between_the_chunks_of_a_long_call():
     calls: list[int] = []
     run.between_chunks = lambda: calls.append(sim.step_index) or 0
     run.run(12, None)  # three chunks: 0-4, 4-8, 8-12
-    assert calls == [4, 8, 12]  # after each chunk (none before the first: the caller took them just before)
+    # between two chunks only: none before the first (the caller took them just before), none after the
+    # last (the caller takes them just after: in lockstep, the answer to the state published last)
+    assert calls == [4, 8]
+    calls.clear()
+    run.run(16, None)  # one chunk: nothing taken inside the call
+    assert calls == []
 
 
 @pytest.mark.parametrize("duration", [10.000000005, 10.0, 9.995])
