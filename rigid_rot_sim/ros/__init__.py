@@ -10,7 +10,7 @@
 * :mod:`.wheel_inputs`: ``~/wheel_torque`` for the reaction wheels; :mod:`.lockstep`: the
   read-only ``lockstep.*`` parameters and the turn engine's wiring; :mod:`.simulate_steps`: the
   standard ``SimulateSteps`` action; :mod:`.recording`: the node's recorder;
-  :mod:`.foxglove_live`: the Foxglove live server;
+  :mod:`.foxglove_live`: the Foxglove live server; :mod:`.live_views`: the optional live viewers' wiring;
 * :mod:`.run_loop`: the run loop (steps, commands, outputs; services on an executor thread);
   :mod:`.intake`: every command topic taken by the run loop in arrival order, losses counted;
 * :mod:`.joint_state_door`: the wheels' JointState door for ros2_control; :mod:`.paused_clock`: /clock

@@ -81,8 +81,8 @@ from rclpy.subscription import Subscription
 from rclpy.time_source import CLOCK_TOPIC
 
 from rigid_rot_sim.core import limits
+from rigid_rot_sim.ros import live_views, paused_clock, sim_events, simulation_services
 from rigid_rot_sim.ros import parameters as params
-from rigid_rot_sim.ros import paused_clock, sim_events, simulation_services
 from rigid_rot_sim.ros.inputs import Rejections, TorqueInputs
 from rigid_rot_sim.ros.intake import TAKEN_BY_THE_RUN_LOOP, CommandIntake
 from rigid_rot_sim.ros.joint_state_door import JointStateDoor
@@ -177,8 +177,12 @@ class SceneRun:
         self.web: WebLive | None = None
         self.web_words = ""
         try:
-            self.foxglove, self.foxglove_words = self._start_foxglove(node, settings[params.FOXGLOVE])
-            self.web, self.web_words = self._start_web(node, settings[params.WEB])
+            self.foxglove, self.foxglove_words = live_views.start_foxglove(
+                node, settings[params.FOXGLOVE], sim, self.outputs, scene
+            )
+            self.web, self.web_words = live_views.start_web(
+                node, settings[params.WEB], sim, self.outputs, self.driver, scene
+            )
             sim.pause(settings[params.START_PAUSED])
             self.driver.pacer.anchor(sim.t)
             # the run loop's turns (run_loop): paced on the steady clock, never on /clock, which this node publishes
@@ -220,36 +224,6 @@ class SceneRun:
             self.wheel_input.listeners.append(recording)  # every wheel command as received
             self.joint_state_door.listeners.append(recording)  # every JointState command as received
         return recording
-
-    def _start_foxglove(self, node: Node, address: str) -> tuple[FoxgloveLive | None, str]:
-        """The Foxglove live server, a listener of the outputs (None without an address or foxglove-sdk)."""
-        if not address:
-            return None, ""
-        from rigid_rot_sim.ros import foxglove_live
-
-        name = node.get_namespace().rstrip("/") + "/" + node.get_name()
-        try:
-            live, words = foxglove_live.start(address, self.sim, self.outputs.body_view, self.scene.frames, name)
-        except (OSError, RuntimeError) as exc:  # the port is taken, the host is not ours
-            raise ValueError(f"foxglove: cannot serve on {address}: {exc}") from None
-        if live is not None:
-            self.outputs.listeners.append(live)  # every message published, as the bytes published
-        return live, words
-
-    def _start_web(self, node: Node, address: str) -> tuple[WebLive | None, str]:
-        """The web page, an observer of the run driver (None without an address or viser)."""
-        if not address:
-            return None, ""
-        from rigid_rot_sim.ros import web_live
-
-        title = f"rigid_rot_sim: {self.scene.name}"
-        try:
-            live, words = web_live.start(address, node, self.sim, self.outputs.body_view, title)
-        except (OSError, RuntimeError) as exc:  # the host is not ours
-            raise ValueError(f"web: cannot serve on {address}: {exc}") from None
-        if live is not None:
-            self.driver.observers.append(live)  # the states the outputs publish, as snapshots (no copy)
-        return live, words
 
     def _startup_line(self, auto: bool, record_path: str, log_time: str) -> str:
         """What was built and what was left out (and why), in one line."""
