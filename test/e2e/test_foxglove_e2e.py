@@ -123,7 +123,16 @@ def test_live_server_streams_what_the_node_publishes(tmp_path, launch_node, ros_
                 _check_scene_entity(scenes[t_ns], state, view)
                 checked += 1
         assert checked >= 10
-        assert client.times and max(client.times) <= max(t for t, _ in client.received("/rigid_rot_sim/state"))
+        # the server's time moves to each state's time as it streams it: every time it broadcast is the time of
+        # a state it streams (the SDK sends its time and data messages apart, so the state may come just after)
+        assert client.times
+        last_time = max(client.times)
+
+        def state_times() -> set[int]:
+            return {t for t, _ in client.received("/rigid_rot_sim/state")}
+
+        client.until(lambda: max(state_times()) >= last_time, WAIT, "the state at the last time", node.check_alive)
+        assert last_time in state_times()
         assert client.channel_of("/rigid_rot_sim/markers")["schemaName"] == "visualization_msgs/msg/MarkerArray"
     finally:
         client.close()
