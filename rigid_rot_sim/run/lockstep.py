@@ -29,7 +29,7 @@ States never depend on the wall clock: a turn's commands always act at t_k, and 
 never passes t_{k+1} without them (or without the timeout's decision, which is recorded).
 
 >>> from types import SimpleNamespace as NS
->>> sim = NS(step_index=0, t=0.0, dt=0.01, paused=False)
+>>> sim = NS(clock=NS(k=0, t=0.0, dt=0.01), paused=False)
 >>> spec = NS(period=0.02, inputs=("~/torque",), timeout=1.0, on_timeout="pause")
 >>> turns = Lockstep(spec, sim, clock=lambda: 0.0)
 >>> turns.period_steps, turns.next_turn_step()
