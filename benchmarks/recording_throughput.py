@@ -120,7 +120,7 @@ def loop_rate(steps: int, record: bool, publish_every: int) -> float:
                     scene_text=SCENE.read_text(),
                     scene_file=str(SCENE),
                     parameters={},
-                    integrator={"method": sim.method, "dt": sim.dt, "options": sim.options},
+                    integrator={"method": sim.stepper.method, "dt": sim.clock.dt, "options": sim.stepper.options},
                     events_topic="/rigid_rot_sim/sim_events",
                 )
                 run.add_topic("/rigid_rot_sim/state", RigidBodyState, role="state")
@@ -174,7 +174,7 @@ def node_rate(sim_seconds: float, record: Path | None) -> float:
     while not node.finished:
         executor.spin_once(timeout_sec=0.1)
     elapsed = time.perf_counter() - start
-    steps = node.run.sim.step_index
+    steps = node.run.sim.clock.k
     executor.shutdown()
     node.destroy_node()
     rclpy.try_shutdown(context=context)

@@ -249,13 +249,13 @@ def resimulate(path: str | os.PathLike[str], method: str | None = None) -> Resim
     for message, decoded in reader.decoded(topics):
         if message.topic == events_topic:
             event = decode_event(decoded)
-            if event.step > sim.step_index:
+            if event.step > sim.clock.k:
                 sim.advance_to(event.step)
             _apply(sim, event, override)
             events += 1
             continue
         t = time_to_seconds(decoded.header.stamp)
-        k = sim.step_index + round((t - sim.t) / sim.dt)
+        k = sim.clock.k + round((t - sim.clock.t) / sim.clock.dt)
         sim.advance_to(k)
         snapshot = sim.snapshot()
         if message.topic in sensor_topics:
@@ -292,7 +292,7 @@ def resimulate(path: str | os.PathLike[str], method: str | None = None) -> Resim
     return ResimReport(
         core_changed=None if recorded_core is None else recorded_core != core_fingerprint(),
         path=str(path),
-        method=sim.method,
+        method=sim.stepper.method,
         recorded_method=recorded_method,
         dt=dt,
         states=states,

@@ -40,7 +40,7 @@ class FoxgloveLive:
         self._latched: dict[str, tuple[str, bytes, int]] = {}  # topic -> (type, data, log time)
 
     def published(self, name: str, topic: str, data: bytes, msg: Any) -> None:
-        t_ns = round(self.sim.t * 1e9)
+        t_ns = round(self.sim.clock.t * 1e9)
         kind = type(msg)
         type_name = self._types.get(kind) or self._types.setdefault(kind, type_name_of(kind))
         if name in LATCHED:

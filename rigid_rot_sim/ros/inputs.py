@@ -56,7 +56,9 @@ class Rejections:
         # the frame_id is echoed, but never more than MAX_NAME_LENGTH characters of it
         frame_id = limits.clip_text(frame_id)
         reason = limits.clip_text(reason, limits.MAX_TEXT_LENGTH)
-        self.outputs.publish("rejected", conversions.rejected_command(source, reason, self.sim.t, frame_id, torque))
+        self.outputs.publish(
+            "rejected", conversions.rejected_command(source, reason, self.sim.clock.t, frame_id, torque)
+        )
         now = time.monotonic()
         last, suppressed = self._warned.get(source, (-math.inf, 0))
         if now - last >= REJECT_WARN_PERIOD:
@@ -70,7 +72,9 @@ class Rejections:
         """``count`` commands on ``topic`` never reached the node's handler (a bound was hit): one
         RejectedCommand (its reason says how many and why; no frame, zero torque) and a warning."""
         reason = limits.clip_text(f"lost: {why}", limits.MAX_TEXT_LENGTH)
-        self.outputs.publish("rejected", conversions.rejected_command(topic, reason, self.sim.t, "", (0.0, 0.0, 0.0)))
+        self.outputs.publish(
+            "rejected", conversions.rejected_command(topic, reason, self.sim.clock.t, "", (0.0, 0.0, 0.0))
+        )
         self.lost_total += count
         self.logger.warning(f"{topic}: {why} ({self.lost_total} lost in all)")
 

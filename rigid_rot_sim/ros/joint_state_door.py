@@ -123,7 +123,7 @@ class JointStateDoor(SimulationObserver):
         names, position, velocity, effort, stamp = conversions.joint_command_from_msg(msg)
         efforts = wheel_efforts(self.source, self.names, names, position, velocity, effort)
         sim = self.sim
-        effective = effective_time(self.source, stamp, sim.t)
+        effective = effective_time(self.source, stamp, sim.clock.t)
         sim.command_gate(self.source, stamp if stamp > 0.0 else None)  # lockstep: a turn input, or it passes
         torques = merged_torques(sim.commands.wheel_torques, efforts)
         _, _, clamped = sim.submit_wheel_torques(self.source, torques, effective)

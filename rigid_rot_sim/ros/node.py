@@ -124,14 +124,14 @@ class SceneRun:
         settings = read_settings(node, scene)
         self.scene = scene = settings.scene  # with the frame parameters' names
         self.sim = sim = Simulator(scene, method=settings[params.INTEGRATOR], dt=settings[params.DT])
-        sim.max_torque = settings[params.MAX_TORQUE]
+        sim.commands.max_torque = float(settings[params.MAX_TORQUE])
         state_qos = output_qos(OutputQos(settings[params.QOS_RELIABILITY], settings[params.QOS_DEPTH]))
         has_sensors = scene.sensors.gyro is not None or scene.sensors.star_tracker is not None
         self.sensors = SensorSuite(scene.sensors) if has_sensors else None
         self.outputs = Outputs(
             node, scene, settings.rates(), state_qos, settings[params.GROUND_TRUTH_VARIANCE], self.sensors
         )
-        schedule = OutputSchedule.from_rates(self.outputs.rates, sim.dt)
+        schedule = OutputSchedule.from_rates(self.outputs.rates, sim.clock.dt)
         pacer = Pacer(settings[params.REAL_TIME_FACTOR])
         self.driver = RunDriver(sim, schedule, pacer, settings[params.DURATION] or None, observers=[self.outputs])
         rejections = Rejections(node, sim, self.outputs)
@@ -155,7 +155,7 @@ class SceneRun:
             self.inputs.subscriptions + self.wheel_input.subscriptions + self.joint_state_door.subscriptions,
         )
         self.lockstep: NodeLockstep | None = None
-        lockstep = lockstep_from_parameters(node, scene, sim.dt)
+        lockstep = lockstep_from_parameters(node, scene, sim.clock.dt)
         if lockstep is not None:
             self.lockstep = NodeLockstep(node, lockstep, self.driver)
         self.services = RunServices(node, self.driver, scene, rejections, self.report_progress)
@@ -184,7 +184,7 @@ class SceneRun:
                 node, settings[params.WEB], sim, self.outputs, self.driver, scene
             )
             sim.pause(settings[params.START_PAUSED])
-            self.driver.pacer.anchor(sim.t)
+            self.driver.pacer.anchor(sim.clock.t)
             # the run loop's turns (run_loop): paced on the steady clock, never on /clock, which this node publishes
             self.loop = RunLoop(node, self.intake, self.turn)
             if isinstance(node.default_callback_group, RunCallbackGroup):
@@ -199,7 +199,7 @@ class SceneRun:
             )
             for warning in sim.warnings():
                 self.logger.warning(warning)
-            self.outputs.publish_latched(sim.t)
+            self.outputs.publish_latched(sim.clock.t)
             self.driver.publish_due(force=True)
             self.intake.wake()  # the first turn
         except BaseException:  # e.g. Ctrl-C / SIGTERM while starting (main's start-up handler)
@@ -228,7 +228,7 @@ class SceneRun:
     def _startup_line(self, auto: bool, record_path: str, log_time: str) -> str:
         """What was built and what was left out (and why), in one line."""
         sim, scene, pacer, duration = self.sim, self.scene, self.driver.pacer, self.driver.duration
-        built = [f"integrator {sim.method} (dt {sim.dt:g} s{', auto' if auto else ''})"]
+        built = [f"integrator {sim.stepper.method} (dt {sim.clock.dt:g} s{', auto' if auto else ''})"]
         left_out: list[str] = []
         if self.lockstep is not None:
             built.insert(0, self.lockstep.describe())
@@ -328,7 +328,7 @@ class SceneRun:
         if progress.failure is not None:
             self.logger.error(f"simulation paused: {progress.failure} (reset or set_state to continue)")
         if progress.finished:
-            self.logger.info(f"duration reached: t = {self.sim.t:.9g} s after {self.sim.step_index} steps; stopping")
+            self.logger.info(f"duration reached: t = {self.sim.clock.t:.9g} s after {self.sim.clock.k} steps; stopping")
             if self.lockstep is not None:
                 self.logger.info(self.lockstep.turns.summary())
 

@@ -142,10 +142,10 @@ class ParamSpec(Generic[V]):
 
 
 def _check_integrator(run: RunParameters, change: Change) -> None:
-    dt = change[DT] if DT in change else run.driver.sim.dt
+    dt = change[DT] if DT in change else run.driver.sim.clock.dt
     if not isinstance(dt, float) or not (math.isfinite(dt) and dt > 0.0):
         raise ValueError(f"dt must be a finite number > 0 s, got {dt!r}")
-    if dt != run.driver.sim.dt and any(isinstance(o, Lockstep) for o in run.driver.sim.observers):
+    if dt != run.driver.sim.clock.dt and any(isinstance(o, Lockstep) for o in run.driver.sim.observers):
         raise ValueError("dt is fixed in lockstep (the turns are whole steps of it); restart to change it")
     run.driver.sim.check_integrator(change[INTEGRATOR], dt)
 
@@ -153,11 +153,11 @@ def _check_integrator(run: RunParameters, change: Change) -> None:
 def _set_integrator(run: RunParameters, change: Change) -> None:
     sim, log = run.driver.sim, run.logger
     try:
-        sim.set_integrator(method=change[INTEGRATOR], dt=change[DT] if DT in change else sim.dt)
+        sim.set_integrator(method=change[INTEGRATOR], dt=change[DT] if DT in change else sim.clock.dt)
     except ValueError as exc:  # e.g. a method that cannot take this scene's torque
-        log.error(f"integrator unchanged ({sim.method}, dt {sim.dt:g} s): {exc}")
+        log.error(f"integrator unchanged ({sim.stepper.method}, dt {sim.clock.dt:g} s): {exc}")
     else:
-        log.info(f"integrator {sim.method}, dt {sim.dt:g} s from t = {sim.t:.9g} s")
+        log.info(f"integrator {sim.stepper.method}, dt {sim.clock.dt:g} s from t = {sim.clock.t:.9g} s")
         for warning in sim.warnings():
             log.warning(warning)
     run.retime()
@@ -166,7 +166,7 @@ def _set_integrator(run: RunParameters, change: Change) -> None:
 
 def _set_real_time_factor(run: RunParameters, change: Change) -> None:
     run.driver.pacer.real_time_factor = change[REAL_TIME_FACTOR]
-    run.driver.pacer.anchor(run.driver.sim.t)
+    run.driver.pacer.anchor(run.driver.sim.clock.t)
     run.retime()
 
 
@@ -175,7 +175,7 @@ def _set_duration(run: RunParameters, change: Change) -> None:
 
 
 def _set_max_torque(run: RunParameters, change: Change) -> None:
-    run.driver.sim.max_torque = change[MAX_TORQUE]
+    run.driver.sim.commands.max_torque = float(change[MAX_TORQUE])
 
 
 def _check_rate_values(values: Iterable[tuple[ParamSpec[float], float]]) -> None:
@@ -199,7 +199,7 @@ def _check_rates(run: RunParameters, change: Change) -> None:
 
 def _set_rates(run: RunParameters, change: Change) -> None:
     schedule = run.driver.schedule
-    schedule.set_rates({output: change[RATES[output]] for output in schedule.periods}, run.driver.sim.dt)
+    schedule.set_rates({output: change[RATES[output]] for output in schedule.periods}, run.driver.sim.clock.dt)
 
 
 # ---------------------------------------------------------------- the table

@@ -4,7 +4,7 @@ The run publishes ``/clock`` at its steps (``rates.clock``, Hz of sim time); a p
 no step, so without this a ``use_sim_time`` node started during a pause would have no time at
 all (its clock reads 0 until the first message). Gazebo keeps publishing the frozen time while
 paused; so does this node: a steady-clock timer at ``rates.clock`` Hz of wall time (at most
-:data:`MAX_RATE`) publishes ``sim.t`` while the simulator is paused, nothing while it runs. These
+:data:`MAX_RATE`) publishes ``sim.clock.t`` while the simulator is paused, nothing while it runs. These
 messages carry no new time, so the recording does not hold them (they go to the publisher only).
 """
 
@@ -44,7 +44,7 @@ class PausedClock:
 
     def tick(self) -> None:
         if self.sim.paused:
-            self.publisher.publish(conversions.clock_message(self.sim.t))
+            self.publisher.publish(conversions.clock_message(self.sim.clock.t))
         else:
             # playing: no tick until the run is paused again (the run loop re-arms it then:
             # SceneRun._paused_clock_follows). Cancelled here, on the executor's thread, never from the run

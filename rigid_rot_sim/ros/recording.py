@@ -92,10 +92,10 @@ class NodeRecording(SimulationObserver):
                 scene_text=scene_text,
                 scene_file=str(scene.source),
                 parameters=parameters,
-                integrator={"method": sim.method, "dt": sim.dt, "options": sim.options},
+                integrator={"method": sim.stepper.method, "dt": sim.clock.dt, "options": sim.stepper.options},
                 events_topic=node.resolve_topic_name("~/sim_events"),
                 on_error=on_error,
-                sim_seconds=(lambda: sim.t) if log_time == "sim" else None,
+                sim_seconds=(lambda: sim.clock.t) if log_time == "sim" else None,
                 sensors=None if outputs.sensors is None else {"seed": outputs.sensors.seed},
             )
         except RecorderError as exc:
@@ -186,7 +186,7 @@ class NodeRecording(SimulationObserver):
         self._event(
             "set_state",
             step,
-            f"set_state at t = {self.sim.t:.9g} s",
+            f"set_state at t = {self.sim.clock.t:.9g} s",
             orientation=tuple(float(v) for v in orientation),
             angular_velocity=tuple(float(v) for v in angular_velocity),
         )
@@ -198,7 +198,7 @@ class NodeRecording(SimulationObserver):
         self._event(
             "integrator",
             step,
-            f"integrator {method}, dt {dt:g} s from t = {self.sim.t:.9g} s",
+            f"integrator {method}, dt {dt:g} s from t = {self.sim.clock.t:.9g} s",
             method=method,
             dt=float(dt),
             options=dict(options),

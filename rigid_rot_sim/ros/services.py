@@ -190,7 +190,7 @@ class RunServices:
         """Replace the state at the current time and publish every output."""
         self.sim.set_state(orientation, angular_velocity)
         self.run.publish_due(force=True)
-        return f"state set at t = {self.sim.t:.9g} s; {self._run_state()}"
+        return f"state set at t = {self.sim.clock.t:.9g} s; {self._run_state()}"
 
     def set_initial_state(self) -> str:
         """The scene's initial attitude and ω at the current time (a reset of the state only)."""
@@ -215,8 +215,8 @@ class RunServices:
             raise ValueError(f"cannot resume after a failure ({sim.failure}); reset or set_state first")
         sim.pause(paused)
         if not paused:
-            self.run.pacer.anchor(sim.t)
-        return f"{'paused' if paused else 'running'} at t = {sim.t:.9g} s"
+            self.run.pacer.anchor(sim.clock.t)
+        return f"{'paused' if paused else 'running'} at t = {sim.clock.t:.9g} s"
 
     def check_step(self, steps: int) -> None:
         """ValueError unless a paused run can be stepped ``steps`` times in one request."""
@@ -255,14 +255,14 @@ class RunServices:
         """
         sim = self.sim
         self.check_step(steps)
-        start = sim.step_index
+        start = sim.clock.k
         self.report(self.run.run(start + steps, self.run.clock() + STEP_REQUEST_WALL))
-        done = sim.step_index - start
+        done = sim.clock.k - start
         if sim.failure is not None:
             raise ValueError(f"stopped after {done} steps: {sim.failure}")
         if done < steps:
             raise ValueError(
                 f"only {done} of {steps} steps done within the {STEP_REQUEST_WALL:g} s budget of a request "
-                f"(t = {sim.t:.9g} s): call ~/step again for the rest"
+                f"(t = {sim.clock.t:.9g} s): call ~/step again for the rest"
             )
-        return f"{done} steps done, t = {sim.t:.9g} s"
+        return f"{done} steps done, t = {sim.clock.t:.9g} s"

@@ -147,7 +147,7 @@ class SimulateStepsAction:
                 return
             now = time.monotonic()
             chunk_end = min(deadline, max(now, goal.sent_at + period))  # up to the next feedback that is due
-            progress = run.run(sim.step_index + (goal.steps - goal.done), chunk_end)
+            progress = run.run(sim.clock.k + (goal.steps - goal.done), chunk_end)
             self.actions.report(progress)
             goal.done += progress.steps
             if sim.failure is not None:

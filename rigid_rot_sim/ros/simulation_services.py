@@ -206,7 +206,7 @@ class SimulationServices:
     def run_state(self) -> int:
         """SimulationState code of the run now."""
         run = self.run
-        if run.finished or (self._stopped and run.sim.paused and run.sim.step_index == 0):
+        if run.finished or (self._stopped and run.sim.paused and run.sim.clock.k == 0):
             return STOPPED
         return PAUSED if run.sim.paused else PLAYING
 

@@ -72,7 +72,7 @@ class WheelTorqueInput:
         received_ns = time.time_ns() if received_ns is None else received_ns
         torques, stamp = conversions.wheel_torques_from_msg(msg)
         try:
-            effective = stamp if stamp > 0.0 and stamp >= self.sim.t else None
+            effective = stamp if stamp > 0.0 and stamp >= self.sim.clock.t else None
             _, _, clamped = self.sim.submit_wheel_torques(self.topic, torques, effective)
             for i in clamped:
                 if i not in self._clamped_said:

@@ -27,11 +27,10 @@ from rigid_rot_sim.core.wheels import (
     gyrostat_energy,
     total_momentum_body,
 )
-from rigid_rot_sim.run.commands import CommandRejected
 from rigid_rot_sim.run.observables import StateSnapshot, _relative_change
 from rigid_rot_sim.run.stepper import Stepper, command_torques
 
-__all__ = ["GyrostatStepper", "WheelInputs", "AUTO_METHOD", "make_stepper"]
+__all__ = ["GyrostatStepper", "AUTO_METHOD", "make_stepper"]
 
 #: What ``auto`` picks for a spacecraft scene: the adaptive method (its accuracy does not hang on dt).
 AUTO_METHOD = "dopri5"
@@ -193,30 +192,3 @@ class GyrostatStepper(Stepper):
 def make_stepper(scene: Any, *args: Any) -> Stepper:
     """The stepper of ``scene``: a :class:`GyrostatStepper` for a spacecraft scene, else a :class:`Stepper`."""
     return (GyrostatStepper if scene.spacecraft else Stepper)(scene, *args)
-
-
-class WheelInputs:
-    """The :class:`~rigid_rot_sim.run.simulator.Simulator`'s wheel-command entry (a mixin: it uses the
-    simulator's clock, commands, observers and ``_report_rejected``)."""
-
-    def submit_wheel_torques(
-        self, source: str, torques: Any, effective_time: float | None = None
-    ) -> tuple[int, tuple[float, ...], tuple[int, ...]]:
-        """Hold wheel motor torques (N*m, scene order) from now or ``effective_time`` (s, resim's entry).
-
-        Returns (step it takes effect, torques as clamped to max_torque, indices of the wheels clamped);
-        CommandRejected, the observers told, for a scene without wheels, a wrong number of values or a
-        non-finite one (:meth:`CommandSchedule.submit_wheels`).
-        """
-        sim: Any = self
-        step, effective = sim.clock.k, sim.clock.t if effective_time is None else effective_time
-        try:
-            result: tuple[int, tuple[float, ...], tuple[int, ...]] = sim.commands.submit_wheels(
-                source, torques, effective
-            )
-        except CommandRejected as rejected:
-            sim._report_rejected(rejected, "", torques)
-            raise
-        for observer in sim.observers:
-            observer.wheel_command_accepted(step, source, result[1], effective, result[2])
-        return result

@@ -29,7 +29,7 @@ States never depend on the wall clock: a turn's commands always act at t_k, and 
 never passes t_{k+1} without them (or without the timeout's decision, which is recorded).
 
 >>> from types import SimpleNamespace as NS
->>> sim = NS(step_index=0, t=0.0, dt=0.01, paused=False)
+>>> sim = NS(clock=NS(k=0, t=0.0, dt=0.01), paused=False)
 >>> spec = NS(period=0.02, inputs=("~/torque",), timeout=1.0, on_timeout="pause")
 >>> turns = Lockstep(spec, sim, clock=lambda: 0.0)
 >>> turns.period_steps, turns.next_turn_step()
@@ -99,7 +99,7 @@ class Lockstep(SimulationObserver):
     def __init__(self, spec: Any, sim: Simulator, clock: Callable[[], float] = time.monotonic) -> None:
         self.sim = sim
         self.spec = spec
-        self.period_steps = period_steps(spec.period, sim.dt)
+        self.period_steps = period_steps(spec.period, sim.clock.dt)
         self.inputs = tuple(spec.inputs)
         self.timeout = float(spec.timeout)
         self.on_timeout = spec.on_timeout
@@ -132,15 +132,15 @@ class Lockstep(SimulationObserver):
     def next_turn_step(self) -> int:
         """The first turn boundary after the current step."""
         n = self.period_steps
-        return (self.sim.step_index // n + 1) * n
+        return (self.sim.clock.k // n + 1) * n
 
     def at_turn_boundary(self) -> bool:
-        return self.sim.step_index % self.period_steps == 0
+        return self.sim.clock.k % self.period_steps == 0
 
     def _sync(self) -> None:
         """Start the bookkeeping of the turn the run stands on (once per turn; keeps early answers)."""
-        if self.open_step != self.sim.step_index:
-            self.open_step = self.sim.step_index
+        if self.open_step != self.sim.clock.k:
+            self.open_step = self.sim.clock.k
             self.answered = set()
             self.waiting_since = self.sent_at = self.clock()
 
@@ -154,7 +154,7 @@ class Lockstep(SimulationObserver):
     def waiting(self) -> bool:
         """The run stands on a turn boundary whose turn is not done: it waits for answers."""
         sim = self.sim
-        return self.at_turn_boundary() and sim.step_index != self._done_step and sim.failure is None
+        return self.at_turn_boundary() and sim.clock.k != self._done_step and sim.failure is None
 
     def missing(self) -> list[str]:
         """The inputs that have not answered the open turn yet."""
@@ -180,9 +180,9 @@ class Lockstep(SimulationObserver):
 
     def timeout_reason(self) -> str:
         """Why the open turn timed out (for ~/sim_events, the log and Simulator.fail)."""
-        t = self.sim.t
+        t = self.sim.clock.t
         return (
-            f"lockstep: no command stamped {t:.9g} s (turn {self.sim.step_index // self.period_steps}) on "
+            f"lockstep: no command stamped {t:.9g} s (turn {self.sim.clock.k // self.period_steps}) on "
             f"{', '.join(self.missing())} within the timeout of {self.timeout:g} s of wall time"
         )
 
@@ -191,7 +191,7 @@ class Lockstep(SimulationObserver):
         if self.turns == 0:
             self.first_released = self.clock()
         self.turns += 1
-        self._done_step = self.sim.step_index
+        self._done_step = self.sim.clock.k
         self.open_step = None
         self.answered = set()
 
@@ -222,7 +222,7 @@ class Lockstep(SimulationObserver):
                 snapshot = sim.snapshot()
                 names = [name for name in TURN_OUTPUTS if name in run.schedule.periods]
                 for observer in run.observers:
-                    observer.outputs_due(sim.step_index, snapshot, names)
+                    observer.outputs_due(sim.clock.k, snapshot, names)
                 return Progress()
             if decision is Decision.WAIT:
                 return Progress()
@@ -231,7 +231,7 @@ class Lockstep(SimulationObserver):
                 note = self.timeout_reason()
                 action = "paused (~/pause data=false resumes the turn)" if decision is Decision.PAUSE else "holding"
                 for observer in sim.observers:
-                    observer.lockstep_timeout(sim.step_index, note, decision.value)
+                    observer.lockstep_timeout(sim.clock.k, note, decision.value)
                 note = f"{note}: {action}"
                 if decision is Decision.PAUSE:
                     sim.pause(True)
@@ -259,8 +259,8 @@ class Lockstep(SimulationObserver):
         """
         if source not in self.inputs:
             return
-        t = self.sim.t
-        k = self.sim.step_index
+        t = self.sim.clock.t
+        k = self.sim.clock.k
         if not self.waiting:
             raise CommandRejected(
                 source,

@@ -8,7 +8,7 @@ from its subscription to the integrator and to the file is one path, read top to
 with no method or publisher wrapped at run time.
 
 Every call carries ``step``: the step index at which it happened (the simulator's
-``step_index`` *before* the change took effect), so that a recording of the calls
+``clock.k`` *before* the change took effect), so that a recording of the calls
 re-simulates the run exactly. Observers must not raise: a failing observer (a full disk)
 reports its own error and stays quiet afterwards; the run goes on.
 

@@ -167,14 +167,14 @@ class Pacer:
         if r <= 0.0:
             return None, None
         target_t = self._anchor_t + (now - self._anchor_wall) * r
-        behind_wall = (target_t - sim.t) / r
+        behind_wall = (target_t - sim.clock.t) / r
         dropped = None
         if behind_wall > MAX_BACKLOG_WALL:
             dropped = behind_wall
             self._anchor_wall = now - MAX_TICK_WALL * 0.5
-            self._anchor_t = sim.t
-            target_t = sim.t + MAX_TICK_WALL * 0.5 * r
-        return max(sim.step_at_or_before(target_t), sim.step_index), dropped
+            self._anchor_t = sim.clock.t
+            target_t = sim.clock.t + MAX_TICK_WALL * 0.5 * r
+        return max(sim.clock.step_at_or_before(target_t), sim.clock.k), dropped
 
 
 class OutputSchedule:
@@ -275,7 +275,7 @@ class RunDriver:
 
     def publish_due(self, force: bool = False, rest: bool = False) -> None:
         """Report the outputs due at the current step (see :meth:`OutputSchedule.due`)."""
-        step = self.sim.step_index
+        step = self.sim.clock.k
         names: Sequence[str] = self.schedule.due(step, force, rest)
         if not names:
             return
@@ -286,7 +286,7 @@ class RunDriver:
     def restart(self) -> None:
         """After a reset: not finished, paced from the current (initial) state."""
         self.finished = False
-        self.pacer.anchor(self.sim.t)
+        self.pacer.anchor(self.sim.clock.t)
 
     def next_wait(self) -> float | None:
         """Wall time (s) until the run next needs a tick: the next due output (or the end) at r > 0, 0 at
@@ -302,11 +302,11 @@ class RunDriver:
         r = self.pacer.real_time_factor
         if r <= 0.0:
             return 0.0
-        k = sim.step_index
+        k = sim.clock.k
         stop = self.schedule.next_due(k)
         if self.duration is not None:
-            stop = min(stop, sim.step_at_or_after(self.duration))
-        due = self.pacer.wall_at(sim.t + (stop - k) * sim.dt) + DUE_MARGIN
+            stop = min(stop, sim.clock.step_at_or_after(self.duration))
+        due = self.pacer.wall_at(sim.clock.t + (stop - k) * sim.clock.dt) + DUE_MARGIN
         return max(0.0, due - self.clock())
 
     def tick(self, budget: float = MAX_TICK_WALL) -> Progress:
@@ -322,8 +322,8 @@ class RunDriver:
             behind = falling_behind_message(
                 self.pacer.real_time_factor,
                 dropped,
-                sim.method,
-                sim.dt,
+                sim.stepper.method,
+                sim.clock.dt,
                 self.physics_cost.per_step,
                 math.hypot(*snapshot.angular_velocity_body.tolist()),
                 math.hypot(*snapshot.torque_body.tolist()),
@@ -332,18 +332,18 @@ class RunDriver:
             self._spent = [now, 0.0, 0.0]
         progress = self.run(target, now + budget)
         progress.falling_behind = behind
-        if target is not None and sim.step_index >= target:
+        if target is not None and sim.clock.k >= target:
             self._spent = [self.clock(), 0.0, 0.0]  # on pace: the window of a next warning starts here
         return progress
 
     def run(self, target: int | None, deadline: float | None) -> Progress:
         """Step (reporting what is due) up to step ``target`` (None: unbounded) or the wall ``deadline``."""
         sim = self.sim
-        start = sim.step_index
-        end_step = sim.step_at_or_after(self.duration) if self.duration is not None else None
+        start = sim.clock.k
+        end_step = sim.clock.step_at_or_after(self.duration) if self.duration is not None else None
         first = True
         while True:
-            k = sim.step_index
+            k = sim.clock.k
             if end_step is not None and k >= end_step:
                 self.publish_due(rest=True)  # every output ends on the final state, none twice
                 self.finished = True
@@ -371,13 +371,13 @@ class RunDriver:
                 self.physics_cost.record(steps, cpu_stepped - cpu_began)
             else:  # the first chunk loads the compiled kernels: not a step's cost, and the pace starts after it
                 self._warm = True
-                self.pacer.anchor(sim.t)
+                self.pacer.anchor(sim.clock.t)
             if sim.failure is not None:
                 self.publish_due(force=True)
-                return Progress(steps=sim.step_index - start, failure=sim.failure)
+                return Progress(steps=sim.clock.k - start, failure=sim.failure)
             self.publish_due()
             self._spent[1] += cpu_stepped - cpu_began
             self._spent[2] += self.cpu_clock() - cpu_stepped
             if deadline is not None and self.clock() >= deadline:
                 break
-        return Progress(steps=sim.step_index - start)
+        return Progress(steps=sim.clock.k - start)

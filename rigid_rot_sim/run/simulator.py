@@ -5,7 +5,9 @@ step / reset / set_state and the run's failure state, and reports every outside 
 its observers (:class:`~rigid_rot_sim.run.observer.SimulationObserver`: a command accepted
 in :meth:`~Simulator.submit_torque`, where :meth:`~Simulator.receive_torque` leads too, or
 rejected, an applied torque, set_state, reset, an integrator change, a failure). It
-delegates to four parts, each in its own module: the step clock (:mod:`~rigid_rot_sim.run.clock`),
+is made of four parts, each in its own module, read as the simulator's read-only attributes
+(``sim.clock``, ``sim.commands``, ``sim.stepper``, ``sim.observables``): the step clock
+(:mod:`~rigid_rot_sim.run.clock`),
 the torque commands with their hold / timeout state, the scene's torque schedules and
 the torques applied for a duration (:mod:`~rigid_rot_sim.run.commands`), the integrator
 stepped within the run's limits (:mod:`~rigid_rot_sim.run.stepper`), and the user-frame
@@ -18,7 +20,7 @@ Physics advances in fixed steps of ``dt``; the sim time of step k is computed fr
 integer step counter (``t = t_epoch + (k - k_epoch) * dt``, with ``t_epoch = k_epoch = 0``
 until dt is changed at run time), never accumulated. Every torque change takes effect at
 a step boundary: the first boundary at or after its *effective time* (see
-:meth:`Simulator.step_at_or_after`). A topic command's effective time is its header
+:meth:`~rigid_rot_sim.run.clock.StepClock.step_at_or_after`). A topic command's effective time is its header
 stamp when the stamp is non-zero and not in the past, else the sim time at receipt
 (:meth:`Simulator.receive_torque`); :meth:`Simulator.submit_torque` takes an explicit
 effective time, so that a re-simulation fed the recorded commands reproduces the run
@@ -32,7 +34,7 @@ Hold-policy timeouts are in sim time and also end on a step boundary.
 Failures and limits
 -------------------
 Every number that enters is finite and within :mod:`~rigid_rot_sim.core.limits`: torque
-components at most ``MAX_MAGNITUDE`` N*m (and a norm of at most :attr:`Simulator.max_torque`
+components at most ``MAX_MAGNITUDE`` N*m (and a norm of at most ``sim.commands.max_torque``
 when that is > 0), frame ids at most ``MAX_NAME_LENGTH`` characters, and a state whose ω
 turns the body at most ``MAX_ROTATION_PER_STEP`` rad per step. A run stops (``paused``, the
 reason in :attr:`Simulator.failure`, the last good state kept, every snapshot field finite)
@@ -44,14 +46,14 @@ and :meth:`Simulator.set_state` clear the failure and resume a run that the fail
 from __future__ import annotations
 
 from collections.abc import Callable
-from typing import Any
+from typing import Any, Final
 
 from rigid_rot_sim.core import validation
 from rigid_rot_sim.core.dynamics import RigidBody
 from rigid_rot_sim.run import advice
 from rigid_rot_sim.run.clock import StepClock
 from rigid_rot_sim.run.commands import APPLY_TORQUE_SOURCE, CommandRejected, CommandSchedule, TorqueCommand
-from rigid_rot_sim.run.gyrostat_stepper import WheelInputs, make_stepper
+from rigid_rot_sim.run.gyrostat_stepper import make_stepper
 from rigid_rot_sim.run.observables import Observables, StateSnapshot
 from rigid_rot_sim.run.observer import SimulationObserver
 from rigid_rot_sim.scene.scene import Scene
@@ -61,7 +63,7 @@ from rigid_rot_sim.scene.scene import Scene
 __all__ = ["Simulator", "StateSnapshot", "TorqueCommand", "CommandRejected", "APPLY_TORQUE_SOURCE"]
 
 
-class Simulator(WheelInputs):
+class Simulator:
     """Simulate ``scene``; ``method`` / ``dt`` / ``options`` override the scene's integrator.
 
     Parameters
@@ -82,7 +84,7 @@ class Simulator(WheelInputs):
         self.scene = scene
         self.body = RigidBody.from_inertia(scene.body.inertia_array, name="body.inertia")
         self.frames = scene.frames
-        self.observables = Observables(scene, self.body)
+        self.observables: Final = Observables(scene, self.body)
         self.gravity = self.observables.gravity
         #: Told what happens to the run, in order (:class:`SimulationObserver`); add with :meth:`add_observer`.
         self.observers: list[SimulationObserver] = []
@@ -91,9 +93,13 @@ class Simulator(WheelInputs):
         self.command_gate: Callable[[str, float | None], None] = lambda source, stamp: None
         self.failure: str | None = None
         self._paused_by_failure = False
-        self.clock = StepClock(validation.positive_scalar("dt", scene.integrator.dt if dt is None else dt))
-        self.commands = CommandSchedule(scene, self.clock)
-        self.stepper = make_stepper(
+        #: The run's parts, read through the simulator and never replaced: the step clock (``sim.clock.t``,
+        #: ``.dt``, ``.k``, the boundary a time lands on), the torque commands (``sim.commands``: what each
+        #: input holds, ``max_torque``, frame resolution) and the integrator (``sim.stepper.method``, ``.options``).
+        #: Every change goes through the simulator's methods, which tell the observers.
+        self.clock: Final = StepClock(validation.positive_scalar("dt", scene.integrator.dt if dt is None else dt))
+        self.commands: Final = CommandSchedule(scene, self.clock)
+        self.stepper: Final = make_stepper(
             scene,
             self.body,
             self.observables,
@@ -111,26 +117,7 @@ class Simulator(WheelInputs):
         """Report what happens to the run to ``observer`` from now on (after those added before)."""
         self.observers.append(observer)
 
-    @property
-    def max_torque(self) -> float:
-        """Largest accepted torque norm (N*m) of a command or apply_torque request; 0 = no limit."""
-        return self.commands.max_torque
-
-    @max_torque.setter
-    def max_torque(self, value: float) -> None:
-        self.commands.max_torque = float(value)
-
     # ------------------------------------------------------------------ integrator (the stepper)
-
-    @property
-    def method(self) -> str:
-        """The integrator's registry name (``auto`` resolved)."""
-        return self.stepper.method
-
-    @property
-    def options(self) -> dict[str, Any]:
-        """The integrator's keyword options."""
-        return self.stepper.options
 
     def set_integrator(
         self, method: str | None = None, dt: float | None = None, options: dict[str, Any] | None = None
@@ -139,7 +126,7 @@ class Simulator(WheelInputs):
         step = self.clock.k
         self.stepper.reconfigure(method, dt, options)
         for observer in self.observers:
-            observer.integrator_changed(step, self.method, self.dt, dict(self.options))
+            observer.integrator_changed(step, self.stepper.method, self.clock.dt, dict(self.stepper.options))
 
     def check_integrator(self, method: str, dt: float) -> None:
         """ValueError (the reason) if :meth:`set_integrator` would refuse ``method`` at ``dt``; no change."""
@@ -148,46 +135,10 @@ class Simulator(WheelInputs):
     def warnings(self) -> list[str]:
         """Stability / accuracy warnings for the current method and step (:mod:`advice`)."""
         return advice.step_warnings(
-            self.method, self.body.principal_moments, advice.omega_bound(self.scene, self.body), self.dt
+            self.stepper.method, self.body.principal_moments, advice.omega_bound(self.scene, self.body), self.clock.dt
         )
 
-    # ------------------------------------------------------------------ time (the step clock)
-
-    @property
-    def dt(self) -> float:
-        """Physics step, s."""
-        return self.clock.dt
-
-    @property
-    def step_index(self) -> int:
-        """Number of steps since the last reset."""
-        return self.clock.k
-
-    @property
-    def t(self) -> float:
-        """Sim time of the current step boundary, s."""
-        return self.clock.t
-
-    def time_of_step(self, k: int) -> float:
-        """Sim time (s) of step boundary k."""
-        return self.clock.time_of_step(k)
-
-    def step_at_or_after(self, t: float) -> int:
-        """The first step boundary at or after sim time t (s), never before the current one."""
-        return self.clock.step_at_or_after(t)
-
-    def step_at_or_before(self, t: float) -> int:
-        """The last step boundary at or before sim time t (s) (may be in the past)."""
-        return self.clock.step_at_or_before(t)
-
     # ------------------------------------------------------------------ commands (the schedule)
-
-    def resolve_frame(self, source: str, frame_id: str, policy: str) -> str:
-        """``body`` or ``world`` for ``frame_id`` under an input's frame policy.
-
-        See :meth:`CommandSchedule.resolve_frame`.
-        """
-        return self.commands.resolve_frame(source, frame_id, policy)
 
     def receive_torque(
         self, source: str, torque: Any, frame_id: str = "", stamp: float | None = None, force: Any = None
@@ -205,7 +156,7 @@ class Simulator(WheelInputs):
         except CommandRejected as rejected:
             self._report_rejected(rejected, frame_id, torque)
             raise
-        return self.submit_torque(source, values, frame, effective, receipt_time=self.t, stamp=stamp)
+        return self.submit_torque(source, values, frame, effective, receipt_time=self.clock.t, stamp=stamp)
 
     def submit_torque(
         self,
@@ -220,7 +171,7 @@ class Simulator(WheelInputs):
         """Schedule a command on input ``source`` for an explicit effective time (resim's entry).
 
         ``torque`` (N*m) in ``frame`` (``body`` or ``world``). Takes effect at
-        :meth:`step_at_or_after` ``(effective_time)``; replaces the input's previous value
+        ``sim.clock.step_at_or_after(effective_time)``; replaces the input's previous value
         then, and falls back to zero after the input's timeout (sim time), if it has one.
         """
         step = self.clock.k
@@ -248,13 +199,28 @@ class Simulator(WheelInputs):
             observer.torque_applied(step, command)
         return command
 
+    def submit_wheel_torques(
+        self, source: str, torques: Any, effective_time: float | None = None
+    ) -> tuple[int, tuple[float, ...], tuple[int, ...]]:
+        """Hold wheel motor torques (N*m, scene order) from now or ``effective_time`` (s, resim's entry).
+
+        Returns (step it takes effect, torques as clamped to max_torque, indices of the wheels clamped);
+        CommandRejected, the observers told, for a scene without wheels, a wrong number of values or a
+        non-finite one (:meth:`CommandSchedule.submit_wheels`).
+        """
+        step, effective = self.clock.k, self.clock.t if effective_time is None else effective_time
+        try:
+            result = self.commands.submit_wheels(source, torques, effective)
+        except CommandRejected as rejected:
+            self._report_rejected(rejected, "", torques)
+            raise
+        for observer in self.observers:
+            observer.wheel_command_accepted(step, source, result[1], effective, result[2])
+        return result
+
     def _report_rejected(self, rejected: CommandRejected, frame_id: str, torque: Any) -> None:
         for observer in self.observers:
             observer.command_rejected(self.clock.k, rejected.source, rejected.reason, frame_id, torque)
-
-    def held_torques(self) -> dict[str, tuple[tuple[float, float, float], str]]:
-        """What each topic input holds now: {source: (torque N*m, frame)} (absent = zero)."""
-        return self.commands.held_torques()
 
     # ------------------------------------------------------------------ stepping
 

@@ -36,8 +36,8 @@ def torque_for_steps(sim: Simulator, torque: Any, frame_id: str, steps: int) -> 
     """
     if isinstance(steps, bool) or int(steps) != steps or steps < 1:
         raise ValueError(f"steps must be an integer >= 1, got {steps}")
-    k = sim.step_index
+    k = sim.clock.k
     # the end time is that of boundary k + steps computed from the step counter; the schedule
     # rounds t_k + duration back onto that boundary (within the clock's BOUNDARY_SLACK)
-    duration = sim.time_of_step(k + int(steps)) - sim.t
+    duration = sim.clock.time_of_step(k + int(steps)) - sim.clock.t
     return sim.apply_torque(torque, frame_id, duration)

@@ -9,7 +9,9 @@ engine's :class:`~rigid_rot_sim.run.commands.CommandSchedule` adds them, so the 
 its bits. A world-frame torque is re-expressed in the body frame at every step, from the
 attitude at the start of the step: :func:`world_in_body`, used by the engine's stepper
 (:meth:`rigid_rot_sim.run.stepper.Stepper.set_command_torque`) on floats and by the
-sweep's chunks on columns (one body per row), with the same bits.
+sweep's chunks on columns (one body per row), with the same bits. :func:`stretch_at` finds the
+stretch of a step; :func:`follows_attitude` says when a world-frame torque makes the body-frame
+torque change at every step, not only where a stretch starts.
 
 ``test/sweep/test_sweep_matches_engine.py`` checks, for every shipped scene, that the
 stretches start exactly where the engine's command schedule changes the torque.
@@ -18,10 +20,13 @@ stretches start exactly where the engine's command schedule changes the torque.
 >>> schedule = TorqueSchedule("body", (ScheduleSegment(0.0, (0.1, 0.0, 0.0)), ScheduleSegment(0.3, (0.0, 0.0, 0.0))))
 >>> [(s.start, s.stop, s.body) for s in stretches((schedule,), 0.1, 5)]
 [(0, 3, (0.1, 0.0, 0.0)), (3, 5, (0.0, 0.0, 0.0))]
+>>> stretch_at(stretches((schedule,), 0.1, 5), 2).body, follows_attitude((schedule,))
+((0.1, 0.0, 0.0), False)
 """
 
 from __future__ import annotations
 
+import bisect
 from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import Any
@@ -30,7 +35,7 @@ from rigid_rot_sim.core import frames
 from rigid_rot_sim.core import quaternion as quat
 from rigid_rot_sim.scene.scene import TorqueSchedule
 
-__all__ = ["Stretch", "stretches", "world_in_body"]
+__all__ = ["Stretch", "stretches", "stretch_at", "follows_attitude", "world_in_body"]
 
 Vector3 = tuple[float, float, float]
 
@@ -71,6 +76,19 @@ def stretches(schedules: Sequence[TorqueSchedule], dt: float, end_step: int) -> 
             Stretch(start, stop, (body[0], body[1], body[2]), (world[0], world[1], world[2]) if has_world else None)
         )
     return tuple(out)
+
+
+def stretch_at(timeline: Sequence[Stretch], k: int) -> Stretch:
+    """The stretch of ``timeline`` (:func:`stretches`) that holds step ``k``."""
+    return timeline[bisect.bisect_right([stretch.start for stretch in timeline], k) - 1]
+
+
+def follows_attitude(schedules: Sequence[TorqueSchedule]) -> bool:
+    """Whether a world-frame schedule holds a non-zero torque: then the body-frame torque may change at every step
+    (re-expressed from the attitude at each boundary, :func:`world_in_body`), not only where a stretch starts."""
+    return any(
+        any(segment.torque) for schedule in schedules if schedule.frame == "world" for segment in schedule.segments
+    )
 
 
 def world_in_body(q_principal: Any, principal_from_body: Any, world: Any) -> Any:

@@ -28,7 +28,6 @@ bit (``test/sweep/test_sweep_matches_engine.py``).
 
 from __future__ import annotations
 
-import bisect
 import math
 import time
 from dataclasses import dataclass, fields
@@ -43,7 +42,7 @@ from rigid_rot_sim.core.batch import advance_batch, advance_batch_recording
 from rigid_rot_sim.core.dynamics import RigidBody
 from rigid_rot_sim.core.integrators.base import NonFiniteStateError
 from rigid_rot_sim.core.steps import step_at_or_after, step_at_or_before, step_grid
-from rigid_rot_sim.run.timeline import Stretch, stretches, world_in_body
+from rigid_rot_sim.run.timeline import Stretch, follows_attitude, stretch_at, stretches, world_in_body
 from rigid_rot_sim.sweep.checkpoints import CheckpointTrack, row_norms
 from rigid_rot_sim.sweep.draws import StreamDraws
 from rigid_rot_sim.sweep.spec import NORMAL_CUT_SIGMAS, Dispersion, SweepSpec
@@ -285,12 +284,12 @@ def _advance_isolated(
 def _boundaries(
     spec: SweepSpec, dt: float, n_full: int, timeline: tuple[Stretch, ...]
 ) -> tuple[np.ndarray, np.ndarray]:
-    """Step indices where the torque may change or a checkpoint is taken, and the checkpoint steps."""
+    """Step indices where the torque may change (the timeline's, the noise's) or a checkpoint is taken, and the
+    checkpoint steps."""
     checkpoints = np.unique(np.linspace(0, n_full, spec.checkpoints + 1).round().astype(np.int64))
     marks = {0, n_full, *checkpoints.tolist(), *(stretch.start for stretch in timeline)}
-    worlds = [schedule for schedule in spec.scene.schedules if schedule.frame == "world"]
-    if any(any(segment.torque) for schedule in worlds for segment in schedule.segments):
-        marks.update(range(n_full + 1))  # re-expressed in the body frame at every step
+    if follows_attitude(spec.scene.schedules):
+        marks.update(range(n_full + 1))
     if spec.dispersions.torque_noise_sigma is not None:
         interval = spec.dispersions.torque_noise_interval
         marks.update(step_at_or_after(k * interval, dt) for k in range(math.ceil(spec.duration / interval)))
@@ -379,7 +378,7 @@ def _simulate(spec: SweepSpec, bodies: _Bodies, method: str, dt: float) -> _Outc
     impulse = np.zeros(n)
     track.observe(0.0, omega)
     last_torque: tuple[Any, np.ndarray, np.ndarray] = (None, np.empty(0), np.empty(0))
-    world_frame = any(schedule.frame == "world" for schedule in spec.scene.schedules)
+    world_frame = any(stretch.world is not None for stretch in timeline)  # torques that depend on the state
     segments = [(int(a), int(b)) for a, b in zip(marks[:-1], marks[1:], strict=False) if b > a]
     if last > 0.0:
         segments.append((n_full, n_full + 1))  # the last, shorter step landing on the duration
@@ -395,7 +394,7 @@ def _simulate(spec: SweepSpec, bodies: _Bodies, method: str, dt: float) -> _Outc
         live = slice(None) if everyone else alive
         attitude = (q[live], principal_from_body[live]) if world_frame else None
         live_bodies = bodies if everyone else _subset(bodies, alive)
-        torque_body = _body_torque(spec, live_bodies, _stretch_at(timeline, a), a, dt, attitude)
+        torque_body = _body_torque(spec, live_bodies, stretch_at(timeline, a), a, dt, attitude)
         # most segments of a run repeat the last one's torques (a torque-free run: all of them)
         key = (step, torque_body.tobytes()) if everyone else None
         if key is None or key != last_torque[0]:
@@ -480,15 +479,10 @@ def _same_torques(
     torques' bytes), full steps only; the torques must not depend on the state (no world-frame schedule)."""
     joined = segments[:1]
     for a, b in segments[1:]:
-        if a == n_full or (dt, _body_torque(spec, bodies, _stretch_at(timeline, a), a, dt, None).tobytes()) != key:
+        if a == n_full or (dt, _body_torque(spec, bodies, stretch_at(timeline, a), a, dt, None).tobytes()) != key:
             break
         joined.append((a, b))
     return joined
-
-
-def _stretch_at(timeline: tuple[Stretch, ...], k: int) -> Stretch:
-    """The stretch of ``timeline`` holding step ``k``."""
-    return timeline[bisect.bisect_right([stretch.start for stretch in timeline], k) - 1]
 
 
 def _subset(bodies: _Bodies, mask: np.ndarray) -> _Bodies:

@@ -111,13 +111,13 @@ def test_torque_commands_change_omega_exactly_as_the_core_predicts(launch_node, 
 
     sim = Simulator(load_scene(SCENES / "torque_driven.yaml"), method="rk4")
     for when, torque, frame in commands:
-        sim.submit_torque("~/torque", torque, sim.resolve_frame("~/torque", frame, "header"), when)
+        sim.submit_torque("~/torque", torque, sim.commands.resolve_frame("~/torque", frame, "header"), when)
     compared = 0
     for msg in states:
         t = stamp(msg)
         if t < t1 - 0.1:
             continue
-        sim.advance_to(round(t / sim.dt))
+        sim.advance_to(round(t / sim.clock.dt))
         expected = sim.snapshot()
         got = [msg.angular_velocity_body.x, msg.angular_velocity_body.y, msg.angular_velocity_body.z]
         assert got == expected.angular_velocity_body.tolist(), f"t = {t}"  # bit for bit

@@ -37,8 +37,8 @@ def record_like_the_node(
         scene_file=str(scene_path),
         parameters={"integrator": scene.integrator.method},
         events_topic="/rigid_rot_sim/sim_events",
-        integrator={"method": sim.method, "dt": sim.dt, "options": sim.options},
-        sim_seconds=(lambda: sim.t) if log_time == "sim" else None,
+        integrator={"method": sim.stepper.method, "dt": sim.clock.dt, "options": sim.stepper.options},
+        sim_seconds=(lambda: sim.clock.t) if log_time == "sim" else None,
     ) as run:
         run.add_topic("/rigid_rot_sim/state", RigidBodyState, role="state")
         run.add_topic(torque_topic, WrenchStamped, role="torque")
@@ -152,8 +152,8 @@ def record_wheels(path: Path, tamper_angle_at: int | None = None):
         scene_file=str(scene_path),
         parameters={"integrator": "gyrostat_rk4"},
         events_topic="/rigid_rot_sim/sim_events",
-        integrator={"method": sim.method, "dt": sim.dt, "options": sim.options},
-        sim_seconds=lambda: sim.t,
+        integrator={"method": sim.stepper.method, "dt": sim.clock.dt, "options": sim.stepper.options},
+        sim_seconds=lambda: sim.clock.t,
     ) as run:
         run.add_topic("/rigid_rot_sim/state", RigidBodyState, role="state")
         run.add_topic("/rigid_rot_sim/wheels", JointState, role="wheels")

@@ -110,7 +110,7 @@ def _point(x, y, z):
 
 def test_torque_free_scene_builds_no_subscription_and_picks_exact(harness):
     h = harness("free_tumble", real_time_factor=0.0)
-    assert h.node.run.sim.method == "exact"
+    assert h.node.run.sim.stepper.method == "exact"
     assert h.node.run.inputs.subscriptions == []
     subscriptions = dict(h.client.get_subscriber_names_and_types_by_node("rigid_rot_sim", "/"))
     assert not any("torque" in topic for topic in subscriptions)
@@ -133,11 +133,11 @@ def test_torque_free_scene_builds_no_subscription_and_picks_exact(harness):
 def test_top_scene_builds_top_state_and_torque_scene_subscribes(harness):
     top = harness("heavy_top", real_time_factor=0.0)
     assert top.spin_until(lambda: "/rigid_rot_sim/top_state" in top.published_topics())
-    assert top.node.run.sim.method == "exact_split"
+    assert top.node.run.sim.stepper.method == "exact_split"
     top.close()
     driven = harness("torque_driven", real_time_factor=0.0)
     assert [s.topic_name for s in driven.node.run.inputs.subscriptions] == ["/rigid_rot_sim/torque"]
-    assert driven.node.run.sim.method == "taylor"
+    assert driven.node.run.sim.stepper.method == "taylor"
 
 
 def test_parameters_are_validated_and_applied(harness):
@@ -145,24 +145,24 @@ def test_parameters_are_validated_and_applied(harness):
     node = h.node
     refused = node.set_parameters([Parameter("integrator", value="magic")])[0]
     assert not refused.successful and "unknown integrator 'magic'" in refused.reason
-    assert node.run.sim.method == "taylor" and node.get_parameter("integrator").value == "auto"
+    assert node.run.sim.stepper.method == "taylor" and node.get_parameter("integrator").value == "auto"
     for bad_dt in (-0.001, 0.0):
         result = node.set_parameters([Parameter("dt", value=bad_dt)])[0]
         assert not result.successful and result.reason
-    assert node.run.sim.dt == 0.001
+    assert node.run.sim.clock.dt == 0.001
     assert not node.set_parameters([Parameter("scene", value="other.yaml")])[0].successful
     refused_rate = node.set_parameters([Parameter("rates.top_state", value=10.0)])[0]
     assert not refused_rate.successful and "not built" in refused_rate.reason
     ok = node.set_parameters([Parameter("integrator", value="rk4"), Parameter("dt", value=0.002)])[0]
     assert ok.successful
-    assert node.run.sim.method == "rk4" and node.run.sim.dt == 0.002
+    assert node.run.sim.stepper.method == "rk4" and node.run.sim.clock.dt == 0.002
     assert node.set_parameters([Parameter("real_time_factor", value=2.0)])[0].successful
     assert node.run.driver.pacer.real_time_factor == 2.0
     assert node.set_parameters([Parameter("rates.state", value=25.0)])[0].successful
     assert node.run.driver.schedule.periods["state"] == 20  # 25 Hz at dt = 2 ms
     # the run continues
-    k = node.run.sim.step_index
-    assert h.spin_until(lambda: node.run.sim.step_index > k + 100)
+    k = node.run.sim.clock.k
+    assert h.spin_until(lambda: node.run.sim.clock.k > k + 100)
 
 
 def test_params_file_overrides_the_scene(context, tmp_path):
@@ -175,7 +175,9 @@ def test_params_file_overrides_the_scene(context, tmp_path):
     node = RigidRotSimNode(context=context, cli_args=["--ros-args", "--params-file", str(params)])
     try:
         assert (
-            node.run.sim.method == "rk4" and node.run.sim.dt == 0.0005 and node.run.driver.pacer.real_time_factor == 0.0
+            node.run.sim.stepper.method == "rk4"
+            and node.run.sim.clock.dt == 0.0005
+            and node.run.driver.pacer.real_time_factor == 0.0
         )
         assert node.run.driver.schedule.periods["state"] == 10 and "clock" not in node.run.driver.schedule.periods
     finally:
@@ -189,13 +191,13 @@ def test_pause_step_reset_set_state_services(harness):
     refused = h.call(Step, "step", Step.Request(steps=5))
     assert not refused.success and "not paused" in refused.message
     assert h.call(SetBool, "pause", SetBool.Request(data=True)).success
-    k = h.node.run.sim.step_index
+    k = h.node.run.sim.clock.k
     h.spin_until(lambda: False, timeout=0.2)
-    assert h.node.run.sim.step_index == k  # paused: no steps
+    assert h.node.run.sim.clock.k == k  # paused: no steps
     zero = h.call(Step, "step", Step.Request(steps=0))
     assert not zero.success
     stepped = h.call(Step, "step", Step.Request(steps=25))
-    assert stepped.success and h.node.run.sim.step_index == k + 25
+    assert stepped.success and h.node.run.sim.clock.k == k + 25
     t = stepped.state.header.stamp.sec + stepped.state.header.stamp.nanosec * 1e-9
     assert t == pytest.approx((k + 25) * 0.01, abs=1e-9)
     request = SetState.Request()
@@ -213,10 +215,10 @@ def test_pause_step_reset_set_state_services(harness):
     bad_omega.angular_velocity.x = math.nan
     assert not h.call(SetState, "set_state", bad_omega).success
     assert h.call(Trigger, "reset", Trigger.Request()).success
-    assert h.node.run.sim.step_index == 0
+    assert h.node.run.sim.clock.k == 0
     assert h.node.run.sim.snapshot().angular_velocity_body.tolist() == [0.3, 0.2, 2.0]
     assert h.call(SetBool, "pause", SetBool.Request(data=False)).success
-    assert h.spin_until(lambda: h.node.run.sim.step_index > 5)
+    assert h.spin_until(lambda: h.node.run.sim.clock.k > 5)
 
 
 def test_apply_torque_service_and_rejections(harness):
@@ -249,7 +251,7 @@ def test_apply_torque_service_and_rejections(harness):
     assert any("neither the body frame" in r for r in reasons)
     assert any("non-finite torque.x" in r for r in reasons) and any("non-zero force" in r for r in reasons)
     assert sources == {"/rigid_rot_sim/apply_torque", "/rigid_rot_sim/torque"}
-    assert h.spin_until(lambda: h.node.run.sim.t > 0.5)
+    assert h.spin_until(lambda: h.node.run.sim.clock.t > 0.5)
     # only the 0.1 s applied torque acted: omega_z = 0.004 * 0.1 / 0.04
     assert h.node.run.sim.snapshot().angular_velocity_body[2] == pytest.approx(0.01, rel=1e-9)
 
@@ -257,15 +259,15 @@ def test_apply_torque_service_and_rejections(harness):
 def test_start_paused_waits_for_resume(harness):
     h = harness("free_tumble", real_time_factor=0.0, start_paused=True)
     h.spin_until(lambda: False, timeout=0.3)
-    assert h.node.run.sim.paused and h.node.run.sim.step_index == 0
+    assert h.node.run.sim.paused and h.node.run.sim.clock.k == 0
     assert h.call(SetBool, "pause", SetBool.Request(data=False)).success
-    assert h.spin_until(lambda: h.node.run.sim.step_index > 100)
+    assert h.spin_until(lambda: h.node.run.sim.clock.k > 100)
 
 
 def test_duration_reached_finishes(harness):
     h = harness("free_tumble", real_time_factor=0.0, duration=0.5)
     assert h.spin_until(lambda: h.node.finished)
-    assert h.node.run.sim.t == pytest.approx(0.5, abs=1e-12) and h.node.run.sim.step_index == 50
+    assert h.node.run.sim.clock.t == pytest.approx(0.5, abs=1e-12) and h.node.run.sim.clock.k == 50
 
 
 def test_rep105_frames_by_default_on_every_output_and_recorded_tf(harness, tmp_path):
@@ -378,9 +380,9 @@ def test_recording_without_the_mcap_package_is_disabled_with_a_message(context, 
     try:
         assert node.run.recording is None and node.run.sim is not None and not (tmp_path / "x.mcap").exists()
         assert "recording disabled: mcap is not installed" in capfd.readouterr().err
-        k = node.run.sim.step_index  # the run itself goes on
+        k = node.run.sim.clock.k  # the run itself goes on
         node.run.sim.advance_to(k + 3)
-        assert node.run.sim.step_index == k + 3
+        assert node.run.sim.clock.k == k + 3
     finally:
         node.destroy_node()
 
@@ -441,7 +443,9 @@ def test_integer_values_for_double_parameters_are_stored_as_floats(context, tmp_
             stored = node.get_parameter(name)
             assert stored.type_ == Parameter.Type.DOUBLE and stored.value == value and isinstance(stored.value, float)
         assert (
-            node.run.driver.pacer.real_time_factor == 0.0 and node.run.driver.duration == 5.0 and node.run.sim.dt == 1.0
+            node.run.driver.pacer.real_time_factor == 0.0
+            and node.run.driver.duration == 5.0
+            and node.run.sim.clock.dt == 1.0
         )
         # what `ros2 param set` sends: the SetParameters service of the node, an INTEGER value
         service = client.create_client(SetParameters, "/rigid_rot_sim/set_parameters")
@@ -617,4 +621,4 @@ def test_a_lockstep_answer_that_comes_while_the_turn_steps_is_never_left_undecid
                 assert wait(0.0), "the answer to the state just published is in the reader"
             else:  # a slice cut by SLICE_WALL (the first one loads the kernels): at rtf 0 the next turn comes at once
                 assert wait_s == 0.0
-    assert turns.timeouts == 0 and run.sim.step_index >= 5 * turns.period_steps
+    assert turns.timeouts == 0 and run.sim.clock.k >= 5 * turns.period_steps

@@ -67,7 +67,7 @@ def test_the_table_is_what_the_node_declares(node):
 
 def test_settings_read_by_spec_are_typed_values(node):
     settings = parameters.read_settings(node, node.run.scene)
-    assert settings[parameters.DT] == node.run.sim.dt and isinstance(settings[parameters.DT], float)
+    assert settings[parameters.DT] == node.run.sim.clock.dt and isinstance(settings[parameters.DT], float)
     assert settings.rates() == {name: node.get_parameter(f"rates.{name}").value for name in OUTPUT_NAMES}
 
 

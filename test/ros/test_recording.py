@@ -25,7 +25,7 @@ def test_every_event_kind_is_recorded_and_replayed_bit_for_bit(tmp_path):
         scene_text=SCENE.read_text(),
         scene_file=str(SCENE),
         parameters={},
-        integrator={"method": sim.method, "dt": sim.dt, "options": sim.options},
+        integrator={"method": sim.stepper.method, "dt": sim.clock.dt, "options": sim.stepper.options},
         events_topic="/rigid_rot_sim/sim_events",
     )
     run.add_topic("/rigid_rot_sim/state", RigidBodyState, role="state")
@@ -39,7 +39,7 @@ def test_every_event_kind_is_recorded_and_replayed_bit_for_bit(tmp_path):
         (120, lambda: sim.apply_torque((0.001, 0.0, 0.0), "odom", 0.05)),
         (200, lambda: sim.set_integrator(dt=0.0005)),  # a dt change mid-run
         (300, lambda: sim.set_state((0.1, 0.0, 0.0, 1.0), (0.2, -0.1, 0.3))),
-        (400, lambda: sim.submit_torque("~/torque", (0.0, 0.002, 0.0), "body", sim.t + 0.01)),
+        (400, lambda: sim.submit_torque("~/torque", (0.0, 0.002, 0.0), "body", sim.clock.t + 0.01)),
         (500, lambda: sim.set_integrator(method="lie_rk4")),  # an integrator change mid-run
         (600, sim.reset),
         (650, lambda: sim.receive_torque("~/torque", (0.001, 0.001, 0.0), "odom", 0.0)),
@@ -74,7 +74,7 @@ def test_rejected_commands_record_no_event(tmp_path):
         scene_text=SCENE.read_text(),
         scene_file=str(SCENE),
         parameters={},
-        integrator={"method": sim.method, "dt": sim.dt},
+        integrator={"method": sim.stepper.method, "dt": sim.clock.dt},
         events_topic="/e/sim_events",
     ) as run:
         sim.add_observer(NodeRecording(run, sim, None))

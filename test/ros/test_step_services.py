@@ -28,7 +28,7 @@ def _complete(h, response, start: int, steps: int):
     (a loaded machine) says so and is finished with ~/step, as the service's reply advises."""
     while not response.success:
         assert "within the 0.25 s budget" in response.message, response.message
-        rest = start + steps - h.node.run.sim.step_index
+        rest = start + steps - h.node.run.sim.clock.k
         response = h.call(Step, "step", Step.Request(steps=rest))
     return response
 
@@ -96,7 +96,7 @@ def test_step_with_torque_equals_a_topic_command_then_step_bit_for_bit(harness, 
     assert topic.spin_until(lambda: accepted.commands)
     assert accepted.commands[0].step == 0 and accepted.commands[0].source == "~/torque"
     by_topic = _complete(topic, topic.call(Step, "step", Step.Request(steps=300)), 0, 300)
-    topic_steps = topic.node.run.sim.step_index
+    topic_steps = topic.node.run.sim.clock.k
     _close(topic)  # one node named rigid_rot_sim at a time
 
     atomic = harness("torque_driven", **spin)
@@ -105,7 +105,7 @@ def test_step_with_torque_equals_a_topic_command_then_step_bit_for_bit(harness, 
         StepWithTorque, "step_with_torque", StepWithTorque.Request(torque=torque, frame_id=frame, steps=300)
     )
     response = _complete(atomic, response, 0, 300)
-    assert atomic.node.run.sim.step_index == topic_steps == 300
+    assert atomic.node.run.sim.clock.k == topic_steps == 300
     assert _state_bits(response.state) == _state_bits(by_topic.state)
     assert response.state.torque_body.z != 0.0
     # the torque acted over exactly those steps: the next step is torque-free
@@ -120,7 +120,7 @@ def test_step_with_torque_refusals_apply_and_step_nothing(harness):
     playing = h.call(StepWithTorque, "step_with_torque", StepWithTorque.Request(torque=Vector3(z=0.01), steps=5))
     assert not playing.success and "not paused" in playing.message
     assert h.call(SetBool, "pause", SetBool.Request(data=True)).success
-    k = h.node.run.sim.step_index
+    k = h.node.run.sim.clock.k
     for request, reason in [
         (StepWithTorque.Request(torque=Vector3(z=0.01), steps=0), "steps must be >= 1"),
         (StepWithTorque.Request(torque=Vector3(z=0.01), steps=10**6), "exceeds the limit"),
@@ -131,7 +131,7 @@ def test_step_with_torque_refusals_apply_and_step_nothing(harness):
         response = h.call(StepWithTorque, "step_with_torque", request)
         assert not response.success and reason in response.message, response.message
     sim = h.node.run.sim
-    assert sim.step_index == k and sim.snapshot().angular_velocity_body.tolist() == [0.0, 0.0, 0.0]
+    assert sim.clock.k == k and sim.snapshot().angular_velocity_body.tolist() == [0.0, 0.0, 0.0]
     assert h.spin_until(lambda: len(rejected) >= 3)  # the torque refusals are published with their reason
     assert {r.source for r in rejected} == {"/rigid_rot_sim/step_with_torque"}
     h.call(Step, "step", Step.Request(steps=5))
@@ -179,7 +179,7 @@ def test_simulate_steps_action_feedback_at_a_bounded_rate_cancel_and_refusal(har
     assert goal.accepted
     done = _result(h, goal)
     assert done.status == 4 and done.result.result.result == Result.RESULT_OK  # GoalStatus.STATUS_SUCCEEDED
-    assert h.node.run.sim.step_index == steps and h.node.run.sim.paused
+    assert h.node.run.sim.clock.k == steps and h.node.run.sim.paused
     # feedback after complete steps, in order, the first after the first step and always the last;
     # at most FEEDBACK_RATE per second of wall time, not one per step
     assert [p[:2] for p in published[:1] + published[-1:]] == [(1, steps - 1), (steps, 0)]
@@ -201,9 +201,9 @@ def test_simulate_steps_action_feedback_at_a_bounded_rate_cancel_and_refusal(har
     assert len(cancel.result().goals_canceling) == 1
     canceled = _result(h, goal)
     assert canceled.status == 5 and "canceled after" in canceled.result.result.error_message  # STATUS_CANCELED
-    stopped_at = h.node.run.sim.step_index
+    stopped_at = h.node.run.sim.clock.k
     h.spin_until(lambda: False, timeout=0.2)
-    assert h.node.run.sim.step_index == stopped_at < 10**9 and h.node.run.sim.paused
+    assert h.node.run.sim.clock.k == stopped_at < 10**9 and h.node.run.sim.paused
 
     # refused while playing: aborted with RESULT_OPERATION_FAILED, as the .action says
     assert h.call(SetBool, "pause", SetBool.Request(data=False)).success
@@ -229,7 +229,7 @@ def test_a_run_driven_by_step_with_torque_resimulates_bit_exact(harness, tmp_pat
         request = StepWithTorque.Request(torque=torque, frame_id=frame, steps=steps)
         _complete(h, h.call(StepWithTorque, "step_with_torque", request), start, steps)
         start += steps
-    assert h.node.run.sim.step_index == 427
+    assert h.node.run.sim.clock.k == 427
     _close(h)  # the recording is complete
     report = resimulate(bag)
     assert report.identical and "BIT-EXACT" in report.verdict, report.format()

@@ -27,7 +27,7 @@ def test_reset_publishes_the_backward_clock(context):  # noqa: F811
         )
         assert h.spin_until(lambda: clocks and clocks[-1] > 0.5)
         assert h.call(SetBool, "pause", SetBool.Request(data=True)).success  # so that t = 0 is the last /clock
-        before = h.node.run.sim.t
+        before = h.node.run.sim.clock.t
         assert before > 0.5
         count = len(clocks)
         assert h.call(Trigger, "reset", Trigger.Request()).success

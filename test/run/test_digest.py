@@ -49,7 +49,7 @@ def test_the_simulator_digest_covers_every_step_whatever_the_chunks():
     for _ in range(10):
         one.advance(1)
         integrator = one.stepper.integrator
-        steps.append((one.t, *integrator.q, *integrator.omega))
+        steps.append((one.clock.t, *integrator.q, *integrator.omega))
     chunked.advance(3)
     chunked.advance(7)
     assert one.snapshot().digest == chunked.snapshot().digest == _reference(steps)

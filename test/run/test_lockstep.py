@@ -46,7 +46,7 @@ class Rig:
         self.sim.command_gate = self.turns.admit
 
     def answer(self, torque=(0.0, 0.0, 0.01), stamp=None):
-        stamp = self.sim.t if stamp is None else stamp
+        stamp = self.sim.clock.t if stamp is None else stamp
         return self.sim.receive_torque("~/torque", np.array(torque), "", stamp)
 
 
@@ -66,14 +66,14 @@ def test_a_turn_waits_for_its_command_and_the_command_acts_from_t_k():
     rig = Rig()
     for _ in range(3):
         rig.turns.tick(rig.run)
-    assert rig.sim.step_index == 0 and rig.turns.waiting  # nothing answered: no step taken
+    assert rig.sim.clock.k == 0 and rig.turns.waiting  # nothing answered: no step taken
     rig.answer(stamp=0.0)  # turn 0: a zero stamp is t_0
     rig.turns.tick(rig.run)
-    assert rig.sim.step_index == 20 and rig.turns.waiting and rig.turns.turns == 1
+    assert rig.sim.clock.k == 20 and rig.turns.waiting and rig.turns.turns == 1
     command = rig.answer((0.0, 0.0, 0.02))
     assert command.step == 20  # acts from t_1, exactly
     rig.turns.tick(rig.run)
-    assert rig.sim.step_index == 40
+    assert rig.sim.clock.k == 40
     assert [s.step for s in rig.published.states] == [20, 40]  # the state once per turn, at t_k
 
 
@@ -103,7 +103,7 @@ def test_a_controller_that_stops_answering_pauses_the_run_with_the_reason():
     assert rig.turns.tick(rig.run).lockstep_timeout is None and not rig.sim.paused
     rig.now += 0.2
     progress = rig.turns.tick(rig.run)
-    assert rig.sim.paused and rig.sim.step_index == 20
+    assert rig.sim.paused and rig.sim.clock.k == 20
     assert "no command stamped 0.02 s (turn 1) on ~/torque within the timeout of 2 s" in progress.lockstep_timeout
     # resumed: the turn is still open, and its timeout counts again from the resume
     rig.sim.pause(False)
@@ -112,7 +112,7 @@ def test_a_controller_that_stops_answering_pauses_the_run_with_the_reason():
     assert not rig.sim.paused and rig.turns.waiting
     rig.answer()
     rig.turns.tick(rig.run)
-    assert rig.sim.step_index == 40
+    assert rig.sim.clock.k == 40
 
 
 def test_hold_goes_on_with_the_last_command():
@@ -122,7 +122,7 @@ def test_hold_goes_on_with_the_last_command():
     rig.now += 2.5
     progress = rig.turns.tick(rig.run)
     assert "holding" in progress.lockstep_timeout and not rig.sim.paused
-    assert rig.sim.step_index == 40 and rig.turns.timeouts == 1
+    assert rig.sim.clock.k == 40 and rig.turns.timeouts == 1
     np.testing.assert_array_equal(rig.published.states[-1].torque_body, [0.0, 0.0, 0.01])
 
 
@@ -141,21 +141,21 @@ def test_reset_and_set_state_reopen_the_turn_and_step_passes_turns():
     rig.turns.tick(rig.run)
     rig.answer()
     rig.turns.tick(rig.run)
-    assert rig.sim.step_index == 40
+    assert rig.sim.clock.k == 40
     rig.sim.reset()
     rig.turns.tick(rig.run)
-    assert rig.sim.step_index == 0 and rig.turns.waiting  # turn 0 again, its answer needed again
+    assert rig.sim.clock.k == 0 and rig.turns.waiting  # turn 0 again, its answer needed again
     rig.answer(stamp=0.0)
     rig.sim.set_state([0.0, 0.0, 0.0, 1.0], [0.0, 0.0, 0.1])
     assert not rig.turns.answered
     rig.turns.tick(rig.run)
-    assert rig.sim.step_index == 0 and rig.turns.waiting  # the answer was to the old state
+    assert rig.sim.clock.k == 0 and rig.turns.waiting  # the answer was to the old state
     rig.sim.pause(True)
-    rig.run.run(rig.sim.step_index + 45, None)  # ~/step: through turns without waiting
-    assert rig.sim.step_index == 45
+    rig.run.run(rig.sim.clock.k + 45, None)  # ~/step: through turns without waiting
+    assert rig.sim.clock.k == 45
     rig.sim.pause(False)
     rig.turns.tick(rig.run)
-    assert rig.sim.step_index == 60 and rig.turns.waiting
+    assert rig.sim.clock.k == 60 and rig.turns.waiting
 
 
 def test_states_do_not_depend_on_when_the_answers_arrive():

@@ -3,12 +3,12 @@
 The run driver is tested on a fake clock and a fake simulator whose steps cost fake wall time.
 """
 
-import math
 from types import SimpleNamespace
 
 import numpy as np
 import pytest
 
+from rigid_rot_sim.run.clock import StepClock
 from rigid_rot_sim.run.observer import SimulationObserver
 from rigid_rot_sim.run.pacing import (
     MAX_BACKLOG_WALL,
@@ -67,31 +67,21 @@ class FakeClock:
 
 
 class FakeSim:
-    """The Simulator's stepping API on a uniform grid; each step costs ``step_wall`` s of the fake clock."""
+    """The Simulator's stepping API on a real step clock; each step costs ``step_wall`` s of the fake wall clock."""
 
-    def __init__(self, clock: FakeClock, dt: float = 0.01, step_wall: float = 0.0, fail_at: int | None = None) -> None:
-        self.clock, self.dt, self.step_wall, self.fail_at = clock, dt, step_wall, fail_at
-        self.step_index = 0
+    def __init__(self, wall: FakeClock, dt: float = 0.01, step_wall: float = 0.0, fail_at: int | None = None) -> None:
+        self.wall, self.step_wall, self.fail_at = wall, step_wall, fail_at
+        self.clock = StepClock(dt)
+        self.stepper = SimpleNamespace(method="rk4")
         self.paused = False
         self.failure = None
-        self.method = "rk4"
         self.slices: list[tuple[int, int]] = []
 
-    @property
-    def t(self) -> float:
-        return self.step_index * self.dt
-
-    def step_at_or_before(self, t: float) -> int:
-        return math.floor(t / self.dt + 1e-9)
-
-    def step_at_or_after(self, t: float) -> int:
-        return math.ceil(t / self.dt - 1e-9)
-
     def advance_to(self, k: int) -> int:
-        start = self.step_index
+        start = self.clock.k
         end = k if self.fail_at is None else min(k, self.fail_at)
-        self.step_index = end
-        self.clock.now += (end - start) * self.step_wall
+        self.clock.k = end
+        self.wall.now += (end - start) * self.step_wall
         self.slices.append((start, end))
         if self.fail_at is not None and end == self.fail_at:
             self.failure = "NonFiniteStateError: test"
@@ -99,7 +89,7 @@ class FakeSim:
         return end - start
 
     def snapshot(self):
-        return SimpleNamespace(t=self.t, angular_velocity_body=np.array([3.0, 4.0, 0.0]), torque_body=np.zeros(3))
+        return SimpleNamespace(t=self.clock.t, angular_velocity_body=np.array([3.0, 4.0, 0.0]), torque_body=np.zeros(3))
 
 
 class Due(SimulationObserver):
@@ -114,7 +104,7 @@ class Due(SimulationObserver):
 def driver(clock, sim, rtf=0.0, periods=None, duration=None):
     due = Due()
     run = RunDriver(sim, OutputSchedule(periods or {}), Pacer(rtf, clock), duration, observers=[due])
-    run.pacer.anchor(sim.t)
+    run.pacer.anchor(sim.clock.t)
     return run, due
 
 
@@ -143,7 +133,7 @@ def test_paced_run_reaches_the_step_due_by_the_wall_clock_and_reports_due_output
     run, due = driver(clock, sim, rtf=2.0, periods={"state": 5})
     clock.now += 0.1  # 0.2 s of sim time at r = 2: step 20
     progress = run.tick()
-    assert sim.step_index == 20 and progress.steps == 20 and progress.falling_behind is None
+    assert sim.clock.k == 20 and progress.steps == 20 and progress.falling_behind is None
     assert [step for step, _ in due.calls] == [5, 10, 15, 20]  # slices stop at each due output
     assert run.tick().steps == 0  # no wall time passed: nothing due
 
@@ -158,9 +148,9 @@ def test_a_backlog_beyond_the_limit_is_dropped_with_the_reason():
     # the fake steps cost nothing: the 0.8 s were lost elsewhere, and the warning says so
     assert "not the physics" in progress.falling_behind and "the other 0.80 s it did not run" in progress.falling_behind
     # re-anchored: only half a tick of sim time ahead, not the 0.8 s missed
-    assert sim.step_index == sim.step_at_or_before(MAX_TICK_WALL * 0.5) == 1
+    assert sim.clock.k == sim.clock.step_at_or_before(MAX_TICK_WALL * 0.5) == 1
     clock.now += 0.05
-    assert run.tick().falling_behind is None and sim.step_index == 6  # paced again from the new anchor
+    assert run.tick().falling_behind is None and sim.clock.k == 6  # paced again from the new anchor
 
 
 def test_slices_hold_the_executor_about_the_budget_whatever_a_step_costs():
@@ -170,14 +160,14 @@ def test_slices_hold_the_executor_about_the_budget_whatever_a_step_costs():
     run.step_cost.per_step = 0.004
     began = clock.now
     run.tick()  # as fast as possible: stops at the deadline
-    assert sim.step_index == 5 and clock.now - began == pytest.approx(MAX_TICK_WALL)
+    assert sim.clock.k == 5 and clock.now - began == pytest.approx(MAX_TICK_WALL)
     sim.step_wall = 0.2  # a step suddenly 50x slower (taylor at a huge |omega| dt)
     began = clock.now
     run.tick()
     assert clock.now - began <= MAX_TICK_WALL + 5 * 0.2  # the first slice, sized on the old cost
-    began, steps = clock.now, sim.step_index
+    began, steps = clock.now, sim.clock.k
     run.tick()
-    assert sim.step_index - steps == 1 and clock.now - began == pytest.approx(0.2)  # at most one slow step
+    assert sim.clock.k - steps == 1 and clock.now - began == pytest.approx(0.2)  # at most one slow step
 
 
 def test_a_paused_run_does_not_step_and_resumes_from_a_new_anchor():
@@ -186,11 +176,11 @@ def test_a_paused_run_does_not_step_and_resumes_from_a_new_anchor():
     run, _ = driver(clock, sim, rtf=1.0)
     sim.paused = True
     clock.now += 0.3
-    assert run.tick().steps == 0 and sim.step_index == 0
+    assert run.tick().steps == 0 and sim.clock.k == 0
     sim.paused = False
-    run.pacer.anchor(sim.t)  # as ~/pause data=false does
+    run.pacer.anchor(sim.clock.t)  # as ~/pause data=false does
     clock.now += 0.1
-    assert run.tick().falling_behind is None and sim.step_index == 10  # the paused time is not caught up
+    assert run.tick().falling_behind is None and sim.clock.k == 10  # the paused time is not caught up
 
 
 def test_the_duration_ends_the_run_with_every_output_on_the_final_state_once():
@@ -198,7 +188,7 @@ def test_the_duration_ends_the_run_with_every_output_on_the_final_state_once():
     sim = FakeSim(clock)
     run, due = driver(clock, sim, rtf=0.0, periods={"state": 4, "clock": 1}, duration=0.1)
     progress = run.tick()
-    assert progress.finished and run.finished and sim.step_index == 10
+    assert progress.finished and run.finished and sim.clock.k == 10
     assert due.calls[-2:] == [(10, ("clock",)), (10, ("state",))]  # due ones, then the rest: none twice
     assert run.tick().steps == 0 and len(due.calls) == 11  # finished: nothing more
     run.restart()  # after a reset
@@ -210,7 +200,7 @@ def test_a_failure_stops_the_slice_and_reports_every_output():
     sim = FakeSim(clock, fail_at=7)
     run, due = driver(clock, sim, rtf=0.0, periods={"state": 5, "clock": 1})
     progress = run.tick()
-    assert progress.failure == "NonFiniteStateError: test" and sim.step_index == 7
+    assert progress.failure == "NonFiniteStateError: test" and sim.clock.k == 7
     assert due.calls[-1] == (7, ("state", "clock"))
     assert run.tick().steps == 0  # paused by the failure
 
@@ -220,7 +210,7 @@ def test_a_step_request_runs_to_its_target_within_its_budget():
     sim = FakeSim(clock, step_wall=0.001)
     run, _ = driver(clock, sim)
     sim.paused = True
-    assert run.run(25, clock() + 0.25).steps == 25 and sim.step_index == 25
+    assert run.run(25, clock() + 0.25).steps == 25 and sim.clock.k == 25
     sim.step_wall = 0.1
     run.step_cost.per_step = 0.1
     assert run.run(50, clock() + 0.25).steps < 25  # stopped short at the budget; the reply says so
@@ -235,7 +225,7 @@ def test_the_next_tick_is_due_when_the_next_output_is_and_never_while_paused():
     assert run.next_wait() == pytest.approx(0.015, abs=1e-5)  # the steps before it wait for it (no tick for them)
     clock.now += 0.015
     run.tick()
-    assert sim.step_index == 5 and run.next_wait() == pytest.approx(2 * 0.01 / 2.0, abs=1e-5)  # then the end, step 7
+    assert sim.clock.k == 5 and run.next_wait() == pytest.approx(2 * 0.01 / 2.0, abs=1e-5)  # then the end, step 7
     sim.paused = True
     assert run.next_wait() is None  # paused: nothing is due until something changes
     sim.paused = False
@@ -251,7 +241,7 @@ def test_a_run_loop_takes_its_commands_between_the_chunks_of_a_long_call():
     sim = FakeSim(clock)
     run, _ = driver(clock, sim, rtf=0.0, periods={"state": 4})
     calls: list[int] = []
-    run.between_chunks = lambda: calls.append(sim.step_index) or 0
+    run.between_chunks = lambda: calls.append(sim.clock.k) or 0
     run.run(12, None)  # three chunks: 0-4, 4-8, 8-12
     # between two chunks only: none before the first (the caller took them just before), none after the
     # last (the caller takes them just after: in lockstep, the answer to the state published last)
@@ -275,10 +265,10 @@ def test_the_node_simulate_and_the_sweep_take_the_same_number_of_steps(duration)
     sim = Simulator(scene)
     clock = FakeClock()
     run = RunDriver(sim, OutputSchedule({}), Pacer(0.0, clock), duration)
-    run.pacer.anchor(sim.t)
+    run.pacer.anchor(sim.clock.t)
     while not run.tick().finished:
         pass
     trajectory = simulate([1.0, 2.0, 3.0], [0.0, 0.0, 0.0], t_end=duration, dt=dt, method="rk4", save_every=1)
     n_full, last = step_grid(duration, dt)  # what the sweep's chunks take
-    assert sim.step_index == len(trajectory.t) - 1 == n_full + (last > 0.0)
+    assert sim.clock.k == len(trajectory.t) - 1 == n_full + (last > 0.0)
     assert trajectory.t[-1] == duration

@@ -50,16 +50,16 @@ def states_equal(a, b) -> bool:
 def test_time_is_step_count_times_dt():
     sim = driven()
     sim.advance(7)
-    assert sim.step_index == 7 and sim.t == 7 * 0.01
+    assert sim.clock.k == 7 and sim.clock.t == 7 * 0.01
     sim.advance(993)
-    assert sim.t == 1000 * 0.01  # not an accumulated sum of 0.01s
+    assert sim.clock.t == 1000 * 0.01  # not an accumulated sum of 0.01s
 
 
 def test_command_takes_effect_at_the_next_boundary_and_holds():
     sim = driven()
     sim.advance(3)
     command = sim.receive_torque("hold_in", [0.0, 0.0, 0.2])
-    assert command.receipt_time == command.effective_time == sim.t and command.step == 3
+    assert command.receipt_time == command.effective_time == sim.clock.t and command.step == 3
     sim.advance(10)
     assert omega(sim)[2] == pytest.approx(0.2 * 10 * 0.01 / I3, rel=1e-12)
     sim.advance(10)  # held until replaced
@@ -75,7 +75,7 @@ def test_timeout_input_falls_back_to_zero_after_its_sim_time_timeout():
     sim.advance(20)
     # the command lasted 0.05 s = 5 steps
     assert omega(sim)[2] == pytest.approx(1.0 * 0.05 / I3, rel=1e-12)
-    assert sim.held_torques() == {}
+    assert sim.commands.held_torques() == {}
 
 
 def test_a_new_command_restarts_the_timeout():
@@ -96,7 +96,7 @@ def test_future_stamp_delays_the_command_and_past_stamp_means_now():
     sim.advance(5)
     assert omega(sim)[2] == pytest.approx(0.05 / I3, rel=1e-12)
     past = sim.receive_torque("hold_in", [0.0, 0.0, 0.0], stamp=0.01)
-    assert past.effective_time == sim.t and past.step == sim.step_index
+    assert past.effective_time == sim.clock.t and past.step == sim.clock.k
 
 
 def test_stamp_between_boundaries_rounds_up_to_the_next_one():
@@ -166,14 +166,14 @@ def _run_sequence(sim, chunks, feed):
         120: ("world_in", [0.05, 0.0, 0.0], "world", 0.0),
         200: ("hold_in", [0.0, 0.0, 0.0], "", 2.5),
     }
-    while sim.step_index < 300:
-        k = sim.step_index
+    while sim.clock.k < 300:
+        k = sim.clock.k
         if k in schedule:
             feed(sim, *schedule[k])
         n = min(chunks(k), 300 - k)
         nxt = min([s for s in schedule if s > k] + [300])
         sim.advance(min(n, nxt - k))
-        snapshots[sim.step_index] = sim.snapshot()
+        snapshots[sim.clock.k] = sim.snapshot()
     return snapshots
 
 
@@ -201,8 +201,8 @@ def test_every_method_gives_the_same_bits_whatever_the_chunking(method):
         sim.set_state([0.1, 0.2, 0.3, 0.9], [0.5, -0.3, 1.0])
         sim.receive_torque("hold_in", [0.0, 0.1, 0.2])
         sim.submit_torque("world_in", [0.05, 0.0, 0.0], "world", 0.555)
-        while sim.step_index < 120:
-            assert sim.advance(min(chunk, 120 - sim.step_index)) > 0, sim.failure
+        while sim.clock.k < 120:
+            assert sim.advance(min(chunk, 120 - sim.clock.k)) > 0, sim.failure
         return sim.snapshot()
 
     one, seven, all_at_once = run(1), run(7), run(1000)
@@ -287,7 +287,7 @@ def test_reset_restores_the_initial_state_and_clears_commands():
     sim.apply_torque([1.0, 0.0, 0.0], "", 10.0)
     sim.advance(50)
     sim.reset()
-    assert sim.step_index == 0 and sim.held_torques() == {}
+    assert sim.clock.k == 0 and sim.commands.held_torques() == {}
     assert states_equal(sim.snapshot(), initial)
     sim.advance(50)
     assert np.all(omega(sim) == 0.0)
@@ -329,7 +329,7 @@ def test_step_requires_pause():
     with pytest.raises(ValueError, match="not paused"):
         sim.step(3)
     sim.pause(True)
-    assert sim.step(3) == 3 and sim.step_index == 3
+    assert sim.step(3) == 3 and sim.clock.k == 3
     with pytest.raises(ValueError, match="steps must be an integer >= 1"):
         sim.step(0)
 
@@ -340,9 +340,9 @@ def test_changing_dt_keeps_time_continuous_and_recomputes_pending_steps():
     pending = sim.receive_torque("hold_in", [0, 0, 1.0], stamp=0.5)
     assert pending.step == 50
     sim.set_integrator(dt=0.02)
-    assert sim.t == pytest.approx(0.1, abs=0) and sim.dt == 0.02
+    assert sim.clock.t == pytest.approx(0.1, abs=0) and sim.clock.dt == 0.02
     sim.advance(20)
-    assert sim.t == pytest.approx(0.5, rel=1e-15) and omega(sim)[2] == 0.0
+    assert sim.clock.t == pytest.approx(0.5, rel=1e-15) and omega(sim)[2] == 0.0
     sim.advance(5)
     assert omega(sim)[2] == pytest.approx(0.1 / I3, rel=1e-12)
     with pytest.raises(ValueError, match="unknown integrator"):
@@ -351,7 +351,7 @@ def test_changing_dt_keeps_time_continuous_and_recomputes_pending_steps():
         sim.check_integrator("exact", 0.01)
     with pytest.raises(ValueError, match="cannot run"):
         sim.set_integrator("exact")
-    assert sim.method == "rk4"
+    assert sim.stepper.method == "rk4"
 
 
 @pytest.mark.parametrize(
@@ -364,7 +364,7 @@ def test_changing_dt_keeps_time_continuous_and_recomputes_pending_steps():
     ],
 )
 def test_auto_choice_follows_the_scene(scene, expected):
-    assert Simulator(load_scene(SCENES / f"{scene}.yaml")).method == expected
+    assert Simulator(load_scene(SCENES / f"{scene}.yaml")).stepper.method == expected
 
 
 def test_auto_integrator_takes_commands_from_rest():
@@ -445,8 +445,8 @@ def exercise(sim: Simulator) -> None:
     sim.advance(3)
     sim.receive_torque("hold_in", [0.0, 0.0, 0.2])
     sim.advance(2)
-    sim.receive_torque("timeout_in", [0.1, 0.0, 0.0], "world", stamp=sim.t + 0.034)
-    sim.submit_torque("world_in", [0.0, 0.3, 0.0], "world", sim.t + 0.02)
+    sim.receive_torque("timeout_in", [0.1, 0.0, 0.0], "world", stamp=sim.clock.t + 0.034)
+    sim.submit_torque("world_in", [0.0, 0.3, 0.0], "world", sim.clock.t + 0.02)
     sim.advance(4)
     sim.apply_torque([0.0, 0.0, 1.0], "body", 0.05)
     sim.advance(5)
@@ -522,7 +522,7 @@ def test_the_reports_re_simulate_the_run_bit_for_bit():
         elif name == "integrator_changed":
             method, dt, options = args
             replay.set_integrator(method, dt, options)
-    replay.advance_to(sim.step_index)
+    replay.advance_to(sim.clock.k)
     a, b = sim.snapshot(), replay.snapshot()
     assert a.t == b.t and a.step == b.step
     for field in ("orientation", "angular_velocity_body", "torque_body"):
@@ -594,7 +594,7 @@ def test_a_failure_is_reported_at_the_last_good_step():
     sim.advance(10_000)
     assert sim.failure is not None
     assert observer.names() == ["state_set", "failed"]
-    assert observer.calls[1][1:] == (sim.step_index, sim.failure)
+    assert observer.calls[1][1:] == (sim.clock.k, sim.failure)
 
 
 def test_observers_change_nothing_and_hear_in_the_order_added():

@@ -50,7 +50,7 @@ def test_huge_torque_stops_the_run_quickly_with_a_reason_and_reset_resumes_it(me
     assert all_finite(sim.snapshot())
     # item 1: reset answered success but the run stayed paused until ~/pause false
     sim.reset()
-    assert sim.failure is None and not sim.paused and sim.step_index == 0
+    assert sim.failure is None and not sim.paused and sim.clock.k == 0
     assert sim.advance(10) == 10
 
 
@@ -103,7 +103,7 @@ def test_max_torque_rejects_commands_above_it_with_the_reason():
     with pytest.raises(CommandRejected, match="exceeds max_torque"):
         sim.apply_torque([0.0, 3.0, 0.0], "", 1.0)
     sim.receive_torque("~/torque", [1.0, 1.0, 1.0], "base_link")  # |tau| = 1.73 N*m
-    assert sim.held_torques() == {} and sim.advance(2) == 2 and sim.held_torques()
+    assert sim.commands.held_torques() == {} and sim.advance(2) == 2 and sim.commands.held_torques()
 
 
 def test_torque_components_beyond_the_magnitude_limit_are_rejected():

@@ -42,7 +42,7 @@ def test_torque_for_steps_then_steps_equals_a_topic_command_then_steps_bit_for_b
         sim.step(37)  # start away from t = 0
     topic.receive_torque("torque", torque, frame)
     command = torque_for_steps(applied, torque, frame, 250)
-    assert command.step == applied.step_index
+    assert command.step == applied.clock.k
     for _ in range(5):  # compared at every 50th boundary, and the stepping split differently
         topic.step(50)
         applied.step(25)

@@ -175,7 +175,7 @@ def test_the_shipped_spacecraft_scenes_run(name):
     scene = load_scene(SCENES / f"{name}.yaml")
     sim = Simulator(scene)
     start = sim.snapshot()
-    steps = round(scene.duration / sim.dt)
+    steps = round(scene.duration / sim.clock.dt)
     assert sim.advance(steps) == steps and sim.failure is None
     end = sim.snapshot()
     if name == "wheel_slew":
