@@ -62,6 +62,9 @@ def module_of(path: str) -> str:
 def test_the_ratchet_only_shrinks(tmp_path):
     """Run mypy once more without the ratchet: every listed module must still have errors."""
     text = (ROOT / "pyproject.toml").read_text(encoding="utf-8")
+    if not ratchet_modules():  # the ratchet is empty: nothing is exempt, in any override
+        assert not re.search(r"(?m)^ignore_errors = true$", text)
+        return
     without = re.sub(r"(?m)^ignore_errors = true$", "ignore_errors = false", text)
     assert without != text, "no `ignore_errors = true` line found: the ratchet's format changed, update this test"
     config = tmp_path / "pyproject.toml"

@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import math
 import time
+from collections.abc import Callable
 from typing import Any, Protocol
 
 from geometry_msgs.msg import Vector3Stamped, WrenchStamped
@@ -96,26 +97,27 @@ class TorqueInputs:
         for spec in scene.topic_inputs:
             msg_type = WrenchStamped if spec.message_type == "WrenchStamped" else Vector3Stamped
             topic = node.resolve_topic_name(spec.topic)
-            subscription = intake.subscribe(
-                msg_type,
-                spec.topic,
-                lambda msg, received_ns, source=spec.topic, topic=topic: self.torque_callback(
-                    msg, source, topic, received_ns
-                ),
-                qos,
-            )
+            subscription = intake.subscribe(msg_type, spec.topic, self._handler(spec.topic, topic), qos)
             self.subscriptions.append(subscription)
             if spec.message_type == "WrenchStamped":
                 node.get_logger().info(
                     f"{topic}: only wrench.torque acts on the body; a command with a non-zero wrench.force is rejected"
                 )
 
+    def _handler(self, source: str, topic: str) -> Callable[[Any, int], None]:
+        """The intake's handler of one topic input: its messages to :meth:`torque_callback`."""
+
+        def handle(msg: Any, received_ns: int) -> None:
+            self.torque_callback(msg, source, topic, received_ns)
+
+        return handle
+
     def describe(self) -> tuple[list[str], list[str]]:
         """For the start-up line: (what was built, what was left out and why)."""
         if not self.subscriptions:
             return [], ["torque subscriptions (no topic input)"]
         built = []
-        for spec, subscription in zip(self.topic_inputs, self.subscriptions):
+        for spec, subscription in zip(self.topic_inputs, self.subscriptions, strict=True):
             hold = "hold until replaced" if spec.timeout is None else f"zero {spec.timeout:g} s after the last command"
             depth = subscription.qos_profile.depth
             built.append(

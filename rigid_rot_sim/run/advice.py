@@ -253,14 +253,14 @@ def omega_bound(scene: Scene, body: RigidBody) -> float:
         assert scene.body.mass is not None and scene.body.center_of_mass is not None
         com_body = np.array(scene.body.center_of_mass, dtype=float)
         weight = scene.body.mass * scene.gravity.acceleration
-        v0 = weight * quat.rotate(scene.initial.orientation, com_body)[2]  # type: ignore[arg-type]
+        v0 = weight * quat.rotate(scene.initial.orientation, com_body)[2]
         t0 = 0.5 * float(omega0 @ body.inertia_tensor @ omega0)
         reach = weight * float(np.linalg.norm(com_body))
         return math.sqrt(2.0 * max(t0 + v0 + reach, 0.0) / i_min)
     impulse = 0.0
     for schedule in scene.schedules:
         segments = schedule.segments
-        for this, following in zip(segments, segments[1:]):
+        for this, following in zip(segments, segments[1:], strict=False):  # pairwise
             impulse += math.hypot(*this.torque) * (following.start - this.start)
         if math.hypot(*segments[-1].torque) > 0.0 and scene.duration is not None:
             impulse += math.hypot(*segments[-1].torque) * max(scene.duration - segments[-1].start, 0.0)
