@@ -60,6 +60,7 @@ def start(node: Node, sim: Simulator) -> SimulationObserver | None:
         return None
 
     publisher = node.create_publisher(DiagnosticStatus, TOPIC, QOS)
-    live = NodeRecording(_Publishing(publisher), sim, node.get_logger())  # type: ignore[arg-type]
+    # the observer only calls `active` and `record_event` (the events), which _Publishing has of a RunRecorder
+    live = NodeRecording(_Publishing(publisher), sim, node.get_logger())  # type: ignore[arg-type]  # events only
     sim.add_observer(live)
     return live

@@ -7,13 +7,11 @@ import os
 import time
 
 import pytest
+import rclpy
+from geometry_msgs.msg import Vector3Stamped, WrenchStamped
+from rclpy.qos import QoSProfile
 
-rclpy = pytest.importorskip("rclpy")
-
-from geometry_msgs.msg import Vector3Stamped, WrenchStamped  # noqa: E402
-from rclpy.qos import QoSProfile  # noqa: E402
-
-from rigid_rot_sim.ros.intake import CommandIntake, Door  # noqa: E402
+from rigid_rot_sim.ros.intake import CommandIntake, Door
 
 
 @pytest.fixture
