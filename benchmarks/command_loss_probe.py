@@ -40,12 +40,12 @@ import time
 os.environ.setdefault("ROS_DOMAIN_ID", str(os.getpid() % 100 + 120))
 os.environ.setdefault("ROS_AUTOMATIC_DISCOVERY_RANGE", "LOCALHOST")
 
-import rclpy  # noqa: E402
-from geometry_msgs.msg import WrenchStamped  # noqa: E402
-from rclpy.clock import Clock  # noqa: E402
-from rclpy.clock_type import ClockType  # noqa: E402
-from rclpy.executors import MultiThreadedExecutor, SingleThreadedExecutor  # noqa: E402
-from rclpy.qos import QoSProfile  # noqa: E402
+import rclpy
+from geometry_msgs.msg import WrenchStamped
+from rclpy.clock import Clock
+from rclpy.clock_type import ClockType
+from rclpy.executors import MultiThreadedExecutor, SingleThreadedExecutor
+from rclpy.qos import QoSProfile
 
 TOPIC = "/probe_torque"
 DEPTH = 10

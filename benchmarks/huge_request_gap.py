@@ -32,11 +32,11 @@ os.environ.setdefault("ROS_DOMAIN_ID", str(os.getpid() % 100 + 1))
 os.environ["ROS_AUTOMATIC_DISCOVERY_RANGE"] = "LOCALHOST"
 os.environ["PYTHONUNBUFFERED"] = "1"
 
-import rclpy  # noqa: E402
-from rclpy.executors import SingleThreadedExecutor  # noqa: E402
+import rclpy
+from rclpy.executors import SingleThreadedExecutor
 
-from rigid_rot_msgs.msg import RigidBodyState  # noqa: E402
-from rigid_rot_sim.ros.qos import STATE_QOS  # noqa: E402
+from rigid_rot_msgs.msg import RigidBodyState
+from rigid_rot_sim.ros.qos import STATE_QOS
 
 ROOT = Path(__file__).resolve().parents[1]
 SCENE = ROOT / "config" / "scenes" / "free_tumble.yaml"

@@ -91,13 +91,13 @@ def write_bag(path: Path, t: np.ndarray, omega: np.ndarray, torque: TorqueSchedu
         writer.finish()
 
 
-def timed(run):  # noqa: ANN001, ANN201
+def timed(run):
     cpu, wall = time.process_time(), time.perf_counter()
     out = run()
     return out, time.process_time() - cpu, time.perf_counter() - wall
 
 
-def ours(path: Path):  # noqa: ANN201
+def ours(path: Path):
     data = read_bag(path, BagInputs(imu="/imu", torque=("/torque",)))
     return identify(data.measurements, segment=SEGMENT)
 

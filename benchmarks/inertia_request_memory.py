@@ -25,10 +25,10 @@ from pathlib import Path
 os.environ.setdefault("ROS_DOMAIN_ID", str(os.getpid() % 100 + 1))
 os.environ["ROS_AUTOMATIC_DISCOVERY_RANGE"] = "LOCALHOST"
 
-import rclpy  # noqa: E402
-from geometry_msgs.msg import Point  # noqa: E402
+import rclpy
+from geometry_msgs.msg import Point
 
-from rigid_rot_msgs.srv import ComputeInertia  # noqa: E402
+from rigid_rot_msgs.srv import ComputeInertia
 
 SERVICE = "/rigid_rot_sim/compute_inertia"
 

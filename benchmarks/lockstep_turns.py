@@ -34,12 +34,12 @@ import time
 os.environ.setdefault("ROS_DOMAIN_ID", str(os.getpid() % 100 + 101))
 os.environ.setdefault("ROS_AUTOMATIC_DISCOVERY_RANGE", "LOCALHOST")
 
-import rclpy  # noqa: E402
-from geometry_msgs.msg import WrenchStamped  # noqa: E402
-from rclpy.qos import QoSProfile, ReliabilityPolicy  # noqa: E402
-from std_srvs.srv import SetBool  # noqa: E402
+import rclpy
+from geometry_msgs.msg import WrenchStamped
+from rclpy.qos import QoSProfile, ReliabilityPolicy
+from std_srvs.srv import SetBool
 
-from rigid_rot_msgs.msg import RigidBodyState  # noqa: E402
+from rigid_rot_msgs.msg import RigidBodyState
 
 QOS = QoSProfile(depth=10, reliability=ReliabilityPolicy.RELIABLE)
 PERIOD = 0.02  # s of sim time per turn in closed_loop_lockstep

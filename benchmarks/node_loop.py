@@ -40,14 +40,14 @@ from pathlib import Path
 os.environ.setdefault("ROS_DOMAIN_ID", str(os.getpid() % 100 + 140))
 os.environ.setdefault("ROS_AUTOMATIC_DISCOVERY_RANGE", "LOCALHOST")
 
-import rclpy  # noqa: E402
-from geometry_msgs.msg import WrenchStamped  # noqa: E402
-from rclpy.qos import QoSProfile  # noqa: E402
+import rclpy
+from geometry_msgs.msg import WrenchStamped
+from rclpy.qos import QoSProfile
 
-from rigid_rot_msgs.msg import RigidBodyState  # noqa: E402
+from rigid_rot_msgs.msg import RigidBodyState
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
-import lockstep_turns  # noqa: E402  # beside this file
+import lockstep_turns  # beside this file
 
 ROOT = Path(__file__).resolve().parents[1]
 SCENE = ROOT / "config" / "scenes" / "torque_driven.yaml"

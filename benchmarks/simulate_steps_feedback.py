@@ -22,15 +22,15 @@ import time
 os.environ.setdefault("ROS_DOMAIN_ID", str(os.getpid() % 100 + 101))
 os.environ.setdefault("ROS_AUTOMATIC_DISCOVERY_RANGE", "LOCALHOST")
 
-import rclpy  # noqa: E402
-from rclpy.action import ActionClient  # noqa: E402
-from rclpy.executors import SingleThreadedExecutor  # noqa: E402
-from rclpy.parameter import Parameter  # noqa: E402
-from simulation_interfaces.action import SimulateSteps  # noqa: E402
+import rclpy
+from rclpy.action import ActionClient
+from rclpy.executors import SingleThreadedExecutor
+from rclpy.parameter import Parameter
+from simulation_interfaces.action import SimulateSteps
 
-from rigid_rot_sim.ros import simulate_steps  # noqa: E402
-from rigid_rot_sim.ros.node import RigidRotSimNode  # noqa: E402
-from rigid_rot_sim.share import ensure_ament_prefix_path, resolve_scene  # noqa: E402
+from rigid_rot_sim.ros import simulate_steps
+from rigid_rot_sim.ros.node import RigidRotSimNode
+from rigid_rot_sim.share import ensure_ament_prefix_path, resolve_scene
 
 
 def one_goal(steps: int, rate: float) -> tuple[float, int]:

@@ -14,7 +14,7 @@ import matplotlib
 import numpy as np
 
 matplotlib.use("Agg")
-import matplotlib.pyplot as plt  # noqa: E402
+import matplotlib.pyplot as plt
 
 #: Errors below this (exact to round-off) are drawn at it, so that they stay on a log axis.
 ERROR_CLIP = 1e-16

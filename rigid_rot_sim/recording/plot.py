@@ -28,7 +28,7 @@ from rigid_rot_sim.recording.resim import SENSOR_TYPES, STATE_TYPE
 from rigid_rot_sim.scene.scene import parse_scene_text
 
 matplotlib.use("Agg")
-import matplotlib.pyplot as plt  # noqa: E402
+import matplotlib.pyplot as plt
 
 _AXIS_COLOURS = ("tab:red", "tab:green", "tab:blue")
 

@@ -107,7 +107,7 @@ class Recorder:
         self._finished = False
         try:
             self.path.parent.mkdir(parents=True, exist_ok=True)
-            self._stream = open(self.path, "wb")  # noqa: SIM115 - closed in finish()
+            self._stream = open(self.path, "wb")
         except OSError as exc:
             raise RecorderError(f"cannot record to {self.path}: {exc.strerror or exc}") from exc
         self._writer = Writer(self._stream, chunk_size=chunk_size, compression=_COMPRESSIONS[compression])

@@ -7,10 +7,10 @@ import pytest
 
 pytest.importorskip("rigid_rot_msgs.msg")
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "recording"))
-from test_resim import COMMANDS, record_like_the_node  # noqa: E402
+from test_resim import COMMANDS, record_like_the_node
 
-from rigid_rot_sim.cli import main  # noqa: E402
-from rigid_rot_sim.recording.reader import BagReader  # noqa: E402
+from rigid_rot_sim.cli import main
+from rigid_rot_sim.recording.reader import BagReader
 
 
 @pytest.fixture(scope="module")

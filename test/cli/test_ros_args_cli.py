@@ -9,7 +9,7 @@ import sys
 from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "recording"))
-from test_resim import COMMANDS, record_like_the_node  # noqa: E402
+from test_resim import COMMANDS, record_like_the_node
 
 RIGID_ROT = str(Path(sys.executable).with_name("rigid-rot"))
 

@@ -17,16 +17,16 @@ import numpy as np
 import pytest
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
-import foxglove  # noqa: E402,F401  (the viewer extra: make setup installs it, so these tests always run)
-from e2e_helpers import WAIT  # noqa: E402
-from foxglove_client import FoxgloveClient  # noqa: E402
+import foxglove  # noqa: F401  (the viewer extra: make setup installs it, so these tests always run)
+from e2e_helpers import WAIT
+from foxglove_client import FoxgloveClient
 
-from rigid_rot_sim.core.inertia import equivalent_box, principal_frame  # noqa: E402
-from rigid_rot_sim.recording.definitions import dynamic_decoder  # noqa: E402
-from rigid_rot_sim.recording.reader import BagReader  # noqa: E402
-from rigid_rot_sim.run.body_view import body_view  # noqa: E402
-from rigid_rot_sim.scene.scene import load_scene  # noqa: E402
-from rigid_rot_sim.share import resolve_scene  # noqa: E402
+from rigid_rot_sim.core.inertia import equivalent_box, principal_frame
+from rigid_rot_sim.recording.definitions import dynamic_decoder
+from rigid_rot_sim.recording.reader import BagReader
+from rigid_rot_sim.run.body_view import body_view
+from rigid_rot_sim.scene.scene import load_scene
+from rigid_rot_sim.share import resolve_scene
 
 STATE_TYPE = "rigid_rot_msgs/msg/RigidBodyState"
 PORT = re.compile(r"Foxglove live server ws://127\.0\.0\.1:(\d+)")

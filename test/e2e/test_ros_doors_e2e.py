@@ -33,7 +33,7 @@ from rigid_rot_sim.recording.reader import BagReader
 from rigid_rot_sim.recording.resim import resimulate
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
-from test_simulate_steps_e2e import _reply  # noqa: E402 (a reply lost by a fresh server is asked for again)
+from test_simulate_steps_e2e import _reply
 
 MOMENTS = (10.0, 12.0, 15.0)
 SPIN = 0.01  # kg*m^2

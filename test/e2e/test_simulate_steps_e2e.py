@@ -18,8 +18,8 @@ import pytest
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
-from test_node_e2e import SCENES, stamp  # noqa: E402 (collector: a conftest fixture)
-from test_vendored_interfaces import UPSTREAM_1_5_1_ACTION  # noqa: E402
+from test_node_e2e import SCENES, stamp
+from test_vendored_interfaces import UPSTREAM_1_5_1_ACTION
 
 ACTION = "/rigid_rot_sim/simulate_steps"
 SUCCEEDED, CANCELED, ABORTED = 4, 5, 6  # action_msgs/msg/GoalStatus

@@ -16,7 +16,7 @@ import pytest
 import yaml
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
-from test_node_e2e import NODE, SCENES, stamp  # noqa: E402 (collector: a conftest fixture)
+from test_node_e2e import NODE, SCENES, stamp
 
 WORLD, BODY = "map_test", "satellite"
 

@@ -24,9 +24,9 @@ import numpy as np
 import pytest
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
-import viser  # noqa: E402,F401  (the web extra: make setup installs it, so these tests always run)
-from browser import start_browser  # noqa: E402
-from e2e_helpers import WAIT  # noqa: E402
+import viser  # noqa: F401  (the web extra: make setup installs it, so these tests always run)
+from browser import start_browser
+from e2e_helpers import WAIT
 
 OUT = Path(__file__).resolve().parents[2] / "out" / "web_e2e"
 URL = re.compile(r"web page http://(127\.0\.0\.1:\d+)/")

@@ -16,7 +16,7 @@ from gymnasium.utils.env_checker import check_env
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-import rigid_rot_sim.envs  # noqa: F401  (registers the ids)
+import rigid_rot_sim.envs
 from rigid_rot_sim.envs import DEFAULT_SENSORS
 
 IDS = ["RigidRot/AttitudeControl-v0", "RigidRot/WheelAttitudeControl-v0"]

@@ -6,4 +6,4 @@ from pathlib import Path
 sys.path.insert(0, str(Path(__file__).resolve().parent))  # generators.py
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "ros"))  # test_node.py, test_node_hardening.py
 
-from test_node import context, harness  # noqa: E402,F401  (fixtures)
+from test_node import context, harness  # noqa: F401  (fixtures)

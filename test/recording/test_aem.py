@@ -18,10 +18,10 @@ import numpy as np
 import pytest
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
-from test_resim import COMMANDS, record_like_the_node  # noqa: E402
+from test_resim import COMMANDS, record_like_the_node
 
-from rigid_rot_sim.recording.aem import AemOptions, AttitudeSample, format_aem, parse_epoch, write_aem  # noqa: E402
-from rigid_rot_sim.recording.reader import BagReader  # noqa: E402
+from rigid_rot_sim.recording.aem import AemOptions, AttitudeSample, format_aem, parse_epoch, write_aem
+from rigid_rot_sim.recording.reader import BagReader
 
 #: Table 4-2, in order: (keyword, mandatory).
 HEADER = [

@@ -4,11 +4,11 @@ import numpy as np
 import pytest
 
 pytest.importorskip("rigid_rot_msgs.msg")
-from test_resim import COMMANDS, record_like_the_node  # noqa: E402
+from test_resim import COMMANDS, record_like_the_node
 
-from rigid_rot_sim.recording.plot import load_states, plot_run, principal_frame  # noqa: E402
-from rigid_rot_sim.recording.reader import BagReader  # noqa: E402
-from rigid_rot_sim.recording.writer import Recorder  # noqa: E402
+from rigid_rot_sim.recording.plot import load_states, plot_run, principal_frame
+from rigid_rot_sim.recording.reader import BagReader
+from rigid_rot_sim.recording.writer import Recorder
 
 
 @pytest.mark.parametrize("scene, commands", [("torque_driven", COMMANDS), ("free_tumble", {})])

@@ -6,15 +6,15 @@ import numpy as np
 import pytest
 
 pytest.importorskip("rigid_rot_msgs.msg")
-from geometry_msgs.msg import WrenchStamped  # noqa: E402
+from geometry_msgs.msg import WrenchStamped
 
-from rigid_rot_msgs.msg import RigidBodyState  # noqa: E402
-from rigid_rot_sim import conversions  # noqa: E402
-from rigid_rot_sim.recording.resim import attitude_angle, resimulate  # noqa: E402
-from rigid_rot_sim.recording.session import RunRecorder  # noqa: E402
-from rigid_rot_sim.ros.recording import NodeRecording  # noqa: E402
-from rigid_rot_sim.run.simulator import CommandRejected, Simulator  # noqa: E402
-from rigid_rot_sim.scene.scene import load_scene  # noqa: E402
+from rigid_rot_msgs.msg import RigidBodyState
+from rigid_rot_sim import conversions
+from rigid_rot_sim.recording.resim import attitude_angle, resimulate
+from rigid_rot_sim.recording.session import RunRecorder
+from rigid_rot_sim.ros.recording import NodeRecording
+from rigid_rot_sim.run.simulator import CommandRejected, Simulator
+from rigid_rot_sim.scene.scene import load_scene
 
 SCENES = Path(__file__).resolve().parents[2] / "config" / "scenes"
 

@@ -13,17 +13,17 @@ from pathlib import Path
 import pytest
 
 # test/conftest.py has set the session's ROS_DOMAIN_ID and localhost discovery.
-import rclpy  # noqa: E402
-from builtin_interfaces.msg import Duration  # noqa: E402
-from geometry_msgs.msg import Vector3, WrenchStamped  # noqa: E402
-from rclpy.executors import SingleThreadedExecutor  # noqa: E402
-from rclpy.parameter import Parameter  # noqa: E402
-from std_srvs.srv import SetBool, Trigger  # noqa: E402
+import rclpy
+from builtin_interfaces.msg import Duration
+from geometry_msgs.msg import Vector3, WrenchStamped
+from rclpy.executors import SingleThreadedExecutor
+from rclpy.parameter import Parameter
+from std_srvs.srv import SetBool, Trigger
 
-from rigid_rot_msgs.msg import RejectedCommand, RigidBodyState  # noqa: E402
-from rigid_rot_msgs.srv import ApplyTorque, ComputeInertia, SetState, Step  # noqa: E402
-from rigid_rot_sim.ros.node import RigidRotSimNode  # noqa: E402
-from rigid_rot_sim.ros.qos import COMMAND_QOS, REJECTED_QOS, STATE_QOS  # noqa: E402
+from rigid_rot_msgs.msg import RejectedCommand, RigidBodyState
+from rigid_rot_msgs.srv import ApplyTorque, ComputeInertia, SetState, Step
+from rigid_rot_sim.ros.node import RigidRotSimNode
+from rigid_rot_sim.ros.qos import COMMAND_QOS, REJECTED_QOS, STATE_QOS
 
 ROOT = Path(__file__).resolve().parents[2]
 SCENES = ROOT / "config" / "scenes"

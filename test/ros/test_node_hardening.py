@@ -5,20 +5,20 @@ import math
 import time
 
 import pytest
-import rclpy  # noqa: E402  (test/conftest.py has set the session's ROS_DOMAIN_ID)
-import test_node  # noqa: E402
-from builtin_interfaces.msg import Duration  # noqa: E402
-from geometry_msgs.msg import Point, Vector3, WrenchStamped  # noqa: E402
-from rclpy.clock_type import ClockType  # noqa: E402
-from rclpy.parameter import Parameter  # noqa: E402
-from std_srvs.srv import SetBool, Trigger  # noqa: E402
-from test_node import SCENES  # noqa: E402
+import rclpy
+import test_node
+from builtin_interfaces.msg import Duration
+from geometry_msgs.msg import Point, Vector3, WrenchStamped
+from rclpy.clock_type import ClockType
+from rclpy.parameter import Parameter
+from std_srvs.srv import SetBool, Trigger
+from test_node import SCENES
 
-from rigid_rot_msgs.msg import RejectedCommand, RigidBodyState  # noqa: E402
-from rigid_rot_msgs.srv import ApplyTorque, ComputeInertia, SetState, Step  # noqa: E402
-from rigid_rot_sim.core import limits  # noqa: E402
-from rigid_rot_sim.ros.node import RigidRotSimNode  # noqa: E402
-from rigid_rot_sim.ros.qos import COMMAND_QOS, REJECTED_QOS, STATE_QOS  # noqa: E402
+from rigid_rot_msgs.msg import RejectedCommand, RigidBodyState
+from rigid_rot_msgs.srv import ApplyTorque, ComputeInertia, SetState, Step
+from rigid_rot_sim.core import limits
+from rigid_rot_sim.ros.node import RigidRotSimNode
+from rigid_rot_sim.ros.qos import COMMAND_QOS, REJECTED_QOS, STATE_QOS
 
 # test_node's fixtures, used here by name
 context = test_node.context

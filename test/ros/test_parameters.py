@@ -9,10 +9,10 @@ from rcl_interfaces.msg import ParameterType
 from rclpy.parameter import Parameter
 
 from rigid_rot_sim.ros import parameters
-from rigid_rot_sim.ros.lockstep import LOCKSTEP_PARAMETERS  # noqa: E402
-from rigid_rot_sim.ros.node import RigidRotSimNode  # noqa: E402
-from rigid_rot_sim.scene.scene import OUTPUT_NAMES, load_scene  # noqa: E402
-from rigid_rot_sim.share import resolve_scene  # noqa: E402
+from rigid_rot_sim.ros.lockstep import LOCKSTEP_PARAMETERS
+from rigid_rot_sim.ros.node import RigidRotSimNode
+from rigid_rot_sim.scene.scene import OUTPUT_NAMES, load_scene
+from rigid_rot_sim.share import resolve_scene
 
 PACKAGE = Path(parameters.__file__).resolve().parents[1]
 TYPES = {

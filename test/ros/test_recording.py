@@ -6,13 +6,13 @@ import pytest
 import yaml
 
 pytest.importorskip("rigid_rot_msgs.msg")
-from rigid_rot_msgs.msg import RigidBodyState  # noqa: E402
-from rigid_rot_sim import conversions  # noqa: E402
-from rigid_rot_sim.recording.resim import resimulate  # noqa: E402
-from rigid_rot_sim.recording.session import RunRecorder  # noqa: E402
-from rigid_rot_sim.ros.recording import NodeRecording  # noqa: E402
-from rigid_rot_sim.run.simulator import Simulator  # noqa: E402
-from rigid_rot_sim.scene.scene import load_scene  # noqa: E402
+from rigid_rot_msgs.msg import RigidBodyState
+from rigid_rot_sim import conversions
+from rigid_rot_sim.recording.resim import resimulate
+from rigid_rot_sim.recording.session import RunRecorder
+from rigid_rot_sim.ros.recording import NodeRecording
+from rigid_rot_sim.run.simulator import Simulator
+from rigid_rot_sim.scene.scene import load_scene
 
 SCENE = Path(__file__).resolve().parents[2] / "config" / "scenes" / "torque_driven.yaml"
 

@@ -9,18 +9,18 @@ import math
 import struct
 
 import pytest
-from geometry_msgs.msg import Vector3, WrenchStamped  # noqa: E402
-from rclpy.action import ActionClient  # noqa: E402
-from simulation_interfaces.action import SimulateSteps  # noqa: E402
-from simulation_interfaces.msg import Result, SimulatorFeatures  # noqa: E402
-from simulation_interfaces.srv import GetSimulatorFeatures  # noqa: E402
-from std_srvs.srv import SetBool  # noqa: E402
-from test_node import Harness, context  # noqa: E402,F401 (the fixture)
+from geometry_msgs.msg import Vector3, WrenchStamped
+from rclpy.action import ActionClient
+from simulation_interfaces.action import SimulateSteps
+from simulation_interfaces.msg import Result, SimulatorFeatures
+from simulation_interfaces.srv import GetSimulatorFeatures
+from std_srvs.srv import SetBool
+from test_node import Harness, context  # noqa: F401 (the fixture)
 
-from rigid_rot_msgs.msg import RejectedCommand  # noqa: E402
-from rigid_rot_msgs.srv import Step, StepWithTorque  # noqa: E402
-from rigid_rot_sim.ros.qos import COMMAND_QOS, REJECTED_QOS  # noqa: E402
-from rigid_rot_sim.run.observer import SimulationObserver  # noqa: E402
+from rigid_rot_msgs.msg import RejectedCommand
+from rigid_rot_msgs.srv import Step, StepWithTorque
+from rigid_rot_sim.ros.qos import COMMAND_QOS, REJECTED_QOS
+from rigid_rot_sim.run.observer import SimulationObserver
 
 
 def _complete(h, response, start: int, steps: int):
