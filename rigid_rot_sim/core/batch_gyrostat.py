@@ -21,9 +21,8 @@ speed saturation and friction act inside, as in the single-body kernel).
 
 from __future__ import annotations
 
-from typing import Any
-
 import math
+from typing import Any
 
 import numpy as np
 from numba import prange

@@ -119,8 +119,9 @@ class SlewTask:
                 raise ValueError(f"{name} must be an integer >= 1, got {getattr(self, name)!r}")
         if self.max_episode_steps > self.observation_horizon:
             raise ValueError(
-                f"max_episode_steps ({self.max_episode_steps}) exceeds observation_horizon ({self.observation_horizon}), "
-                "the episode length the observation bounds are sized for: pass observation_horizon >= max_episode_steps"
+                f"max_episode_steps ({self.max_episode_steps}) exceeds observation_horizon "
+                f"({self.observation_horizon}), the episode length the observation bounds are sized for: "
+                "pass observation_horizon >= max_episode_steps"
             )
         moments = np.asarray(self.principal_moments, dtype=float)
         if moments.shape != (3,) or not np.all(np.isfinite(moments) & (moments > 0.0)):

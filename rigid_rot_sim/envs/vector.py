@@ -121,7 +121,8 @@ class AttitudeControlVectorEnv(VectorEnv):
             raise TypeError(f"`options['reset_mask']` must have `dtype=np.bool_`, got {mask.dtype}")
         if not np.any(mask):
             raise ValueError(
-                f"`options['reset_mask']` must contain a boolean array with at least one True value, got reset_mask={mask}"
+                "`options['reset_mask']` must contain a boolean array with at least one True value, "
+                f"got reset_mask={mask}"
             )
         if not self._started and not mask.all():
             raise RuntimeError("the first reset() resets every slot: call it without a reset_mask")
@@ -160,7 +161,7 @@ class AttitudeControlVectorEnv(VectorEnv):
         return self.bodies.observation.copy(), reward, terminated, truncated, infos
 
     def _reset_slots(self, slots: np.ndarray) -> dict[str, Any]:
-        """New episodes in ``slots`` from their generators; their infos, batched as ``VectorEnv._add_info`` batches them."""
+        """New episodes in ``slots`` from their generators; their infos batched as ``VectorEnv._add_info`` does."""
         generators = [self._generators[slot] for slot in slots.tolist()]
         episodes = self.bodies.reset(slots, [g for g in generators if g is not None])
         infos: dict[str, Any] = {}
