@@ -24,12 +24,15 @@ algorithms take it as a vector environment instead of wrapping it as a single on
 from __future__ import annotations
 
 import functools
+import importlib
 from copy import deepcopy
 from typing import Any
 
 import gymnasium as gym
 import numpy as np
-from gymnasium.vector import AutoresetMode, VectorEnv
+from gymnasium.vector import AutoresetMode
+
+from rigid_rot_sim.envs.vector import AttitudeControlVectorEnv
 
 __all__ = ["NativeVecEnv", "sb3_vec_env", "unbatch_infos"]
 
@@ -54,7 +57,7 @@ class NativeVecEnv:
     no per-slot method to call (``env_method`` refuses) and an attribute is set on all of them.
     """
 
-    def __init__(self, envs: VectorEnv) -> None:
+    def __init__(self, envs: AttitudeControlVectorEnv) -> None:
         mode = envs.metadata.get("autoreset_mode")
         if mode is not AutoresetMode.SAME_STEP:
             raise ValueError(
@@ -181,25 +184,28 @@ class NativeVecEnv:
 @functools.cache
 def _sb3_class() -> type:
     try:
-        from stable_baselines3.common.vec_env import VecEnv
+        vec_env = importlib.import_module("stable_baselines3.common.vec_env")  # optional: no stubs, no dependency
     except ImportError as error:
         raise ImportError(
             f"sb3_vec_env needs Stable-Baselines3 (pip install stable-baselines3), which failed to import: {error}"
         ) from error
-    return type("SB3NativeVecEnv", (NativeVecEnv, VecEnv), {"__module__": __name__})
+    return type("SB3NativeVecEnv", (NativeVecEnv, vec_env.VecEnv), {"__module__": __name__})
 
 
-def sb3_vec_env(env: str | VectorEnv, num_envs: int = 1, **kwargs: Any) -> NativeVecEnv:
+def sb3_vec_env(env: str | AttitudeControlVectorEnv, num_envs: int = 1, **kwargs: Any) -> NativeVecEnv:
     """An SB3 ``VecEnv`` over the native vector environment of ``env`` (an id, with ``make``'s keyword
     arguments) or over ``env`` itself (a vector environment in ``SAME_STEP`` mode)."""
     cls = _sb3_class()
     if isinstance(env, str):
-        env = gym.make_vec(
+        vector = gym.make_vec(
             env,
             num_envs=num_envs,
             vectorization_mode="vector_entry_point",
             autoreset_mode=AutoresetMode.SAME_STEP,
             **kwargs,
         )
+        if not isinstance(vector, AttitudeControlVectorEnv):
+            raise ValueError(f"{env!r} is not an id of rigid_rot_sim.envs (its native vector environment is needed)")
+        env = vector
     adapter: NativeVecEnv = cls(env)
     return adapter

@@ -134,9 +134,8 @@ class AttitudeControlVectorEnv(VectorEnv):
             raise RuntimeError("call reset() before step()")
         mode = self.autoreset_mode
         if mode is AutoresetMode.DISABLED and self._ended.any():
-            slots = np.flatnonzero(self._ended).tolist()
             raise RuntimeError(
-                f"slots {slots} ended and autoreset_mode is DISABLED: reset them with "
+                f"slots {np.flatnonzero(self._ended).tolist()} ended and autoreset_mode is DISABLED: reset them with "
                 "reset(options={'reset_mask': mask}) before the next step"
             )
         restarting = np.flatnonzero(self._ended) if mode is AutoresetMode.NEXT_STEP else np.zeros(0, dtype=np.int64)
