@@ -165,3 +165,17 @@ def test_autoreset_mode_is_a_vector_argument_and_unknown_arguments_name_the_env(
     with pytest.raises(TypeError, match="WheelAttitudeControlVectorEnv: unexpected argument 'max_torqe'") as caught:
         gym.make_vec(IDS[1], 2, vectorization_mode="vector_entry_point", max_torqe=1.0)
     assert all(name in str(caught.value) for name in TASK_ARGUMENTS)
+
+
+def test_the_wheel_env_at_scale_runs_the_parallel_simd_kernel_with_the_single_envs_bits():
+    """2048 slots x 10 RK4 steps a step: the parallel structure-of-arrays kernel; sampled slots == the single env."""
+    n, steps = 2048, 4
+    envs = gym.make_vec(IDS[1], num_envs=n, vectorization_mode="vector_entry_point")
+    obs, _ = envs.reset(seed=5)
+    actions = np.random.default_rng(6).uniform(-1, 1, (steps, n, 3)).astype(np.float32)
+    history = np.array([obs] + [envs.step(a)[0] for a in actions])
+    for slot in (0, 777, 1500, n - 1):
+        single = gym.make(IDS[1]).unwrapped
+        rows = [single.reset(seed=rigid_rot_sim.envs.vector.slot_seeds(5, n)[slot])[0]]
+        rows += [single.step(a[slot])[0] for a in actions]
+        assert np.array(rows).tobytes() == np.ascontiguousarray(history[:, slot]).tobytes(), f"slot {slot}"
