@@ -42,10 +42,11 @@ __all__ = [
 TASK_ARGUMENTS = tuple(f.name for f in dataclasses.fields(SlewTask) if f.name != "sensors")
 
 
-def make_task(owner: str, sensors: SensorSuite | bool | None = None, **kwargs: Any) -> SlewTask:
+def make_task(owner: str, own: tuple[str, ...], sensors: SensorSuite | bool | None = None, **kwargs: Any) -> SlewTask:
     """A :class:`SlewTask` from ``owner``'s keyword arguments (``sensors=True``: :data:`DEFAULT_SENSORS`).
 
-    An argument that is no field of the task is refused by name, with the arguments ``owner`` takes.
+    An argument that is no field of the task is refused by name, with the arguments ``owner``
+    takes: its ``own`` ones and the task's.
     """
     unknown = sorted(set(kwargs) - set(TASK_ARGUMENTS))
     if unknown:
@@ -56,8 +57,7 @@ def make_task(owner: str, sensors: SensorSuite | bool | None = None, **kwargs: A
             else ""
         )
         raise TypeError(
-            f"{owner}: unexpected argument {unknown[0]!r}{hint}; its arguments are render_mode, sensors, "
-            f"{', '.join(TASK_ARGUMENTS)}"
+            f"{owner}: unexpected argument {unknown[0]!r}{hint}; its arguments are {', '.join(own + TASK_ARGUMENTS)}"
         )
     if sensors is True:
         sensors = DEFAULT_SENSORS
@@ -90,7 +90,7 @@ class AttitudeControlEnv(gym.Env[np.ndarray, np.ndarray]):
     def __init__(self, render_mode: str | None = None, sensors: SensorSuite | bool | None = None, **kwargs: Any):
         if render_mode is not None:
             raise ValueError(f"render_mode must be None (no rendering), got {render_mode!r}")
-        self.task = make_task(type(self).__name__, sensors, **kwargs)
+        self.task = make_task(type(self).__name__, ("render_mode", "sensors"), sensors, **kwargs)
         self.observation_space = observation_space(self.task, self.with_wheels)
         self.action_space = action_space()
         self.bodies = SlewBodies(self.task, 1, self.with_wheels)

@@ -72,7 +72,8 @@ class AttitudeControlVectorEnv(VectorEnv):
         self.metadata = {**type(self).metadata, "autoreset_mode": self.autoreset_mode}
         self.num_envs = int(num_envs)
         self.render_mode = None
-        self.task = make_task(type(self).__name__, sensors, **kwargs)
+        own = ("num_envs", "render_mode", "sensors", "autoreset_mode")
+        self.task = make_task(type(self).__name__, own, sensors, **kwargs)
         self.single_observation_space = observation_space(self.task, self.with_wheels)
         self.single_action_space = action_space()
         self.observation_space = batch_space(self.single_observation_space, self.num_envs)
