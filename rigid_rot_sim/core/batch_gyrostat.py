@@ -4,7 +4,7 @@ Classical RK4 on ``(q, omega, Omega)``, the equations of :mod:`rigid_rot_sim.cor
 body from its own state, with its own principal moments and motor commands and one wheel set
 shared by all bodies (axes in the principal frame). Two layouts, the same bits: ``'per_body'``
 runs the single-body kernel :func:`rigid_rot_sim.core.integrators.gyrostat.rk4_advance` body by
-body; ``'soa'`` (the default, ~10x faster) re-writes its operations, in its order, for chunks of
+body; ``'soa'`` (the default, ~4x faster) re-writes its operations, in its order, for chunks of
 bodies laid out for SIMD (``_rk4_soa_chunk``: the one deliberate second copy of the formula, as
 :mod:`rigid_rot_sim.core.batch` has for rigid bodies, pinned bit for bit by
 ``test/core/test_batch_gyrostat.py``). So a body advanced here has the bits of the same body
@@ -38,8 +38,8 @@ __all__ = ["advance_gyrostats", "hub_inverses"]
 
 # Below this many body-steps a call runs serially: starting a parallel region costs up to a
 # scheduler time slice when the cores are busy (as core/batch.py, whose threshold is 10x higher:
-# a gyrostat RK4 step costs ~2 us, a rigid body's ~0.1 us; at 8192 bodies x 10 steps the parallel
-# loop took half the serial time on the busy 2-core machine).
+# a gyrostat RK4 step costs 65-100 ns in the SIMD layout, ~0.3 us body by body; at 8192 bodies x
+# 10 steps the parallel loop took 0.5-1.3x the serial time on the busy 2-core machine).
 _PARALLEL_BODY_STEPS = 20_000
 
 
@@ -92,7 +92,7 @@ _advance_parallel = compiled(parallel=True)(_kernel_parallel)
 # -- RK4 laid out for SIMD ------------------------------------------------------------------
 #
 # The loop above runs rk4_advance body by body: each step's stages wait on each other, and a
-# gyrostat RK4 step costs ~1-2 us there (latency-bound, the scratch arrays of each call on the
+# gyrostat RK4 step costs ~0.3 us there (latency-bound, the scratch arrays of each call on the
 # heap). Below, the bodies are taken in chunks held as structure of arrays (one row per state
 # component, the inner loops over the chunk's bodies, which LLVM vectorises: AVX2/AVX-512
 # lanes) and every operation is rk4_advance's and gyrostat_rhs's own, in their order (the
