@@ -39,7 +39,7 @@ __all__ = ["advance_gyrostats", "hub_inverses"]
 # Below this many body-steps a call runs serially: starting a parallel region costs up to a
 # scheduler time slice when the cores are busy (as core/batch.py, whose threshold is 10x higher:
 # a gyrostat RK4 step costs 65-100 ns in the SIMD layout, ~0.3 us body by body; at 8192 bodies x
-# 10 steps the parallel loop took 0.5-1.3x the serial time on the busy 2-core machine).
+# 10 steps the environment step took 0.7-1.5x the serial time in parallel on the busy 2-core machine).
 _PARALLEL_BODY_STEPS = 20_000
 
 
