@@ -45,6 +45,8 @@ def entry_points() -> dict[str, Any]:
         "batch._rk4_soa_parallel": batch._rk4_soa_parallel,
         "batch_gyrostat._advance_serial": batch_gyrostat._advance_serial,
         "batch_gyrostat._advance_parallel": batch_gyrostat._advance_parallel,
+        "batch_gyrostat._rk4_soa_serial": batch_gyrostat._rk4_soa_serial,
+        "batch_gyrostat._rk4_soa_parallel": batch_gyrostat._rk4_soa_parallel,
         "slew.slew_update": slew.slew_update,
     }
 
@@ -83,9 +85,18 @@ def exercise() -> None:
 
     for n, steps in ((1, 2), (2, 100_000)):  # serial, then parallel
         q0 = np.tile([0.0, 0.0, 0.0, 1.0], (n, 1))
-        advance_gyrostats(
-            np.tile(moments, (n, 1)), wheels, q0, np.ones((n, 3)), np.zeros((n, 1)), np.ones((n, 1)), 1e-4, steps
-        )
+        for layout in ("soa", "per_body"):
+            advance_gyrostats(
+                np.tile(moments, (n, 1)),
+                wheels,
+                q0,
+                np.ones((n, 3)),
+                np.zeros((n, 1)),
+                np.ones((n, 1)),
+                1e-4,
+                steps,
+                layout=layout,
+            )
     slew_update(
         q0,
         np.ones((2, 3)),

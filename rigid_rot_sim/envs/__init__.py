@@ -11,7 +11,8 @@ Importing this package registers, under the ``RigidRot`` namespace::
 ``make_vec`` are the fields of :class:`~rigid_rot_sim.envs.task.SlewTask` and ``sensors``.
 
 Modules: :mod:`.task` - the slew task (dispersions, reward, bounds); :mod:`.attitude` - the single
-environments; :mod:`.vector` - the native vector environment on the batch kernels.
+environments; :mod:`.vector` - the native vector environment on the batch kernels; :mod:`.sb3` -
+Stable-Baselines3's ``VecEnv`` interface over the native vector environment.
 """
 
 from __future__ import annotations

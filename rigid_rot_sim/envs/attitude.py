@@ -19,6 +19,7 @@ observations bit for bit, in any process.
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from typing import Any
 
@@ -28,11 +29,36 @@ from gymnasium import spaces
 
 from rigid_rot_sim.envs.task import DEFAULT_SENSORS, SensorSuite, SlewBodies, SlewTask
 
-__all__ = ["AttitudeControlEnv", "WheelAttitudeControlEnv", "make_task", "observation_space", "action_space"]
+__all__ = [
+    "AttitudeControlEnv",
+    "WheelAttitudeControlEnv",
+    "make_task",
+    "observation_space",
+    "action_space",
+    "TASK_ARGUMENTS",
+]
+
+#: The keyword arguments of the environments beside ``render_mode`` and ``sensors``: the task's fields.
+TASK_ARGUMENTS = tuple(f.name for f in dataclasses.fields(SlewTask) if f.name != "sensors")
 
 
-def make_task(sensors: SensorSuite | bool | None = None, **kwargs: Any) -> SlewTask:
-    """A :class:`SlewTask` from the environments' keyword arguments (``sensors=True``: :data:`DEFAULT_SENSORS`)."""
+def make_task(owner: str, own: tuple[str, ...], sensors: SensorSuite | bool | None = None, **kwargs: Any) -> SlewTask:
+    """A :class:`SlewTask` from ``owner``'s keyword arguments (``sensors=True``: :data:`DEFAULT_SENSORS`).
+
+    An argument that is no field of the task is refused by name, with the arguments ``owner``
+    takes: its ``own`` ones and the task's.
+    """
+    unknown = sorted(set(kwargs) - set(TASK_ARGUMENTS))
+    if unknown:
+        hint = (
+            " (a vector environment's argument: gymnasium.make_vec(..., vector_kwargs={'autoreset_mode': ...}) "
+            "for the sync and async modes)"
+            if "autoreset_mode" in unknown
+            else ""
+        )
+        raise TypeError(
+            f"{owner}: unexpected argument {unknown[0]!r}{hint}; its arguments are {', '.join(own + TASK_ARGUMENTS)}"
+        )
     if sensors is True:
         sensors = DEFAULT_SENSORS
     elif sensors is False:
@@ -64,14 +90,14 @@ class AttitudeControlEnv(gym.Env[np.ndarray, np.ndarray]):
     def __init__(self, render_mode: str | None = None, sensors: SensorSuite | bool | None = None, **kwargs: Any):
         if render_mode is not None:
             raise ValueError(f"render_mode must be None (no rendering), got {render_mode!r}")
-        self.task = make_task(sensors, **kwargs)
+        self.task = make_task(type(self).__name__, ("render_mode", "sensors"), sensors, **kwargs)
         self.observation_space = observation_space(self.task, self.with_wheels)
         self.action_space = action_space()
         self.bodies = SlewBodies(self.task, 1, self.with_wheels)
         self._started = False
 
     def reset(self, *, seed: int | None = None, options: dict[str, Any] | None = None) -> tuple[np.ndarray, dict]:
-        """A new episode drawn from the environment's generator (seeded by ``seed`` when given)."""
+        """A new episode drawn from the environment's generator (seeded by ``seed`` when given; no options)."""
         super().reset(seed=seed)
         (episode,) = self.bodies.reset([0], [self.np_random])
         self._started = True

@@ -74,7 +74,9 @@ class SlewTask:
     an initial attitude ``target (x) exp(angle axis)`` with a uniformly random axis and ``angle``
     uniform in [0, ``max_initial_error``] rad; initial rates uniform in ``[-max_initial_rate,
     max_initial_rate]`` rad/s per axis. Reward weights and the hold test: :mod:`rigid_rot_sim.core.slew`.
-    ``max_episode_steps``: control periods before truncation (it also bounds the rate observation).
+    ``max_episode_steps``: control periods before truncation. ``observation_horizon``: the
+    episode length (control periods) the observation's rate bounds are sized for, so that the
+    spaces never depend on the episode length (``max_episode_steps`` may not exceed it).
     Wheels (wheel environment only): three wheels on the body axes of spin inertia
     ``wheel_inertia`` (kg*m^2) and ``wheel_max_speed`` (rad/s), frictionless, starting at rest.
     """
@@ -93,6 +95,7 @@ class SlewTask:
     rate_tolerance: float = 0.005
     hold_periods: int = 10
     max_episode_steps: int = 300
+    observation_horizon: int = 300
     wheel_inertia: float = 0.005
     wheel_max_speed: float = 300.0
     sensors: SensorSuite | None = field(default=None)
@@ -111,9 +114,15 @@ class SlewTask:
         steps = self.control_period / self.dt
         if abs(steps - round(steps)) > 1e-9 * steps or round(steps) < 1:
             raise ValueError(f"control_period ({self.control_period} s) must be a whole number of dt ({self.dt} s)")
-        for name in ("hold_periods", "max_episode_steps"):
+        for name in ("hold_periods", "max_episode_steps", "observation_horizon"):
             if int(getattr(self, name)) != getattr(self, name) or getattr(self, name) < 1:
                 raise ValueError(f"{name} must be an integer >= 1, got {getattr(self, name)!r}")
+        if self.max_episode_steps > self.observation_horizon:
+            raise ValueError(
+                f"max_episode_steps ({self.max_episode_steps}) exceeds observation_horizon "
+                f"({self.observation_horizon}), the episode length the observation bounds are sized for: "
+                "pass observation_horizon >= max_episode_steps"
+            )
         moments = np.asarray(self.principal_moments, dtype=float)
         if moments.shape != (3,) or not np.all(np.isfinite(moments) & (moments > 0.0)):
             raise ValueError(f"principal_moments must be three finite values > 0, got {self.principal_moments!r}")
@@ -138,8 +147,8 @@ class SlewTask:
 
     @property
     def horizon(self) -> float:
-        """The longest episode (s)."""
-        return self.max_episode_steps * self.control_period
+        """The time (s) the observation bounds are sized for: ``observation_horizon`` periods (>= any episode)."""
+        return self.observation_horizon * self.control_period
 
     def wheels(self) -> WheelModel:
         """Three frictionless wheels along the body (principal) axes."""
@@ -148,7 +157,7 @@ class SlewTask:
         return wheel_model(nominal, ("x", "y", "z"), np.eye(3), [j] * 3, [torque] * 3, [speed] * 3)
 
     def rate_bound(self, with_wheels: bool) -> float:
-        """A bound (rad/s) on every rate component over an episode, from the momentum it can gain.
+        """A bound (rad/s) on every rate component over :attr:`horizon`, from the momentum it can gain.
 
         Without wheels ``|H|`` grows by at most ``sqrt(3) max_torque`` per second from ``|H0| <=
         I_max sqrt(3) max_initial_rate``, and ``|omega| <= |H| / I_min``. With wheels the total
@@ -303,7 +312,7 @@ class SlewBodies:
         rows = slice(None)
         q_seen, omega_seen = self._observed(rows)
         reward, terminated = self._update(rows, q_seen, omega_seen, action, self.hold)
-        truncated = (self.steps >= task.max_episode_steps) & ~terminated
+        truncated = self.steps >= task.max_episode_steps  # also when it terminates there, as TimeLimit says
         return reward, terminated, truncated
 
     def _observed(self, rows: np.ndarray | slice) -> tuple[np.ndarray, np.ndarray]:
