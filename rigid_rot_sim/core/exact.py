@@ -113,6 +113,7 @@ from scipy.spatial.transform import Rotation
 
 from rigid_rot_sim.core import quaternion as quat
 from rigid_rot_sim.core import validation
+from rigid_rot_sim.core.arrays import ArrayLike, FloatArray
 from rigid_rot_sim.core.dynamics import axes_by_moment
 from rigid_rot_sim.core.elliptic import (
     AGM_SIZE,
@@ -140,7 +141,6 @@ from rigid_rot_sim.core.elliptic import (
     two_sum,
 )
 from rigid_rot_sim.core.jit import compiled
-from rigid_rot_sim.core.validation import FloatArray
 
 #: Float sequences the kernels take (tuples in compiled code, arrays or lists where Python calls them).
 Floats = Sequence[float] | FloatArray
@@ -1203,7 +1203,7 @@ class TorqueFreeSolution:
     case: str
     _flow: Any = field(repr=False, compare=False)
 
-    def state(self, t: Any) -> tuple[np.ndarray, np.ndarray]:
+    def state(self, t: ArrayLike) -> tuple[np.ndarray, np.ndarray]:
         """``(quaternion(t), omega(t))`` evaluated together (shapes (..., 4) and (..., 3))."""
         if isinstance(t, (float, int)) and not isinstance(t, bool):
             if not math.isfinite(t):
@@ -1221,11 +1221,11 @@ class TorqueFreeSolution:
         result: tuple[Quat, Vec3] = self._flow.evaluate_scalar(t - self.t0)
         return result
 
-    def omega(self, t: Any) -> np.ndarray:
+    def omega(self, t: ArrayLike) -> np.ndarray:
         """Angular velocity at time(s) t (s), rad/s, principal body frame; shape t.shape + (3,)."""
         return self.state(t)[1]
 
-    def quaternion(self, t: Any) -> np.ndarray:
+    def quaternion(self, t: ArrayLike) -> np.ndarray:
         """Attitude at time(s) t (s), principal -> world, scalar-last; shape t.shape + (4,)."""
         return self.state(t)[0]
 
@@ -1241,7 +1241,7 @@ class TorqueFreeSolution:
 
 
 def torque_free_solution(
-    moments: Any, omega0: Any, q0: Any = (0.0, 0.0, 0.0, 1.0), t0: float = 0.0
+    moments: ArrayLike, omega0: ArrayLike, q0: ArrayLike = (0.0, 0.0, 0.0, 1.0), t0: float = 0.0
 ) -> TorqueFreeSolution:
     """Exact torque-free motion of a rigid body.
 
@@ -1276,7 +1276,7 @@ def torque_free_solution(
     return solution_from_state(moments, omega0, q0, t0)
 
 
-def torque_free_flow(moments: np.ndarray, q: Any, omega: Any, tau: float) -> tuple[Quat, Vec3]:
+def torque_free_flow(moments: np.ndarray, q: ArrayLike, omega: ArrayLike, tau: float) -> tuple[Quat, Vec3]:
     """Exact free flow over tau (s) from (q, omega): ``(q(tau), omega(tau))`` as float tuples.
 
     The same as ``torque_free_solution(moments, omega, q).state(tau)`` without the input

@@ -29,6 +29,7 @@ from typing import Any
 import numpy as np
 
 from rigid_rot_sim.core import frames, validation
+from rigid_rot_sim.core.arrays import ArrayLike
 from rigid_rot_sim.core.dynamics import RigidBody, angular_momentum_world, kinetic_energy
 from rigid_rot_sim.core.integrators import get_method
 from rigid_rot_sim.core.steps import step_grid
@@ -149,17 +150,17 @@ class _UserFrameTorque:
 
 
 def simulate(
-    inertia: Any,
-    omega0: Any,
+    inertia: ArrayLike,
+    omega0: ArrayLike,
     t_end: float,
     dt: float,
     method: str,
-    q0: Any = (0.0, 0.0, 0.0, 1.0),
+    q0: ArrayLike = (0.0, 0.0, 0.0, 1.0),
     torque: Any = None,
     *,
     save_every: int = 1,
     wheels: Any = None,
-    wheel_speeds0: Any = None,
+    wheel_speeds0: ArrayLike | None = None,
     wheel_torque: Any = None,
     orbit: Any = None,
     **options: Any,
@@ -288,17 +289,17 @@ def simulate(
 
 
 def simulate_gyrostat(
-    inertia: Any,
-    omega0: Any,
+    inertia: ArrayLike,
+    omega0: ArrayLike,
     t_end: float,
     dt: float,
     method: str,
-    q0: Any = (0.0, 0.0, 0.0, 1.0),
+    q0: ArrayLike = (0.0, 0.0, 0.0, 1.0),
     torque: Any = None,
     *,
     save_every: int = 1,
     wheels: Any = None,
-    wheel_speeds0: Any = None,
+    wheel_speeds0: ArrayLike | None = None,
     wheel_torque: Any = None,
     orbit: Any = None,
     **options: Any,
@@ -432,7 +433,7 @@ def checked_save_every(save_every: Any) -> int:
     return int(save_every)
 
 
-def rigid_body(inertia: Any) -> tuple[RigidBody, bool]:
+def rigid_body(inertia: ArrayLike) -> tuple[RigidBody, bool]:
     """``(RigidBody.from_inertia(inertia), body.is_principal)``, cached per inertia value (arrays read-only)."""
     try:
         values = np.asarray(inertia, dtype=float)
@@ -455,8 +456,8 @@ def _cached_body(shape: tuple[int, ...], data: bytes) -> tuple[RigidBody, bool]:
 _IDENTITY_ATTITUDE = (0.0, 0.0, 0.0, 1.0)
 
 
-def attitude(q0: Any) -> np.ndarray:
+def attitude(q0: ArrayLike) -> np.ndarray:
     """``validation.quaternion("q0", q0)``, with the identity (the default) looked up."""
-    if type(q0) is tuple and q0 == _IDENTITY_ATTITUDE:
+    if isinstance(q0, tuple) and q0 == _IDENTITY_ATTITUDE:
         return np.array(_IDENTITY_ATTITUDE)
     return validation.quaternion("q0", q0)

@@ -34,6 +34,7 @@ from typing import Any, ClassVar
 import numpy as np
 
 from rigid_rot_sim.core import validation
+from rigid_rot_sim.core.arrays import ArrayLike
 from rigid_rot_sim.core.integrators.base import Integrator, NonFiniteStateError
 from rigid_rot_sim.core.integrators.status import NON_FINITE, OK
 from rigid_rot_sim.core.jit import compiled
@@ -264,17 +265,17 @@ class GyrostatIntegrator(Integrator):
 
     def __init__(
         self,
-        moments: Any,
+        moments: ArrayLike,
         dt: float,
         torque: Any = None,
         *,
         wheels: WheelModel | None = None,
         orbit: OrbitModel = NO_ORBIT,
-        wheel_speeds0: Any = None,
-        wheel_angles0: Any = None,
+        wheel_speeds0: ArrayLike | None = None,
+        wheel_angles0: ArrayLike | None = None,
         t0: float = 0.0,
-        q0: Any = (0.0, 0.0, 0.0, 1.0),
-        omega0: Any = (0.0, 0.0, 0.0),
+        q0: ArrayLike = (0.0, 0.0, 0.0, 1.0),
+        omega0: ArrayLike = (0.0, 0.0, 0.0),
         **options: Any,
     ) -> None:
         self.wheels = wheels if wheels is not None else WheelModel((), np.zeros((0, 3)), *([np.zeros(0)] * 6))
@@ -297,7 +298,14 @@ class GyrostatIntegrator(Integrator):
 
     # ------------------------------------------------------------------ state
 
-    def set_state(self, t: float, q: Any, omega: Any, wheel_speeds: Any = None, wheel_angles: Any = None) -> None:
+    def set_state(
+        self,
+        t: float,
+        q: ArrayLike,
+        omega: ArrayLike,
+        wheel_speeds: ArrayLike | None = None,
+        wheel_angles: ArrayLike | None = None,
+    ) -> None:
         """Replace the state; ``wheel_speeds`` (rad/s) and ``wheel_angles`` (rad) None keep the wheels' own."""
         values = {}
         for name, given in (("speeds", wheel_speeds), ("angles", wheel_angles)):
@@ -317,7 +325,7 @@ class GyrostatIntegrator(Integrator):
     def _restart(self) -> None:
         """Hook: the state or the inputs were replaced."""
 
-    def set_wheel_commands(self, torques: Any) -> None:
+    def set_wheel_commands(self, torques: ArrayLike) -> None:
         """Hold the motor torques ``torques`` (N*m, one per wheel, already clamped) from now on."""
         commands = np.array(torques, dtype=float).reshape(self.wheels.count)
         if not np.all(np.isfinite(commands)):
