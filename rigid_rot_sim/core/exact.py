@@ -392,22 +392,30 @@ def _reflected_phase(
         sv_h, cv_h, dv_h = _hyperbolic_jacobi(vh, params[_E_M1])
         sv, cv, dv = (sv_h, 0.0), (cv_h, 0.0), (dv_h, 0.0)
     else:
-        sv, cv, dv = jacobi_dd(
-            vh,
-            vl,
-            agm_a,
-            agm_c,
-            int(params[_E_LEVELS]),
-            params[_E_M1],
-            params[_E_M1_LO],
-            params[_E_AGM_TOP],
-            params[_E_AGM_TOP + 1],
-        )
+        sv, cv, dv = _jacobi_at(params, agm_a, agm_c, vh, vl)
     inv = dd_div(1.0, 0.0, *dv)
     kp = (params[_E_KP], params[_E_KP + 1])
     sn = dd_mul(*cv, *inv)
     g = _reflected_excess(params, vh, vl, sv[0], cv[0], dv[0])
     return (side * sn[0], side * sn[1]), dd_mul(*dd_mul(*kp, *sv), *inv), dd_mul(*kp, *inv), side * g[0], side * g[1]
+
+
+@register_jitable
+def _jacobi_at(
+    params: FloatArray, agm_a: FloatArray, agm_c: FloatArray, uh: float, ul: float
+) -> tuple[DoubleDouble, DoubleDouble, DoubleDouble]:
+    """sn, cn, dn (double-doubles) at u = uh + ul of the flow's modulus (its AGM tables and parameters)."""
+    return jacobi_dd(
+        uh,
+        ul,
+        agm_a,
+        agm_c,
+        int(params[_E_LEVELS]),
+        params[_E_M1],
+        params[_E_M1_LO],
+        params[_E_AGM_TOP],
+        params[_E_AGM_TOP + 1],
+    )
 
 
 @register_jitable
@@ -454,17 +462,7 @@ def _phase(
         g_h, g_l = _hyperbolic_excess(params, abs(rh), abs(rl), sn_a)
         return (side * parity * sn_a, 0.0), (parity * cn_a, 0.0), (dn_a, 0.0), j, side * g_h, side * g_l
     else:
-        sn, cn, dn = jacobi_dd(
-            rh,
-            rl,
-            agm_a,
-            agm_c,
-            int(params[_E_LEVELS]),
-            params[_E_M1],
-            params[_E_M1_LO],
-            params[_E_AGM_TOP],
-            params[_E_AGM_TOP + 1],
-        )
+        sn, cn, dn = _jacobi_at(params, agm_a, agm_c, rh, rl)
     if params[_E_KP] < _SMALL_KP and abs(rh) > 0.25 * k:
         # between ~K / 4 and K / 2 the reflected excess is the better conditioned: cn and dn here, of order
         # k'^(1/4) to k'^(1/2), carry the amplitude's absolute rounding, which the excess of

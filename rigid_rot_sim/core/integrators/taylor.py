@@ -360,15 +360,7 @@ class Taylor(Integrator):
             -1.0 if self.tol is None else self.tol,
             self.max_step,
             self.series_order,
-            self._coeffs,
-            self._pairs,
-            self._terms,
-            self._term_values,
-            self._inverse_orders,
-            self._forcing_buffer,
-            self._binom,
-            self._poly,
-            self._const_forcing,
+            *self._recurrence,
             counters,
         )
         done, substeps, status = (int(v) for v in counters)
@@ -394,6 +386,23 @@ class Taylor(Integrator):
             f"{self.name}: step size underflow at step {self.n_steps + 1}, t = {t:.9g} s (omega = {self.omega})"
         )
 
+    @property
+    def _recurrence(
+        self,
+    ) -> tuple[FloatArray, IntArray, IntArray, FloatArray, FloatArray, FloatArray, FloatArray, FloatArray, FloatArray]:
+        """The kernels' coefficient buffer and recurrence tables, in their order (coeffs ... const_forcing)."""
+        return (
+            self._coeffs,
+            self._pairs,
+            self._terms,
+            self._term_values,
+            self._inverse_orders,
+            self._forcing_buffer,
+            self._binom,
+            self._poly,
+            self._const_forcing,
+        )
+
     def _substep(self, t0: float, x0: np.ndarray, h_cap: float, h_fallback: float) -> tuple[float, int, np.ndarray]:
         """One Taylor step from (t0, x0) of length <= h_cap; returns (h, order, x(t0 + h)).
 
@@ -412,15 +421,7 @@ class Taylor(Integrator):
             -1.0 if self.tol is None else self.tol,
             self.series_order,
             rho,
-            self._coeffs,
-            self._pairs,
-            self._terms,
-            self._term_values,
-            self._inverse_orders,
-            self._forcing_buffer,
-            self._binom,
-            self._poly,
-            self._const_forcing,
+            *self._recurrence,
             x_end,
         )
         if status != _OK:
