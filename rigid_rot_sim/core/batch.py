@@ -33,11 +33,9 @@ from numba.extending import register_jitable
 
 from rigid_rot_sim.core import quaternion as quat
 from rigid_rot_sim.core.arrays import ArrayLike, FloatArray, IntArray
-from rigid_rot_sim.core.dynamics import euler_rhs_components
 from rigid_rot_sim.core.exact import free_flow
 from rigid_rot_sim.core.integrators import kernels
 from rigid_rot_sim.core.integrators.base import NonFiniteStateError
-from rigid_rot_sim.core.integrators.explicit import dexpinv
 from rigid_rot_sim.core.integrators.status import NEWTON_FAILED, NON_FINITE, OK
 from rigid_rot_sim.core.jit import serial_and_parallel
 from rigid_rot_sim.core.torque import TORQUE_NONE, TORQUE_TIME
@@ -178,38 +176,11 @@ _PARALLEL_BODY_STEPS = 200_000
 # exponential map's sine and cosine (libm, one body at a time: a vectorised sine would round
 # differently), and the product, normalisation and finiteness test (vectorised, with selects
 # instead of branches). Every operation is rk4_step's own, in its order (explicit.py: Euler's
-# equations, dexpinv, quaternion.exp_rotation_vector, multiply, normalize), and numba
+# equations, _dexpinv, quaternion.exp_rotation_vector, multiply, normalize), and numba
 # compiles without fastmath, so each body gets the bits of the single-body kernel;
 # test/core/test_batch.py checks it against RK4 body by body.
 
 _SOA_CHUNK = 512  # bodies per chunk: its scratch rows stay in the L1/L2 cache
-
-
-@register_jitable
-def _rk4_stage(
-    i1: float,
-    i2: float,
-    i3: float,
-    n1: float,
-    n2: float,
-    n3: float,
-    w1: float,
-    w2: float,
-    w3: float,
-    hs: float,
-    a: float,
-    b: float,
-    c: float,
-    v1: float,
-    v2: float,
-    v3: float,
-) -> tuple[float, float, float, float, float, float]:
-    """An RK4 stage after the first, as rk4_step computes it: the rates ``x = w + hs (a, b, c)`` at the
-    rotation vector ``u = hs v``; returns Euler's equations at x and ``dexp^-1_{-u}(x)``."""
-    x1, x2, x3 = w1 + hs * a, w2 + hs * b, w3 + hs * c
-    da, db, dc = euler_rhs_components(i1, i2, i3, x1, x2, x3, n1, n2, n3)
-    u1, u2, u3 = dexpinv(hs * v1, hs * v2, hs * v3, x1, x2, x3)
-    return da, db, dc, u1, u2, u3
 
 
 @register_jitable
@@ -255,11 +226,40 @@ def _rk4_soa_chunk(
         for j in range(m):
             i1, i2, i3, n1, n2, n3 = k[0, j], k[1, j], k[2, j], k[3, j], k[4, j], k[5, j]
             w1, w2, w3 = x[4, j], x[5, j], x[6, j]
-            # stage 1, then stages 2 to 4 as rk4_step's (the same calls, inlined by LLVM)
-            a1, b1, c1 = euler_rhs_components(i1, i2, i3, w1, w2, w3, n1, n2, n3)
-            a2, b2, c2, v21, v22, v23 = _rk4_stage(i1, i2, i3, n1, n2, n3, w1, w2, w3, hh, a1, b1, c1, w1, w2, w3)
-            a3, b3, c3, v31, v32, v33 = _rk4_stage(i1, i2, i3, n1, n2, n3, w1, w2, w3, hh, a2, b2, c2, v21, v22, v23)
-            a4, b4, c4, v41, v42, v43 = _rk4_stage(i1, i2, i3, n1, n2, n3, w1, w2, w3, h, a3, b3, c3, v31, v32, v33)
+            # stage 1
+            a1 = ((i2 - i3) * w2 * w3 + n1) / i1
+            b1 = ((i3 - i1) * w3 * w1 + n2) / i2
+            c1 = ((i1 - i2) * w1 * w2 + n3) / i3
+            # stage 2
+            x1, x2, x3 = w1 + hh * a1, w2 + hh * b1, w3 + hh * c1
+            u1, u2, u3 = hh * w1, hh * w2, hh * w3
+            a2 = ((i2 - i3) * x2 * x3 + n1) / i1
+            b2 = ((i3 - i1) * x3 * x1 + n2) / i2
+            c2 = ((i1 - i2) * x1 * x2 + n3) / i3
+            d1, d2, d3 = u2 * x3 - u3 * x2, u3 * x1 - u1 * x3, u1 * x2 - u2 * x1
+            v21 = x1 + 0.5 * d1 + (u2 * d3 - u3 * d2) / 12.0
+            v22 = x2 + 0.5 * d2 + (u3 * d1 - u1 * d3) / 12.0
+            v23 = x3 + 0.5 * d3 + (u1 * d2 - u2 * d1) / 12.0
+            # stage 3
+            x1, x2, x3 = w1 + hh * a2, w2 + hh * b2, w3 + hh * c2
+            u1, u2, u3 = hh * v21, hh * v22, hh * v23
+            a3 = ((i2 - i3) * x2 * x3 + n1) / i1
+            b3 = ((i3 - i1) * x3 * x1 + n2) / i2
+            c3 = ((i1 - i2) * x1 * x2 + n3) / i3
+            d1, d2, d3 = u2 * x3 - u3 * x2, u3 * x1 - u1 * x3, u1 * x2 - u2 * x1
+            v31 = x1 + 0.5 * d1 + (u2 * d3 - u3 * d2) / 12.0
+            v32 = x2 + 0.5 * d2 + (u3 * d1 - u1 * d3) / 12.0
+            v33 = x3 + 0.5 * d3 + (u1 * d2 - u2 * d1) / 12.0
+            # stage 4
+            x1, x2, x3 = w1 + h * a3, w2 + h * b3, w3 + h * c3
+            u1, u2, u3 = h * v31, h * v32, h * v33
+            a4 = ((i2 - i3) * x2 * x3 + n1) / i1
+            b4 = ((i3 - i1) * x3 * x1 + n2) / i2
+            c4 = ((i1 - i2) * x1 * x2 + n3) / i3
+            d1, d2, d3 = u2 * x3 - u3 * x2, u3 * x1 - u1 * x3, u1 * x2 - u2 * x1
+            v41 = x1 + 0.5 * d1 + (u2 * d3 - u3 * d2) / 12.0
+            v42 = x2 + 0.5 * d2 + (u3 * d1 - u1 * d3) / 12.0
+            v43 = x3 + 0.5 * d3 + (u1 * d2 - u2 * d1) / 12.0
             v1 = h6 * (w1 + 2.0 * (v21 + v31) + v41)
             v2 = h6 * (w2 + 2.0 * (v22 + v32) + v42)
             v3 = h6 * (w3 + 2.0 * (v23 + v33) + v43)

@@ -37,7 +37,7 @@ def euler_step(t: float, state: State, h: float, moments: Floats, torque: Torque
 
 
 @register_jitable
-def dexpinv(u1: float, u2: float, u3: float, w1: float, w2: float, w3: float) -> Vector:
+def _dexpinv(u1: float, u2: float, u3: float, w1: float, w2: float, w3: float) -> Vector:
     """``omega + 1/2 u x omega + 1/12 u x (u x omega)``: du/ds for q = q_n (x) exp(u)."""
     c1 = u2 * w3 - u3 * w2
     c2 = u3 * w1 - u1 * w3
@@ -74,7 +74,7 @@ def rk4_step(t: float, state: State, h: float, moments: Floats, torque: TorqueDa
         q = quat.multiply(qn, quat.exp_rotation_vector(u)) if attitude_torque else qn
         n1, n2, n3 = torque_at(torque, th, q, (x1, x2, x3))
     a2, b2, c2 = euler_rhs_components(i1, i2, i3, x1, x2, x3, n1, n2, n3)
-    U2 = dexpinv(u[0], u[1], u[2], x1, x2, x3)
+    U2 = _dexpinv(u[0], u[1], u[2], x1, x2, x3)
 
     # stage 3
     x1, x2, x3 = w1 + hh * a2, w2 + hh * b2, w3 + hh * c2
@@ -83,7 +83,7 @@ def rk4_step(t: float, state: State, h: float, moments: Floats, torque: TorqueDa
         q = quat.multiply(qn, quat.exp_rotation_vector(u)) if attitude_torque else qn
         n1, n2, n3 = torque_at(torque, th, q, (x1, x2, x3))
     a3, b3, c3 = euler_rhs_components(i1, i2, i3, x1, x2, x3, n1, n2, n3)
-    U3 = dexpinv(u[0], u[1], u[2], x1, x2, x3)
+    U3 = _dexpinv(u[0], u[1], u[2], x1, x2, x3)
 
     # stage 4
     x1, x2, x3 = w1 + h * a3, w2 + h * b3, w3 + h * c3
@@ -92,7 +92,7 @@ def rk4_step(t: float, state: State, h: float, moments: Floats, torque: TorqueDa
         q = quat.multiply(qn, quat.exp_rotation_vector(u)) if attitude_torque else qn
         n1, n2, n3 = torque_at(torque, t + h, q, (x1, x2, x3))
     a4, b4, c4 = euler_rhs_components(i1, i2, i3, x1, x2, x3, n1, n2, n3)
-    U4 = dexpinv(u[0], u[1], u[2], x1, x2, x3)
+    U4 = _dexpinv(u[0], u[1], u[2], x1, x2, x3)
 
     h6 = h / 6.0
     u = (
