@@ -101,6 +101,13 @@ def euler_coefficients(i1: float, i2: float, i3: float) -> tuple[float, float, f
     return (i2 - i3) / i1, (i3 - i1) / i2, (i1 - i2) / i3
 
 
+#: The kernels' coefficient buffer and recurrence tables as one argument: (coeffs, pairs, terms,
+#: term_values, inverse_orders, forcing, binom, poly, const_forcing).
+Recurrence = tuple[
+    FloatArray, IntArray, IntArray, FloatArray, FloatArray, FloatArray, FloatArray, FloatArray, FloatArray
+]
+
+
 @functools.lru_cache(maxsize=256)
 def recurrence_tables(key: tuple[Any, ...]) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """(pairs, terms, term_values, b) for the compiled recurrence, cached per body (and gravity).
@@ -360,7 +367,7 @@ class Taylor(Integrator):
             -1.0 if self.tol is None else self.tol,
             self.max_step,
             self.series_order,
-            *self._recurrence,
+            self._recurrence,
             counters,
         )
         done, substeps, status = (int(v) for v in counters)
@@ -387,9 +394,7 @@ class Taylor(Integrator):
         )
 
     @property
-    def _recurrence(
-        self,
-    ) -> tuple[FloatArray, IntArray, IntArray, FloatArray, FloatArray, FloatArray, FloatArray, FloatArray, FloatArray]:
+    def _recurrence(self) -> Recurrence:
         """The kernels' coefficient buffer and recurrence tables, in their order (coeffs ... const_forcing)."""
         return (
             self._coeffs,
@@ -421,7 +426,7 @@ class Taylor(Integrator):
             -1.0 if self.tol is None else self.tol,
             self.series_order,
             rho,
-            *self._recurrence,
+            self._recurrence,
             x_end,
         )
         if status != _OK:
@@ -493,21 +498,14 @@ def taylor_substep(
     tol: float,
     series_order: int,
     rho_box: FloatArray,
-    coeffs: FloatArray,
-    pairs: IntArray,
-    terms: IntArray,
-    term_values: FloatArray,
-    inverse_orders: FloatArray,
-    forcing: FloatArray,
-    binom: FloatArray,
-    poly: FloatArray,
-    const_forcing: FloatArray,
+    recurrence: Recurrence,
     x_end: FloatArray,
 ) -> tuple[float, int, int]:
     """One Taylor step of length <= h_cap from (t0, x0): (h, order, status); x(t0 + h) into x_end.
 
     ``rho_box[0]`` holds the convergence radius estimate (< 0: none) and is updated.
     """
+    coeffs, pairs, terms, term_values, inverse_orders, forcing, binom, poly, const_forcing = recurrence
     p = series_order
     omega_scale = max(1.0, abs(x0[0]), abs(x0[1]), abs(x0[2]))
     if not math.isfinite(omega_scale):
@@ -663,19 +661,12 @@ def _taylor_advance(
     tol: float,
     max_step: float,
     series_order: int,
-    coeffs: FloatArray,
-    pairs: IntArray,
-    terms: IntArray,
-    term_values: FloatArray,
-    inverse_orders: FloatArray,
-    forcing: FloatArray,
-    binom: FloatArray,
-    poly: FloatArray,
-    const_forcing: FloatArray,
+    recurrence: Recurrence,
     counters: IntArray,
 ) -> None:
     """n API steps: state = (omega, q, t, rho, t of a failure) updated in place; series = (t, h, order, valid)
     of the last internal step, whose end state is x_end; counters = (done, substeps, status)."""
+    coeffs = recurrence[0]
     rho_box = np.empty(1)
     rho_box[0] = state[8]
     x = np.empty(_STATE_SIZE)
@@ -706,15 +697,7 @@ def _taylor_advance(
                     tol,
                     series_order,
                     rho_box,
-                    coeffs,
-                    pairs,
-                    terms,
-                    term_values,
-                    inverse_orders,
-                    forcing,
-                    binom,
-                    poly,
-                    const_forcing,
+                    recurrence,
                     x_end,
                 )
                 if status != _OK:
