@@ -44,6 +44,7 @@ from rigid_rot_sim.core.heavy_top import (
     separatrix_state,
 )
 from rigid_rot_sim.core.simulate import simulate
+from rigid_rot_sim.core.steps import steps_over
 from rigid_rot_sim.core.torque import ConstantTorque
 from rigid_rot_sim.core.wheels import NO_ORBIT, WheelModel, gyrostat_rhs, hub_inertia, wheel_model
 
@@ -115,7 +116,7 @@ class Problem:
         One ``core.simulate.simulate(...)`` call from t = 0 to ``t_end``, keeping only the
         final state; ``options`` go to the integrator.
         """
-        n_steps = max(1, round(self.t_end / dt))
+        n_steps = steps_over(self.t_end, dt)
         if self.wheels is not None:  # only the gyrostat methods carry the wheels (ValueError: refused)
             traj = simulate(
                 self.moments,

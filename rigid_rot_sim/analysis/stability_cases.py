@@ -29,6 +29,7 @@ from rigid_rot_sim.analysis.problems import (
 )
 from rigid_rot_sim.core import quaternion as quat
 from rigid_rot_sim.core.exact import torque_free_solution
+from rigid_rot_sim.core.steps import steps_over
 from rigid_rot_sim.core.torque import ConstantTorque
 from rigid_rot_sim.core.wheels import hub_inertia, wheel_model
 
@@ -84,7 +85,7 @@ class Case:
 
     @property
     def n_steps(self) -> int:
-        return max(1, round(self.problem.t_end / self.dt))
+        return steps_over(self.problem.t_end, self.dt)
 
 
 def _triple(values: Any) -> tuple[float, float, float]:
@@ -366,7 +367,7 @@ def _fast_wheel_case(quick: bool) -> Case:
     across = float(np.linalg.norm(omega0 - (omega0 @ axis) * axis))
     hub = np.linalg.eigvalsh(hub_inertia(moments, wheels))
     amplitude = float(np.sqrt(hub[-1] / hub[0])) * across
-    steps = max(1, round(problem.t_end / dt))
+    steps = steps_over(problem.t_end, dt)
     limit = rk4_nutation_error(rate, dt, steps, amplitude)
     return Case(
         name="fast wheel, slow body",

@@ -50,6 +50,7 @@ from rigid_rot_sim.cluster import map_tasks, open_client
 from rigid_rot_sim.core import quaternion as quat
 from rigid_rot_sim.core.integrators import METHODS
 from rigid_rot_sim.core.integrators.base import NonFiniteStateError
+from rigid_rot_sim.core.steps import steps_over
 
 SCIPY_METHODS = ("RK45", "DOP853", "Radau", "LSODA")
 TARGETS = (1e-6, 1e-10)
@@ -219,7 +220,7 @@ def _runner(
     else:
         dt = value
         parameter = "dt"
-    n_steps = max(1, round(problem.t_end / dt))
+    n_steps = steps_over(problem.t_end, dt)
 
     def run_ours() -> tuple[np.ndarray, np.ndarray, int]:
         q, omega = problem.final_state(line.method, dt, **options)
@@ -301,7 +302,7 @@ def next_value(
         return finer[0]
     aim = TARGET_MARGIN * max([t for t in TARGETS if goal <= t < last.omega_error] or [goal])
     shrink = (last.omega_error / aim) ** (1.0 / max(order, MIN_ORDER))
-    n_steps = max(1, round(t_end / last.value))
+    n_steps = steps_over(t_end, last.value)
     return max(t_end / max(2 * n_steps, math.ceil(n_steps * shrink)), finer[-1])
 
 

@@ -22,7 +22,8 @@ Modules, one job each:
 * :mod:`.torque` - torque models; :mod:`.sensors` - a rate gyro and a star tracker;
 * :mod:`.quaternion` - quaternion helpers on floats; :mod:`.steps` - which step a time lands on
   and how many steps a duration takes;
-* :mod:`.jit` - numba with an on-disk cache; :mod:`.precompile` - fills that cache;
+* :mod:`.arrays` - the array types of kernels and functions, by dtype; :mod:`.jit` - numba with
+  an on-disk cache; :mod:`.precompile` - fills that cache;
   :mod:`.limits` - every documented input limit; :mod:`.validation` - argument checks.
 
 The rooms above it: :mod:`rigid_rot_sim.scene` reads scene files into frozen dataclasses (PyYAML,

@@ -26,18 +26,18 @@ end of each (a sweep's checkpoints), with the bits of calls cut there.
 from __future__ import annotations
 
 import math
-from typing import Any
 
 import numpy as np
 from numba import prange
 from numba.extending import register_jitable
 
 from rigid_rot_sim.core import quaternion as quat
+from rigid_rot_sim.core.arrays import ArrayLike, FloatArray, IntArray
 from rigid_rot_sim.core.exact import free_flow
 from rigid_rot_sim.core.integrators import kernels
 from rigid_rot_sim.core.integrators.base import NonFiniteStateError
 from rigid_rot_sim.core.integrators.status import NEWTON_FAILED, NON_FINITE, OK
-from rigid_rot_sim.core.jit import compiled
+from rigid_rot_sim.core.jit import serial_and_parallel
 from rigid_rot_sim.core.torque import TORQUE_NONE, TORQUE_TIME
 
 #: Methods for bodies under (per-body) torques.
@@ -56,7 +56,7 @@ _KERNELS = {
 _FAILURES = {NON_FINITE: "non-finite state", NEWTON_FAILED: "Newton's method did not converge"}
 
 
-def _as_batch(name: str, value: Any, n: int | None, width: int) -> np.ndarray:
+def _as_batch(name: str, value: ArrayLike, n: int | None, width: int) -> np.ndarray:
     array = np.asarray(value, dtype=float)
     if array.ndim == 1:
         if array.shape != (width,):
@@ -74,19 +74,19 @@ def _as_batch(name: str, value: Any, n: int | None, width: int) -> np.ndarray:
 
 @register_jitable
 def _advance_body(
-    b: Any,
-    method: Any,
-    moments: Any,
-    q: Any,
-    omega: Any,
-    torque: Any,
-    dt: Any,
-    n_steps: Any,
-    normalize_q: Any,
-    failed_step: Any,
-    failure: Any,
-    record_steps: Any,
-    omega_at: Any,
+    b: int,
+    method: int,
+    moments: FloatArray,
+    q: FloatArray,
+    omega: FloatArray,
+    torque: FloatArray,
+    dt: float,
+    n_steps: int,
+    normalize_q: bool,
+    failed_step: IntArray,
+    failure: IntArray,
+    record_steps: IntArray,
+    omega_at: FloatArray,
 ) -> None:
     """Advance body b in place; if it fails it keeps its last good state and records the
     (1-based) failing step and the status. After each of ``record_steps`` (increasing, 1-based)
@@ -140,20 +140,19 @@ def _advance_body(
         omega[b, i] = state[4 + i]
 
 
-@compiled(parallel=True)
-def _advance_bodies_parallel(
-    method: Any,
-    moments: Any,
-    q: Any,
-    omega: Any,
-    torque: Any,
-    dt: Any,
-    n_steps: Any,
-    normalize_q: Any,
-    failed_step: Any,
-    failure: Any,
-    record_steps: Any,
-    omega_at: Any,
+def _advance_bodies(
+    method: int,
+    moments: FloatArray,
+    q: FloatArray,
+    omega: FloatArray,
+    torque: FloatArray,
+    dt: float,
+    n_steps: int,
+    normalize_q: bool,
+    failed_step: IntArray,
+    failure: IntArray,
+    record_steps: IntArray,
+    omega_at: FloatArray,
 ) -> None:
     for b in prange(q.shape[0]):
         _advance_body(
@@ -163,26 +162,7 @@ def _advance_bodies_parallel(
 
 # Serial for small jobs: starting the parallel region costs up to a scheduler time slice
 # (milliseconds) when the cores are busy with other work.
-@compiled
-def _advance_bodies_serial(
-    method: Any,
-    moments: Any,
-    q: Any,
-    omega: Any,
-    torque: Any,
-    dt: Any,
-    n_steps: Any,
-    normalize_q: Any,
-    failed_step: Any,
-    failure: Any,
-    record_steps: Any,
-    omega_at: Any,
-) -> None:
-    for b in range(q.shape[0]):
-        _advance_body(
-            b, method, moments, q, omega, torque, dt, n_steps, normalize_q, failed_step, failure, record_steps, omega_at
-        )
-
+_advance_bodies_serial, _advance_bodies_parallel = serial_and_parallel(_advance_bodies)
 
 _PARALLEL_BODY_STEPS = 200_000
 
@@ -205,19 +185,19 @@ _SOA_CHUNK = 512  # bodies per chunk: its scratch rows stay in the L1/L2 cache
 
 @register_jitable
 def _rk4_soa_chunk(
-    start: Any,
-    stop: Any,
-    moments: Any,
-    q: Any,
-    omega: Any,
-    torque: Any,
-    dt: Any,
-    n_steps: Any,
-    normalize_q: Any,
-    failed_step: Any,
-    failure: Any,
-    record_steps: Any,
-    omega_at: Any,
+    start: int,
+    stop: int,
+    moments: FloatArray,
+    q: FloatArray,
+    omega: FloatArray,
+    torque: FloatArray,
+    dt: float,
+    n_steps: int,
+    normalize_q: bool,
+    failed_step: IntArray,
+    failure: IntArray,
+    record_steps: IntArray,
+    omega_at: FloatArray,
 ) -> None:
     m = stop - start
     # state and per-body constants, one row per component
@@ -346,19 +326,18 @@ def _rk4_soa_chunk(
 # error_model="numpy": a division is the IEEE one without numba's zero-divisor test (a branch that
 # stops LLVM from vectorising); the divisors here are moments (> 0, checked), constants and a
 # quaternion norm, whose zero gives a non-finite state, reported as such.
-@compiled(parallel=True, error_model="numpy")
-def _rk4_soa_parallel(
-    moments: Any,
-    q: Any,
-    omega: Any,
-    torque: Any,
-    dt: Any,
-    n_steps: Any,
-    normalize_q: Any,
-    failed_step: Any,
-    failure: Any,
-    record_steps: Any,
-    omega_at: Any,
+def _rk4_soa(
+    moments: FloatArray,
+    q: FloatArray,
+    omega: FloatArray,
+    torque: FloatArray,
+    dt: float,
+    n_steps: int,
+    normalize_q: bool,
+    failed_step: IntArray,
+    failure: IntArray,
+    record_steps: IntArray,
+    omega_at: FloatArray,
 ) -> None:
     n = q.shape[0]
     for c in prange((n + _SOA_CHUNK - 1) // _SOA_CHUNK):
@@ -380,47 +359,17 @@ def _rk4_soa_parallel(
         )
 
 
-@compiled(error_model="numpy")
-def _rk4_soa_serial(
-    moments: Any,
-    q: Any,
-    omega: Any,
-    torque: Any,
-    dt: Any,
-    n_steps: Any,
-    normalize_q: Any,
-    failed_step: Any,
-    failure: Any,
-    record_steps: Any,
-    omega_at: Any,
-) -> None:
-    n = q.shape[0]
-    for start in range(0, n, _SOA_CHUNK):
-        _rk4_soa_chunk(
-            start,
-            min(n, start + _SOA_CHUNK),
-            moments,
-            q,
-            omega,
-            torque,
-            dt,
-            n_steps,
-            normalize_q,
-            failed_step,
-            failure,
-            record_steps,
-            omega_at,
-        )
+_rk4_soa_serial, _rk4_soa_parallel = serial_and_parallel(_rk4_soa, error_model="numpy")
 
 
 def advance_batch(
     method: str,
-    principal_moments: Any,
-    q: Any,
-    omega: Any,
+    principal_moments: ArrayLike,
+    q: ArrayLike,
+    omega: ArrayLike,
     dt: float,
     n_steps: int,
-    torque_body: Any = None,
+    torque_body: ArrayLike | None = None,
     *,
     normalize_q: bool = True,
     layout: str = "soa",
@@ -478,12 +427,12 @@ def advance_batch(
 
 def advance_batch_recording(
     method: str,
-    principal_moments: Any,
-    q: Any,
-    omega: Any,
+    principal_moments: ArrayLike,
+    q: ArrayLike,
+    omega: ArrayLike,
     dt: float,
-    record_steps: Any,
-    torque_body: Any = None,
+    record_steps: ArrayLike,
+    torque_body: ArrayLike | None = None,
     *,
     normalize_q: bool = True,
     layout: str = "soa",
@@ -516,16 +465,16 @@ def advance_batch_recording(
 
 def _advance(
     method: str,
-    principal_moments: Any,
-    q: Any,
-    omega: Any,
+    principal_moments: ArrayLike,
+    q: ArrayLike,
+    omega: ArrayLike,
     dt: float,
     n_steps: int,
-    torque_body: Any,
+    torque_body: ArrayLike | None,
     normalize_q: bool,
     layout: str,
-    record_steps: np.ndarray,
-) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    record_steps: IntArray,
+) -> tuple[FloatArray, FloatArray, FloatArray]:
     """The checks and the compiled loop of advance_batch and advance_batch_recording."""
     if layout not in ("soa", "per_body"):
         raise ValueError(f"layout must be 'soa' or 'per_body', got {layout!r}")

@@ -27,8 +27,8 @@ from scipy.spatial.transform import Rotation
 
 from rigid_rot_sim.core import quaternion as quat
 from rigid_rot_sim.core import validation
+from rigid_rot_sim.core.arrays import ArrayLike, FloatArray
 from rigid_rot_sim.core.inertia import principal_frame, principal_orientation
-from rigid_rot_sim.core.validation import FloatArray
 
 
 @register_jitable
@@ -65,7 +65,7 @@ def axes_by_moment(i1: float, i2: float, i3: float) -> tuple[int, int, int]:
     return lo, hi, 2
 
 
-def euler_rhs(moments: Any, omega: Any, torque: Any = None) -> np.ndarray:
+def euler_rhs(moments: ArrayLike, omega: Any, torque: Any = None) -> np.ndarray:
     """Angular acceleration d(omega)/dt, rad/s^2, principal frame.
 
     Parameters
@@ -86,21 +86,21 @@ def euler_rhs(moments: Any, omega: Any, torque: Any = None) -> np.ndarray:
     return np.stack(alpha, axis=-1)
 
 
-def angular_momentum_body(moments: Any, omega: Any) -> FloatArray:
+def angular_momentum_body(moments: ArrayLike, omega: ArrayLike) -> FloatArray:
     """Body-frame angular momentum ``L = I omega``, kg*m^2/s (principal frame; shape (..., 3))."""
     moments_array: FloatArray = np.asarray(moments, dtype=float)
     omega_array: FloatArray = np.asarray(omega, dtype=float)
     return moments_array * omega_array
 
 
-def kinetic_energy(moments: Any, omega: Any) -> FloatArray | float:
+def kinetic_energy(moments: ArrayLike, omega: ArrayLike) -> FloatArray | float:
     """Rotational kinetic energy ``T = 1/2 omega . L``, J (principal frame; shape (...))."""
     omega_array: FloatArray = np.asarray(omega, dtype=float)
     energy: FloatArray | float = 0.5 * np.sum(omega_array * angular_momentum_body(moments, omega_array), axis=-1)
     return energy
 
 
-def body_to_world(q: Any, v_body: Any) -> np.ndarray:
+def body_to_world(q: ArrayLike, v_body: ArrayLike) -> np.ndarray:
     """Rotate body-frame vectors to the world frame, ``R(q) v`` (q: (..., 4) scalar-last)."""
     q = np.asarray(q, dtype=float)
     v_body = np.asarray(v_body, dtype=float)
@@ -108,7 +108,7 @@ def body_to_world(q: Any, v_body: Any) -> np.ndarray:
     return rotated.reshape(np.broadcast_shapes(q.shape[:-1] + (3,), v_body.shape))
 
 
-def world_to_body(q: Any, v_world: Any) -> np.ndarray:
+def world_to_body(q: ArrayLike, v_world: ArrayLike) -> np.ndarray:
     """Rotate world-frame vectors into the body frame, ``R(q)^T v`` (q: (..., 4) scalar-last)."""
     q = np.asarray(q, dtype=float)
     v_world = np.asarray(v_world, dtype=float)
@@ -116,12 +116,12 @@ def world_to_body(q: Any, v_world: Any) -> np.ndarray:
     return rotated.reshape(np.broadcast_shapes(q.shape[:-1] + (3,), v_world.shape))
 
 
-def angular_momentum_world(moments: Any, q: Any, omega: Any) -> np.ndarray:
+def angular_momentum_world(moments: ArrayLike, q: ArrayLike, omega: ArrayLike) -> np.ndarray:
     """World-frame angular momentum ``R(q) I omega``, kg*m^2/s (principal-frame q and omega)."""
     return body_to_world(q, angular_momentum_body(moments, omega))
 
 
-def quaternion_derivative(q: Any, omega: Any) -> np.ndarray:
+def quaternion_derivative(q: ArrayLike, omega: ArrayLike) -> np.ndarray:
     """``dq/dt = 1/2 q (x) (omega, 0)``, 1/s, for body-frame omega (rad/s); shape (..., 4)."""
     q = np.asarray(q, dtype=float)
     omega = np.asarray(omega, dtype=float)
@@ -159,7 +159,7 @@ class RigidBody:
     inertia_tensor: np.ndarray
 
     @classmethod
-    def from_inertia(cls, inertia: Any, name: str = "inertia") -> RigidBody:
+    def from_inertia(cls, inertia: ArrayLike, name: str = "inertia") -> RigidBody:
         """Build from three principal moments (kg*m^2) or a symmetric 3x3 tensor.
 
         A diagonal tensor keeps the user's axes (no rotation). Otherwise the principal
@@ -187,22 +187,22 @@ class RigidBody:
         """True when the user body frame is the principal frame."""
         return bool(np.array_equal(self.body_from_principal, quat.IDENTITY))
 
-    def vector_to_principal(self, v_body: Any) -> np.ndarray:
+    def vector_to_principal(self, v_body: ArrayLike) -> np.ndarray:
         """User body-frame vectors (..., 3) -> principal-frame coordinates."""
         return world_to_body(np.broadcast_to(self.body_from_principal, np.shape(v_body)[:-1] + (4,)), v_body)
 
-    def vector_from_principal(self, v_principal: Any) -> np.ndarray:
+    def vector_from_principal(self, v_principal: ArrayLike) -> np.ndarray:
         """Principal-frame vectors (..., 3) -> user body-frame coordinates."""
         return body_to_world(np.broadcast_to(self.body_from_principal, np.shape(v_principal)[:-1] + (4,)), v_principal)
 
-    def attitude_to_principal(self, q_body: Any) -> np.ndarray:
+    def attitude_to_principal(self, q_body: ArrayLike) -> np.ndarray:
         """Attitude body -> world (..., 4) -> attitude principal -> world, ``q (x) q_bp``."""
         r = quat.compose_rotations(
             Rotation.from_quat(np.reshape(q_body, (-1, 4))), Rotation.from_quat(self.body_from_principal)
         )
         return r.as_quat(canonical=False).reshape(np.shape(q_body))
 
-    def attitude_from_principal(self, q_principal: Any) -> np.ndarray:
+    def attitude_from_principal(self, q_principal: ArrayLike) -> np.ndarray:
         """Attitude principal -> world (..., 4) -> attitude body -> world, ``q (x) q_bp^-1``."""
         r = quat.compose_rotations(
             Rotation.from_quat(np.reshape(q_principal, (-1, 4))), Rotation.from_quat(self.body_from_principal).inv()

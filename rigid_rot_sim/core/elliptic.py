@@ -20,7 +20,7 @@ import numpy as np
 from numba import types
 from numba.extending import intrinsic, overload, register_jitable
 
-from rigid_rot_sim.core.validation import FloatArray
+from rigid_rot_sim.core.arrays import FloatArray
 
 _EPS = 2.220446049250313e-16
 #: A double-double (hi, lo) as a tuple.

@@ -113,6 +113,7 @@ from scipy.spatial.transform import Rotation
 
 from rigid_rot_sim.core import quaternion as quat
 from rigid_rot_sim.core import validation
+from rigid_rot_sim.core.arrays import ArrayLike, FloatArray
 from rigid_rot_sim.core.dynamics import axes_by_moment
 from rigid_rot_sim.core.elliptic import (
     AGM_SIZE,
@@ -140,7 +141,6 @@ from rigid_rot_sim.core.elliptic import (
     two_sum,
 )
 from rigid_rot_sim.core.jit import compiled
-from rigid_rot_sim.core.validation import FloatArray
 
 #: Float sequences the kernels take (tuples in compiled code, arrays or lists where Python calls them).
 Floats = Sequence[float] | FloatArray
@@ -392,22 +392,30 @@ def _reflected_phase(
         sv_h, cv_h, dv_h = _hyperbolic_jacobi(vh, params[_E_M1])
         sv, cv, dv = (sv_h, 0.0), (cv_h, 0.0), (dv_h, 0.0)
     else:
-        sv, cv, dv = jacobi_dd(
-            vh,
-            vl,
-            agm_a,
-            agm_c,
-            int(params[_E_LEVELS]),
-            params[_E_M1],
-            params[_E_M1_LO],
-            params[_E_AGM_TOP],
-            params[_E_AGM_TOP + 1],
-        )
+        sv, cv, dv = _jacobi_at(params, agm_a, agm_c, vh, vl)
     inv = dd_div(1.0, 0.0, *dv)
     kp = (params[_E_KP], params[_E_KP + 1])
     sn = dd_mul(*cv, *inv)
     g = _reflected_excess(params, vh, vl, sv[0], cv[0], dv[0])
     return (side * sn[0], side * sn[1]), dd_mul(*dd_mul(*kp, *sv), *inv), dd_mul(*kp, *inv), side * g[0], side * g[1]
+
+
+@register_jitable
+def _jacobi_at(
+    params: FloatArray, agm_a: FloatArray, agm_c: FloatArray, uh: float, ul: float
+) -> tuple[DoubleDouble, DoubleDouble, DoubleDouble]:
+    """sn, cn, dn (double-doubles) at u = uh + ul of the flow's modulus (its AGM tables and parameters)."""
+    return jacobi_dd(
+        uh,
+        ul,
+        agm_a,
+        agm_c,
+        int(params[_E_LEVELS]),
+        params[_E_M1],
+        params[_E_M1_LO],
+        params[_E_AGM_TOP],
+        params[_E_AGM_TOP + 1],
+    )
 
 
 @register_jitable
@@ -454,17 +462,7 @@ def _phase(
         g_h, g_l = _hyperbolic_excess(params, abs(rh), abs(rl), sn_a)
         return (side * parity * sn_a, 0.0), (parity * cn_a, 0.0), (dn_a, 0.0), j, side * g_h, side * g_l
     else:
-        sn, cn, dn = jacobi_dd(
-            rh,
-            rl,
-            agm_a,
-            agm_c,
-            int(params[_E_LEVELS]),
-            params[_E_M1],
-            params[_E_M1_LO],
-            params[_E_AGM_TOP],
-            params[_E_AGM_TOP + 1],
-        )
+        sn, cn, dn = _jacobi_at(params, agm_a, agm_c, rh, rl)
     if params[_E_KP] < _SMALL_KP and abs(rh) > 0.25 * k:
         # between ~K / 4 and K / 2 the reflected excess is the better conditioned: cn and dn here, of order
         # k'^(1/4) to k'^(1/2), carry the amplitude's absolute rounding, which the excess of
@@ -1203,7 +1201,7 @@ class TorqueFreeSolution:
     case: str
     _flow: Any = field(repr=False, compare=False)
 
-    def state(self, t: Any) -> tuple[np.ndarray, np.ndarray]:
+    def state(self, t: ArrayLike) -> tuple[np.ndarray, np.ndarray]:
         """``(quaternion(t), omega(t))`` evaluated together (shapes (..., 4) and (..., 3))."""
         if isinstance(t, (float, int)) and not isinstance(t, bool):
             if not math.isfinite(t):
@@ -1221,11 +1219,11 @@ class TorqueFreeSolution:
         result: tuple[Quat, Vec3] = self._flow.evaluate_scalar(t - self.t0)
         return result
 
-    def omega(self, t: Any) -> np.ndarray:
+    def omega(self, t: ArrayLike) -> np.ndarray:
         """Angular velocity at time(s) t (s), rad/s, principal body frame; shape t.shape + (3,)."""
         return self.state(t)[1]
 
-    def quaternion(self, t: Any) -> np.ndarray:
+    def quaternion(self, t: ArrayLike) -> np.ndarray:
         """Attitude at time(s) t (s), principal -> world, scalar-last; shape t.shape + (4,)."""
         return self.state(t)[0]
 
@@ -1241,7 +1239,7 @@ class TorqueFreeSolution:
 
 
 def torque_free_solution(
-    moments: Any, omega0: Any, q0: Any = (0.0, 0.0, 0.0, 1.0), t0: float = 0.0
+    moments: ArrayLike, omega0: ArrayLike, q0: ArrayLike = (0.0, 0.0, 0.0, 1.0), t0: float = 0.0
 ) -> TorqueFreeSolution:
     """Exact torque-free motion of a rigid body.
 
@@ -1276,7 +1274,7 @@ def torque_free_solution(
     return solution_from_state(moments, omega0, q0, t0)
 
 
-def torque_free_flow(moments: np.ndarray, q: Any, omega: Any, tau: float) -> tuple[Quat, Vec3]:
+def torque_free_flow(moments: np.ndarray, q: ArrayLike, omega: ArrayLike, tau: float) -> tuple[Quat, Vec3]:
     """Exact free flow over tau (s) from (q, omega): ``(q(tau), omega(tau))`` as float tuples.
 
     The same as ``torque_free_solution(moments, omega, q).state(tau)`` without the input

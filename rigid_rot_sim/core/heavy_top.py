@@ -53,12 +53,12 @@ from scipy.integrate import quad
 from scipy.special import ellipj, ellipk, ellipkinc
 
 from rigid_rot_sim.core import validation
+from rigid_rot_sim.core.arrays import ArrayLike, FloatArray
 from rigid_rot_sim.core.dynamics import angular_momentum_world, kinetic_energy, world_to_body
 from rigid_rot_sim.core.inertia import parallel_axis_shift
 from rigid_rot_sim.core.quaternion import quaternion_to_zxz, zxz_to_quaternion
 from rigid_rot_sim.core.simulate import simulate
 from rigid_rot_sim.core.torque import GravityTorque
-from rigid_rot_sim.core.validation import FloatArray
 
 _E_Z = np.array([0.0, 0.0, 1.0])
 
@@ -123,7 +123,7 @@ class HeavyTop:
         )
         return q, omega
 
-    def invariants(self, q: Any, omega: Any) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    def invariants(self, q: ArrayLike, omega: ArrayLike) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """``(E, p_phi, p_psi)``: energy (J) and the momenta about the vertical and the symmetry axis (kg*m^2/s).
 
         q (..., 4) principal -> world; omega (..., 3) rad/s, body frame.
@@ -137,7 +137,7 @@ class HeavyTop:
         return energy, p_phi, p_psi
 
     def simulate(
-        self, q0: Any, omega0: Any, t_end: float, dt: float, method: str, **options: Any
+        self, q0: ArrayLike, omega0: ArrayLike, t_end: float, dt: float, method: str, **options: Any
     ) -> HeavyTopTrajectory:
         """Integrate with a core integrator (``METHODS`` name) and add Euler angles and invariants."""
         traj = simulate(self.pivot_moments, omega0, t_end, dt, method, q0=q0, torque=self.torque, **options)
@@ -174,7 +174,7 @@ def separatrix_state(top: HeavyTop) -> tuple[np.ndarray, np.ndarray]:
     return top.state_from_euler(theta0, 0.0, 0.0, 0.0, phi_dot, psi_dot)
 
 
-def separatrix_solution(top: HeavyTop, t: Any) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+def separatrix_solution(top: HeavyTop, t: ArrayLike) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Closed-form ``(theta, phi, psi)`` (rad) at t (s) from :func:`separatrix_state`.
 
     ``1 / cos(theta) = 1 + 1 / cosh(gamma t)`` with ``gamma = sqrt(m g l / I1)``; phi and psi
@@ -226,13 +226,13 @@ class HeavyTopReference:
         u1, u2 = self.turning_points
         return math.acos(min(u2, 1.0)), math.acos(max(u1, -1.0))
 
-    def cos_theta(self, t: Any) -> np.ndarray:
+    def cos_theta(self, t: ArrayLike) -> np.ndarray:
         """u = cos(theta) at t (s)."""
         u1, u2 = self.turning_points
         sn = ellipj(self.nu * np.asarray(t, dtype=float) + self.w0, self.k2)[0]
         return u1 + (u2 - u1) * sn * sn
 
-    def theta(self, t: Any) -> np.ndarray:
+    def theta(self, t: ArrayLike) -> np.ndarray:
         """Nutation angle theta(t), rad."""
         theta: FloatArray = np.arccos(np.clip(self.cos_theta(t), -1.0, 1.0))
         return theta
@@ -260,7 +260,7 @@ class HeavyTopReference:
         part = integrate(0.0, rest)
         return periods * one[0] + part[0], periods * one[1] + part[1]
 
-    def euler_angles(self, t: Any) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    def euler_angles(self, t: ArrayLike) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """``(theta, phi, psi)`` at t >= 0 (s), rad; phi and psi unwrapped."""
         t = np.atleast_1d(np.asarray(t, dtype=float))
         if np.any(t < 0.0) or not np.all(np.isfinite(t)):
@@ -268,7 +268,7 @@ class HeavyTopReference:
         increments = np.array([self._integral(float(s)) for s in t.ravel()]).reshape(t.shape + (2,))
         return self.theta(t), self.phi0 + increments[..., 0], self.psi0 + increments[..., 1]
 
-    def quaternion(self, t: Any) -> np.ndarray:
+    def quaternion(self, t: ArrayLike) -> np.ndarray:
         """Attitude (principal -> world, scalar-last) at t >= 0 (s)."""
         theta, phi, psi = self.euler_angles(t)
         return zxz_to_quaternion(phi, theta, psi)
@@ -285,7 +285,7 @@ def _polished_roots(coefficients: np.ndarray) -> np.ndarray:
     return np.sort(real)
 
 
-def heavy_top_reference(top: HeavyTop, q0: Any, omega0: Any) -> HeavyTopReference:
+def heavy_top_reference(top: HeavyTop, q0: ArrayLike, omega0: ArrayLike) -> HeavyTopReference:
     """The exact heavy-top motion from (q0, omega0) at t = 0 (see the module docstring).
 
     Raises ValueError when f(u) has no oscillation range in [-1, 1] (a state at a double

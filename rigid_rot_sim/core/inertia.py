@@ -26,7 +26,7 @@ import numpy as np
 from scipy.spatial.transform import Rotation
 
 from rigid_rot_sim.core import limits, validation
-from rigid_rot_sim.core.validation import FloatArray
+from rigid_rot_sim.core.arrays import ArrayLike, FloatArray
 
 #: Symmetry labels, from the most to the least degenerate.
 SYMMETRY_LABELS = ("point", "linear", "spherical", "symmetric", "asymmetric")
@@ -73,7 +73,7 @@ class MassProperties:
     symmetry: str
 
 
-def validate_point_masses(masses: Any, positions: Any) -> tuple[np.ndarray, np.ndarray]:
+def validate_point_masses(masses: ArrayLike, positions: ArrayLike) -> tuple[np.ndarray, np.ndarray]:
     """Return ``masses`` (n,) and ``positions`` (n, 3) as float arrays, or raise ValueError.
 
     Rules: at least one mass and at most ``limits.MAX_POINT_MASSES``; as many positions as
@@ -120,7 +120,7 @@ def _point_mass_inertia(masses: FloatArray, offsets: FloatArray) -> FloatArray:
     return 0.5 * (tensor + tensor.T)
 
 
-def parallel_axis_shift(inertia_com: Any, mass: float, offset: Any) -> FloatArray:
+def parallel_axis_shift(inertia_com: ArrayLike, mass: float, offset: ArrayLike) -> FloatArray:
     """Inertia tensor about a point displaced by ``offset`` from the centre of mass.
 
     ``I_p = I_com + mass * (|s|^2 E - s s^T)`` with ``s = offset`` (m, from the centre of mass
@@ -133,7 +133,7 @@ def parallel_axis_shift(inertia_com: Any, mass: float, offset: Any) -> FloatArra
     return tensor + mass * (float(shift @ shift) * np.eye(3) - np.outer(shift, shift))
 
 
-def inertia_about_center_of_mass(inertia: Any, mass: float, offset: Any) -> FloatArray:
+def inertia_about_center_of_mass(inertia: ArrayLike, mass: float, offset: ArrayLike) -> FloatArray:
     """Inertia tensor about the centre of mass from the one about a point ``offset`` from it.
 
     The inverse of :func:`parallel_axis_shift`: ``I_com = I_p - mass * (|s|^2 E - s s^T)``
@@ -171,7 +171,7 @@ def _symmetry_label(moments: np.ndarray, point_scale: float) -> str:
     return "asymmetric"
 
 
-def principal_frame(inertia_com: Any) -> tuple[np.ndarray, np.ndarray]:
+def principal_frame(inertia_com: ArrayLike) -> tuple[np.ndarray, np.ndarray]:
     """Principal moments (ascending, kg*m^2) and axes (columns, det = +1) of an inertia tensor.
 
     Rounding can leave the zero moment of a linear or point body slightly negative; it is
@@ -186,7 +186,7 @@ def principal_frame(inertia_com: Any) -> tuple[np.ndarray, np.ndarray]:
     return moments, axes
 
 
-def principal_orientation(principal_axes: Any) -> np.ndarray:
+def principal_orientation(principal_axes: ArrayLike) -> np.ndarray:
     """Quaternion (x, y, z, w), scalar-last, of the rotation principal frame -> input frame.
 
     ``principal_axes`` is the (3, 3) rotation matrix whose columns are the principal axes
@@ -202,7 +202,7 @@ def principal_orientation(principal_axes: Any) -> np.ndarray:
 
 
 def principal_frame_pose(
-    inertia_com: Any, center_of_mass: Any = (0.0, 0.0, 0.0)
+    inertia_com: ArrayLike, center_of_mass: ArrayLike = (0.0, 0.0, 0.0)
 ) -> tuple[np.ndarray, np.ndarray] | None:
     """Pose of the principal-axes frame in the body frame, or None where the two coincide.
 
@@ -225,7 +225,7 @@ def principal_frame_pose(
     return offset.copy(), principal_orientation(axes)
 
 
-def mass_properties(masses: Any, positions: Any, origin: Any = (0.0, 0.0, 0.0)) -> MassProperties:
+def mass_properties(masses: ArrayLike, positions: ArrayLike, origin: ArrayLike = (0.0, 0.0, 0.0)) -> MassProperties:
     """Mass properties of point masses.
 
     Parameters
@@ -292,7 +292,7 @@ def _mass_properties(mass_array: np.ndarray, position_array: np.ndarray, origin_
 NOMINAL_BOX_SIZE = 1.0
 
 
-def equivalent_box(principal_moments: Any, mass: float | None = None) -> np.ndarray:
+def equivalent_box(principal_moments: ArrayLike, mass: float | None = None) -> np.ndarray:
     """Sides (a, b, c), m, of the uniform box with these principal moments, along the principal axes.
 
     A uniform box of mass m and sides a, b, c has ``I1 = m (b^2 + c^2) / 12`` (cyclic), so

@@ -11,15 +11,19 @@ the file of its entry point changes, but the kernels are built from helpers in s
 modules (``register_jitable``); so the cache of every compiled function of this package
 is keyed on the contents of all its core sources instead: editing any of them, or
 checking out another commit, recompiles on next use instead of running stale code.
+
+:func:`serial_and_parallel` compiles one loop body twice, serially and over the cores (numba runs
+``prange`` as ``range`` without ``parallel=True``), so the two never drift apart.
 """
 
 from __future__ import annotations
 
 import functools
 import hashlib
+import types
 from collections.abc import Callable
 from pathlib import Path
-from typing import Any, TypeVar, overload
+from typing import Any, TypeVar, cast, overload
 
 from numba import njit
 from numba.core import caching, config
@@ -95,3 +99,25 @@ def compiled(function: Callable[..., Any] | None = None, **options: Any) -> Any:
         raise ValueError("core kernels are compiled without fastmath (bit-reproducible results)")
     decorator = njit(cache=True, **options)
     return decorator if function is None else decorator(function)
+
+
+def serial_and_parallel(function: _F, **options: Any) -> tuple[_F, _F]:
+    """One kernel body compiled twice: ``(serial, parallel)``, the second with ``parallel=True``.
+
+    ``function`` loops with ``numba.prange``: the serial twin runs it as ``range`` (no start-up of the
+    parallel region, for small jobs), the parallel one over the cores. numba's cache files are named
+    after the function's qualified name and do not tell the two compilations apart, so the parallel
+    twin compiles a copy of the function named ``<name>_parallel``.
+    """
+    if not isinstance(function, types.FunctionType):
+        raise TypeError(f"serial_and_parallel compiles a plain function, got {function!r}")
+    name = f"{function.__name__}_parallel"
+    twin = types.FunctionType(
+        function.__code__, function.__globals__, name, function.__defaults__, function.__closure__
+    )
+    twin.__qualname__ = f"{function.__qualname__}_parallel"
+    twin.__module__ = function.__module__
+    twin.__doc__ = function.__doc__
+    serial: _F = compiled(**options)(function)
+    parallel: _F = compiled(parallel=True, **options)(cast(_F, twin))
+    return serial, parallel

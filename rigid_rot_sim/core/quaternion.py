@@ -28,6 +28,8 @@ import numpy.typing as npt
 from numba.extending import register_jitable
 from scipy.spatial.transform import Rotation
 
+from rigid_rot_sim.core.arrays import ArrayLike
+
 Quaternion = tuple[float, float, float, float]
 Vector = tuple[float, float, float]
 #: What the helpers receive: tuples inside the kernels, tuples or float arrays from Python callers.
@@ -142,7 +144,7 @@ def from_zxz(phi: Angles, theta: Angles, psi: Angles) -> tuple[Angles, Angles, A
     return (sh * np.cos(half_diff), sh * np.sin(half_diff), ch * np.sin(half_sum), ch * np.cos(half_sum))
 
 
-def zxz_to_quaternion(phi: Any, theta: Any, psi: Any) -> np.ndarray:
+def zxz_to_quaternion(phi: ArrayLike, theta: ArrayLike, psi: ArrayLike) -> np.ndarray:
     """Quaternion (x, y, z, w) of ``Rz(phi) Rx(theta) Rz(psi)`` (intrinsic z-x-z, rad).
 
     Equals ``Rotation.from_euler('ZXZ', [phi, theta, psi]).as_quat()`` up to sign;
@@ -152,7 +154,7 @@ def zxz_to_quaternion(phi: Any, theta: Any, psi: Any) -> np.ndarray:
     return np.stack(from_zxz(*broadcast), axis=-1)
 
 
-def quaternion_to_zxz(q: Any) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+def quaternion_to_zxz(q: ArrayLike) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """z-x-z Euler angles ``(phi, theta, psi)`` (rad) with ``R(q) = Rz(phi) Rx(theta) Rz(psi)``.
 
     theta in [0, pi]; phi and psi in (-pi, pi]. Computed from the half-angle form of

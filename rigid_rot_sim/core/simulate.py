@@ -16,7 +16,7 @@ Example
 (1.0, (101, 4))
 
 Reaction wheels and the gravity gradient (``wheels=``, ``orbit=``) are run by the gyrostat
-methods (:func:`simulate_gyrostat`, inputs checked by :mod:`rigid_rot_sim.core.simulate_wheels`); the
+methods (:func:`_simulate_gyrostat`, inputs checked by :mod:`rigid_rot_sim.core.simulate_wheels`); the
 trajectory then carries the wheel speeds. Example: ``docs/spacecraft.md``.
 """
 
@@ -24,15 +24,19 @@ from __future__ import annotations
 
 import functools
 from dataclasses import dataclass, field
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
 from rigid_rot_sim.core import frames, validation
+from rigid_rot_sim.core.arrays import ArrayLike, FloatArray
 from rigid_rot_sim.core.dynamics import RigidBody, angular_momentum_world, kinetic_energy
 from rigid_rot_sim.core.integrators import get_method
 from rigid_rot_sim.core.steps import step_grid
 from rigid_rot_sim.core.torque import ConstantTorque, GravityTorque, PolynomialTorque
+
+if TYPE_CHECKING:  # imported on use: the plain path does not load the wheels' kernels
+    from rigid_rot_sim.core.wheels import WheelModel
 
 
 @dataclass(frozen=True)
@@ -149,17 +153,17 @@ class _UserFrameTorque:
 
 
 def simulate(
-    inertia: Any,
-    omega0: Any,
+    inertia: ArrayLike,
+    omega0: ArrayLike,
     t_end: float,
     dt: float,
     method: str,
-    q0: Any = (0.0, 0.0, 0.0, 1.0),
+    q0: ArrayLike = (0.0, 0.0, 0.0, 1.0),
     torque: Any = None,
     *,
     save_every: int = 1,
     wheels: Any = None,
-    wheel_speeds0: Any = None,
+    wheel_speeds0: ArrayLike | None = None,
     wheel_torque: Any = None,
     orbit: Any = None,
     **options: Any,
@@ -209,22 +213,6 @@ def simulate(
     NonFiniteStateError
         A step produced a non-finite state (names the step and the time).
     """
-    if wheels is not None or orbit is not None or wheel_speeds0 is not None or wheel_torque is not None:
-        return simulate_gyrostat(
-            inertia,
-            omega0,
-            t_end,
-            dt,
-            method,
-            q0,
-            torque,
-            save_every=save_every,
-            wheels=wheels,
-            wheel_speeds0=wheel_speeds0,
-            wheel_torque=wheel_torque,
-            orbit=orbit,
-            **options,
-        )
     body, is_principal = rigid_body(inertia)
     omega0 = validation.finite_vector("omega0", omega0)
     q0 = attitude(q0)
@@ -232,6 +220,11 @@ def simulate(
     dt = validation.positive_scalar("dt", dt)
     if type(save_every) is not int or save_every < 1:  # the common case skips the call
         save_every = checked_save_every(save_every)
+    if wheels is not None or orbit is not None or wheel_speeds0 is not None or wheel_torque is not None:
+        wheel_inputs = _WheelInputs(wheels, wheel_speeds0, wheel_torque, orbit)
+        return _simulate_gyrostat(
+            body, is_principal, omega0, q0, t_end, dt, method, torque, save_every, wheel_inputs, options
+        )
     integrator_class = get_method(method)
 
     if is_principal:  # nothing to rotate (and no Rotation objects to build)
@@ -271,12 +264,31 @@ def simulate(
     if n_full or tail:
         t[-1] = t_end  # the grid's last point is t_end up to rounding; report it exactly
 
-    if is_principal:
+    return _trajectory(body, is_principal, method, t, q_p, omega_p)
+
+
+def _trajectory(
+    body: RigidBody,
+    is_principal: bool,
+    method: str,
+    t: np.ndarray,
+    q_p: FloatArray,
+    omega_p: FloatArray,
+    wheels_principal: WheelModel | None = None,
+    wheel_speeds: FloatArray | None = None,
+) -> Trajectory:
+    """The principal-frame samples as a trajectory in the user body frame (a GyrostatTrajectory with wheels)."""
+    if is_principal:  # nothing to rotate (and no Rotation objects to build)
         q_body, omega_body = q_p, omega_p
     else:
         q_body = body.attitude_from_principal(q_p)
         omega_body = body.vector_from_principal(omega_p)
-    return Trajectory(
+    wheel_fields: dict[str, Any] = {}
+    kind = Trajectory
+    if wheels_principal is not None:
+        wheel_fields = {"wheel_speeds": wheel_speeds, "wheels_principal": wheels_principal}
+        kind = GyrostatTrajectory
+    return kind(
         t=t,
         q=q_body,
         omega=omega_body,
@@ -284,28 +296,36 @@ def simulate(
         principal_moments=body.principal_moments,
         q_principal=q_p,
         omega_principal=omega_p,
+        **wheel_fields,
     )
 
 
-def simulate_gyrostat(
-    inertia: Any,
-    omega0: Any,
+@dataclass(frozen=True)
+class _WheelInputs:
+    """simulate()'s wheel and orbit arguments, as given (checked by :mod:`rigid_rot_sim.core.simulate_wheels`)."""
+
+    wheels: Any
+    speeds0: ArrayLike | None
+    torque: Any
+    orbit: Any
+
+
+def _simulate_gyrostat(
+    body: RigidBody,
+    is_principal: bool,
+    omega0: FloatArray,
+    q0: FloatArray,
     t_end: float,
     dt: float,
     method: str,
-    q0: Any = (0.0, 0.0, 0.0, 1.0),
-    torque: Any = None,
-    *,
-    save_every: int = 1,
-    wheels: Any = None,
-    wheel_speeds0: Any = None,
-    wheel_torque: Any = None,
-    orbit: Any = None,
-    **options: Any,
+    torque: Any,
+    save_every: int,
+    inputs: _WheelInputs,
+    options: dict[str, Any],
 ) -> Trajectory:
     """:func:`~rigid_rot_sim.core.simulate.simulate` with reaction wheels and the gravity gradient.
 
-    Parameters as :func:`~rigid_rot_sim.core.simulate.simulate`'s; ``method`` is ``rk4`` or
+    Parameters as :func:`~rigid_rot_sim.core.simulate.simulate`'s, checked there; ``method`` is ``rk4`` or
     ``dopri5`` (ValueError naming them otherwise), ``torque`` None or a constant body-frame
     vector (N*m). ``wheel_speeds0`` or ``wheel_torque`` need ``wheels``; a wheel speed beyond its
     max_speed is refused. Time grid and sampling as ``simulate``'s.
@@ -326,12 +346,7 @@ def simulate_gyrostat(
     from rigid_rot_sim.core.simulate_wheels import checked_wheel_speeds, checked_wheels, wheel_torque_events
     from rigid_rot_sim.core.wheels import NO_ORBIT, OrbitModel
 
-    body, is_principal = rigid_body(inertia)
-    omega0 = validation.finite_vector("omega0", omega0)
-    q0 = attitude(q0)
-    t_end = validation.nonnegative_scalar("t_end", t_end)
-    dt = validation.positive_scalar("dt", dt)
-    save_every = checked_save_every(save_every)
+    wheels, wheel_speeds0, wheel_torque, orbit = inputs.wheels, inputs.speeds0, inputs.torque, inputs.orbit
     integrator_class = get_gyrostat_method(method)
     if orbit is not None and not isinstance(orbit, OrbitModel):
         raise ValueError(
@@ -397,32 +412,8 @@ def simulate_gyrostat(
     if n_full or tail:
         t[-1] = t_end
 
-    if is_principal:
-        q_body, omega_body = q_p, omega_p
-    else:
-        q_body = body.attitude_from_principal(q_p)
-        omega_body = body.vector_from_principal(omega_p)
-    if wheels_p is None:  # gravity gradient only: a rigid body's trajectory
-        return Trajectory(
-            t=t,
-            q=q_body,
-            omega=omega_body,
-            method=method,
-            principal_moments=moments,
-            q_principal=q_p,
-            omega_principal=omega_p,
-        )
-    return GyrostatTrajectory(
-        t=t,
-        q=q_body,
-        omega=omega_body,
-        method=method,
-        principal_moments=moments,
-        q_principal=q_p,
-        omega_principal=omega_p,
-        wheel_speeds=speeds,
-        wheels_principal=wheels_p,
-    )
+    # gravity gradient only (no wheels): a rigid body's trajectory
+    return _trajectory(body, is_principal, method, t, q_p, omega_p, wheels_p, speeds)
 
 
 def checked_save_every(save_every: Any) -> int:
@@ -432,7 +423,7 @@ def checked_save_every(save_every: Any) -> int:
     return int(save_every)
 
 
-def rigid_body(inertia: Any) -> tuple[RigidBody, bool]:
+def rigid_body(inertia: ArrayLike) -> tuple[RigidBody, bool]:
     """``(RigidBody.from_inertia(inertia), body.is_principal)``, cached per inertia value (arrays read-only)."""
     try:
         values = np.asarray(inertia, dtype=float)
@@ -455,8 +446,8 @@ def _cached_body(shape: tuple[int, ...], data: bytes) -> tuple[RigidBody, bool]:
 _IDENTITY_ATTITUDE = (0.0, 0.0, 0.0, 1.0)
 
 
-def attitude(q0: Any) -> np.ndarray:
+def attitude(q0: ArrayLike) -> np.ndarray:
     """``validation.quaternion("q0", q0)``, with the identity (the default) looked up."""
-    if type(q0) is tuple and q0 == _IDENTITY_ATTITUDE:
+    if isinstance(q0, tuple) and q0 == _IDENTITY_ATTITUDE:
         return np.array(_IDENTITY_ATTITUDE)
     return validation.quaternion("q0", q0)

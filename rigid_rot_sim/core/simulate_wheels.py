@@ -21,6 +21,7 @@ from typing import Any
 import numpy as np
 
 from rigid_rot_sim.core import validation
+from rigid_rot_sim.core.arrays import ArrayLike
 from rigid_rot_sim.core.steps import step_at_or_after
 from rigid_rot_sim.core.wheels import WheelModel, hub_inertia
 
@@ -90,7 +91,7 @@ def checked_wheels(wheels: Any, moments: np.ndarray, body: Any) -> WheelModel | 
     return principal
 
 
-def checked_wheel_speeds(wheels: WheelModel | None, wheel_speeds0: Any) -> np.ndarray:
+def checked_wheel_speeds(wheels: WheelModel | None, wheel_speeds0: ArrayLike | None) -> np.ndarray:
     """Initial wheel speeds (rad/s, default 0); ValueError for a wrong count, a non-finite one, one beyond max_speed."""
     n_wheels = 0 if wheels is None else wheels.count
     if wheel_speeds0 is None:

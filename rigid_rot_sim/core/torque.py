@@ -24,9 +24,9 @@ import numpy as np
 from numba.core.extending import overload
 from numba.extending import register_jitable
 
+from rigid_rot_sim.core.arrays import FloatArray
 from rigid_rot_sim.core.quaternion import Floats, Vector
 from rigid_rot_sim.core.quaternion import rotate_inverse as _rotate_inverse
-from rigid_rot_sim.core.validation import FloatArray
 
 
 class TorqueModel(Protocol):

@@ -11,16 +11,14 @@ import math
 from typing import Any
 
 import numpy as np
-import numpy.typing as npt
+
+from rigid_rot_sim.core.arrays import FloatArray
 
 # Moments from an eigen-decomposition or a CAD export satisfy the triangle inequality
 # only up to rounding (a thin plate has I3 = I1 + I2 exactly in theory).
 TRIANGLE_RTOL = 1e-12
 # Relative asymmetry tolerated in a user-supplied inertia tensor.
 SYMMETRY_RTOL = 1e-9
-
-#: A float64 array: what every check below returns (numpy's typing keeps arithmetic on it float64).
-FloatArray = npt.NDArray[np.float64]
 
 
 def finite_scalar(name: str, value: Any) -> float:

@@ -97,6 +97,7 @@ import numpy as np
 from numba.extending import register_jitable
 
 from rigid_rot_sim.core import quaternion as quat
+from rigid_rot_sim.core.arrays import ArrayLike
 
 __all__ = [
     "WheelModel",
@@ -168,7 +169,7 @@ class WheelModel:
         )
 
 
-def _array(values: Any, n: int, name: str, minimum: float, strict: bool) -> np.ndarray:
+def _array(values: ArrayLike, n: int, name: str, minimum: float, strict: bool) -> np.ndarray:
     a = np.array(values, dtype=float).reshape(n)
     bad = ~np.isfinite(a) | ((a <= minimum) if strict else (a < minimum))
     if np.any(bad):
@@ -178,15 +179,15 @@ def _array(values: Any, n: int, name: str, minimum: float, strict: bool) -> np.n
 
 
 def wheel_model(
-    inertia: Any,
+    inertia: ArrayLike,
     names: Any,
-    axes: Any,
-    spin_inertia: Any,
-    max_torque: Any,
-    max_speed: Any,
-    coulomb: Any = None,
-    viscous: Any = None,
-    stiction_speed: Any = None,
+    axes: ArrayLike,
+    spin_inertia: ArrayLike,
+    max_torque: ArrayLike,
+    max_speed: ArrayLike,
+    coulomb: ArrayLike | None = None,
+    viscous: ArrayLike | None = None,
+    stiction_speed: ArrayLike | None = None,
 ) -> WheelModel:
     """Validated :class:`WheelModel` for a body of inertia ``inertia`` (3x3, kg*m^2, wheels included).
 
@@ -402,14 +403,14 @@ def gyrostat_rhs(
 # ---------------------------------------------------------------------- invariants (numpy)
 
 
-def hub_inertia(moments: Any, wheels: WheelModel) -> np.ndarray:
+def hub_inertia(moments: ArrayLike, wheels: WheelModel) -> np.ndarray:
     """``I - sum J g g^T`` (3, 3), kg*m^2, with ``moments`` the principal moments of the wheels' frame."""
     spin = np.einsum("i,ij,ik->jk", wheels.spin_inertia, wheels.axes, wheels.axes)
     hub: np.ndarray = np.diag(np.asarray(moments, dtype=float)) - spin
     return hub
 
 
-def total_momentum_body(moments: Any, wheels: WheelModel, omega: Any, speeds: Any) -> np.ndarray:
+def total_momentum_body(moments: ArrayLike, wheels: WheelModel, omega: ArrayLike, speeds: ArrayLike) -> np.ndarray:
     """Eq. (1): ``I omega + sum J Omega g`` (kg*m^2/s), body frame; omega (..., 3), speeds (..., n)."""
     omega = np.asarray(omega, dtype=float)
     speeds = np.asarray(speeds, dtype=float)
@@ -417,7 +418,7 @@ def total_momentum_body(moments: Any, wheels: WheelModel, omega: Any, speeds: An
     return momentum
 
 
-def gyrostat_energy(moments: Any, wheels: WheelModel, omega: Any, speeds: Any) -> np.ndarray:
+def gyrostat_energy(moments: ArrayLike, wheels: WheelModel, omega: ArrayLike, speeds: ArrayLike) -> np.ndarray:
     """Eq. (6): kinetic energy (J) of body and wheels; omega (..., 3), speeds (..., n)."""
     omega = np.asarray(omega, dtype=float)
     speeds = np.asarray(speeds, dtype=float)

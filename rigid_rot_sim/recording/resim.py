@@ -30,6 +30,7 @@ from typing import Any
 import numpy as np
 
 from rigid_rot_sim.core import quaternion as quat
+from rigid_rot_sim.core.steps import nearest_step
 from rigid_rot_sim.message_fields import quaternion_to_array, time_to_seconds, vector3_to_array
 from rigid_rot_sim.recording.events import EVENT_TYPE, SimEvent, decode_event
 from rigid_rot_sim.recording.provenance import core_fingerprint
@@ -255,7 +256,7 @@ def resimulate(path: str | os.PathLike[str], method: str | None = None) -> Resim
             events += 1
             continue
         t = time_to_seconds(decoded.header.stamp)
-        k = sim.clock.k + round((t - sim.clock.t) / sim.clock.dt)
+        k = nearest_step(t, sim.clock.dt, t0=sim.clock.t, k0=sim.clock.k)
         sim.advance_to(k)
         snapshot = sim.snapshot()
         if message.topic in sensor_topics:

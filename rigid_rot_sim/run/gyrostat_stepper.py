@@ -17,8 +17,8 @@ from typing import Any
 
 import numpy as np
 
+from rigid_rot_sim.core import frames, validation
 from rigid_rot_sim.core import quaternion as quat
-from rigid_rot_sim.core import validation
 from rigid_rot_sim.core.integrators.gyrostat import GyrostatIntegrator, get_gyrostat_method
 from rigid_rot_sim.core.wheels import (
     NO_ORBIT,
@@ -150,7 +150,7 @@ class GyrostatStepper(Stepper):
             moments, principal_wheels = self.body.principal_moments, self._wheels
             assert principal_wheels is not None  # built with the body-frame wheels
             momentum = total_momentum_body(moments, principal_wheels, integrator.omega, speeds)
-            momentum_body = np.array(quat.rotate(body_from_principal, momentum))
+            momentum_body = np.array(frames.vector_from_principal(body_from_principal, momentum))
             energy = float(gyrostat_energy(moments, principal_wheels, integrator.omega, speeds))
             net = np.array(
                 [
@@ -165,7 +165,7 @@ class GyrostatStepper(Stepper):
             gg = gravity_gradient_torque(
                 self._orbit.compiled(), self.body.principal_moments, tuple(integrator.q), integrator.t
             )
-            sources.append(("gravity_gradient", np.array(quat.rotate(body_from_principal, gg))))
+            sources.append(("gravity_gradient", np.array(frames.vector_from_principal(body_from_principal, gg))))
         total = np.sum([v for _, v in sources], axis=0) if sources else np.zeros(3)
         momentum_world = np.array(quat.rotate(q, momentum_body))
         reference_energy = self.observables._energy_ref

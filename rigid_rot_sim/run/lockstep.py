@@ -44,6 +44,7 @@ import time
 from collections.abc import Callable
 from typing import TYPE_CHECKING, Any
 
+from rigid_rot_sim.core.steps import whole_steps
 from rigid_rot_sim.run.commands import CommandRejected
 from rigid_rot_sim.run.observer import SimulationObserver
 from rigid_rot_sim.run.pacing import MAX_TICK_WALL, Progress
@@ -82,10 +83,10 @@ def stamp_ns(seconds: float) -> int:
 
 def period_steps(period: float, dt: float) -> int:
     """Whole steps of ``dt`` in ``period`` (s); ValueError when the period is not a whole number of steps."""
-    n = round(period / dt)
-    if n < 1 or abs(n * dt - period) > 1e-9 * period:
+    n = whole_steps(period, dt)
+    if n is None:
         raise ValueError(f"lockstep.period {period:g} s is not a whole number of steps of dt {dt:g} s")
-    return int(n)
+    return n
 
 
 class Lockstep(SimulationObserver):

@@ -21,7 +21,6 @@ from typing import Any
 import numpy as np
 
 from rigid_rot_sim.core import frames, limits, validation
-from rigid_rot_sim.core import quaternion as quat
 from rigid_rot_sim.core.dynamics import RigidBody
 from rigid_rot_sim.core.integrators import get_method
 from rigid_rot_sim.core.integrators.base import Integrator, NonFiniteStateError
@@ -47,7 +46,7 @@ def command_torques(commands: CommandSchedule, orientation: np.ndarray) -> list[
     """The commanded torques acting now, by source (N*m, user body frame; world ones rotated at ``orientation``)."""
     q = tuple(float(v) for v in orientation)
     return [
-        (name, np.array(quat.rotate_inverse(q, torque) if frame == "world" else torque, dtype=float))
+        (name, np.array(frames.vector_in_body(q, torque) if frame == "world" else torque, dtype=float))
         for name, torque, frame in commands.named_torques
     ]
 

@@ -32,7 +32,6 @@ from dataclasses import dataclass
 from typing import Any
 
 from rigid_rot_sim.core import frames
-from rigid_rot_sim.core import quaternion as quat
 from rigid_rot_sim.scene.scene import TorqueSchedule
 
 __all__ = ["Stretch", "stretches", "stretch_at", "follows_attitude", "world_in_body"]
@@ -97,4 +96,4 @@ def world_in_body(q_principal: Any, principal_from_body: Any, world: Any) -> Any
     Floats (the engine) or equal-length columns (the sweep, one body per row).
     """
     q_body = frames.attitude_from_principal(q_principal, principal_from_body)
-    return quat.rotate_inverse(q_body, world)
+    return frames.vector_in_body(q_body, world)

@@ -47,7 +47,7 @@ from rigid_rot_sim.core.integrators import get_method
 from rigid_rot_sim.core.integrators.gyrostat import get_gyrostat_method
 from rigid_rot_sim.core.quaternion import zxz_to_quaternion
 from rigid_rot_sim.core.sensors import GyroModel, StarTrackerModel
-from rigid_rot_sim.core.steps import step_at_or_after
+from rigid_rot_sim.core.steps import step_at_or_after, whole_steps
 from rigid_rot_sim.scene import names
 from rigid_rot_sim.scene.bounded_yaml import load_input, read_input
 from rigid_rot_sim.scene.scene_schema import (
@@ -561,8 +561,7 @@ def lockstep_spec(
             raise ValueError(f"lockstep.inputs[{index}]: {name!r} is listed twice")
         inputs.append(name)
     period = float(spec["period"])
-    steps = round(period / dt)
-    if steps < 1 or abs(steps * dt - period) > 1e-9 * period:
+    if whole_steps(period, dt) is None:
         raise ValueError(f"lockstep.period: {period:g} s is not a whole number of steps of integrator.dt {dt:g} s")
     return LockstepSpec(
         period=period,

@@ -14,15 +14,16 @@ from __future__ import annotations
 
 import math
 
-import numba
 import numpy as np
+
+from rigid_rot_sim.core.jit import compiled
 
 __all__ = ["CheckpointTrack", "row_norms"]
 
 _TINY = float(np.finfo(float).tiny)
 
 
-@numba.njit(cache=True)
+@compiled
 def _row_norms(x, out):
     for i in range(x.shape[0]):
         out[i] = math.sqrt(x[i, 0] * x[i, 0] + x[i, 1] * x[i, 1] + x[i, 2] * x[i, 2])
@@ -39,7 +40,7 @@ def row_norms(x: np.ndarray) -> np.ndarray:
     return _row_norms(x, np.empty(x.shape[0]))
 
 
-@numba.njit(cache=True)
+@compiled
 def _nan_max(a: float, b: float) -> float:
     """``np.maximum``: NaN if either is."""
     if math.isnan(a) or math.isnan(b):
@@ -47,7 +48,7 @@ def _nan_max(a: float, b: float) -> float:
     return a if a >= b else b
 
 
-@numba.njit(cache=True)
+@compiled
 def _nan_min(a: float, b: float) -> float:
     """``np.minimum``: NaN if either is."""
     if math.isnan(a) or math.isnan(b):
@@ -55,7 +56,7 @@ def _nan_min(a: float, b: float) -> float:
     return a if a <= b else b
 
 
-@numba.njit(cache=True)
+@compiled
 def _observe(t, omega, moments, major, intermediate, sign0, max_omega, cos_min, cos_max, first_flip, previous):
     """One checkpoint at time ``t`` (s) of the principal-frame rates ``omega`` (N, 3): updates the trackers in place.
 

@@ -22,8 +22,9 @@ import ctypes
 import functools
 from collections.abc import Iterator
 
-import numba
 import numpy as np
+
+from rigid_rot_sim.core.jit import compiled
 
 __all__ = ["pcg64_state_words", "pcg64_states", "StreamDraws"]
 
@@ -59,7 +60,7 @@ _K_MIX_L, _K_MIX_R = _U(_MIX_MULT_L), _U(_MIX_MULT_R)
 _K_PCG_HI, _K_PCG_LO = _U(_PCG_MULT >> 64), _U(_PCG_MULT & _M64)
 
 
-@numba.njit(cache=True)
+@compiled
 def _hashmix(value, hash_const):
     """SeedSequence's hashmix: (the mixed value, the next hash constant)."""
     value = value ^ hash_const
@@ -68,13 +69,13 @@ def _hashmix(value, hash_const):
     return value ^ (value >> _K_16), hash_const
 
 
-@numba.njit(cache=True)
+@compiled
 def _mix(x, y):
     result = (x * _K_MIX_L - y * _K_MIX_R) & _K_M32
     return result ^ (result >> _K_16)
 
 
-@numba.njit(cache=True)
+@compiled
 def _mix_in(pool, hash_const, words):
     """mix_entropy's loop over the words past the pool's size: each mixed into every pool entry.
 
@@ -87,7 +88,7 @@ def _mix_in(pool, hash_const, words):
     return hash_const
 
 
-@numba.njit(cache=True)
+@compiled
 def _run_pool_compiled(run):
     """SeedSequence.mix_entropy of the run's words (>= 4 of them): the pool and the hash constant it leaves."""
     pool = np.empty(_POOL_SIZE, dtype=np.uint64)
@@ -102,7 +103,7 @@ def _run_pool_compiled(run):
     return pool, _mix_in(pool, hash_const, run[_POOL_SIZE:])
 
 
-@numba.njit(cache=True)
+@compiled
 def _mul_hi(a, b):
     """The high 64 bits of the 128-bit product of two uint64, on 32-bit halves."""
     a0, a1, b0, b1 = a & _K_M32, a >> _K_32, b & _K_M32, b >> _K_32
@@ -111,7 +112,7 @@ def _mul_hi(a, b):
     return a1 * b1 + (middle >> _K_32) + (middle2 >> _K_32)
 
 
-@numba.njit(cache=True)
+@compiled
 def _seed_samples(pool0, hash_const0, samples, key, out):
     """``out[i]``: PCG64 seeded from SeedSequence(run, spawn_key=(samples[i], key)), the run's pool given.
 
@@ -186,7 +187,7 @@ def pcg64_states(seed: int, samples: np.ndarray, stream: int) -> list[tuple[int,
     return [(lo | hi << 64, ilo | ihi << 64) for lo, hi, ilo, ihi in pcg64_state_words(seed, samples, stream).tolist()]
 
 
-@numba.njit(cache=True)
+@compiled
 def _load_stream(words, flags, row):
     """Write a fresh stream's state into the generator: the state words, no buffered 32-bit half."""
     for j in range(4):
@@ -195,7 +196,7 @@ def _load_stream(words, flags, row):
     flags[1] = 0
 
 
-@numba.njit(cache=True)
+@compiled
 def _fill_normals(generator, words, flags, rows, cut, out):
     """Row i of ``out``: standard normals of the stream whose state is ``rows[i]``, in order.
 
@@ -218,7 +219,7 @@ def _fill_normals(generator, words, flags, rows, cut, out):
     return out
 
 
-@numba.njit(cache=True)
+@compiled
 def _fill_uniforms(generator, words, flags, rows, low, high, out):
     """Row i of ``out``: uniform numbers in [low, high) of the stream whose state is ``rows[i]``."""
     for i in range(rows.shape[0]):

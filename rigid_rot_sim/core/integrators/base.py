@@ -42,6 +42,7 @@ from typing import Any, ClassVar, Literal
 import numpy as np
 
 from rigid_rot_sim.core import quaternion as quat
+from rigid_rot_sim.core.arrays import ArrayLike
 from rigid_rot_sim.core.torque import TorqueFunction
 
 
@@ -126,13 +127,13 @@ class Integrator:
 
     def __init__(
         self,
-        moments: Any,
+        moments: ArrayLike,
         dt: float,
         torque: TorqueFunction | None = None,
         *,
         t0: float = 0.0,
-        q0: Any = (0.0, 0.0, 0.0, 1.0),
-        omega0: Any = (0.0, 0.0, 0.0),
+        q0: ArrayLike = (0.0, 0.0, 0.0, 1.0),
+        omega0: ArrayLike = (0.0, 0.0, 0.0),
         **options: Any,
     ) -> None:
         if options:
@@ -145,7 +146,7 @@ class Integrator:
         self.n_steps = 0
         self.set_state(t0, q0, omega0)
 
-    def set_state(self, t: float, q: Any, omega: Any) -> None:
+    def set_state(self, t: float, q: ArrayLike, omega: ArrayLike) -> None:
         """Replace the state (q is normalised; a zero or non-finite q is a ValueError)."""
         q = np.asarray(q, dtype=float).reshape(4)
         omega = np.asarray(omega, dtype=float).reshape(3)

@@ -29,6 +29,7 @@ from typing import Any
 import numpy as np
 from numba.extending import register_jitable
 
+from rigid_rot_sim.core.arrays import ArrayLike
 from rigid_rot_sim.core.exact import TorqueFreeSolution, free_flow, solution_from_state
 from rigid_rot_sim.core.integrators.base import Integrator, NonFiniteStateError, UnsupportedTorqueError
 from rigid_rot_sim.core.integrators.fixed_step import FixedStepIntegrator
@@ -55,7 +56,7 @@ class ExactFlow(Integrator):
     stability = "exact"
     fixed_step = True
 
-    def __init__(self, moments: Any, dt: float, torque: Any = None, **kwargs: Any) -> None:
+    def __init__(self, moments: ArrayLike, dt: float, torque: Any = None, **kwargs: Any) -> None:
         _refuse_torque(torque)
         super().__init__(moments, dt, torque, **kwargs)
 

@@ -34,6 +34,7 @@ from typing import Any, ClassVar
 import numpy as np
 
 from rigid_rot_sim.core import validation
+from rigid_rot_sim.core.arrays import ArrayLike
 from rigid_rot_sim.core.integrators.base import Integrator, NonFiniteStateError
 from rigid_rot_sim.core.integrators.status import NON_FINITE, OK
 from rigid_rot_sim.core.jit import compiled
@@ -126,6 +127,11 @@ _P = np.array(
         [0.0, 40617522 / 29380423, -110615467 / 29380423, 69997945 / 29380423],
     ]
 )
+
+#: The kernels' leading arguments (anchor t, anchor step, dt, steps, state) and trailing ones (moments, wheel
+#: data, hub inverse, external torque, orbit data, wheel commands, motor torques out), in their order.
+_Grid = tuple[float, int, float, int, np.ndarray]
+_Model = tuple[np.ndarray, tuple[np.ndarray, ...], np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]
 
 # solver[...] slots carried between calls
 _T, _H, _T_OLD, _H_OLD, _FSAL = range(5)
@@ -264,17 +270,17 @@ class GyrostatIntegrator(Integrator):
 
     def __init__(
         self,
-        moments: Any,
+        moments: ArrayLike,
         dt: float,
         torque: Any = None,
         *,
         wheels: WheelModel | None = None,
         orbit: OrbitModel = NO_ORBIT,
-        wheel_speeds0: Any = None,
-        wheel_angles0: Any = None,
+        wheel_speeds0: ArrayLike | None = None,
+        wheel_angles0: ArrayLike | None = None,
         t0: float = 0.0,
-        q0: Any = (0.0, 0.0, 0.0, 1.0),
-        omega0: Any = (0.0, 0.0, 0.0),
+        q0: ArrayLike = (0.0, 0.0, 0.0, 1.0),
+        omega0: ArrayLike = (0.0, 0.0, 0.0),
         **options: Any,
     ) -> None:
         self.wheels = wheels if wheels is not None else WheelModel((), np.zeros((0, 3)), *([np.zeros(0)] * 6))
@@ -297,7 +303,14 @@ class GyrostatIntegrator(Integrator):
 
     # ------------------------------------------------------------------ state
 
-    def set_state(self, t: float, q: Any, omega: Any, wheel_speeds: Any = None, wheel_angles: Any = None) -> None:
+    def set_state(
+        self,
+        t: float,
+        q: ArrayLike,
+        omega: ArrayLike,
+        wheel_speeds: ArrayLike | None = None,
+        wheel_angles: ArrayLike | None = None,
+    ) -> None:
         """Replace the state; ``wheel_speeds`` (rad/s) and ``wheel_angles`` (rad) None keep the wheels' own."""
         values = {}
         for name, given in (("speeds", wheel_speeds), ("angles", wheel_angles)):
@@ -317,7 +330,7 @@ class GyrostatIntegrator(Integrator):
     def _restart(self) -> None:
         """Hook: the state or the inputs were replaced."""
 
-    def set_wheel_commands(self, torques: Any) -> None:
+    def set_wheel_commands(self, torques: ArrayLike) -> None:
         """Hold the motor torques ``torques`` (N*m, one per wheel, already clamped) from now on."""
         commands = np.array(torques, dtype=float).reshape(self.wheels.count)
         if not np.all(np.isfinite(commands)):
@@ -369,6 +382,30 @@ class GyrostatIntegrator(Integrator):
             self._anchor_t, self._anchor_k, self._anchor_dt = self.t, 0, self.dt
         return self._external()
 
+    def advance(self, n: int) -> None:
+        """Take ``n`` steps of ``dt`` (NonFiniteStateError at the first bad one, state at the last good one)."""
+        n = int(n)
+        if n <= 0:
+            return
+        external = self._start_run()
+        grid = (self._anchor_t, self._anchor_k, self.dt, n, self._y)
+        applied = np.zeros(self.wheels.count)
+        model = (self.moments, self._wheel_data, self._hub_inverse, external, self._orbit_data, self.wheel_commands)
+        done, status = self._run(grid, (*model, applied))
+        self._commit(done)
+        if status != OK:
+            self._restart()  # from the last good state
+            self._fail(status)
+
+    def _run(self, grid: _Grid, model: _Model) -> tuple[int, int]:
+        """The method's compiled loop: (steps done, status).
+
+        ``grid`` (anchor t, anchor step, dt, n steps, state ``self._y``, updated in place) and ``model``
+        (moments, wheel data, hub inverse, external torque, orbit data, wheel commands, and the array that
+        receives the motor torques acting at the end) are the leading and trailing arguments of the kernels.
+        """
+        raise NotImplementedError
+
     def _fail(self, status: int) -> None:
         t_bad = self._anchor_t + (self._anchor_k + 1) * self.dt
         what = "step size underflow" if status == STEP_UNDERFLOW else "non-finite state"
@@ -385,30 +422,9 @@ class GyrostatRK4(GyrostatIntegrator):
         self._torque_seen: Any = None
         super().__init__(*args, **kwargs)
 
-    def advance(self, n: int) -> None:
-        """Take ``n`` steps of ``dt`` (NonFiniteStateError at the first bad one, state at the last good one)."""
-        n = int(n)
-        if n <= 0:
-            return
-        external = self._start_run()
-        applied = np.zeros(self.wheels.count)
-        done, status = rk4_advance(
-            self._anchor_t,
-            self._anchor_k,
-            self.dt,
-            n,
-            self._y,
-            self.moments,
-            self._wheel_data,
-            self._hub_inverse,
-            external,
-            self._orbit_data,
-            self.wheel_commands,
-            applied,
-        )
-        self._commit(done)
-        if status != OK:
-            self._fail(status)
+    def _run(self, grid: _Grid, model: _Model) -> tuple[int, int]:
+        done, status = rk4_advance(*(*grid, *model))
+        return int(done), int(status)
 
 
 class GyrostatDopri5(GyrostatIntegrator):
@@ -439,37 +455,11 @@ class GyrostatDopri5(GyrostatIntegrator):
         self._y_old = self._y_int.copy()
         self._stages = np.zeros((7, m))
 
-    def advance(self, n: int) -> None:
-        """Report ``n`` multiples of dt (NonFiniteStateError at the first bad one, state at the last good one)."""
-        n = int(n)
-        if n <= 0:
-            return
-        external = self._start_run()
-        applied = np.zeros(self.wheels.count)
-        done, status = dopri5_advance(
-            self._anchor_t,
-            self._anchor_k,
-            self.dt,
-            n,
-            self._y,
-            self._solver,
-            self._y_int,
-            self._y_old,
-            self._stages,
-            self.rtol,
-            self.atol,
-            self.moments,
-            self._wheel_data,
-            self._hub_inverse,
-            external,
-            self._orbit_data,
-            self.wheel_commands,
-            applied,
-        )
-        self._commit(done)
-        if status != OK:
-            self._restart()  # from the last good report
-            self._fail(status)
+    def _run(self, grid: _Grid, model: _Model) -> tuple[int, int]:
+        """Report ``n`` multiples of dt by the dense output; a failure restarts from the last good report."""
+        solver = (self._solver, self._y_int, self._y_old, self._stages, self.rtol, self.atol)
+        done, status = dopri5_advance(*(*grid, *solver, *model))
+        return int(done), int(status)
 
 
 #: The methods that can run a scene with wheels or gravity gradient, by name.

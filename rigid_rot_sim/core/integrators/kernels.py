@@ -16,14 +16,16 @@ from typing import Any
 
 from numba.extending import register_jitable
 
+from rigid_rot_sim.core.arrays import FloatArray
 from rigid_rot_sim.core.integrators.exact_flow import exact_split_step
 from rigid_rot_sim.core.integrators.explicit import euler_step, rk4_step
 from rigid_rot_sim.core.integrators.fixed_step import KernelLoop, install_kernel_loop
 from rigid_rot_sim.core.integrators.implicit import implicit_midpoint_step
 from rigid_rot_sim.core.integrators.lie import cf4_step
 from rigid_rot_sim.core.integrators.splitting import COMPOSITIONS, splitting_step
-from rigid_rot_sim.core.integrators.status import NON_FINITE, OK
+from rigid_rot_sim.core.integrators.status import NON_FINITE, OK, State, StepResult
 from rigid_rot_sim.core.jit import compiled
+from rigid_rot_sim.core.quaternion import Vector
 
 EULER, RK4, LIE_RK4, IMPLICIT_MIDPOINT, SPLITTING2, SPLITTING4, SPLITTING6, EXACT_SPLIT2, EXACT_SPLIT4 = range(9)
 
@@ -46,8 +48,12 @@ _SPLITTING6 = COMPOSITIONS[6]
 
 
 @register_jitable
-def step_kernel(method: Any, t: Any, state: Any, dt: Any, moments: Any, torque: Any) -> Any:
-    """One step of the kernel ``method`` (an id of KERNEL_IDS): (new_state, status)."""
+def step_kernel(method: int, t: float, state: State, dt: float, moments: Vector, torque: Any) -> StepResult:
+    """One step of the kernel ``method`` (an id of KERNEL_IDS): (new_state, status).
+
+    ``torque`` is a :class:`~rigid_rot_sim.core.torque.TorqueData` when run by Python and its plain
+    tuple ``TorqueData.compiled`` when compiled (the kernels index it, so both work).
+    """
     if method == RK4:
         return rk4_step(t, state, dt, moments, torque)
     if method == LIE_RK4:
@@ -69,17 +75,17 @@ def step_kernel(method: Any, t: Any, state: Any, dt: Any, moments: Any, torque: 
 
 @register_jitable
 def advance_steps(
-    method: Any,
-    t_anchor: Any,
-    k0: Any,
-    dt: Any,
-    n: Any,
-    state: Any,
-    moments: Any,
+    method: int,
+    t_anchor: float,
+    k0: int,
+    dt: float,
+    n: int,
+    state: State,
+    moments: Vector,
     torque: Any,
-    save_every: Any,
-    saved: Any,
-) -> Any:
+    save_every: int,
+    saved: FloatArray,
+) -> tuple[State, int, int, State]:
     """Steps k0 .. k0 + n - 1 from ``state``: returns (state, steps done, status, bad state).
 
     Stops at the first step whose kernel reports a failure or whose state is not finite,

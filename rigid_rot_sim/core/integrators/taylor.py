@@ -71,6 +71,7 @@ from typing import Any, ClassVar
 import numpy as np
 from numba.extending import register_jitable
 
+from rigid_rot_sim.core.arrays import ArrayLike, FloatArray, IntArray
 from rigid_rot_sim.core.integrators.base import Integrator, NonFiniteStateError, UnsupportedTorqueError
 from rigid_rot_sim.core.jit import compiled
 from rigid_rot_sim.core.torque import ConstantTorque, GravityTorque, PolynomialTorque, TorqueFunction
@@ -98,6 +99,13 @@ def euler_coefficients(i1: float, i2: float, i3: float) -> tuple[float, float, f
     """``((I2 - I3) / I1, (I3 - I1) / I2, (I1 - I2) / I3)``: Euler's equations as ``w1' = c1 w2 w3 + N1 / I1``
     (cyclic), the coefficients of the recurrence's quadratic terms (moments in kg*m^2)."""
     return (i2 - i3) / i1, (i3 - i1) / i2, (i1 - i2) / i3
+
+
+#: The kernels' coefficient buffer and recurrence tables as one argument: (coeffs, pairs, terms,
+#: term_values, inverse_orders, forcing, binom, poly, const_forcing).
+Recurrence = tuple[
+    FloatArray, IntArray, IntArray, FloatArray, FloatArray, FloatArray, FloatArray, FloatArray, FloatArray
+]
 
 
 @functools.lru_cache(maxsize=256)
@@ -225,7 +233,7 @@ class Taylor(Integrator):
 
     def __init__(
         self,
-        moments: Any,
+        moments: ArrayLike,
         dt: float,
         torque: TorqueFunction | None = None,
         *,
@@ -359,15 +367,7 @@ class Taylor(Integrator):
             -1.0 if self.tol is None else self.tol,
             self.max_step,
             self.series_order,
-            self._coeffs,
-            self._pairs,
-            self._terms,
-            self._term_values,
-            self._inverse_orders,
-            self._forcing_buffer,
-            self._binom,
-            self._poly,
-            self._const_forcing,
+            self._recurrence,
             counters,
         )
         done, substeps, status = (int(v) for v in counters)
@@ -393,6 +393,21 @@ class Taylor(Integrator):
             f"{self.name}: step size underflow at step {self.n_steps + 1}, t = {t:.9g} s (omega = {self.omega})"
         )
 
+    @property
+    def _recurrence(self) -> Recurrence:
+        """The kernels' coefficient buffer and recurrence tables, in their order (coeffs ... const_forcing)."""
+        return (
+            self._coeffs,
+            self._pairs,
+            self._terms,
+            self._term_values,
+            self._inverse_orders,
+            self._forcing_buffer,
+            self._binom,
+            self._poly,
+            self._const_forcing,
+        )
+
     def _substep(self, t0: float, x0: np.ndarray, h_cap: float, h_fallback: float) -> tuple[float, int, np.ndarray]:
         """One Taylor step from (t0, x0) of length <= h_cap; returns (h, order, x(t0 + h)).
 
@@ -411,15 +426,7 @@ class Taylor(Integrator):
             -1.0 if self.tol is None else self.tol,
             self.series_order,
             rho,
-            self._coeffs,
-            self._pairs,
-            self._terms,
-            self._term_values,
-            self._inverse_orders,
-            self._forcing_buffer,
-            self._binom,
-            self._poly,
-            self._const_forcing,
+            self._recurrence,
             x_end,
         )
         if status != _OK:
@@ -435,10 +442,16 @@ _OK, _NON_FINITE_STATE, _NON_FINITE_SERIES, _UNDERFLOW = 0, 1, 2, 3
 
 @register_jitable
 def taylor_forcing(
-    t0: Any, binom: Any, poly: Any, const_forcing: Any, inverse_orders: Any, series_order: Any, out: Any
-) -> Any:
+    t0: float,
+    binom: FloatArray,
+    poly: FloatArray,
+    const_forcing: FloatArray,
+    inverse_orders: FloatArray,
+    series_order: int,
+    out: FloatArray,
+) -> int:
     """Fill out[:n] with the coefficients of b(t0 + s), pre-divided by (k + 1); returns n."""
-    n = poly.shape[0]
+    n: int = poly.shape[0]
     if n == 0:
         for c in range(_STATE_SIZE):
             if const_forcing[c] != 0.0:
@@ -463,7 +476,7 @@ def taylor_forcing(
 
 
 @register_jitable
-def taylor_evaluate(coeffs: Any, p: Any, s: Any, out: Any) -> Any:
+def taylor_evaluate(coeffs: FloatArray, p: int, s: float, out: FloatArray) -> None:
     """The series (order p) at s (Horner), quaternion renormalised, into out."""
     for c in range(_STATE_SIZE):
         value = coeffs[p, c]
@@ -477,29 +490,22 @@ def taylor_evaluate(coeffs: Any, p: Any, s: Any, out: Any) -> Any:
 
 @register_jitable
 def taylor_substep(
-    t0: Any,
-    x0: Any,
-    h_cap: Any,
-    h_fallback: Any,
-    controlled: Any,
-    tol: Any,
-    series_order: Any,
-    rho_box: Any,
-    coeffs: Any,
-    pairs: Any,
-    terms: Any,
-    term_values: Any,
-    inverse_orders: Any,
-    forcing: Any,
-    binom: Any,
-    poly: Any,
-    const_forcing: Any,
-    x_end: Any,
-) -> Any:
+    t0: float,
+    x0: FloatArray,
+    h_cap: float,
+    h_fallback: float,
+    controlled: bool,
+    tol: float,
+    series_order: int,
+    rho_box: FloatArray,
+    recurrence: Recurrence,
+    x_end: FloatArray,
+) -> tuple[float, int, int]:
     """One Taylor step of length <= h_cap from (t0, x0): (h, order, status); x(t0 + h) into x_end.
 
     ``rho_box[0]`` holds the convergence radius estimate (< 0: none) and is updated.
     """
+    coeffs, pairs, terms, term_values, inverse_orders, forcing, binom, poly, const_forcing = recurrence
     p = series_order
     omega_scale = max(1.0, abs(x0[0]), abs(x0[1]), abs(x0[2]))
     if not math.isfinite(omega_scale):
@@ -521,7 +527,9 @@ def taylor_substep(
 
 
 @register_jitable
-def rigid_body_series(coeffs: Any, p: Any, euler: Any, forcing: Any, n_forced: Any, inverse_orders: Any) -> Any:
+def rigid_body_series(
+    coeffs: FloatArray, p: int, euler: FloatArray, forcing: FloatArray, n_forced: int, inverse_orders: FloatArray
+) -> None:
     """coeffs[1..p] from coeffs[0] for Euler's equations and q' = 1/2 q (x) (omega, 0), written out.
 
     ``euler = ((I2 - I3) / I1, (I3 - I1) / I2, (I1 - I2) / I3)``; ``forcing`` (torque / I, pre-divided
@@ -570,8 +578,15 @@ def rigid_body_series(coeffs: Any, p: Any, euler: Any, forcing: Any, n_forced: A
 
 @register_jitable
 def general_series(
-    coeffs: Any, p: Any, pairs: Any, terms: Any, term_values: Any, forcing: Any, n_forced: Any, inverse_orders: Any
-) -> Any:
+    coeffs: FloatArray,
+    p: int,
+    pairs: IntArray,
+    terms: IntArray,
+    term_values: FloatArray,
+    forcing: FloatArray,
+    n_forced: int,
+    inverse_orders: FloatArray,
+) -> None:
     """coeffs[1..p] from coeffs[0] for any ``x' = C:x x + b`` given by its non-zero entries (gravity)."""
     n_pairs = pairs.shape[0]
     products = np.empty(n_pairs)
@@ -595,17 +610,17 @@ def general_series(
 
 @register_jitable
 def _step_from_series(
-    h_cap: Any,
-    h_fallback: Any,
-    controlled: Any,
-    tol: Any,
-    series_order: Any,
-    p: Any,
-    omega_scale: Any,
-    rho_box: Any,
-    coeffs: Any,
-    x_end: Any,
-) -> Any:
+    h_cap: float,
+    h_fallback: float,
+    controlled: bool,
+    tol: float,
+    series_order: int,
+    p: int,
+    omega_scale: float,
+    rho_box: FloatArray,
+    coeffs: FloatArray,
+    x_end: FloatArray,
+) -> tuple[float, int, int]:
     """The step from the series' last two terms (see the module docstring); x(t0 + h) into x_end."""
     h = h_cap
     if controlled:
@@ -636,29 +651,22 @@ def _step_from_series(
 
 @register_jitable
 def _taylor_advance(
-    n: Any,
-    dt: Any,
-    state: Any,
-    series: Any,
-    x_end: Any,
-    landing_first: Any,
-    controlled: Any,
-    tol: Any,
-    max_step: Any,
-    series_order: Any,
-    coeffs: Any,
-    pairs: Any,
-    terms: Any,
-    term_values: Any,
-    inverse_orders: Any,
-    forcing: Any,
-    binom: Any,
-    poly: Any,
-    const_forcing: Any,
-    counters: Any,
-) -> Any:
+    n: int,
+    dt: float,
+    state: FloatArray,
+    series: FloatArray,
+    x_end: FloatArray,
+    landing_first: bool,
+    controlled: bool,
+    tol: float,
+    max_step: float,
+    series_order: int,
+    recurrence: Recurrence,
+    counters: IntArray,
+) -> None:
     """n API steps: state = (omega, q, t, rho, t of a failure) updated in place; series = (t, h, order, valid)
     of the last internal step, whose end state is x_end; counters = (done, substeps, status)."""
+    coeffs = recurrence[0]
     rho_box = np.empty(1)
     rho_box[0] = state[8]
     x = np.empty(_STATE_SIZE)
@@ -689,15 +697,7 @@ def _taylor_advance(
                     tol,
                     series_order,
                     rho_box,
-                    coeffs,
-                    pairs,
-                    terms,
-                    term_values,
-                    inverse_orders,
-                    forcing,
-                    binom,
-                    poly,
-                    const_forcing,
+                    recurrence,
                     x_end,
                 )
                 if status != _OK:
