@@ -10,7 +10,7 @@ from gymnasium.utils.env_checker import data_equivalence
 from gymnasium.vector import AutoresetMode
 from gymnasium.wrappers.vector import RecordEpisodeStatistics
 
-import rigid_rot_sim.envs  # noqa: F401  (registers the ids)
+import rigid_rot_sim.envs  # registers the ids
 from rigid_rot_sim.envs.attitude import TASK_ARGUMENTS, AttitudeControlEnv
 from rigid_rot_sim.envs.vector import AttitudeControlVectorEnv
 
