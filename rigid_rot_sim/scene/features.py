@@ -117,6 +117,10 @@ _SWEEP = frozenset(
         "initial",
         "schedules.body",
         "schedules.world",
+        "spacecraft.wheels",  # these four: the engine per sample (sweep/engine_runs.py)
+        "spacecraft.wheels.friction",
+        "spacecraft.wheel_schedule",
+        "spacecraft.gravity_gradient",
         *MEASUREMENTS,  # no sensor columns: the bodies' states do not depend on them
     }
 )
