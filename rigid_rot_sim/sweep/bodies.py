@@ -22,7 +22,8 @@ class Bodies:
     """N bodies' inputs, as the batch runs them (principal frames) and as rows report them."""
 
     moments: np.ndarray  # (N, 3) kg*m^2, principal
-    body_from_principal: Rotation  # N rotations
+    body_from_principal: Rotation  # N rotations (scipy renormalises: the engine's conversions of the initial state)
+    body_from_principal_quat: np.ndarray  # (N, 4) the quaternions as given: the engine's frames formulas take these
     q0_body: np.ndarray  # (N, 4)
     omega0_body: np.ndarray  # (N, 3)
     torque_scale: np.ndarray  # (N, 3) multiplies the scheduled body torque

@@ -204,18 +204,26 @@ def _bodies(spec: SweepSpec, spin_rate: float | None, samples: range | None) -> 
     misalignment = stack("misalignment")
     attitude = stack("attitude")
     moments = np.asarray(body.principal_moments) * (1.0 + stack("moments"))
-    body_from_principal = quat.compose_rotations(
-        Rotation.from_quat(body.body_from_principal), Rotation.from_rotvec(misalignment)
-    )
-    q0 = quat.compose_rotations(
-        Rotation.from_quat(spec.scene.initial.orientation), Rotation.from_rotvec(attitude)
-    ).as_quat()
     d = spec.dispersions
+    # composed only where dispersed: a composition with the identity renormalises (an ulp), the engine's does not
+    body_from_principal_quat = np.tile(body.body_from_principal, (n, 1))
+    body_from_principal = Rotation.from_quat(body_from_principal_quat)
+    if d.axis_misalignment is not None:
+        body_from_principal = quat.compose_rotations(
+            Rotation.from_quat(body.body_from_principal), Rotation.from_rotvec(misalignment)
+        )
+        body_from_principal_quat = body_from_principal.as_quat(canonical=False)
+    q0 = np.tile(np.asarray(spec.scene.initial.orientation, dtype=float), (n, 1))
+    if d.initial_attitude is not None:
+        q0 = quat.compose_rotations(
+            Rotation.from_quat(spec.scene.initial.orientation), Rotation.from_rotvec(attitude)
+        ).as_quat()
     intervals = math.ceil(spec.duration / d.torque_noise_interval) if d.torque_noise_sigma is not None else 0
     noise = draws["noise"] if draws is not None else np.zeros((1, intervals, 3))
     return Bodies(
         moments=moments,
         body_from_principal=body_from_principal,
+        body_from_principal_quat=body_from_principal_quat,
         q0_body=q0,
         omega0_body=_nominal_omega0(spec, spin_rate) + stack("omega"),
         torque_scale=1.0 + stack("torque_scale"),
@@ -372,7 +380,7 @@ class _BatchRun:
         self.plan, self.bodies, self.method = plan, bodies, method
         n = bodies.moments.shape[0]
         bp = bodies.body_from_principal
-        self.principal_from_body = _rows(frames.principal_from_body, bp.as_quat(canonical=False))
+        self.principal_from_body = _rows(frames.principal_from_body, bodies.body_from_principal_quat)
         self.q = quat.compose_rotations(Rotation.from_quat(bodies.q0_body), bp).as_quat()  # principal -> world
         self.omega = bp.apply(bodies.omega0_body, inverse=True)
         self.alive = np.ones(n, dtype=bool)
@@ -452,7 +460,7 @@ class _BatchRun:
             self.track.observe(self.plan.time_of(b), omega)
 
     def outcome(self) -> Outcome:
-        alive, bp = self.alive, self.bodies.body_from_principal
+        alive = self.alive
         energy, momentum = self.invariants()
         with np.errstate(divide="ignore", invalid="ignore"):
             energy_drift = np.abs(energy - self.energy0) / np.where(self.energy0 > 0, self.energy0, 1.0)
@@ -461,7 +469,7 @@ class _BatchRun:
         q_body = _rows(frames.attitude_from_principal, q_alive, self.principal_from_body)
         q_body[~alive] = np.nan
         omega_alive = np.where(alive[:, None], self.omega, 0.0)
-        omega_body = _rows(frames.vector_from_principal, bp.as_quat(canonical=False), omega_alive)
+        omega_body = _rows(frames.vector_from_principal, self.bodies.body_from_principal_quat, omega_alive)
         omega_body[~alive] = np.nan
         return Outcome(
             q_body=q_body,

@@ -55,7 +55,7 @@ from rigid_rot_sim.core.batch import BATCH_METHODS
 from rigid_rot_sim.core.integrators.gyrostat import GYROSTAT_METHODS
 from rigid_rot_sim.core.validation import TRIANGLE_RTOL
 from rigid_rot_sim.scene.bounded_yaml import load_input, read_input
-from rigid_rot_sim.scene.features import MEASUREMENTS, features_of, refuse_unhonoured
+from rigid_rot_sim.scene.features import MEASUREMENTS, PATHS, features_of, refuse_unhonoured
 from rigid_rot_sim.scene.scene import Scene, SceneError, load_scene
 from rigid_rot_sim.scene.schema import validated
 from rigid_rot_sim.share import resolve_scene
@@ -104,8 +104,9 @@ _BATCH_ONLY_DISPERSIONS = ("torque_scale", "torque_noise")
 
 
 def runs_per_sample(scene: Scene) -> bool:
-    """Whether the sweep runs ``scene`` in the engine per sample (a feature outside :data:`BATCH_FEATURES`)."""
-    return not set(features_of(scene)) <= BATCH_FEATURES
+    """Whether the sweep runs ``scene`` in the engine per sample (a feature the sweep runs outside
+    :data:`BATCH_FEATURES`)."""
+    return bool(set(features_of(scene)) & (PATHS["sweep"] - BATCH_FEATURES))
 
 
 def methods_for(scene: Scene) -> tuple[str, ...]:
