@@ -99,7 +99,7 @@ class Elements:
 @register_jitable
 def eccentric_anomaly(mean_anomaly: float, e: float) -> float:
     """E with ``E - e sin E = M`` (rad), 0 <= e < 1, to round-off (Newton from ``M + e sin M``, or pi)."""
-    m = math.fmod(mean_anomaly, 2.0 * math.pi)
+    m = float(np.fmod(mean_anomaly, 2.0 * math.pi))
     if m > math.pi:
         m -= 2.0 * math.pi
     elif m < -math.pi:
@@ -276,7 +276,7 @@ class KeplerOrbit:
 @register_jitable
 def orbit_state(orbit: np.ndarray, t: float) -> tuple[float, float, float, float, float, float]:
     """``(x, y, z, vx, vy, vz)`` (m, m/s, ECI) of :meth:`KeplerOrbit.compiled` at ``t`` (s)."""
-    mean_anomaly = math.fmod(orbit[6] + orbit[9] * t, 2.0 * math.pi)
+    mean_anomaly = float(np.fmod(orbit[6] + orbit[9] * t, 2.0 * math.pi))
     nu = mean_to_true_anomaly(mean_anomaly, orbit[2])
     return _rv(orbit[0], orbit[1], orbit[2], orbit[3], orbit[4] + orbit[7] * t, orbit[5] + orbit[8] * t, nu)
 

@@ -119,3 +119,21 @@ def test_validity_and_unknown_model_refused() -> None:
         geomagnetic.field_ned("igrf14", 0.0, 0.0, 0.0, 2031.0)
     with pytest.raises(ValueError, match="unknown field model 'chaos'"):
         geomagnetic.field_ned("chaos", 0.0, 0.0, 0.0, 2025.0)
+
+
+def test_field_along_an_orbit_is_the_ecef_field_turned_by_the_earth_rotation_angle() -> None:
+    import datetime as dt
+
+    kepler = orbit.kepler_orbit(6.9e6, 0.01, math.radians(97.5), 0.3, 0.2, 0.1, j2=orbit.EARTH_J2)
+    epoch = dt.datetime(2026, 3, 1, 6, 0, 0)
+    along = geomagnetic.orbit_field("igrf14", kepler, epoch, 86400.0)
+    for t in (0.0, 1234.5, 80000.0):
+        r_eci, _ = kepler.state(t)
+        era = orbit.earth_rotation_angle(orbit.days_since_j2000(epoch) + t / 86400.0)
+        year = orbit.decimal_year(epoch) + t / geomagnetic.YEAR_SECONDS
+        expected = orbit.ecef_to_eci(era, geomagnetic.field_ecef("igrf14", orbit.eci_to_ecef(era, r_eci), year))
+        np.testing.assert_allclose(along.eci(t), expected, rtol=1e-12, atol=1e-18)
+    q = np.array([0.1, 0.2, -0.3, 0.9]) / np.linalg.norm([0.1, 0.2, -0.3, 0.9])
+    assert np.linalg.norm(along.body(5.0, q)) == pytest.approx(np.linalg.norm(along.eci(5.0)), rel=1e-14)
+    with pytest.raises(ValueError, match="wmm2025 field is defined from 2025 to 2030"):
+        geomagnetic.orbit_field("wmm2025", kepler, dt.datetime(2029, 12, 1), 86400.0 * 60)
