@@ -153,7 +153,7 @@ def parse_orbit(spec: Mapping[str, Any] | None) -> KeplerOrbit | None:
             raise ValueError(f"orbit.state: {exc}") from None
         values, angles, nu, key = (el.a, el.e, el.i), [el.raan, el.argp], el.nu, "orbit.state"
     try:
-        kepler = core_orbit.kepler_orbit(*values, *angles, nu, mu=mu, j2=j2)
+        kepler = core_orbit.kepler_orbit(values[0], values[1], values[2], angles[0], angles[1], nu, mu=mu, j2=j2)
     except ValueError as exc:
         raise ValueError(f"{key}: {exc}") from None
     periapsis = kepler.a * (1.0 - kepler.e)
