@@ -123,6 +123,10 @@ _SWEEP = frozenset(
         "initial",
         "schedules.body",
         "schedules.world",
+        "spacecraft.wheels",  # these four: the engine per sample (sweep/engine_runs.py)
+        "spacecraft.wheels.friction",
+        "spacecraft.wheel_schedule",
+        "spacecraft.gravity_gradient",
         *MEASUREMENTS,  # no sensor columns: the bodies' states do not depend on them
     }
 )
@@ -136,7 +140,18 @@ PATHS: Mapping[str, frozenset[str]] = {
     # rigid_rot_sim.sweep: the batch kernels, the engine per sample where none applies
     "sweep": _SWEEP,
     # core.simulate.simulate / simulate_gyrostat: what a scene maps onto their arguments with the engine's bits
-    "simulate": frozenset({"body", "initial", *MEASUREMENTS}),
+    # (a schedule is not one: their torque is constant or a callable evaluated within the step)
+    "simulate": frozenset(
+        {
+            "body",
+            "initial",
+            "spacecraft.wheels",
+            "spacecraft.wheels.friction",
+            "spacecraft.wheel_schedule",  # wheel_torque=segments
+            "spacecraft.gravity_gradient",  # orbit=
+            *MEASUREMENTS,
+        }
+    ),
 }
 
 
