@@ -127,6 +127,8 @@ _SWEEP = frozenset(
         "spacecraft.wheels.friction",
         "spacecraft.wheel_schedule",
         "spacecraft.gravity_gradient",
+        "orbit",  # the gravity gradient on it: the engine per sample
+        "environment.magnetic_field",  # acts on no state (a torque that reads it is its own feature)
         *MEASUREMENTS,  # no sensor columns: the bodies' states do not depend on them
     }
 )
@@ -149,6 +151,8 @@ PATHS: Mapping[str, frozenset[str]] = {
             "spacecraft.wheels.friction",
             "spacecraft.wheel_schedule",  # wheel_torque=segments
             "spacecraft.gravity_gradient",  # orbit=
+            "orbit",  # orbit=core.wheels.kepler_orbit_model(scene.orbit), the gradient's orbit
+            "environment.magnetic_field",  # acts on no state (a torque that reads it is its own feature)
             *MEASUREMENTS,
         }
     ),
