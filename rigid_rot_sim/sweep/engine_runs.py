@@ -78,6 +78,13 @@ def _failed(message: str) -> _Run:
     return _Run(np.full(4, np.nan), np.full(3, np.nan), None, error=message)
 
 
+def _principal_omega(sim: Simulator) -> np.ndarray:
+    """(1, 3) rad/s: the engine's rate in its principal frame, as the checkpoints track it."""
+    integrator = sim.stepper.integrator  # a dt change replaces it: read it each time
+    assert integrator is not None
+    return np.asarray(integrator.omega, dtype=float)[None, :]
+
+
 def _run(scene: Scene, method: str, dt: float, duration: float, checkpoints: int) -> _Run:
     """The engine's run of ``scene`` over ``duration`` s, observed at the checkpoints (a last shorter step as
     a change of the engine's dt, as a node would make it)."""
@@ -86,22 +93,20 @@ def _run(scene: Scene, method: str, dt: float, duration: float, checkpoints: int
     except ValueError as exc:
         return _failed(f"ValueError: {exc}")
     n_full, last = step_grid(duration, dt)
-    integrator = sim.stepper.integrator
-    assert integrator is not None
-    track = CheckpointTrack(sim.body.principal_moments[None, :], integrator.omega[None, :])
-    track.observe(0.0, integrator.omega[None, :])
+    track = CheckpointTrack(sim.body.principal_moments[None, :], _principal_omega(sim))
+    track.observe(0.0, _principal_omega(sim))
     start = sim.snapshot()
     for k in checkpoint_steps(n_full, checkpoints)[1:]:
         sim.advance_to(k)
         if sim.failure is not None:
             return _failed(f"{sim.failure} (at t = {sim.clock.t:.9g} s, dt = {dt:.9g} s)")
-        track.observe(checkpoint_time(duration, dt, n_full, last, k), sim.stepper.integrator.omega[None, :])
+        track.observe(checkpoint_time(duration, dt, n_full, last, k), _principal_omega(sim))
     if last > 0.0:
         sim.set_integrator(dt=last)
         sim.advance(1)
         if sim.failure is not None:
             return _failed(f"{sim.failure} (the last step, dt = {last:.9g} s)")
-        track.observe(duration, sim.stepper.integrator.omega[None, :])
+        track.observe(duration, _principal_omega(sim))
     end = sim.snapshot()
     wheels = sum(w.inertia * w.max_speed for w in scene.spacecraft.wheels)
     momentum = math.hypot(*start.angular_momentum_body.tolist()) + duration * sim.stepper._torque_bound() + wheels
