@@ -8,7 +8,9 @@ is a part of a scene that acts on the state, named by its scene key (``schedules
 ``spacecraft.wheels.friction``, ...): :func:`features_of` lists those a scene uses. :data:`PATHS`
 declares, per path, the features it runs; :func:`refuse_unhonoured` is the one check every path makes
 before any work: a ``ValueError`` naming the first feature the path does not run, in one line (the CLI
-turns it into stderr and exit 2). A path never runs a scene without one of its sources.
+turns it into stderr and exit 2). A path never runs a scene without one of its sources. The Gymnasium
+envs take no scene today (they build their bodies from arguments): an env that takes one declares its
+path here and calls :func:`refuse_unhonoured` in its constructor.
 
 Every field of :class:`~rigid_rot_sim.scene.scene.Scene`, recursively, is classified in
 :data:`FEATURE_FIELDS` (a field a feature reads) or in :data:`SETTINGS` (a field that acts on no state:
