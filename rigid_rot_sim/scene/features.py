@@ -56,10 +56,13 @@ FEATURES: Mapping[str, Callable[[Scene], bool]] = {
     "spacecraft.gravity_gradient": lambda scene: scene.spacecraft.gravity_gradient is not None,
     "sensors.gyro": lambda scene: scene.sensors.gyro is not None,
     "sensors.star_tracker": lambda scene: scene.sensors.star_tracker is not None,
+    "orbit": lambda scene: scene.orbit is not None,
+    "environment.magnetic_field": lambda scene: scene.magnetic_field is not None,
+    "sensors.magnetometer": lambda scene: scene.sensors.magnetometer is not None,
 }
 
 #: Features that act on no state (measurements of it): see the module docstring.
-MEASUREMENTS = frozenset({"sensors.gyro", "sensors.star_tracker"})
+MEASUREMENTS = frozenset({"sensors.gyro", "sensors.star_tracker", "sensors.magnetometer"})
 
 #: Scene fields (dotted, through the dataclass tree) that a feature reads -> that feature. A field
 #: naming a dataclass covers its fields (a new field of the gyro model is the gyro's).
@@ -86,6 +89,10 @@ FEATURE_FIELDS: Mapping[str, str] = {
     "joint_state_topics": "joint_state_topics",
     "sensors.gyro": "sensors.gyro",
     "sensors.star_tracker": "sensors.star_tracker",
+    "sensors.magnetometer": "sensors.magnetometer",
+    "orbit": "orbit",
+    "magnetic_field": "environment.magnetic_field",
+    "epoch": "environment.magnetic_field",  # the field's date and the Earth's rotation angle
 }
 
 #: Scene fields that act on no state -> why.
@@ -108,8 +115,7 @@ SETTINGS: Mapping[str, str] = {
     "web": "a node's live viewer",
     "commands": "limits on the commands a running node receives (topic_inputs, ~/apply_torque)",
     "simulation_interfaces_namespace": "where the node serves simulation_interfaces",
-    "sensors.seed": "the seed of the sensors' noise (drawn only for sensors.gyro, sensors.star_tracker)",
-    "epoch": "UTC of sim time 0: a label of the exports (AEM) while no source reads the date",
+    "sensors.seed": "the seed of the sensors' noise (drawn only for the sensors)",
 }
 
 _ALL = frozenset(FEATURES)
@@ -123,6 +129,8 @@ _SWEEP = frozenset(
         "spacecraft.wheels.friction",
         "spacecraft.wheel_schedule",
         "spacecraft.gravity_gradient",
+        "orbit",  # the gravity gradient on it: the engine per sample
+        "environment.magnetic_field",  # acts on no state (a torque that reads it is its own feature)
         *MEASUREMENTS,  # no sensor columns: the bodies' states do not depend on them
     }
 )
@@ -145,6 +153,8 @@ PATHS: Mapping[str, frozenset[str]] = {
             "spacecraft.wheels.friction",
             "spacecraft.wheel_schedule",  # wheel_torque=segments
             "spacecraft.gravity_gradient",  # orbit=
+            "orbit",  # orbit=core.wheels.kepler_orbit_model(scene.orbit), the gradient's orbit
+            "environment.magnetic_field",  # acts on no state (a torque that reads it is its own feature)
             *MEASUREMENTS,
         }
     ),
