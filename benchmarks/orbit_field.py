@@ -33,9 +33,9 @@ from pathlib import Path
 os.environ.setdefault("ROS_DOMAIN_ID", str(os.getpid() % 100 + 1))
 os.environ.setdefault("ROS_AUTOMATIC_DISCOVERY_RANGE", "LOCALHOST")
 
-import rclpy  # noqa: E402
-import yaml  # noqa: E402
-from rclpy.parameter import Parameter  # noqa: E402
+import rclpy
+import yaml
+from rclpy.parameter import Parameter
 
 ROOT = Path(__file__).resolve().parents[1]
 FIELD_SCENE = ROOT / "config" / "scenes" / "cubesat_orbit.yaml"
