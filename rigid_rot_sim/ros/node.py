@@ -68,7 +68,7 @@ import signal
 import sys
 import threading
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from typing import TYPE_CHECKING, Any
 
 import rclpy
@@ -76,6 +76,7 @@ from rclpy.duration import Duration
 from rclpy.exceptions import NameValidationException, ParameterException
 from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
 from rclpy.node import Node
+from rclpy.parameter import Parameter
 from rclpy.signals import SignalHandlerOptions
 from rclpy.subscription import Subscription
 from rclpy.time_source import CLOCK_TOPIC
@@ -523,17 +524,19 @@ def _serve(executor: SingleThreadedExecutor, stop: threading.Event) -> None:
         pass
 
 
-def _start_node(nodes: list[Node]) -> RigidRotSimNode:
-    node = RigidRotSimNode()
-    nodes.append(node)
-    return node
-
-
-def main(args: list[str] | None = None) -> int:
+def main(args: list[str] | None = None, overrides: Sequence[Parameter] = ()) -> int:
     """Run the node until shut down or until the scene's duration is reached (exit code 0).
 
+    ``overrides``: start-up values that win over ``--ros-args`` (rclpy applies a Node's
+    ``parameter_overrides`` after every ``-p`` and params file): ``rigid-rot run``'s own options.
     A bad scene, parameter or ROS argument: one line on stderr, exit code 2.
     """
+
+    def start_node(nodes: list[Node]) -> RigidRotSimNode:
+        node = RigidRotSimNode(parameter_overrides=list(overrides))
+        nodes.append(node)
+        return node
+
     ensure_ament_prefix_path()  # the console script works without activating the venv
     try:
         init_ros(args)
@@ -541,7 +544,7 @@ def main(args: list[str] | None = None) -> int:
         print(startup_error_line(RuntimeError(f"bad ROS arguments: {exc}")), file=sys.stderr, flush=True)
         return 2
     try:
-        run_until_finished(_start_node)
+        run_until_finished(start_node)
     except STARTUP_ERRORS as exc:  # SceneError, a scene the integrator cannot run, a bad parameter
         print(startup_error_line(exc), file=sys.stderr, flush=True)
         return 2
