@@ -5,6 +5,7 @@ from __future__ import annotations
 import os
 import subprocess
 import sys
+import time
 from pathlib import Path
 
 REPO = Path(__file__).resolve().parents[2]
@@ -38,3 +39,26 @@ def test_run_option_and_the_same_p_rule_are_refused_naming_both():
     assert done.stderr.strip().splitlines() == [
         "rigid-rot run: error: --duration 0.5 and --ros-args -p duration:=3.0 both set the duration parameter: give one"
     ]
+
+
+def _wait_for_log(process, text: str, timeout: float = 60.0) -> str:
+    """The process's log once it holds ``text`` (AssertionError with the log after ``timeout`` s)."""
+    deadline = time.monotonic() + timeout
+    while time.monotonic() < deadline:
+        process.check_alive()
+        log = process.log()
+        if text in log:
+            return log
+        time.sleep(0.1)  # the log is a file another process writes: nothing to wait on but its content
+    raise AssertionError(f"no {text!r} in the log within {timeout} s:\n{process.log()}")
+
+
+def test_two_nodes_on_clock_each_name_the_other(launch_node):
+    """Two bodies in two namespaces, both with /clock: each warns, naming the other's node."""
+    nodes = {
+        ns: launch_node("--ros-args", "-r", f"__ns:=/{ns}", "-p", "scene:=free_tumble", name=ns) for ns in ("a", "b")
+    }
+    for ns, other in (("a", "b"), ("b", "a")):
+        log = _wait_for_log(nodes[ns], f"/clock: node /{other}/rigid_rot_sim publishes it too")
+        assert "rates.clock:=0" in log
+        assert f"/{ns}/rigid_rot_sim publishes" not in log  # its own publisher, on the graph all along: no word
