@@ -62,3 +62,18 @@ def test_two_nodes_on_clock_each_name_the_other(launch_node):
         log = _wait_for_log(nodes[ns], f"/clock: node /{other}/rigid_rot_sim publishes it too")
         assert "rates.clock:=0" in log
         assert f"/{ns}/rigid_rot_sim publishes" not in log  # its own publisher, on the graph all along: no word
+
+
+def test_torque_is_done_once_the_node_answered_every_command_not_after_a_fixed_window(launch_node):
+    """``--confirm 30`` is a bound, not a window: done as soon as the node accepted each command (issue 40)."""
+    node = launch_node("--ros-args", "-p", "scene:=torque_driven", "-p", "integrator:=rk4", name="answering")
+    _wait_for_log(node, "duration unbounded")
+    start = time.monotonic()
+    done = rigid_rot("torque", "0", "0", "0.004", "--duration", "0.2", "--confirm", "30", "--wait", "60", timeout=120)
+    elapsed = time.monotonic() - start
+    assert done.returncode == 0, done.stdout + done.stderr
+    assert "then zero" in done.stdout and "answered" not in done.stdout and "not confirmed" not in done.stdout
+    # before: a fixed --confirm window (30 s) after a 2 s wait for DDS acknowledgements; now the node's
+    # ~/sim_events answers within a turn. 20 s leaves room for a loaded machine's start-up and discovery.
+    assert elapsed < 20.0, f"{elapsed:.1f} s"
+    node.check_alive()
