@@ -151,7 +151,8 @@ $(STAMPS)/workspace: $(STAMPS)/package tools/install_workspace.py $(VENV)/bin/ac
 	touch $@
 
 # The main job: the free_tumble scene (embedded defaults), 12 s of sim time at 4x wall pace on a private
-# DDS domain, its states echoed as they arrive over DDS, the run recorded to MCAP; then the
+# DDS domain (an exported ROS_DOMAIN_ID is honoured, as every ROS tool does; else one from the PID,
+# localhost only), its states echoed as they arrive over DDS, the run recorded to MCAP; then the
 # recording is summarised, re-simulated bit for bit without DDS, and plotted.
 DEMO_SCENE := free_tumble
 DEMO_BAG := out/demo_$(DEMO_SCENE).mcap
@@ -178,7 +179,7 @@ demo: setup
 	@mkdir -p out && rm -f $(DEMO_BAG)
 	@echo "== rigid-rot run $(DEMO_SCENE): the node over DDS, recorded to $(DEMO_BAG) =="
 	@if [ -n "$(WEB)" ]; then echo "web page: open http://127.0.0.1:$(WEB_PORT)/ in a browser (offline; docs/viewer.md)"; fi
-	@export ROS_DOMAIN_ID=$$(( ($$$$ % 100) + 1 )) ROS_AUTOMATIC_DISCOVERY_RANGE=LOCALHOST; \
+	@export ROS_DOMAIN_ID=$${ROS_DOMAIN_ID:-$$(( ($$$$ % 100) + 1 ))} ROS_AUTOMATIC_DISCOVERY_RANGE=$${ROS_AUTOMATIC_DISCOVERY_RANGE:-LOCALHOST}; \
 	"$(VENV)/bin/rigid-rot" run $(DEMO_SCENE) --duration 12 --realtime-factor $(if $(WEB),1,4) --echo 1 --record $(DEMO_BAG) \
 		$(if $(WEB),--web 127.0.0.1:$(WEB_PORT))
 	@echo
@@ -192,7 +193,7 @@ demo: setup
 	@"$(VENV)/bin/rigid-rot" plot $(DEMO_BAG) --out out/demo_plots
 	@echo
 	@echo "== closed loop in lockstep: rigid-rot-controller slews the body 60 deg, twice, as fast as it answers =="
-	@export ROS_DOMAIN_ID=$$(( ($$$$ % 100) + 101 )) ROS_AUTOMATIC_DISCOVERY_RANGE=LOCALHOST; \
+	@export ROS_DOMAIN_ID=$${ROS_DOMAIN_ID:-$$(( ($$$$ % 100) + 101 ))} ROS_AUTOMATIC_DISCOVERY_RANGE=$${ROS_AUTOMATIC_DISCOVERY_RANGE:-LOCALHOST}; \
 	for run in 1 2; do \
 		rm -f out/demo_loop_$$run.mcap; \
 		"$(VENV)/bin/rigid-rot-controller" --ros-args --log-level warn -p target:="$(LOOP_TARGET)" & controller=$$!; \
