@@ -63,7 +63,12 @@ MSGS_SOURCES := $(wildcard rigid_rot_msgs/CMakeLists.txt rigid_rot_msgs/package.
 # index entry, bin/activate). Both idempotent.
 TOOLS := $(CURDIR)/tools
 
-.PHONY: setup demo test clean check-tools FORCE
+.PHONY: setup demo test clean check-tools print-ros-pins FORCE
+
+# The pinned ROS 2 Jazzy wheels, one per line: what building rigid_rot_msgs into another venv needs
+# (docs/install.md).
+print-ros-pins:
+	@printf '%s\n' $(ROS_PINS)
 
 setup: check-tools $(STAMPS)/kernels $(STAMPS)/workspace
 

