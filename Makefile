@@ -51,6 +51,12 @@ WEB_PINS := viser==1.1.1
 TEST_PINS := pytest==9.2.0 hypothesis==6.170.15 rosbags==0.11.9 websockets==15.0.1 \
 	ruff==0.17.6 mypy==2.4.1 types-PyYAML==6.0.12.20261113 scipy-stubs==1.17.1.5 mpmath==1.3.0
 
+# colcon, for test/test_colcon.py only (installed there into a throwaway venv, never into .venv): the
+# versions colcon_defaults.yaml is checked with (colcon-common-extensions' discovery: recursive crawl,
+# workspace defaults, ROS package identification).
+COLCON_PINS := colcon-core==0.21.3 colcon-defaults==0.2.9 colcon-recursive-crawl==0.2.3 colcon-ros==0.5.0 \
+	colcon-package-information==0.4.1
+
 # The compiled kernels are built from these (rigid_rot_sim/core/jit.py keys their cache on them).
 CORE_SOURCES := $(shell find rigid_rot_sim/core -name '*.py' 2>/dev/null)
 
@@ -63,12 +69,15 @@ MSGS_SOURCES := $(wildcard rigid_rot_msgs/CMakeLists.txt rigid_rot_msgs/package.
 # index entry, bin/activate). Both idempotent.
 TOOLS := $(CURDIR)/tools
 
-.PHONY: setup demo test clean check-tools print-ros-pins FORCE
+.PHONY: setup demo test clean check-tools print-ros-pins print-colcon-pins FORCE
 
 # The pinned ROS 2 Jazzy wheels, one per line: what building rigid_rot_msgs into another venv needs
 # (docs/install.md).
 print-ros-pins:
 	@printf '%s\n' $(ROS_PINS)
+
+print-colcon-pins:
+	@printf '%s\n' $(COLCON_PINS)
 
 setup: check-tools $(STAMPS)/kernels $(STAMPS)/workspace
 
