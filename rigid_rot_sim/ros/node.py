@@ -243,7 +243,7 @@ class SceneRun:
             built.insert(0, self.lockstep.describe())
         else:
             left_out.append("lockstep (commands act when they arrive)")
-        parts = (self.outputs.describe(), self.inputs.describe(), self.wheel_input.describe())
+        parts = (self.outputs.describe(sim.clock.dt), self.inputs.describe(), self.wheel_input.describe())
         for part_built, part_left_out in (*parts, self.joint_state_door.describe()):
             built += part_built
             left_out += part_left_out

@@ -43,3 +43,27 @@ def test_recording_without_states_is_a_value_error(tmp_path):
         recorder.add_topic("/x", "geometry_msgs/msg/WrenchStamped")
     with pytest.raises(ValueError, match="nothing to plot"):
         plot_run(bag, tmp_path / "plots")
+
+
+def test_a_recording_with_reaction_wheels_gets_their_speeds_plotted(tmp_path):
+    """``rigid-rot plot`` of a wheel run: wheels.png with each wheel's speed and torque (issue 40)."""
+    from sensor_msgs.msg import JointState
+
+    from rigid_rot_sim.recording.plot import wheel_figure
+
+    bag = tmp_path / "wheels.mcap"
+    with Recorder(bag) as recorder:
+        recorder.add_topic("/rigid_rot_sim/wheels", "sensor_msgs/msg/JointState")
+        for k in range(20):
+            msg = JointState(name=["w1", "w2"], velocity=[10.0 * k, -5.0 * k], effort=[0.01, -0.02])
+            msg.header.stamp.nanosec = k * 10_000_000
+            recorder.write_message("/rigid_rot_sim/wheels", msg, k * 10_000_000)
+    figure = wheel_figure(BagReader(bag))
+    assert figure is not None
+    speeds, torques = figure.axes
+    assert [line.get_label() for line in speeds.get_lines()] == ["w1", "w2"]
+    assert list(speeds.get_lines()[0].get_ydata()) == [10.0 * k for k in range(20)]
+    assert list(torques.get_lines()[1].get_ydata()) == [-0.02] * 20
+    no_wheels = tmp_path / "run.mcap"
+    record_like_the_node(no_wheels, "free_tumble", 60, 10, {})
+    assert wheel_figure(BagReader(no_wheels)) is None
