@@ -20,6 +20,7 @@ Modules, one job each:
 * :mod:`.exact` - the closed-form torque-free motion, on :mod:`.elliptic`; :mod:`.heavy_top` -
   the heavy symmetric top; :mod:`.wheels` - a spacecraft with reaction wheels (a gyrostat);
 * :mod:`.torque` - torque models; :mod:`.sensors` - a rate gyro and a star tracker;
+  :mod:`.sensitivities` - Euler's equations with parameter sensitivities (``rigid-rot identify``'s model);
 * :mod:`.quaternion` - quaternion helpers on floats; :mod:`.steps` - which step a time lands on
   and how many steps a duration takes;
 * :mod:`.jit` - numba with an on-disk cache; :mod:`.precompile` - fills that cache;

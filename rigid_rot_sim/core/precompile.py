@@ -28,7 +28,7 @@ import numpy as np
 
 def entry_points() -> dict[str, Any]:
     """The compiled entry points of the core (numba dispatchers, which numba does not type), by name."""
-    from rigid_rot_sim.core import batch, batch_gyrostat, exact, slew
+    from rigid_rot_sim.core import batch, batch_gyrostat, exact, sensitivities, slew
     from rigid_rot_sim.core.integrators import gyrostat, kernels, taylor
 
     return {
@@ -46,6 +46,7 @@ def entry_points() -> dict[str, Any]:
         "batch_gyrostat._advance_serial": batch_gyrostat._advance_serial,
         "batch_gyrostat._advance_parallel": batch_gyrostat._advance_parallel,
         "slew.slew_update": slew.slew_update,
+        "sensitivities.integrate_segments": sensitivities.integrate_segments,
     }
 
 
@@ -100,6 +101,22 @@ def exercise() -> None:
         np.zeros(2),
         True,
     )
+    from rigid_rot_sim.core.sensitivities import integrate_segments
+
+    for k, with_sens in ((6, True), (0, False)):  # rigid-rot identify's fit, then its validation replays
+        integrate_segments(
+            np.array([0.0, 0.1, 0.2]),
+            np.zeros((3, 3)),
+            np.arange(3, dtype=np.int64),
+            np.array([0, 3], dtype=np.int64),
+            np.diag(moments),
+            np.zeros((k, 3, 3)),
+            np.zeros(3),
+            np.ones((1, 3)),
+            np.array([[0.0, 0.0, 0.0, 1.0]]),
+            3,
+            with_sens,
+        )
     from rigid_rot_sim.core.exact import torque_free_flow, torque_free_solution
 
     solution = torque_free_solution(moments, (1.0, 0.1, 0.5))

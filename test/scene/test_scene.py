@@ -321,3 +321,9 @@ duration: 1e1
     assert scene.initial.angular_velocity == (0.001, -0.2, 2.0)
     assert scene.integrator.dt == 5e-4 and scene.duration == 10.0
     assert parse('body: {principal_moments: [1, 2, 3]}\nname: "1e-3"\n', "q.yaml").name == "1e-3"  # quoted: a string
+
+
+def test_a_subnormal_real_time_factor_is_refused_naming_the_key():
+    with pytest.raises(SceneError, match=r"real_time_factor: must be 0 \(as fast as possible\) or from 1e-06"):
+        parse(MINIMAL + "real_time_factor: 5.0e-324\n", "slow.yaml")
+    assert parse(MINIMAL + "real_time_factor: 1.0e-6\n").real_time_factor == 1e-6
