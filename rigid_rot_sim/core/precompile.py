@@ -171,7 +171,8 @@ def ensure_compiled(say: Callable[[str], None]) -> float:
     if kernels_cached():
         return 0.0
     say(
-        "compiling the numba kernels once for this install (about 15-60 s; they are cached for later runs, "
+        "compiling the numba kernels once for this install (about 1.5 min of CPU time, minutes more on a busy "
+        "machine: docs/benchmarks.md; they are cached for later runs, "
         "`python -m rigid_rot_sim.core.precompile` does it ahead)"
     )
     start = time.perf_counter()
