@@ -203,13 +203,16 @@ def plot_run(path: str | os.PathLike[str], out_dir: str | os.PathLike[str] | Non
         xlim=(-span, span),
         ylim=(-span, span),
         zlim=(-span, span),
-        xlabel=f"ω1 (rad/s), I1 = {moments[0]:.4g}",
-        ylabel=f"ω2 (rad/s), I2 = {moments[1]:.4g}",
-        zlabel=f"ω3 (rad/s), I3 = {moments[2]:.4g}",
+        xlabel="ω1 (rad/s)",
+        ylabel="ω2 (rad/s)",
+        zlabel="ω3 (rad/s)",
     )
-    ax3.set_box_aspect((1, 1, 1))
+    ax3.set_box_aspect((1, 1, 1), zoom=0.9)  # room for the z label inside the axes (it met the next plot's)
     ax3.set_title(
-        "on the energy ellipsoid ω·Iω = 2T0" + ("\n(initial energy; torques move ω off it)" if driven else "")
+        "on the energy ellipsoid ω·Iω = 2T0, I = "
+        + ", ".join(f"{m:.4g}" for m in moments)
+        + " kg*m^2"
+        + ("\n(initial energy; torques move ω off it)" if driven else "")
     )
     # the same path seen along the principal axis ω stays closest to: the polhode's shape
     along = int(np.argmax(np.mean(np.abs(omega_p), axis=0)))
