@@ -28,10 +28,6 @@ PACKAGE = Path(__file__).resolve().parents[1] / "rigid_rot_sim"
 
 #: rule -> files (relative to the package) still holding a second home, each removed on another branch.
 PENDING: dict[str, set[str]] = {
-    # envs/task.py checks control_period / dt itself; its branch (issue 36b) edits envs/: ask core/steps.whole_steps
-    "steps": {"envs/task.py"},
-    # identify/kernel.py compiles with numba.njit; issue 40 moves the identify kernel under core/jit.compiled
-    "jit": {"identify/kernel.py"},
 }
 
 

@@ -30,6 +30,7 @@ from rigid_rot_sim.core.sensors import (
     star_tracker_sample,
 )
 from rigid_rot_sim.core.slew import slew_update
+from rigid_rot_sim.core.steps import whole_steps
 from rigid_rot_sim.core.wheels import WheelModel, wheel_model
 
 __all__ = ["SlewTask", "SensorSuite", "Episode", "draw_episode", "SlewBodies", "DEFAULT_SENSORS"]
@@ -67,7 +68,8 @@ DEFAULT_SENSORS = SensorSuite(
 class SlewTask:
     """Every setting of a slew episode (SI units; frames: body = principal, quaternions x, y, z, w body -> world).
 
-    Dynamics: ``control_period`` (s) of ``round(control_period / dt)`` RK4 steps of ``dt`` (s);
+    Dynamics: ``control_period`` (s), a whole number of steps of ``dt`` (s): the rigid body's ``rk4`` (RKMK,
+    :func:`~rigid_rot_sim.core.batch.advance_batch`) or, with wheels, the gyrostat's classical RK4;
     ``max_torque`` (N*m): the full-scale body torque per axis, or each wheel's motor torque.
     Dispersions, drawn per episode: principal moments ``principal_moments * (1 + d u)``, ``u``
     uniform in [-1, 1] per axis, ``d = inertia_dispersion``; a uniformly random target attitude;
@@ -111,8 +113,7 @@ class SlewTask:
                 raise ValueError(f"{name} must be finite and >= 0, got {value!r}")
         if not 0.0 <= self.max_initial_error <= math.pi:
             raise ValueError(f"max_initial_error must be in [0, pi] rad, got {self.max_initial_error!r}")
-        steps = self.control_period / self.dt
-        if abs(steps - round(steps)) > 1e-9 * steps or round(steps) < 1:
+        if whole_steps(self.control_period, self.dt) is None:
             raise ValueError(f"control_period ({self.control_period} s) must be a whole number of dt ({self.dt} s)")
         for name in ("hold_periods", "max_episode_steps", "observation_horizon"):
             if int(getattr(self, name)) != getattr(self, name) or getattr(self, name) < 1:
@@ -142,8 +143,10 @@ class SlewTask:
 
     @property
     def substeps(self) -> int:
-        """RK4 steps per control period."""
-        return round(self.control_period / self.dt)
+        """Integrator steps per control period (checked whole in ``__post_init__``)."""
+        steps = whole_steps(self.control_period, self.dt)
+        assert steps is not None
+        return steps
 
     @property
     def horizon(self) -> float:

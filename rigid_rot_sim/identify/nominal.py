@@ -7,9 +7,9 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
-import yaml
 
 from rigid_rot_sim.core.inertia import mass_properties
+from rigid_rot_sim.scene.bounded_yaml import BoundedYAMLError, load_bounded, read_bounded
 from rigid_rot_sim.scene.scene import parse_scene_text
 from rigid_rot_sim.share import resolve_scene
 
@@ -39,9 +39,9 @@ def load_nominal(path_or_name: str | os.PathLike[str]) -> np.ndarray:
         except ValueError:
             raise ValueError(f"--nominal: no such file or shipped scene: {path_or_name}") from None
     try:
-        data = yaml.safe_load(path.read_text(encoding="utf-8"))
-    except yaml.YAMLError as exc:
-        raise ValueError(f"--nominal {path}: not YAML ({exc})") from None
+        data = load_bounded(read_bounded(path))  # YAML 1.2 numbers (1e-3), as the scene loader reads them
+    except BoundedYAMLError as exc:
+        raise ValueError(f"--nominal {path}: {exc}") from None
     if not isinstance(data, dict):
         raise ValueError(f"--nominal {path}: expected a mapping")
     if "body" in data and "initial" in data:

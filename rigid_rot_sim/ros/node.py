@@ -93,7 +93,7 @@ from rigid_rot_sim.ros.parameters import RunParameters, declare_parameters, decl
 from rigid_rot_sim.ros.qos import output_qos
 from rigid_rot_sim.ros.run_loop import POLL_WALL, SLICE_WALL, RunCallbackGroup, RunLock, RunLoop
 from rigid_rot_sim.ros.services import InertiaService, RunServices
-from rigid_rot_sim.ros.topic_types import WrongTypeWatch
+from rigid_rot_sim.ros.topic_types import RivalPublisherWatch, WrongTypeWatch
 from rigid_rot_sim.ros.wheel_inputs import WheelTorqueInput
 from rigid_rot_sim.run.pacing import OutputSchedule, Pacer, Progress, RunDriver
 from rigid_rot_sim.run.sensors import SensorSuite
@@ -107,6 +107,11 @@ if TYPE_CHECKING:  # imported when recording only: the mcap packages are optiona
     from rigid_rot_sim.ros.web_live import WebLive
 
 NODE_NAME = "rigid_rot_sim"
+#: The end of the warning about another node on /clock: what its consumers see, and the fix.
+CLOCK_RIVAL_ADVICE = (
+    "every use_sim_time node sees two timelines and its time jumps back (a tf2 buffer is cleared each time); "
+    "keep one /clock: rates.clock:=0 on the others, or remap one (-r /clock:=/other/clock)"
+)
 #: Most wall time (s) to wait at shutdown for a service in flight (a ~/step request is at most 0.25 s).
 EXECUTOR_SHUTDOWN_WAIT = 2.0
 
@@ -155,6 +160,9 @@ class SceneRun:
         self.type_watch = WrongTypeWatch(
             node,
             self.inputs.subscriptions + self.wheel_input.subscriptions + self.joint_state_door.subscriptions,
+        )
+        self.clock_watch = (
+            RivalPublisherWatch(node, CLOCK_TOPIC, CLOCK_RIVAL_ADVICE) if "clock" in self.outputs.publishers else None
         )
         self.lockstep: NodeLockstep | None = None
         lockstep = lockstep_from_parameters(node, scene, sim.clock.dt)
@@ -236,7 +244,7 @@ class SceneRun:
             built.insert(0, self.lockstep.describe())
         else:
             left_out.append("lockstep (commands act when they arrive)")
-        parts = (self.outputs.describe(), self.inputs.describe(), self.wheel_input.describe())
+        parts = (self.outputs.describe(sim.clock.dt), self.inputs.describe(), self.wheel_input.describe())
         for part_built, part_left_out in (*parts, self.joint_state_door.describe()):
             built += part_built
             left_out += part_left_out
