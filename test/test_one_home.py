@@ -27,8 +27,7 @@ import pytest
 PACKAGE = Path(__file__).resolve().parents[1] / "rigid_rot_sim"
 
 #: rule -> files (relative to the package) still holding a second home, each removed on another branch.
-PENDING: dict[str, set[str]] = {
-}
+PENDING: dict[str, set[str]] = {}
 
 
 def _names(node: ast.AST) -> set[str]:
