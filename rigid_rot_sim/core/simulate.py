@@ -453,7 +453,7 @@ def attitude(q0: ArrayLike) -> np.ndarray:
     kept as given, as the run engine keeps a scene's: the conversion to the principal frame normalises it once more
     (scipy's rounding) in both, so they start from the same bits (normalising twice may move an ulp).
     """
-    if type(q0) is tuple and q0 == _IDENTITY_ATTITUDE:
+    if isinstance(q0, tuple) and type(q0) is tuple and q0 == _IDENTITY_ATTITUDE:
         return np.array(_IDENTITY_ATTITUDE)
     q = validation.quaternion("q0", q0)
     given = np.asarray(q0, dtype=float)
