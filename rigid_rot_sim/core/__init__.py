@@ -20,6 +20,8 @@ Modules, one job each:
 * :mod:`.exact` - the closed-form torque-free motion, on :mod:`.elliptic`; :mod:`.heavy_top` -
   the heavy symmetric top; :mod:`.wheels` - a spacecraft with reaction wheels (a gyrostat);
 * :mod:`.torque` - torque models; :mod:`.sensors` - a rate gyro and a star tracker;
+  :mod:`.magnetorquer` - torque rods (dipole, torque, their field at the magnetometer);
+  :mod:`.magnetic_control` - B-dot and B-cross detumbling, momentum unloading with the rods;
 * :mod:`.quaternion` - quaternion helpers on floats; :mod:`.steps` - which step a time lands on
   and how many steps a duration takes;
 * :mod:`.jit` - numba with an on-disk cache; :mod:`.precompile` - fills that cache;
