@@ -44,7 +44,7 @@ alone while the wheels shed momentum (``sum u_i g_i = tau_rods``, least squares)
 
 Example
 -------
->>> bcross_dipole([0.0, 0.0, 0.1], [2e-5, 0.0, 0.0], 1e-3).tolist()   # k (w x b) / |b|^2
+>>> np.round(bcross_dipole([0.0, 0.0, 0.1], [2e-5, 0.0, 0.0], 1e-3), 9).tolist()   # k (w x b) / |b|^2
 [0.0, 5.0, 0.0]
 """
 
