@@ -37,6 +37,7 @@ from rigid_rot_sim.recording.reader import BagReader
 from rigid_rot_sim.run.digest import format_digest
 from rigid_rot_sim.run.sensors import SensorSuite
 from rigid_rot_sim.run.simulator import Simulator, StateSnapshot
+from rigid_rot_sim.scene.features import refuse_unhonoured
 from rigid_rot_sim.scene.scene import parse_scene_text
 
 STATE_TYPE = "rigid_rot_msgs/msg/RigidBodyState"
@@ -222,6 +223,7 @@ def resimulate(path: str | os.PathLike[str], method: str | None = None) -> Resim
     if not integrator_record:
         raise ValueError(f"{path}: no 'integrator' metadata record")
     scene = parse_scene_text(scene_record["text"], source=scene_record.get("file", "<recorded scene>"))
+    refuse_unhonoured(scene, "resim")  # scene/features.py: what a re-simulation runs
     recorded_method = integrator_record["method"]
     dt = float(integrator_record["dt"])
     options = json.loads(integrator_record.get("options") or "{}")

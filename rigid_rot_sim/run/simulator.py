@@ -56,6 +56,7 @@ from rigid_rot_sim.run.commands import APPLY_TORQUE_SOURCE, CommandRejected, Com
 from rigid_rot_sim.run.gyrostat_stepper import make_stepper
 from rigid_rot_sim.run.observables import Observables, StateSnapshot
 from rigid_rot_sim.run.observer import SimulationObserver
+from rigid_rot_sim.scene.features import refuse_unhonoured
 from rigid_rot_sim.scene.scene import Scene
 
 # CommandRejected, TorqueCommand, APPLY_TORQUE_SOURCE and StateSnapshot are what the Simulator's
@@ -81,6 +82,7 @@ class Simulator:
     def __init__(
         self, scene: Scene, *, method: str | None = None, dt: float | None = None, options: dict[str, Any] | None = None
     ) -> None:
+        refuse_unhonoured(scene, "engine")  # scene/features.py: what the engine runs
         self.scene = scene
         self.body = RigidBody.from_inertia(scene.body.inertia_array, name="body.inertia")
         self.frames = scene.frames

@@ -1,6 +1,8 @@
 """Input formats: scene files read within limits (PyYAML), checked against JSON Schemas (jsonschema).
 
 * :mod:`.scene` - :class:`~.scene.Scene` and :func:`~.scene.load_scene`, the YAML description of one run;
+* :mod:`.features` - the features (torque sources, sensors) a scene uses, what each path that runs
+  scenes honours, and :func:`~.features.refuse_unhonoured`, the one check of it;
 * :mod:`.scene_schema` - the scene format as one JSON Schema, the output table;
 * :mod:`.schema` - schema helpers and jsonschema errors as one-line English;
 * :mod:`.bounded_yaml` - YAML read within size and depth limits, without aliases;

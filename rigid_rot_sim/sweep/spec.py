@@ -3,9 +3,10 @@
 The format is one JSON Schema, :data:`rigid_rot_sim.sweep.schema.SWEEP_SCHEMA`
 (exported as ``config/schema/sweep.schema.json``). :func:`load_sweep_spec` validates a
 spec against it, then checks what a schema cannot express: the base scene (found, valid,
-torque-free or scheduled), batch method, event and metric names, and dispersions that
-keep every body physical. Every error is a :class:`SweepSpecError` (a ValueError) naming
-the file, the key and what is wrong, in one line, like
+made only of what the sweep runs: :func:`rigid_rot_sim.scene.features.refuse_unhonoured`),
+batch method, event and metric names, and dispersions that keep every body physical.
+Every error is a :class:`SweepSpecError` (a ValueError) naming the file, the key and
+what is wrong, in one line, like
 :class:`rigid_rot_sim.scene.scene.SceneError`, e.g. ``slew.yaml:
 dispersions.principal_moments.relative: 0.4 (normal, cut at 4 sigma) can make moment 1
 non-positive``.
@@ -53,6 +54,7 @@ import numpy as np
 from rigid_rot_sim.core.batch import BATCH_METHODS
 from rigid_rot_sim.core.validation import TRIANGLE_RTOL
 from rigid_rot_sim.scene.bounded_yaml import load_input, read_input
+from rigid_rot_sim.scene.features import refuse_unhonoured
 from rigid_rot_sim.scene.scene import Scene, SceneError, load_scene
 from rigid_rot_sim.scene.schema import validated
 from rigid_rot_sim.share import resolve_scene
@@ -261,7 +263,8 @@ def _listed(value: Any) -> list[Any]:
 
 
 def _base_scene(name: str, source: str) -> Scene:
-    """The scene (a path relative to the spec, or a shipped scene), torque-free or scheduled."""
+    """The scene (a path relative to the spec, or a shipped scene), refused by its first feature the sweep does
+    not run (:data:`rigid_rot_sim.scene.features.PATHS`)."""
     relative = os.path.join(os.path.dirname(os.path.abspath(source)), name) if source != "<string>" else name
     try:
         path = relative if os.path.isfile(relative) else resolve_scene(name)
@@ -271,11 +274,10 @@ def _base_scene(name: str, source: str) -> Scene:
         scene = load_scene(path)
     except SceneError as exc:
         raise ValueError(f"scene: invalid scene: {exc}") from None
-    if scene.gravity is not None or scene.topic_inputs:
-        raise ValueError(
-            f"scene: {scene.name} is driven by {scene.torque_kind}: sweeps run torque-free and scheduled-torque scenes "
-            "(the batch core holds a body-frame torque per step)"
-        )
+    try:
+        refuse_unhonoured(scene, "sweep")  # before any work: what the sweep cannot run (scene/features.py)
+    except ValueError as exc:
+        raise ValueError(f"scene: {exc}") from None
     return scene
 
 

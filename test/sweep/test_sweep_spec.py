@@ -75,7 +75,12 @@ BAD = [
     (
         "topic-driven scene",
         GOOD.replace("scene: free_tumble", "scene: torque_driven"),
-        "bad.yaml: scene: torque_driven is driven by topic",
+        "bad.yaml: scene: topic_inputs: not run by the sweep path (scene torque_driven;",
+    ),
+    (
+        "heavy top",
+        GOOD.replace("scene: free_tumble", "scene: heavy_top"),
+        "bad.yaml: scene: gravity: not run by the sweep path (scene heavy_top;",
     ),
     ("unknown metric", GOOD + "metric: pointing\n", "bad.yaml: metric: unknown metric 'pointing'"),
     ("not YAML", "scene: [unclosed\n", "bad.yaml: not valid YAML"),
