@@ -48,8 +48,10 @@ WEB_PINS := viser==1.1.1
 # websockets: the tests' Foxglove ws-protocol client. The gates' tools (test/test_lint.py, test/test_mypy.py;
 # configured in pyproject.toml): scipy-stubs 1.17.1.x are the stubs of scipy 1.17.1 and work with numpy 2.4
 # (they pull in optype and numpy-typing-compat). mpmath: the 40-digit reference of test/core/test_exact_ulps.py.
+# geomaglib: NOAA/CIRES's IGRF-14, the reference of test/core/test_geomagnetic.py.
 TEST_PINS := pytest==9.2.0 hypothesis==6.170.15 rosbags==0.11.9 websockets==15.0.1 \
-	ruff==0.17.6 mypy==2.4.1 types-PyYAML==6.0.12.20261113 scipy-stubs==1.17.1.5 mpmath==1.3.0
+	ruff==0.17.6 mypy==2.4.1 types-PyYAML==6.0.12.20261113 scipy-stubs==1.17.1.5 mpmath==1.3.0 \
+	geomaglib==1.2.4
 
 # The compiled kernels are built from these (rigid_rot_sim/core/jit.py keys their cache on them).
 CORE_SOURCES := $(shell find rigid_rot_sim/core -name '*.py' 2>/dev/null)

@@ -47,7 +47,7 @@ setup(
     maintainer_email="maintainers@rigid-rot-sim.org",
     description="Rigid-body rotation simulator for ROS 2 with a pure numerical core.",
     license="Apache-2.0",
-    tests_require=["pytest", "hypothesis", "rosbags", "mpmath"],
+    tests_require=["pytest", "hypothesis", "rosbags", "mpmath", "geomaglib"],
     entry_points={
         "console_scripts": [
             "rigid-rot = rigid_rot_sim.console_scripts:rigid_rot",

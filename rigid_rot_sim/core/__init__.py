@@ -22,6 +22,9 @@ Modules, one job each:
 * :mod:`.torque` - torque models; :mod:`.sensors` - a rate gyro and a star tracker;
   :mod:`.magnetorquer` - torque rods (dipole, torque, their field at the magnetometer);
   :mod:`.magnetic_control` - B-dot and B-cross detumbling, momentum unloading with the rods;
+* :mod:`.orbit` - Keplerian orbits with J2, the Earth's rotation, WGS-84, NED and LVLH;
+  :mod:`.geomagnetic` - IGRF-14, WMM2025 and the dipole field, on the coefficients of
+  :mod:`.geomagnetic_coefficients`;
 * :mod:`.quaternion` - quaternion helpers on floats; :mod:`.steps` - which step a time lands on
   and how many steps a duration takes;
 * :mod:`.jit` - numba with an on-disk cache; :mod:`.precompile` - fills that cache;

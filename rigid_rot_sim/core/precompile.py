@@ -28,7 +28,7 @@ import numpy as np
 
 def entry_points() -> dict[str, Any]:
     """The compiled entry points of the core (numba dispatchers, which numba does not type), by name."""
-    from rigid_rot_sim.core import batch, batch_gyrostat, exact, slew
+    from rigid_rot_sim.core import batch, batch_gyrostat, exact, geomagnetic, slew
     from rigid_rot_sim.core.integrators import gyrostat, kernels, taylor
 
     return {
@@ -46,6 +46,7 @@ def entry_points() -> dict[str, Any]:
         "batch_gyrostat._advance_serial": batch_gyrostat._advance_serial,
         "batch_gyrostat._advance_parallel": batch_gyrostat._advance_parallel,
         "slew.slew_update": slew.slew_update,
+        "geomagnetic.field_eci_on_orbit_compiled": geomagnetic.field_eci_on_orbit_compiled,
     }
 
 
@@ -100,6 +101,12 @@ def exercise() -> None:
         np.zeros(2),
         True,
     )
+    import datetime
+
+    from rigid_rot_sim.core.geomagnetic import orbit_field
+    from rigid_rot_sim.core.orbit import kepler_orbit
+
+    orbit_field("igrf14", kepler_orbit(7e6, 0.0, 1.0, 0.0, 0.0, 0.0), datetime.datetime(2025, 1, 1), None).eci(1.0)
     from rigid_rot_sim.core.exact import torque_free_flow, torque_free_solution
 
     solution = torque_free_solution(moments, (1.0, 0.1, 0.5))

@@ -1,4 +1,4 @@
-"""Sensor models: a rate gyro and a star tracker, with noise drawn from a seed by sample index.
+"""Sensor models: a rate gyro, a star tracker and a magnetometer, with noise drawn from a seed by sample index.
 
 Pure numerics (no ROS): frozen dataclasses for the models and the gyro's state, plain
 functions for one sample. Units SI; rates in rad/s in the body frame; quaternions
@@ -38,6 +38,15 @@ Star tracker
 
 so the measured attitude's error is a rotation about the body axes with the noise
 equivalent angle (1 sigma) per axis: its covariance is diag(NEA^2) in the body frame.
+
+Magnetometer
+------------
+::
+
+    m = clip(q round(((1 + s) ⊙ R_mis^T B + b + N sqrt(rate) w) / q), -sat, sat)   (T, sensor axes)
+
+then its faults by time window (Basilisk's): an axis stuck at its last reading, stuck at a value, or
+spiking (multiplied by a factor with a probability per sample). :func:`magnetometer_sample`.
 """
 
 from __future__ import annotations
@@ -55,6 +64,10 @@ __all__ = [
     "GAUSS_MARKOV_PEAK_TAU",
     "GyroModel",
     "GyroState",
+    "MAGNETOMETER_FAULTS",
+    "MagnetometerFault",
+    "MagnetometerModel",
+    "MagnetometerState",
     "StarTrackerModel",
     "Stream",
     "WORDS_PER_SAMPLE",
@@ -62,6 +75,7 @@ __all__ = [
     "gyro_batch",
     "gyro_sample",
     "gyro_turn_on_bias",
+    "magnetometer_sample",
     "star_tracker_sample",
     "standard_normals",
 ]
@@ -81,10 +95,11 @@ class Stream:
     GYRO_TURN_ON = 1
     GYRO = 2
     STAR_TRACKER = 3
+    MAGNETOMETER = 4
 
 
 #: 64-bit words each sample of a stream consumes (a multiple of Philox's block of 4).
-WORDS_PER_SAMPLE = {Stream.GYRO_TURN_ON: 4, Stream.GYRO: 8, Stream.STAR_TRACKER: 4}
+WORDS_PER_SAMPLE = {Stream.GYRO_TURN_ON: 4, Stream.GYRO: 8, Stream.STAR_TRACKER: 4, Stream.MAGNETOMETER: 8}
 
 _TWO_POW_64 = 1 << 64
 
@@ -261,3 +276,101 @@ def star_tracker_sample(model: StarTrackerModel, seed: int, index: int, orientat
     w = standard_normals(seed, Stream.STAR_TRACKER, index, 1, 3)[0]
     error = np.asarray(model.noise_equivalent_angle, dtype=float) * w
     return np.array(quat.normalize(quat.multiply(orientation, quat.exp_rotation_vector(error))), dtype=float)
+
+
+# ------------------------------------------------------------- magnetometer
+
+#: The magnetometer's faults (Basilisk's ``magnetometer`` fault states): the reading of the axes held at
+#: the value it had when the window opened, held at a given value, or multiplied by a factor at random.
+MAGNETOMETER_FAULTS = ("stuck_current", "stuck_value", "spiking")
+
+
+@dataclass(frozen=True)
+class MagnetometerFault:
+    """One fault over the sim-time window ``[start, end)`` (s) on the ``axes`` (0, 1, 2 = sensor x, y, z).
+
+    ``kind`` one of :data:`MAGNETOMETER_FAULTS`; ``value`` (T): what a ``stuck_value`` axis reads;
+    ``probability``: the chance per sample and axis that a ``spiking`` axis spikes, its reading multiplied by
+    ``amount``.
+    """
+
+    kind: str
+    start: float = 0.0
+    end: float = math.inf
+    axes: tuple[int, ...] = (0, 1, 2)
+    value: float = 0.0
+    probability: float = 0.0
+    amount: float = 1.0
+
+    def active(self, t: float) -> bool:
+        return self.start <= t < self.end
+
+
+@dataclass(frozen=True)
+class MagnetometerModel:
+    """A three-axis magnetometer (readings in tesla along the sensor axes, nominally the body axes).
+
+    ``rate``: samples per second of sim time (Hz). ``noise_density`` N: T/sqrt(Hz), white, sampled as the
+    gyro's angle random walk is (sigma = N sqrt(rate) per sample). ``bias``: T per axis. ``scale_factor``:
+    fraction per axis. ``misalignment``: rad, the small rotation vector from the body axes to the sensor axes.
+    ``saturation``: T per axis (0: none). ``quantization``: T per LSB (0: none). ``faults``: by time window.
+    """
+
+    rate: float = 10.0
+    noise_density: float = 0.0
+    bias: tuple[float, float, float] = (0.0, 0.0, 0.0)
+    scale_factor: tuple[float, float, float] = (0.0, 0.0, 0.0)
+    misalignment: tuple[float, float, float] = (0.0, 0.0, 0.0)
+    saturation: float = 0.0
+    quantization: float = 0.0
+    faults: tuple[MagnetometerFault, ...] = ()
+
+    @property
+    def noise_sigma(self) -> float:
+        """1-sigma white noise of one reading per axis (T): N sqrt(rate)."""
+        return self.noise_density * math.sqrt(self.rate)
+
+    @property
+    def covariance(self) -> np.ndarray:
+        """Covariance (T^2) of a reading's random error, sensor axes: sigma^2 + q^2 / 12 per axis."""
+        return np.eye(3) * (self.noise_sigma**2 + self.quantization**2 / 12.0)
+
+
+@dataclass(frozen=True)
+class MagnetometerState:
+    """The magnetometer between samples: the next sample's index and the last reading (T; None before)."""
+
+    index: int = 0
+    last: tuple[float, float, float] | None = None
+
+
+def magnetometer_sample(
+    model: MagnetometerModel, seed: int, state: MagnetometerState, field_body: np.ndarray, t: float
+) -> tuple[np.ndarray, MagnetometerState]:
+    """One reading (T, sensor axes) of the true field ``field_body`` (T, body axes) at sim time ``t`` (s).
+
+    ``m = clip(q round(((1 + s) (R_mis B) + b + sigma w) / q), -sat, sat)``, then the faults active at ``t`` in
+    the order given. Sample k draws 6 normals of ``(seed, MAGNETOMETER, k)``: 3 for the noise, 3 made uniform
+    (through the normal CDF) for the spikes; so every sample has its bits whatever the faults.
+    """
+    w = standard_normals(seed, Stream.MAGNETOMETER, state.index, 1, 6)[0]
+    sensed = np.array(quat.rotate_inverse(quat.exp_rotation_vector(model.misalignment), field_body))
+    reading = (1.0 + np.asarray(model.scale_factor, dtype=float)) * sensed
+    reading = reading + np.asarray(model.bias, dtype=float) + model.noise_sigma * w[:3]
+    if model.quantization > 0.0:
+        reading = model.quantization * np.round(reading / model.quantization)
+    if model.saturation > 0.0:
+        reading = np.clip(reading, -model.saturation, model.saturation)
+    for fault in model.faults:
+        if not fault.active(t):
+            continue
+        for axis in fault.axes:
+            if fault.kind == "stuck_current":
+                if state.last is not None:
+                    reading[axis] = state.last[axis]
+            elif fault.kind == "stuck_value":
+                reading[axis] = fault.value
+            elif 0.5 * math.erfc(-w[3 + axis] / math.sqrt(2.0)) < fault.probability:
+                reading[axis] *= fault.amount
+    last = (float(reading[0]), float(reading[1]), float(reading[2]))
+    return reading, MagnetometerState(index=state.index + 1, last=last)

@@ -77,7 +77,10 @@ rotated into the body frame by ``R(q)^T``), the torque about the centre of mass 
 
     tau_gg = 3 mu / R^5  R_b x (I R_b) = 3 n^2 r x (I r)                           (7)
 
-(the first term of the expansion of the gravity of a point mass over the body). A
+(the first term of the expansion of the gravity of a point mass over the body). On any
+orbit of :mod:`rigid_rot_sim.core.orbit` (:func:`kepler_orbit_model`: eccentric, inclined, with
+J2's drift) the same torque with the body's position from that orbit, ``3 mu / |R|^3 r x (I r)``,
+the world frame then being the orbit's inertial frame. A
 satellite with principal axes along radial (I_r), along-track (I_t) and orbit normal
 (I_n) librates in pitch, relative to the rotating radial frame, at
 ``n sqrt(3 (I_t - I_r) / I_n)`` (stable for I_t > I_r): in the common LVLH axes (x
@@ -97,12 +100,14 @@ import numpy as np
 from numba.extending import register_jitable
 
 from rigid_rot_sim.core import quaternion as quat
+from rigid_rot_sim.core.orbit import KeplerOrbit, orbit_state
 
 __all__ = [
     "WheelModel",
     "OrbitModel",
     "wheel_model",
     "orbit_model",
+    "kepler_orbit_model",
     "NO_ORBIT",
     "gyrostat_rhs",
     "applied_motor_torque",
@@ -232,7 +237,9 @@ def wheel_model(
 
 @dataclass(frozen=True)
 class OrbitModel:
-    """A circular orbit for the gravity-gradient torque: ``mu`` (m^3/s^2), ``radius`` (m), ``inclination`` (rad).
+    """The orbit of the gravity-gradient torque: circular, ``mu`` (m^3/s^2), ``radius`` (m), ``inclination``
+    (rad) in the world frame, or any :class:`~rigid_rot_sim.core.orbit.KeplerOrbit` (``kepler``; then the world
+    frame is its inertial frame and ``radius``, ``inclination`` are unused).
 
     ``mu = 0`` means no gravity gradient (:data:`NO_ORBIT`).
     """
@@ -240,6 +247,7 @@ class OrbitModel:
     mu: float = 0.0
     radius: float = 1.0
     inclination: float = 0.0
+    kepler: KeplerOrbit | None = None
 
     @property
     def enabled(self) -> bool:
@@ -247,25 +255,44 @@ class OrbitModel:
 
     @property
     def mean_motion(self) -> float:
-        """n = sqrt(mu / R^3), rad/s (0 without an orbit)."""
+        """n = sqrt(mu / R^3), or the Kepler orbit's mean anomaly rate, rad/s (0 without an orbit)."""
+        if self.kepler is not None:
+            return self.kepler.mean_anomaly_dot
         return mean_motion(self.mu, self.radius)
 
     def compiled(self) -> np.ndarray:
-        """(3 n^2, n, cos i, sin i) for the kernels."""
-        n = self.mean_motion
-        return np.array([3.0 * n * n, n, math.cos(self.inclination), math.sin(self.inclination)])
+        """For the kernels: ``(k, n, cos i, sin i)`` then :meth:`KeplerOrbit.compiled` (zeros when circular).
+
+        ``k`` bounds ``3 mu / R^3`` over the orbit: ``3 n^2`` when circular, ``3 mu / r_p^3`` (at periapsis)
+        on a Kepler orbit; 0 without an orbit.
+        """
+        if self.kepler is None:
+            n = self.mean_motion
+            head = [3.0 * n * n, n, math.cos(self.inclination), math.sin(self.inclination)]
+            return np.array(head + [0.0] * _KEPLER_SIZE)
+        kepler = self.kepler
+        periapsis = kepler.a * (1.0 - kepler.e)
+        head = [3.0 * kepler.mu / periapsis**3, kepler.mean_anomaly_dot, math.cos(kepler.i), math.sin(kepler.i)]
+        return np.concatenate((np.array(head), kepler.compiled()))
 
     def position_world(self, t: float) -> np.ndarray:
         """The unit vector from the planet to the body at time t (s), world frame."""
-        return np.array(_orbit_direction(self.compiled(), t))
+        _, x, y, z = _orbit_direction(self.compiled(), t)
+        return np.array((x, y, z))
 
 
 NO_ORBIT = OrbitModel()
+_KEPLER_SIZE = 10  # the length of KeplerOrbit.compiled()
 
 
 def mean_motion(mu: float, radius: float) -> float:
     """Mean motion sqrt(mu / R^3) (rad/s) of a circular orbit of radius R (m)."""
     return math.sqrt(mu / radius**3) if mu > 0.0 else 0.0
+
+
+def kepler_orbit_model(kepler: KeplerOrbit) -> OrbitModel:
+    """The gravity gradient on ``kepler`` (:func:`rigid_rot_sim.core.orbit.kepler_orbit` validates it)."""
+    return OrbitModel(kepler.mu, kepler.a, kepler.i, kepler)
 
 
 def orbit_model(mu: float, radius: float, inclination: float = 0.0) -> OrbitModel:
@@ -283,24 +310,29 @@ def orbit_model(mu: float, radius: float, inclination: float = 0.0) -> OrbitMode
 
 
 @register_jitable
-def _orbit_direction(orbit: np.ndarray, t: float) -> tuple[float, float, float]:
+def _orbit_direction(orbit: np.ndarray, t: float) -> tuple[float, float, float, float]:
+    """``(3 mu / R^3, unit vector from the planet to the body)`` at ``t`` of :meth:`OrbitModel.compiled`."""
+    if orbit[5] > 0.0:  # a Kepler orbit: its semi-major axis
+        x, y, z, _, _, _ = orbit_state(orbit[4:], t)
+        r = math.sqrt(x * x + y * y + z * z)
+        return 3.0 * orbit[4] / (r * r * r), x / r, y / r, z / r
     u = orbit[1] * t
     su = math.sin(u)
-    return math.cos(u), orbit[2] * su, orbit[3] * su
+    return orbit[0], math.cos(u), orbit[2] * su, orbit[3] * su
 
 
 @register_jitable
 def gravity_gradient_torque(
     orbit: np.ndarray, moments: np.ndarray, q: tuple[float, float, float, float], t: float
 ) -> tuple[float, float, float]:
-    """Eq. (7): ``3 n^2 r x (I r)`` (N*m) in the principal frame of ``moments``; q principal -> world.
+    """Eq. (7): ``3 mu / R^3 r x (I r)`` (N*m) in the principal frame of ``moments``; q principal -> world.
 
     ``orbit`` is :meth:`OrbitModel.compiled`; zero torque when 3 n^2 is 0.
     """
-    k = orbit[0]
-    if k == 0.0:
+    if orbit[0] == 0.0:
         return 0.0, 0.0, 0.0
-    r1, r2, r3 = quat.rotate_inverse(q, _orbit_direction(orbit, t))
+    k, x, y, z = _orbit_direction(orbit, t)
+    r1, r2, r3 = quat.rotate_inverse(q, (x, y, z))
     i1, i2, i3 = moments[0], moments[1], moments[2]
     return k * (i3 - i2) * r2 * r3, k * (i1 - i3) * r3 * r1, k * (i2 - i1) * r1 * r2
 

@@ -209,3 +209,83 @@ def test_star_tracker_error_has_the_noise_equivalent_angle_per_body_axis():
     assert np.linalg.norm(sample) == pytest.approx(1.0, abs=1e-15)
     np.testing.assert_array_equal(sample, star_tracker_sample(model, 8, 5, q))
     assert not np.array_equal(sample, star_tracker_sample(model, 9, 5, q))
+
+
+# ------------------------------------------------------------------ magnetometer
+
+
+def _magnetometer_run(model, field, seed=7, samples=10_000, times=None):
+    from rigid_rot_sim.core.sensors import MagnetometerState, magnetometer_sample
+
+    state = MagnetometerState()
+    readings = []
+    times = np.arange(samples) / model.rate if times is None else times
+    for t in times:
+        reading, state = magnetometer_sample(model, seed, state, field, float(t))
+        readings.append(reading)
+    return np.array(readings), np.asarray(times)
+
+
+def test_magnetometer_noise_statistics_over_ten_thousand_samples() -> None:
+    from rigid_rot_sim.core.sensors import MagnetometerModel
+
+    field = np.array([2.0e-5, -1.0e-5, 4.0e-5])
+    model = MagnetometerModel(rate=10.0, noise_density=1e-8, bias=(1e-7, -2e-7, 0.0), quantization=5e-9)
+    readings, _ = _magnetometer_run(model, field)
+    n = len(readings)
+    sigma = model.noise_sigma
+    expected_std = math.sqrt(sigma**2 + model.quantization**2 / 12)
+    assert np.all(np.abs(readings.mean(axis=0) - (field + model.bias)) < 3 * expected_std / math.sqrt(n))
+    assert np.all(np.abs(readings.std(axis=0) - expected_std) < 3 * expected_std / math.sqrt(2 * n))
+    steps = readings / model.quantization
+    np.testing.assert_allclose(steps, np.round(steps), rtol=0, atol=1e-6)  # on the quantisation grid
+    assert np.all(np.diff(np.unique(readings[:, 0])) >= model.quantization * (1 - 1e-9))  # no finer step
+    np.testing.assert_allclose(np.diag(model.covariance), expected_std**2)
+
+
+def test_magnetometer_scale_misalignment_saturation_are_deterministic() -> None:
+    from rigid_rot_sim.core.sensors import MagnetometerModel
+
+    field = np.array([3.0e-5, 0.0, 0.0])
+    model = MagnetometerModel(scale_factor=(0.01, 0.0, 0.0), misalignment=(0.0, 0.0, math.pi / 2), saturation=2.9e-5)
+    readings, _ = _magnetometer_run(model, field, samples=3)
+    # the sensor frame turned +90 deg about z: the body's x field lies along the sensor's -y
+    np.testing.assert_allclose(readings[0], [0.0, -2.9e-5, 0.0], atol=1e-20)  # clipped at the saturation
+    model = MagnetometerModel(scale_factor=(0.0, 0.01, 0.0), misalignment=(0.0, 0.0, math.pi / 2))
+    readings, _ = _magnetometer_run(model, field, samples=1)
+    np.testing.assert_allclose(readings[0], [0.0, -3.03e-5, 0.0], rtol=1e-12, atol=1e-20)
+
+
+def test_magnetometer_faults_each_visible_in_their_window() -> None:
+    from rigid_rot_sim.core.sensors import MagnetometerFault, MagnetometerModel
+
+    field = np.array([2.0e-5, -1.0e-5, 4.0e-5])
+    faults = (
+        MagnetometerFault("stuck_current", start=10.0, end=20.0, axes=(0,)),
+        MagnetometerFault("stuck_value", start=30.0, end=40.0, axes=(1, 2), value=1e-6),
+        MagnetometerFault("spiking", start=50.0, end=60.0, axes=(2,), probability=0.3, amount=10.0),
+    )
+    model = MagnetometerModel(rate=10.0, noise_density=1e-8, faults=faults)
+    readings, t = _magnetometer_run(model, field, samples=800)
+    clean, _ = _magnetometer_run(MagnetometerModel(rate=10.0, noise_density=1e-8), field, samples=800)
+    stuck = (t >= 10.0) & (t < 20.0)
+    assert np.all(readings[stuck, 0] == clean[np.argmax(stuck) - 1, 0])  # held at the last reading
+    np.testing.assert_array_equal(readings[stuck, 1:], clean[stuck, 1:])  # the other axes unaffected
+    value = (t >= 30.0) & (t < 40.0)
+    assert np.all(readings[value, 1:] == 1e-6) and np.array_equal(readings[value, 0], clean[value, 0])
+    window = (t >= 50.0) & (t < 60.0)
+    spiked = readings[window, 2] != clean[window, 2]
+    np.testing.assert_allclose(readings[window, 2][spiked], 10.0 * clean[window, 2][spiked])
+    assert 0.3 - 3 * math.sqrt(0.21 / 100) < spiked.mean() < 0.3 + 3 * math.sqrt(0.21 / 100)
+    outside = ~(stuck | value | window)
+    np.testing.assert_array_equal(readings[outside], clean[outside])  # nothing outside the windows
+
+
+def test_magnetometer_is_a_function_of_the_seed() -> None:
+    from rigid_rot_sim.core.sensors import MagnetometerModel
+
+    model = MagnetometerModel(noise_density=1e-8)
+    a, _ = _magnetometer_run(model, np.ones(3) * 1e-5, seed=3, samples=50)
+    b, _ = _magnetometer_run(model, np.ones(3) * 1e-5, seed=3, samples=50)
+    c, _ = _magnetometer_run(model, np.ones(3) * 1e-5, seed=4, samples=50)
+    assert a.tobytes() == b.tobytes() and not np.array_equal(a, c)

@@ -247,3 +247,68 @@ def test_set_state_replaces_or_keeps_the_wheel_angles(cls):
     assert g.wheel_angles.tolist() == [0.0, 1.0, 2.0]
     with pytest.raises(ValueError, match="wheel angles must be finite"):
         g.set_state(g.t, g.q, g.omega, wheel_angles=[0.0, math.inf, 2.0])
+
+
+# ------------------------------------------------------------------ gravity gradient on any orbit
+
+
+def test_a_circular_kepler_orbit_is_the_circular_orbit_of_the_torque() -> None:
+    """raan = argp = nu = 0: the Kepler orbit's node is world x, as the circular model's: the same torque."""
+    from rigid_rot_sim.core.orbit import kepler_orbit
+    from rigid_rot_sim.core.wheels import gravity_gradient_torque, kepler_orbit_model
+
+    circular = orbit_model(3.986004418e14, 7.0e6, 0.7)
+    kepler = kepler_orbit_model(kepler_orbit(7.0e6, 0.0, 0.7, 0.0, 0.0, 0.0))
+    q = tuple(np.array([0.1, -0.3, 0.2, 0.9]) / np.linalg.norm([0.1, -0.3, 0.2, 0.9]))
+    for t in (0.0, 100.0, 2345.6):
+        np.testing.assert_allclose(kepler.position_world(t), circular.position_world(t), atol=1e-12)
+        a = gravity_gradient_torque(kepler.compiled(), MOMENTS, q, t)
+        b = gravity_gradient_torque(circular.compiled(), MOMENTS, q, t)
+        np.testing.assert_allclose(a, b, rtol=1e-11, atol=1e-20)
+
+
+@pytest.mark.parametrize("cls", list(GYROSTAT_METHODS.values()))
+def test_gravity_gradient_pitch_on_an_inclined_eccentric_orbit(cls) -> None:
+    """e = 0.1, i = 50 deg: body axis 3 along the orbit normal, so the motion stays in the orbit plane and the
+    pitch alpha (axis 1 from periapsis, about the normal) obeys I3 alpha'' = 3 mu / R^3 (I2 - I1) sin phi cos phi,
+    phi = nu - alpha: the scalar equation, integrated by scipy to 1e-12, against the 3-D gyrostat."""
+    from scipy.integrate import solve_ivp
+    from scipy.spatial.transform import Rotation
+
+    from rigid_rot_sim.core.orbit import EARTH_MU, kepler_orbit, mean_to_true_anomaly
+    from rigid_rot_sim.core.wheels import kepler_orbit_model
+
+    moments = np.array([100.0, 200.0, 150.0])
+    kepler = kepler_orbit(7.5e6, 0.1, math.radians(50.0), 0.5, 0.7, 0.0)
+    r0, v0 = kepler.state(0.0)
+    p_hat = r0 / np.linalg.norm(r0)
+    h = np.cross(r0, v0)
+    h_hat = h / np.linalg.norm(h)
+    alpha0 = 0.02
+    axes = Rotation.from_rotvec(alpha0 * h_hat).as_matrix() @ np.column_stack((p_hat, np.cross(h_hat, p_hat), h_hat))
+    q0 = Rotation.from_matrix(axes).as_quat()
+    nu_dot0 = np.linalg.norm(h) / np.linalg.norm(r0) ** 2
+    g = cls(moments, 1.0, orbit=kepler_orbit_model(kepler), q0=q0, omega0=(0.0, 0.0, nu_dot0))
+
+    def pitch_rhs(t: float, y: np.ndarray) -> list[float]:
+        r, _ = kepler.state(t)
+        nu = mean_to_true_anomaly(kepler.mean_anomaly + kepler.mean_anomaly_dot * t, kepler.e)
+        phi = nu - y[0]
+        k = 3 * EARTH_MU / np.linalg.norm(r) ** 3 * (moments[1] - moments[0]) / moments[2]
+        return [y[1], k * math.sin(phi) * math.cos(phi)]
+
+    period = kepler.period
+    samples = np.round(np.arange(1, 41) * (2 * period / 40))  # whole steps of 1 s
+    reference = solve_ivp(pitch_rhs, (0, samples[-1]), [alpha0, nu_dot0], t_eval=samples, rtol=1e-12, atol=1e-14)
+    errors = []
+    for t, alpha_ref in zip(samples, reference.y[0], strict=True):
+        g.advance(round(t - g.t))
+        axis1 = Rotation.from_quat(g.q).as_matrix()[:, 0]
+        alpha = math.atan2(np.cross(p_hat, axis1) @ h_hat, axis1 @ p_hat)
+        errors.append(abs((alpha - alpha_ref + math.pi) % (2 * math.pi) - math.pi))
+        assert abs(Rotation.from_quat(g.q).as_matrix()[:, 2] @ h_hat - 1.0) < 1e-9  # stays in the orbit plane
+    assert max(errors) < 1e-6
+    assert (
+        np.ptp(reference.y[0] - np.unwrap([mean_to_true_anomaly(kepler.mean_anomaly_dot * t, 0.1) for t in samples]))
+        > 0.05
+    )
