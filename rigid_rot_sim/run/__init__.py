@@ -10,7 +10,8 @@
 * :mod:`.advice` - stable step sizes and the ``auto`` method choice;
 * :mod:`.timeline` - which scheduled torque acts over which steps, and the world -> body
   re-expression (the engine and the sweep);
-* :mod:`.gyrostat_stepper` - the stepper of a spacecraft scene (reaction wheels);
+* :mod:`.gyrostat_stepper` - the stepper of a spacecraft scene (reaction wheels); :mod:`.rod_torque` - the
+  torque rods' torque on a step, in the Earth's field;
   :mod:`.joint_commands` - the rule of the wheels' JointState commands (ros2_control's door);
 * :mod:`.sensors` - the scene's sensors and their sample sequences; :mod:`.digest` - the run digest;
 * :mod:`.lockstep` - the run waits at each controller turn; :mod:`.step_requests` - steps of a

@@ -1,85 +1,53 @@
-"""A 3U CubeSat detumbling with B-dot (duty-cycled) or B-cross, in a tilted-dipole field: docs/spacecraft.md's plot.
+"""A 3U CubeSat detumbling with B-dot (duty-cycled) or B-cross in IGRF-14: docs/spacecraft.md's plot.
 
-    .venv/bin/python tools/detumble_dipole.py [--law bdot|bcross|both] [--orbits 3] [--out docs/images/detumble.png]
+    .venv/bin/python tools/detumble.py [--law bdot|bcross|both] [--orbits 3] [--out docs/images/detumble.png]
 
-The loop the shipped scene ``cubesat_detumble`` runs, in the core alone (no scene, no engine): a 3U CubeSat (4 kg,
-10 x 10 x 34 cm), 10 deg/s per body axis after separation, three orthogonal rods of 0.2 A*m^2, a magnetometer at
-10 Hz with 100 nT of white noise (seed 0), on a circular 500 km sun-synchronous orbit (inclination 97.4 deg). The
-field is the Earth's centred dipole, tilted as IGRF's first-degree terms (|m| = 7.94e22 A*m^2, 9.4 deg from the
-axis, at longitude -72.6 deg), turning with the Earth: a closed form, so that this reference needs no field model.
-The attitude integrator is the core's RK4 at the magnetometer's period, the dipole held over each period (a
-zero-order hold, as rods driven by flight software are). About 45 s for three orbits on one core.
+The loop the shipped scene ``cubesat_detumble`` is to run, in the core alone (no scene, no engine yet): a 3U
+CubeSat (4 kg, 10 x 10 x 34 cm), 10 deg/s per body axis after separation, three orthogonal rods of 0.2 A*m^2, a
+magnetometer at 10 Hz with 100 nT of white noise per reading (:func:`rigid_rot_sim.core.sensors.magnetometer_sample`,
+seed 0), on a circular 500 km sun-synchronous orbit (inclination 97.4 deg, J2 secular rates) from
+2026-01-01T00:00Z, in IGRF-14 (:mod:`rigid_rot_sim.core.geomagnetic`). The attitude integrator is the core's RK4 at
+the magnetometer's period, the dipole held over each period (a zero-order hold, as flight software drives rods).
+About 45 s for three orbits on one core.
 """
 
 from __future__ import annotations
 
 import argparse
+import datetime as dt
 import math
 from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
 
-from rigid_rot_sim.core import magnetic_control, magnetorquer
+from rigid_rot_sim.core import geomagnetic, magnetic_control, magnetorquer, orbit, sensors
 from rigid_rot_sim.core.integrators import get_method
-from rigid_rot_sim.core.quaternion import rotate_inverse
-
-MU0_OVER_4PI = 1e-7  # T*m/A
-EARTH_DIPOLE = 7.94e22  # A*m^2
-EARTH_RATE = 7.2921150e-5  # rad/s
-GM = 3.986004418e14  # m^3/s^2
-EARTH_RADIUS = 6371.2e3  # m
-_TILT, _LONGITUDE = math.radians(9.4), math.radians(-72.6)
-#: The dipole in the Earth-fixed frame: it points to the geomagnetic south pole (into the northern hemisphere's ground).
-DIPOLE_ECEF = -EARTH_DIPOLE * np.array(
-    [math.sin(_TILT) * math.cos(_LONGITUDE), math.sin(_TILT) * math.sin(_LONGITUDE), math.cos(_TILT)]
-)
 
 #: The 3U CubeSat: principal moments (kg*m^2) of a 4 kg box of 0.1 x 0.1 x 0.34 m.
 CUBESAT_3U = (4.0 * (0.1**2 + 0.34**2) / 12.0, 4.0 * (0.1**2 + 0.34**2) / 12.0, 4.0 * (0.1**2 + 0.1**2) / 12.0)
+EPOCH = dt.datetime(2026, 1, 1, tzinfo=dt.timezone.utc)
+#: 100 nT per reading at 10 Hz.
+MAGNETOMETER = sensors.MagnetometerModel(rate=10.0, noise_density=100e-9 / math.sqrt(10.0))
 
 
-@dataclass(frozen=True)
-class Orbit:
-    """A circular orbit: radius (m), inclination, node right ascension, argument of latitude at t = 0 (rad)."""
-
-    radius: float = EARTH_RADIUS + 500e3
-    inclination: float = math.radians(97.4)
-    node: float = 0.3
-    latitude0: float = 0.0
-
-    @property
-    def period(self) -> float:
-        return 2.0 * math.pi * math.sqrt(self.radius**3 / GM)
-
-    def field_inertial(self, t: float) -> np.ndarray:
-        """The dipole field at the spacecraft, T, inertial frame (ECI, the Earth's rotation angle 0 at t = 0)."""
-        u = self.latitude0 + 2.0 * math.pi * t / self.period
-        cn, sn, ci, si = (
-            math.cos(self.node),
-            math.sin(self.node),
-            math.cos(self.inclination),
-            math.sin(self.inclination),
-        )
-        r = self.radius * np.array(
-            [cn * math.cos(u) - sn * math.sin(u) * ci, sn * math.cos(u) + cn * math.sin(u) * ci, math.sin(u) * si]
-        )
-        c, s = math.cos(EARTH_RATE * t), math.sin(EARTH_RATE * t)
-        m = np.array([c * DIPOLE_ECEF[0] - s * DIPOLE_ECEF[1], s * DIPOLE_ECEF[0] + c * DIPOLE_ECEF[1], DIPOLE_ECEF[2]])
-        r_hat = r / self.radius
-        field_: np.ndarray = MU0_OVER_4PI / self.radius**3 * (3.0 * (m @ r_hat) * r_hat - m)
-        return field_
+def orbit_field(altitude: float = 500e3, phase: float = 0.0, epoch: dt.datetime = EPOCH) -> geomagnetic.OrbitField:
+    """IGRF-14 along a circular sun-synchronous orbit at ``altitude`` (m), argument of latitude ``phase`` (rad)."""
+    kepler = orbit.kepler_orbit(
+        orbit.EARTH_RADIUS + altitude, 0.0, math.radians(97.4), 0.3, 0.0, phase, j2=orbit.EARTH_J2
+    )
+    return geomagnetic.orbit_field("igrf14", kepler, epoch, None)
 
 
 @dataclass
 class HeldDipole:
     """The rods' torque for the integrator: the body dipole held over a step, in the field at (t, q)."""
 
-    orbit: Orbit
+    field_: geomagnetic.OrbitField
     dipole: np.ndarray = field(default_factory=lambda: np.zeros(3))
 
     def __call__(self, t: float, q: np.ndarray, omega: np.ndarray) -> np.ndarray:
-        return np.cross(self.dipole, np.array(rotate_inverse(q, self.orbit.field_inertial(t))))
+        return np.cross(self.dipole, self.field_.body(t, q))
 
 
 @dataclass(frozen=True)
@@ -99,26 +67,25 @@ def run(
     omega0_deg: tuple[float, float, float] = (10.0, 10.0, 10.0),
     max_dipole: float = 0.2,
     gain: float = 1e5,
-    noise: float = 100e-9,
     threshold_deg: float = 0.5,
     stop_below: bool = False,
     record_every: int = 10,
     seed: int = 0,
 ) -> Detumble:
     """Run the loop; ``gain`` is B-dot's k (A*m^2*s/T; B-cross takes k |b|^2 of a 25 uT field, N*m*s)."""
-    orbit = Orbit()
-    dt = 0.1  # s: the magnetometer's period
+    field_ = orbit_field()
+    step = 1.0 / MAGNETOMETER.rate  # s
     rods = magnetorquer.Magnetorquers(axes=np.eye(3), max_dipoles=[max_dipole] * 3)
-    torque = HeldDipole(orbit)
-    integrator = get_method("rk4")(CUBESAT_3U, dt, torque, omega0=np.radians(omega0_deg))
-    schedule = magnetic_control.BDotSchedule(gain=gain, sample_period=dt, cycle_samples=10, sensing_samples=4)
+    torque = HeldDipole(field_)
+    integrator = get_method("rk4")(CUBESAT_3U, step, torque, omega0=np.radians(omega0_deg))
+    schedule = magnetic_control.BDotSchedule(gain=gain, sample_period=step, cycle_samples=10, sensing_samples=4)
     state = magnetic_control.BDotState.initial()
-    rng = np.random.default_rng(seed)
+    reader = sensors.MagnetometerState()
     t_rec, rate_rec, duty_rec, below_at = [], [], [], None
     duty_sum = np.zeros(3)
-    for k in range(int(orbits * orbit.period / dt)):
-        b_true = np.array(rotate_inverse(integrator.q, orbit.field_inertial(integrator.t)))
-        b_measured = b_true + rng.normal(scale=noise, size=3)
+    for k in range(int(orbits * field_.kepler.period / step)):
+        b_true = field_.body(integrator.t, integrator.q)
+        b_measured, reader = sensors.magnetometer_sample(MAGNETOMETER, seed, reader, b_true, integrator.t)
         if law == "bdot":
             state, m_body = magnetic_control.bdot_step(schedule, state, k, b_measured)
         else:
@@ -153,7 +120,7 @@ def main() -> None:
 
     laws = ("bdot", "bcross") if args.law == "both" else (args.law,)
     fig, axes = plt.subplots(2, 1, figsize=(8, 6), sharex=True)
-    period = Orbit().period
+    period = orbit_field().kepler.period
     for law in laws:
         result = run(law, args.orbits)
         when = "not reached" if result.below_at is None else f"{result.below_at / period:.2f} orbits"
@@ -170,7 +137,7 @@ def main() -> None:
     axes[1].set_ylabel("rod duty |m|/m_max (60 s mean)")
     axes[1].set_xlabel("orbits (500 km SSO, 94.5 min)")
     axes[1].legend()
-    fig.suptitle("3U CubeSat detumble: rods 0.2 A*m^2, magnetometer 10 Hz (100 nT), tilted-dipole field")
+    fig.suptitle("3U CubeSat detumble: rods 0.2 A*m^2, magnetometer 10 Hz (100 nT), IGRF-14, 500 km SSO")
     fig.tight_layout()
     args.out.parent.mkdir(parents=True, exist_ok=True)
     fig.savefig(args.out, dpi=110)
