@@ -29,7 +29,7 @@ from geometry_msgs.msg import (
 from nav_msgs.msg import Odometry
 from numpy.typing import ArrayLike
 from rosgraph_msgs.msg import Clock
-from sensor_msgs.msg import Imu, JointState
+from sensor_msgs.msg import Imu, JointState, MagneticField
 from std_msgs.msg import ColorRGBA
 from visualization_msgs.msg import Marker, MarkerArray
 
@@ -267,13 +267,56 @@ def clock_message(t: float) -> Clock:
     return Clock(clock=seconds_to_time(t))
 
 
-def transform_stamped(snapshot: StateSnapshot, world_frame: str, body_frame: str) -> TransformStamped:
-    """world -> body transform of the attitude (no translation: the body turns about a fixed point)."""
+def transform_stamped(
+    snapshot: StateSnapshot, world_frame: str, body_frame: str, position: ArrayLike | None = None
+) -> TransformStamped:
+    """world -> body transform of the attitude; translation ``position`` (m, world frame: the centre of mass on
+    its orbit, ECI), else none (the body turns about a fixed point)."""
     msg = TransformStamped()
     msg.header.stamp = seconds_to_time(snapshot.t)
     msg.header.frame_id = world_frame
     msg.child_frame_id = body_frame
+    if position is not None:
+        msg.transform.translation = array_to_vector3(position)
     msg.transform.rotation = array_to_quaternion(snapshot.orientation)
+    return msg
+
+
+def earth_transform(t: float, world_frame: str, earth_frame: str, earth_rotation_angle: float) -> TransformStamped:
+    """world (ECI) -> ``earth_frame`` (ECEF, REP 105's ``earth``): a turn by the Earth rotation angle (rad) about z."""
+    msg = TransformStamped()
+    msg.header.stamp = seconds_to_time(t)
+    msg.header.frame_id = world_frame
+    msg.child_frame_id = earth_frame
+    msg.transform.rotation = array_to_quaternion(quaternion.exp_rotation_vector((0.0, 0.0, earth_rotation_angle)))
+    return msg
+
+
+def orbit_odometry(
+    snapshot: StateSnapshot, position: ArrayLike, velocity: ArrayLike, world_frame: str, body_frame: str
+) -> Odometry:
+    """nav_msgs/Odometry of the body on its orbit: position (m) and attitude in the world frame (ECI); the twist
+    in the body (child) frame, as Odometry defines it: the orbital velocity rotated into the body axes (m/s)
+    and the angular velocity (rad/s). Covariances zero: the truth."""
+    msg = Odometry()
+    msg.header.stamp = seconds_to_time(snapshot.t)
+    msg.header.frame_id = world_frame
+    msg.child_frame_id = body_frame
+    msg.pose.pose.position = array_to_point(position)
+    q = msg.pose.pose.orientation
+    q.x, q.y, q.z, q.w = snapshot.orientation.tolist()
+    _set_vector3(msg.twist.twist.linear, quaternion.rotate_inverse(snapshot.orientation, np.asarray(velocity)))
+    _set_vector3(msg.twist.twist.angular, snapshot.angular_velocity_body)
+    return msg
+
+
+def magnetic_field_message(field, t: float, frame_id: str, covariance: np.ndarray) -> MagneticField:
+    """sensor_msgs/MagneticField of ``field`` (T, in ``frame_id``) at sim time t (s); ``covariance`` 3x3 (T^2)."""
+    msg = MagneticField()
+    msg.header.stamp = seconds_to_time(t)
+    msg.header.frame_id = frame_id
+    _set_vector3(msg.magnetic_field, field)
+    msg.magnetic_field_covariance = np.asarray(covariance, dtype=float).reshape(9).tolist()
     return msg
 
 

@@ -8,7 +8,7 @@ advancing to the recorded step before each, rebuilds the run: with the same inte
 the states are bit-identical to the recorded ones; with another integrator the report
 shows what that integrator changes on this very run.
 
-Sensor readings (``~/imu`` of a scene with ``sensors.gyro``, ``~/star_tracker``) are drawn
+Sensor readings (``~/imu`` of a scene with ``sensors.gyro``, ``~/star_tracker``, ``~/magnetometer``) are drawn
 again from the recorded seed (the ``sensors`` metadata record), one per recorded message
 in file order, at the recorded message's step (:class:`~rigid_rot_sim.run.sensors.SensorSuite`),
 and compared bit for bit: the re-simulation is BIT-EXACT only when they agree too.
@@ -46,6 +46,7 @@ WHEELS_TYPE = "sensor_msgs/msg/JointState"
 SENSOR_TYPES = {
     "imu": ("sensor_msgs/msg/Imu", "gyro"),
     "star_tracker": ("geometry_msgs/msg/PoseWithCovarianceStamped", "star_tracker"),
+    "magnetometer": ("sensor_msgs/msg/MagneticField", "magnetometer"),
 }
 
 _VECTOR_FIELDS = (
@@ -330,13 +331,15 @@ def _sensors(reader: BagReader, scene: Any, path: Any) -> tuple[SensorSuite | No
         topic = reader.find_topic(role, SENSOR_TYPES[role][0])
         if topic is not None:
             topics[topic] = role
-    return SensorSuite(models, seed=seed), topics
+    return SensorSuite(models, seed=seed, field=scene.orbit_field()), topics
 
 
 def _same_reading(role: str, sensors: Any, recorded: Any, snapshot: StateSnapshot) -> bool:
     """Draw the next reading of the sensor behind ``role`` and compare it with the recorded message."""
     if role == "imu":
         return bool(np.array_equal(vector3_to_array(recorded.angular_velocity), sensors.read_gyro(snapshot)))
+    if role == "magnetometer":
+        return bool(np.array_equal(vector3_to_array(recorded.magnetic_field), sensors.read_magnetometer(snapshot)))
     attitude = quaternion_to_array(recorded.pose.pose.orientation)
     return bool(np.array_equal(attitude, sensors.read_star_tracker(snapshot)))
 

@@ -126,8 +126,9 @@ class SceneRun:
         self.sim = sim = Simulator(scene, method=settings[params.INTEGRATOR], dt=settings[params.DT])
         sim.commands.max_torque = float(settings[params.MAX_TORQUE])
         state_qos = output_qos(OutputQos(settings[params.QOS_RELIABILITY], settings[params.QOS_DEPTH]))
-        has_sensors = scene.sensors.gyro is not None or scene.sensors.star_tracker is not None
-        self.sensors = SensorSuite(scene.sensors) if has_sensors else None
+        models = (scene.sensors.gyro, scene.sensors.star_tracker, scene.sensors.magnetometer)
+        has_sensors = any(model is not None for model in models)
+        self.sensors = SensorSuite(scene.sensors, field=scene.orbit_field()) if has_sensors else None
         self.outputs = Outputs(
             node, scene, settings.rates(), state_qos, settings[params.GROUND_TRUTH_VARIANCE], self.sensors
         )

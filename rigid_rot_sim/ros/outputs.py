@@ -21,6 +21,7 @@ from __future__ import annotations
 from collections.abc import Callable, Mapping, Sequence
 from typing import Any, Protocol
 
+import numpy as np
 from geometry_msgs.msg import InertiaStamped, PoseWithCovarianceStamped, QuaternionStamped, Vector3Stamped
 from nav_msgs.msg import Odometry
 from rclpy.node import Node
@@ -28,19 +29,21 @@ from rclpy.publisher import Publisher
 from rclpy.qos import QoSProfile
 from rclpy.serialization import serialize_message
 from rosgraph_msgs.msg import Clock
-from sensor_msgs.msg import Imu, JointState
+from sensor_msgs.msg import Imu, JointState, MagneticField
 from tf2_msgs.msg import TFMessage  # built into the venv by `make setup` (vendored), a ROS dependency
 from visualization_msgs.msg import MarkerArray
 
 from rigid_rot_msgs.msg import HeavyTopState, RejectedCommand, RigidBodyState, TorqueBreakdown
 from rigid_rot_sim import conversions
 from rigid_rot_sim.core.inertia import principal_frame_pose
+from rigid_rot_sim.core.orbit import days_since_j2000, earth_rotation_angle
 from rigid_rot_sim.ros.qos import CLOCK_QOS, LATCHED_QOS, REJECTED_QOS, TF_QOS, TF_STATIC_QOS
 from rigid_rot_sim.ros.qos import describe as describe_qos
 from rigid_rot_sim.run.body_view import BodyView, body_view
 from rigid_rot_sim.run.observer import SimulationObserver
 from rigid_rot_sim.run.sensors import SensorSuite
 from rigid_rot_sim.run.simulator import StateSnapshot
+from rigid_rot_sim.scene.orbit import epoch_datetime
 from rigid_rot_sim.scene.scene import OUTPUT_NAMES, Frames, Scene
 
 #: A message from the state and the outputs' settings (frames, ground-truth variance, body view).
@@ -59,10 +62,7 @@ OUTPUTS: dict[str, tuple[Any, MessageBuilder | None]] = {
         lambda s, o: conversions.vector_stamped(s.angular_momentum_world, s.t, o.frames.world),
     ),
     "top_state": (HeavyTopState, lambda s, o: conversions.snapshot_to_top_state(s, o.frames.world)),
-    "tf": (
-        TFMessage,
-        lambda s, o: TFMessage(transforms=[conversions.transform_stamped(s, o.frames.world, o.frames.body)]),
-    ),
+    "tf": (TFMessage, lambda s, o: TFMessage(transforms=o.transforms(s))),
     "clock": (Clock, lambda s, o: conversions.clock_message(s.t)),
     "imu": (Imu, lambda s, o: conversions.snapshot_to_imu(s, o.frames.body, o.ground_truth_variance)),
     "odom": (
@@ -72,6 +72,9 @@ OUTPUTS: dict[str, tuple[Any, MessageBuilder | None]] = {
     "markers": (MarkerArray, lambda s, o: conversions.body_markers(o.body_view, s, o.frames.world, o.frames.body)),
     "star_tracker": (PoseWithCovarianceStamped, None),  # a sensor's reading: SENSOR_OUTPUTS
     "wheels": (JointState, lambda s, o: conversions.snapshot_to_joint_state(s, o.frames.body)),
+    "magnetometer": (MagneticField, None),  # a sensor's reading: SENSOR_OUTPUTS
+    "magnetic_field": (MagneticField, lambda s, o: o.true_field(s)),
+    "orbit": (Odometry, lambda s, o: conversions.orbit_odometry(s, *o.orbit_state(s.t), o.frames.world, o.frames.body)),
     "torque_breakdown": (TorqueBreakdown, lambda s, o: conversions.snapshot_to_torque_breakdown(s, o.frames.body)),
 }
 assert tuple(OUTPUTS) == OUTPUT_NAMES, "one entry per scene output, in the scene's order"
@@ -92,10 +95,21 @@ def _star_tracker_reading(sensors: SensorSuite, s: StateSnapshot, f: Frames, v: 
     return conversions.star_tracker_pose(sensors.read_star_tracker(s), s.t, f.world, sensors.star_tracker.covariance)
 
 
+def _magnetometer_reading(sensors: SensorSuite, s: StateSnapshot, f: Frames, v: float) -> Any:
+    assert sensors.magnetometer is not None  # built only when the scene has the magnetometer
+    return conversions.magnetic_field_message(
+        sensors.read_magnetometer(s), s.t, f.body, sensors.magnetometer.covariance
+    )
+
+
 SENSOR_OUTPUTS: dict[str, tuple[str, SensorBuilder]] = {
     "imu": ("gyro", _gyro_reading),
     "star_tracker": ("star_tracker", _star_tracker_reading),
+    "magnetometer": ("magnetometer", _magnetometer_reading),
 }
+
+#: The REP 105 name of the Earth-fixed frame (ECEF) that /tf hangs under the world (ECI) of a scene with an orbit.
+EARTH_FRAME = "earth"
 
 
 def output_topic(name: str) -> str:
@@ -142,6 +156,7 @@ class Outputs(SimulationObserver):
         self.frames = scene.frames
         self.ground_truth_variance = ground_truth_variance
         self.body_view = body_view(scene)
+        self.field = scene.orbit_field()
         self.listeners: list[PublishedListener] = []
         self.publishers: dict[str, Publisher] = {}
         self.rates: dict[str, float] = {}
@@ -167,6 +182,32 @@ class Outputs(SimulationObserver):
             and (name != "star_tracker" or name in self.readings)
             and (name != "wheels" or bool(self.scene.spacecraft.wheels))
             and (name != "torque_breakdown" or self.scene.torque_kind != "none")
+            and (name != "magnetometer" or name in self.readings)
+            and (name != "magnetic_field" or self.field is not None)
+            and (name != "orbit" or self.scene.orbit is not None)
+        ]
+
+    def orbit_state(self, t: float) -> tuple[np.ndarray, np.ndarray]:
+        """Position (m) and velocity (m/s) of the centre of mass at sim time ``t``, world frame (ECI)."""
+        assert self.scene.orbit is not None  # ~/orbit and its /tf are built only with an orbit
+        return self.scene.orbit.state(t)
+
+    def true_field(self, s: StateSnapshot) -> Any:
+        """~/magnetic_field: the true field (T, body frame) at the state ``s``; covariance zero (the truth)."""
+        assert self.field is not None  # built only with a field
+        return conversions.magnetic_field_message(
+            self.field.body(s.t, s.orientation), s.t, self.frames.body, np.zeros(9)
+        )
+
+    def transforms(self, s: StateSnapshot) -> list[Any]:
+        """/tf: world -> body; with an orbit, the body at its ECI position and world -> earth (ECEF)."""
+        if self.scene.orbit is None:
+            return [conversions.transform_stamped(s, self.frames.world, self.frames.body)]
+        position, _ = self.orbit_state(s.t)
+        era = earth_rotation_angle(days_since_j2000(epoch_datetime(self.scene.epoch)) + s.t / 86400.0)
+        return [
+            conversions.transform_stamped(s, self.frames.world, self.frames.body, position),
+            conversions.earth_transform(s.t, self.frames.world, EARTH_FRAME, era),
         ]
 
     def _static_transforms(self) -> list[Any]:

@@ -44,7 +44,18 @@ from rigid_rot_sim.run.simulator import Simulator
 #: Topics registered after the scene's outputs, in this order.
 _LATER = ("rejected", "mass_properties", "tf_static")
 #: Outputs whose topic the ``rigid_rot_sim`` metadata names by role (for resim and plot).
-_ROLES = ("state", "clock", "rejected", "mass_properties", "imu", "star_tracker", "wheels")
+_ROLES = (
+    "state",
+    "clock",
+    "rejected",
+    "mass_properties",
+    "imu",
+    "star_tracker",
+    "wheels",
+    "magnetometer",
+    "magnetic_field",
+    "orbit",
+)
 
 
 class NodeRecording(SimulationObserver):

@@ -9,6 +9,7 @@ of values or a non-finite one is rejected with the reason on ``~/rejected``.
 
 from __future__ import annotations
 
+import math
 import time
 from typing import Any
 
@@ -61,7 +62,13 @@ class WheelTorqueInput:
         if self.spacecraft.wheel_schedule is not None:
             built.append(f"a wheel-torque schedule of {len(self.spacecraft.wheel_schedule.segments)} segment(s)")
         gg = self.spacecraft.gravity_gradient
-        if gg is not None:
+        if gg is not None and gg.kepler is not None:
+            k = gg.kepler
+            built.append(
+                f"gravity gradient (the scene's orbit: a {k.a:g} m, e {k.e:g}, i {math.degrees(k.i):g} deg, "
+                f"J2 {'on' if k.j2 else 'off'})"
+            )
+        elif gg is not None:
             built.append(
                 f"gravity gradient (circular orbit, radius {gg.radius:g} m, inclination {gg.inclination:g} rad)"
             )

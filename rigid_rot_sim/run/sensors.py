@@ -1,7 +1,8 @@
 """The sensors of a run: the scene's models, their seed, and each sensor's sample sequence.
 
 :class:`SensorSuite` holds what a sensor remembers between readings (the gyro's
-Gauss-Markov bias and sample count, the star tracker's sample count) and reads the state
+Gauss-Markov bias and sample count, the star tracker's sample count, the magnetometer's sample count and
+last reading, the field along the orbit it measures) and reads the state
 snapshots it is given, one reading per call, in the order of the calls. The node calls
 it for each ~/imu and ~/star_tracker message it publishes; resim calls it for each such
 message in the recording, in file order, at the same steps: the same seed then gives
@@ -16,6 +17,7 @@ import secrets
 import numpy as np
 
 from rigid_rot_sim.core import sensors as models
+from rigid_rot_sim.core.geomagnetic import OrbitField
 from rigid_rot_sim.run.observables import StateSnapshot
 from rigid_rot_sim.scene.scene import Sensors
 
@@ -25,7 +27,7 @@ __all__ = ["SensorSuite"]
 class SensorSuite:
     """The sensors a scene names, with noise from ``seed`` (None: the scene's, else drawn now)."""
 
-    def __init__(self, sensors: Sensors, seed: int | None = None) -> None:
+    def __init__(self, sensors: Sensors, seed: int | None = None, field: OrbitField | None = None) -> None:
         if seed is None:
             seed = sensors.seed if sensors.seed is not None else secrets.randbits(64)
         self.seed = int(seed)
@@ -34,11 +36,17 @@ class SensorSuite:
         self.gyro_state = models.GyroState()
         self.turn_on_bias = None if self.gyro is None else models.gyro_turn_on_bias(self.gyro, self.seed)
         self.star_tracker_index = 0
+        self.magnetometer = sensors.magnetometer
+        self.magnetometer_state = models.MagnetometerState()
+        if self.magnetometer is not None and field is None:
+            raise ValueError("sensors.magnetometer: the run has no field to measure (environment.magnetic_field)")
+        self.field = field
 
     @property
     def names(self) -> list[str]:
         """The sensors built, for the start-up line."""
-        return [name for name, model in (("gyro", self.gyro), ("star_tracker", self.star_tracker)) if model]
+        named = (("gyro", self.gyro), ("star_tracker", self.star_tracker), ("magnetometer", self.magnetometer))
+        return [name for name, model in named if model]
 
     def read_gyro(self, snapshot: StateSnapshot) -> np.ndarray:
         """The next gyro reading (rad/s, body axes) of the state ``snapshot``."""
@@ -56,3 +64,13 @@ class SensorSuite:
             raise ValueError("the scene has no sensors.star_tracker")
         index, self.star_tracker_index = self.star_tracker_index, self.star_tracker_index + 1
         return models.star_tracker_sample(self.star_tracker, self.seed, index, snapshot.orientation)
+
+    def read_magnetometer(self, snapshot: StateSnapshot) -> np.ndarray:
+        """The next magnetometer reading (T, sensor axes) of the field at the state ``snapshot``."""
+        if self.magnetometer is None or self.field is None:
+            raise ValueError("the scene has no sensors.magnetometer")
+        truth = self.field.body(snapshot.t, snapshot.orientation)
+        reading, self.magnetometer_state = models.magnetometer_sample(
+            self.magnetometer, self.seed, self.magnetometer_state, truth, snapshot.t
+        )
+        return reading

@@ -8,7 +8,8 @@
 * :mod:`.bounded_yaml` - YAML read within size and depth limits, without aliases;
 * :mod:`.names` - ROS topic and frame names checked as ROS checks them (no ROS import);
 * :mod:`.spacecraft` and :mod:`.spacecraft_schema` - a spacecraft's reaction wheels, their
-  torque schedule and the gravity gradient, and their schema.
+  torque schedule and the gravity gradient, and their schema;
+* :mod:`.orbit` - the orbit, the Earth's field and the magnetometer of a scene, and their schema.
 
 Built on :mod:`rigid_rot_sim.core` (limits, inertia, the integrator registry); imports nothing
 from :mod:`rigid_rot_sim.run` or above.

@@ -55,10 +55,13 @@ FEATURES: Mapping[str, Callable[[Scene], bool]] = {
     "spacecraft.magnetorquers": lambda scene: bool(scene.spacecraft.rods),
     "sensors.gyro": lambda scene: scene.sensors.gyro is not None,
     "sensors.star_tracker": lambda scene: scene.sensors.star_tracker is not None,
+    "orbit": lambda scene: scene.orbit is not None,
+    "environment.magnetic_field": lambda scene: scene.magnetic_field is not None,
+    "sensors.magnetometer": lambda scene: scene.sensors.magnetometer is not None,
 }
 
 #: Features that act on no state (measurements of it): see the module docstring.
-MEASUREMENTS = frozenset({"sensors.gyro", "sensors.star_tracker"})
+MEASUREMENTS = frozenset({"sensors.gyro", "sensors.star_tracker", "sensors.magnetometer"})
 
 #: Scene fields (dotted, through the dataclass tree) that a feature reads -> that feature. A field
 #: naming a dataclass covers its fields (a new field of the gyro model is the gyro's).
@@ -87,6 +90,10 @@ FEATURE_FIELDS: Mapping[str, str] = {
     "joint_state_topics": "joint_state_topics",
     "sensors.gyro": "sensors.gyro",
     "sensors.star_tracker": "sensors.star_tracker",
+    "sensors.magnetometer": "sensors.magnetometer",
+    "orbit": "orbit",
+    "magnetic_field": "environment.magnetic_field",
+    "epoch": "environment.magnetic_field",  # the field's date and the Earth's rotation angle
 }
 
 #: Scene fields that act on no state -> why.
@@ -109,8 +116,7 @@ SETTINGS: Mapping[str, str] = {
     "web": "a node's live viewer",
     "commands": "limits on the commands a running node receives (topic_inputs, ~/apply_torque)",
     "simulation_interfaces_namespace": "where the node serves simulation_interfaces",
-    "sensors.seed": "the seed of the sensors' noise (drawn only for sensors.gyro, sensors.star_tracker)",
-    "epoch": "UTC of sim time 0: a label of the exports (AEM) while no source reads the date",
+    "sensors.seed": "the seed of the sensors' noise (drawn only for the sensors)",
 }
 
 _ALL = frozenset(FEATURES)

@@ -42,14 +42,23 @@ from typing import Any
 import numpy as np
 
 from rigid_rot_sim.core import limits, validation
+from rigid_rot_sim.core.geomagnetic import OrbitField, orbit_field
 from rigid_rot_sim.core.inertia import inertia_about_center_of_mass, mass_properties
 from rigid_rot_sim.core.integrators import get_method
 from rigid_rot_sim.core.integrators.gyrostat import get_gyrostat_method
+from rigid_rot_sim.core.orbit import KeplerOrbit
 from rigid_rot_sim.core.quaternion import zxz_to_quaternion
-from rigid_rot_sim.core.sensors import GyroModel, StarTrackerModel
+from rigid_rot_sim.core.sensors import GyroModel, MagnetometerModel, StarTrackerModel
 from rigid_rot_sim.core.steps import step_at_or_after
 from rigid_rot_sim.scene import names
 from rigid_rot_sim.scene.bounded_yaml import load_input, read_input
+from rigid_rot_sim.scene.orbit import (
+    MagneticField,
+    epoch_datetime,
+    parse_magnetic_field,
+    parse_magnetometer,
+    parse_orbit,
+)
 from rigid_rot_sim.scene.scene_schema import (
     DEFAULT_BODY_FRAME,
     DEFAULT_EPOCH,
@@ -351,6 +360,8 @@ class Sensors:
     seed: int | None = None
     gyro: GyroModel | None = None
     star_tracker: StarTrackerModel | None = None
+    #: ~/magnetometer at its rate (a scene with environment.magnetic_field).
+    magnetometer: MagnetometerModel | None = None
 
 
 @dataclass(frozen=True)
@@ -383,6 +394,10 @@ class Scene:
     description: str = ""
     #: UTC date and time of sim time 0 (ISO 8601; see :data:`scene_schema.DEFAULT_EPOCH`).
     epoch: str = DEFAULT_EPOCH
+    #: The orbit of the centre of mass (``orbit:``; :mod:`.orbit`): the world frame is then ECI.
+    orbit: KeplerOrbit | None = None
+    #: ``environment.magnetic_field`` along :attr:`orbit` from :attr:`epoch`.
+    magnetic_field: MagneticField | None = None
     source: str = "<string>"
     text: str = ""
 
@@ -404,6 +419,12 @@ class Scene:
         if self.schedules:
             return "schedule"
         return "none"
+
+    def orbit_field(self) -> OrbitField | None:
+        """The field along the orbit (:class:`rigid_rot_sim.core.geomagnetic.OrbitField`), None without one."""
+        if self.magnetic_field is None or self.orbit is None:
+            return None
+        return orbit_field(self.magnetic_field.model, self.orbit, epoch_datetime(self.epoch), None)
 
     def mass_properties_about_com(self) -> tuple[float, Vector3, np.ndarray]:
         """Mass (kg; 0 when the scene gives none), centre of mass (m, body frame) and the
@@ -474,7 +495,12 @@ def _scene(spec: Mapping[str, Any], source: str, text: str) -> Scene:
     if gravity is not None and (topics or schedules):
         # the integrators expand gravity or a piecewise-constant torque exactly, not their sum
         raise ValueError("torque_inputs: not supported in a gravity (heavy top) scene; drop gravity or the inputs")
-    spacecraft = parse_spacecraft(spec.get("actuators"), spec.get("environment"), body.inertia_array)
+    kepler = parse_orbit(spec.get("orbit"))
+    spacecraft = parse_spacecraft(spec.get("actuators"), spec.get("environment"), body.inertia_array, kepler)
+    epoch = _at("epoch", _epoch, spec.get("epoch") or DEFAULT_EPOCH)
+    magnetic_field = parse_magnetic_field(
+        (spec.get("environment") or {}).get("magnetic_field"), kepler, epoch, spec.get("duration")
+    )
     if gravity is not None and spacecraft:
         raise ValueError("actuators / environment: not supported in a gravity (heavy top) scene; drop gravity")
     duration = spec.get("duration")
@@ -497,7 +523,7 @@ def _scene(spec: Mapping[str, Any], source: str, text: str) -> Scene:
     recording = spec.get("recording")
     foxglove = spec.get("foxglove")
     web = spec.get("web")
-    sensors = _sensors(spec.get("sensors") or {})
+    sensors = _sensors(spec.get("sensors") or {}, magnetic_field)
     outputs = spec.get("outputs") or {}
     joint_state_topics = spec.get("joint_state_topics")
     if joint_state_topics is not None and not spacecraft.wheels:
@@ -506,7 +532,9 @@ def _scene(spec: Mapping[str, Any], source: str, text: str) -> Scene:
     return Scene(
         name=spec.get("name", default_name).strip(),
         description=(spec.get("description") or "").strip(),
-        epoch=_at("epoch", _epoch, spec.get("epoch") or DEFAULT_EPOCH),
+        epoch=epoch,
+        orbit=kepler,
+        magnetic_field=magnetic_field,
         frames=frames,
         body=body,
         initial=_initial(spec.get("initial") or {}),
@@ -716,10 +744,11 @@ def _gyro_fields(gyro: Mapping[str, Any]) -> dict[str, Any]:
     return {name: _floats(value) if isinstance(value, list) else float(value) for name, value in gyro.items()}
 
 
-def _sensors(spec: Mapping[str, Any]) -> Sensors:
+def _sensors(spec: Mapping[str, Any], field: MagneticField | None) -> Sensors:
     gyro = spec.get("gyro")
     star_tracker = spec.get("star_tracker")
     return Sensors(
+        magnetometer=parse_magnetometer(spec.get("magnetometer"), field),
         seed=spec.get("seed"),
         gyro=None if gyro is None else GyroModel(**_gyro_fields(gyro)),
         star_tracker=None
@@ -764,10 +793,11 @@ def _sensor_rates(sensors: Sensors, rates: dict[str, float]) -> dict[str, float]
     for output, sensor, key in (
         ("imu", sensors.gyro, "sensors.gyro.rate"),
         ("star_tracker", sensors.star_tracker, "sensors.star_tracker.rate"),
+        ("magnetometer", sensors.magnetometer, "sensors.magnetometer.rate"),
     ):
         if sensor is None:
-            if output == "star_tracker" and rates.get(output, 0.0) > 0.0:
-                raise ValueError("outputs.star_tracker: needs a sensors.star_tracker section (its noise)")
+            if output in ("star_tracker", "magnetometer") and rates.get(output, 0.0) > 0.0:
+                raise ValueError(f"outputs.{output}: needs a sensors.{output} section (its noise)")
             continue
         _at(key, limits.check_rate, sensor.rate)
         if output in rates and rates[output] != sensor.rate:

@@ -16,6 +16,7 @@ from __future__ import annotations
 from typing import Any, NamedTuple
 
 from rigid_rot_sim.core import limits
+from rigid_rot_sim.scene.orbit import MAGNETOMETER, ORBIT
 from rigid_rot_sim.scene.schema import (
     DIALECT,
     array,
@@ -97,6 +98,16 @@ OUTPUTS: dict[str, OutputSpec] = {
         "geometry_msgs/PoseWithCovarianceStamped on ~/star_tracker (set by sensors.star_tracker.rate; 0: not built)",
     ),
     "wheels": OutputSpec(100.0, "sensor_msgs/JointState on ~/wheels (scenes with reaction wheels only)"),
+    "magnetometer": OutputSpec(
+        0.0,
+        "sensor_msgs/MagneticField on ~/magnetometer: the magnetometer's readings (set by sensors.magnetometer.rate)",
+    ),
+    "magnetic_field": OutputSpec(
+        10.0, "sensor_msgs/MagneticField on ~/magnetic_field: the true field, T, body frame (scenes with a field only)"
+    ),
+    "orbit": OutputSpec(
+        10.0, "nav_msgs/Odometry on ~/orbit: the centre of mass on its orbit, ECI (scenes with an orbit only)"
+    ),
     "torque_breakdown": OutputSpec(
         100.0,
         "rigid_rot_msgs/TorqueBreakdown on ~/torque_breakdown "
@@ -360,6 +371,7 @@ _SENSORS = nullable(
             ),
             "gyro": nullable(_GYRO),
             "star_tracker": nullable(_STAR_TRACKER),
+            "magnetometer": MAGNETOMETER,
         },
     )
 )
@@ -393,6 +405,7 @@ SCENE_SCHEMA: dict[str, Any] = {
             "gravity": _GRAVITY,
             "actuators": ACTUATORS,
             "environment": ENVIRONMENT,
+            "orbit": ORBIT,
             "integrator": _INTEGRATOR,
             "duration": nullable(
                 number("Sim time to run, s; null runs unbounded.", exclusive_minimum=0.0, maximum=_DURATION_MAX)
@@ -400,7 +413,7 @@ SCENE_SCHEMA: dict[str, Any] = {
             "epoch": nullable(
                 {
                     "description": "UTC date and time of sim time 0, ISO 8601 (YYYY-MM-DDThh:mm:ss[.f...][Z]); "
-                    f"used by exports (CCSDS AEM). Default {DEFAULT_EPOCH}.",
+                    f"used by exports (CCSDS AEM), the Earth's rotation and the field's date. Default {DEFAULT_EPOCH}.",
                     "type": "string",
                     "pattern": EPOCH_PATTERN,
                     "default": DEFAULT_EPOCH,

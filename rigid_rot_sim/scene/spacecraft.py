@@ -18,7 +18,15 @@ from typing import Any
 import numpy as np
 
 from rigid_rot_sim.core.magnetorquer import Magnetorquers
-from rigid_rot_sim.core.wheels import DEFAULT_STICTION_SPEED, OrbitModel, WheelModel, orbit_model, wheel_model
+from rigid_rot_sim.core.orbit import KeplerOrbit
+from rigid_rot_sim.core.wheels import (
+    DEFAULT_STICTION_SPEED,
+    OrbitModel,
+    WheelModel,
+    kepler_orbit_model,
+    orbit_model,
+    wheel_model,
+)
 
 __all__ = [
     "ReactionWheel",
@@ -66,13 +74,17 @@ class WheelTorqueSchedule:
 @dataclass(frozen=True)
 class GravityGradient:
     """Gravity gradient of a planet of parameter ``mu`` (m^3/s^2) on a circular orbit (``radius`` m,
-    ``inclination`` rad) in the world frame (:mod:`rigid_rot_sim.core.wheels` defines its geometry)."""
+    ``inclination`` rad) in the world frame (:mod:`rigid_rot_sim.core.wheels` defines its geometry), or on the
+    scene's orbit (``kepler``; ``radius`` its semi-major axis, ``inclination`` its inclination)."""
 
     mu: float
     radius: float
     inclination: float = 0.0
+    kepler: KeplerOrbit | None = None
 
     def model(self) -> OrbitModel:
+        if self.kepler is not None:
+            return kepler_orbit_model(self.kepler)
         return orbit_model(self.mu, self.radius, self.inclination)
 
 
@@ -154,9 +166,15 @@ class Spacecraft:
 
 
 def parse_spacecraft(
-    actuators: Mapping[str, Any] | None, environment: Mapping[str, Any] | None, inertia: Any
+    actuators: Mapping[str, Any] | None,
+    environment: Mapping[str, Any] | None,
+    inertia: Any,
+    kepler: KeplerOrbit | None = None,
 ) -> Spacecraft:
-    """The validated spacecraft parts of a scene whose data passed the schema; ValueError naming the key."""
+    """The validated spacecraft parts of a scene whose data passed the schema; ValueError naming the key.
+
+    ``kepler``: the scene's orbit (``orbit:``), which a gravity gradient without an orbit of its own follows.
+    """
     actuators = actuators or {}
     environment = environment or {}
     wheels = []
@@ -208,12 +226,26 @@ def parse_spacecraft(
         schedule = WheelTorqueSchedule(tuple(segments))
     gravity_gradient = None
     gg = environment.get("gravity_gradient")
-    if gg:
+    if gg is not None and "orbit" in gg:
+        if kepler is not None:
+            raise ValueError(
+                "environment.gravity_gradient.orbit: the scene has an orbit: section; give no orbit here "
+                "(the gradient follows the scene's orbit)"
+            )
         gravity_gradient = GravityGradient(
             float(gg.get("mu", 3.986004418e14)),
             float(gg["orbit"]["radius"]),
             float(gg["orbit"].get("inclination", 0.0)),
         )
+    elif gg is not None:
+        if kepler is None:
+            raise ValueError(
+                "environment.gravity_gradient: needs an orbit: a circular orbit {radius, inclination} here, "
+                "or the scene's orbit: section"
+            )
+        if "mu" in gg:
+            raise ValueError("environment.gravity_gradient.mu: the scene's orbit is the Earth's (mu is its own)")
+        gravity_gradient = GravityGradient(kepler.mu, kepler.a, kepler.i, kepler)
     rods, residual = _parse_rods(actuators.get("magnetorquers"))
     spacecraft = Spacecraft(tuple(wheels), schedule, gravity_gradient, rods, residual)
     try:

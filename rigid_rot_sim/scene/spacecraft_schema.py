@@ -10,6 +10,7 @@ from __future__ import annotations
 from typing import Any
 
 from rigid_rot_sim.core import limits
+from rigid_rot_sim.scene.orbit import MAGNETIC_FIELD
 from rigid_rot_sim.scene.schema import array, mapping, nullable, number, text, vector
 
 __all__ = ["ACTUATORS", "ENVIRONMENT", "MAX_WHEELS", "MAX_RODS", "EARTH_MU"]
@@ -123,8 +124,8 @@ ENVIRONMENT: dict[str, Any] = nullable(
         {
             "gravity_gradient": nullable(
                 mapping(
-                    "Gravity-gradient torque on a circular orbit in the world frame (node line along world x, at the "
-                    "ascending node at t = 0).",
+                    "Gravity-gradient torque: on the scene's orbit: section (give no orbit here), or on a circular "
+                    "orbit in the world frame (node line along world x, at the ascending node at t = 0).",
                     {
                         "mu": number(
                             "Gravitational parameter of the planet, m^3/s^2.",
@@ -133,7 +134,7 @@ ENVIRONMENT: dict[str, Any] = nullable(
                             default=EARTH_MU,
                         ),
                         "orbit": mapping(
-                            "The circular orbit.",
+                            "The circular orbit (not with the scene's orbit: section).",
                             {
                                 "radius": number("Orbit radius, m.", exclusive_minimum=0.0),
                                 "inclination": number(
@@ -143,9 +144,9 @@ ENVIRONMENT: dict[str, Any] = nullable(
                             required=["radius"],
                         ),
                     },
-                    required=["orbit"],
                 )
             ),
+            "magnetic_field": MAGNETIC_FIELD,
         },
     )
 )

@@ -77,7 +77,7 @@ def test_resim_with_another_seed_finds_every_reading_different(recorded, monkeyp
     from rigid_rot_sim.recording import resim
 
     real = resim.SensorSuite
-    monkeypatch.setattr(resim, "SensorSuite", lambda models, seed: real(models, seed=seed + 1))
+    monkeypatch.setattr(resim, "SensorSuite", lambda models, seed, field=None: real(models, seed=seed + 1, field=field))
     report = resimulate(bag)
     assert not report.identical and report.sensor_mismatches == report.sensor_readings > 0
     assert "sensor readings differ" in report.verdict

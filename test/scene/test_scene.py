@@ -23,6 +23,7 @@ SHIPPED = {
     "closed_loop_lockstep": "topic",
     "excitation": "schedule",
     "excitation_gentle": "schedule",
+    "cubesat_orbit": "spacecraft",
 }
 
 MINIMAL = "body: {principal_moments: [1.0, 2.0, 3.0]}\n"
