@@ -2,10 +2,9 @@
 
 ``(G_t clamp(m) + m_res) x b`` (:func:`rigid_rot_sim.core.magnetorquer.torque`) with the field at the step's
 start, in the body at its attitude then, held over the step: a zero-order hold, as for a world-frame torque
-(first order in dt while the body turns the field within the step). :attr:`RodTorque.field` is an
-:class:`~rigid_rot_sim.core.geomagnetic.OrbitField` (world frame = its ECI) that the engine sets once the
-scene's environment gives it one; without it the rods make no torque, and ``scene/features.py`` refuses
-scenes with rods on every path.
+(first order in dt while the body turns the field within the step). :attr:`RodTorque.field` is the scene's
+:class:`~rigid_rot_sim.core.geomagnetic.OrbitField` (``environment.magnetic_field`` on its ``orbit``; the world
+frame is its ECI): a scene with rods must have one (scene validation).
 """
 
 from __future__ import annotations

@@ -84,8 +84,9 @@ class Stepper:
         #: The run digest (:mod:`~rigid_rot_sim.run.digest`) of every step taken so far.
         self.digest = DIGEST_SEED
         self._i_min = float(np.min(body.principal_moments))
-        #: The torque rods' torque (:mod:`~rigid_rot_sim.run.rod_torque`; its ``field`` set by the engine).
-        self.rods = RodTorque(scene.spacecraft.magnetorquers(), observables.principal_from_body)
+        #: The torque rods' torque (:mod:`~rigid_rot_sim.run.rod_torque`) in the scene's field along its orbit.
+        rods = scene.spacecraft.magnetorquers()
+        self.rods = RodTorque(rods, observables.principal_from_body, scene.orbit_field() if rods else None)
         self.configure(method, clock.dt, options, first=True)
 
     # ------------------------------------------------------------------ the integrator

@@ -53,6 +53,7 @@ FEATURES: Mapping[str, Callable[[Scene], bool]] = {
     "joint_state_topics": lambda scene: scene.joint_state_topics is not None,
     "spacecraft.gravity_gradient": lambda scene: scene.spacecraft.gravity_gradient is not None,
     "spacecraft.magnetorquers": lambda scene: bool(scene.spacecraft.rods),
+    "spacecraft.magnetorquers.coupling": lambda scene: any(any(r.magnetometer_coupling) for r in scene.spacecraft.rods),
     "sensors.gyro": lambda scene: scene.sensors.gyro is not None,
     "sensors.star_tracker": lambda scene: scene.sensors.star_tracker is not None,
     "orbit": lambda scene: scene.orbit is not None,
@@ -85,7 +86,10 @@ FEATURE_FIELDS: Mapping[str, str] = {
     "spacecraft.wheels.stiction_speed": "spacecraft.wheels.friction",
     "spacecraft.wheel_schedule": "spacecraft.wheel_schedule",
     "spacecraft.gravity_gradient": "spacecraft.gravity_gradient",
-    "spacecraft.rods": "spacecraft.magnetorquers",
+    "spacecraft.rods.name": "spacecraft.magnetorquers",
+    "spacecraft.rods.axis": "spacecraft.magnetorquers",
+    "spacecraft.rods.max_dipole": "spacecraft.magnetorquers",
+    "spacecraft.rods.magnetometer_coupling": "spacecraft.magnetorquers.coupling",
     "spacecraft.residual_dipole": "spacecraft.magnetorquers",
     "joint_state_topics": "joint_state_topics",
     "sensors.gyro": "sensors.gyro",
@@ -120,9 +124,9 @@ SETTINGS: Mapping[str, str] = {
 }
 
 _ALL = frozenset(FEATURES)
-#: Sources no path steps yet: the torque rods act on the Earth's field, which no stepper computes
-#: until the field of issue 37 is in the engine (then: ``engine`` and ``resim`` first).
-_WAITING = frozenset({"spacecraft.magnetorquers"})
+#: What the engine runs but no recording carries yet: the rods' commands (resim would run them at zero), and
+#: the rods' field at the magnetometer (the engine's magnetometer reads the Earth's field alone).
+_WAITING = frozenset({"spacecraft.magnetorquers", "spacecraft.magnetorquers.coupling"})
 _SWEEP = frozenset(
     {
         "body",
@@ -136,7 +140,7 @@ _SWEEP = frozenset(
 #: What each path runs (a feature outside its set is refused by :func:`refuse_unhonoured`).
 PATHS: Mapping[str, frozenset[str]] = {
     # the run engine, rigid_rot_sim.run.simulator.Simulator (the node and lockstep drive it)
-    "engine": _ALL - _WAITING,
+    "engine": _ALL - {"spacecraft.magnetorquers.coupling"},
     # rigid_rot_sim.recording.resim: the engine fed the recorded commands and seeds
     "resim": _ALL - _WAITING,
     # rigid_rot_sim.sweep: the batch kernels, the engine per sample where none applies

@@ -526,6 +526,11 @@ def _scene(spec: Mapping[str, Any], source: str, text: str) -> Scene:
     sensors = _sensors(spec.get("sensors") or {}, magnetic_field)
     outputs = spec.get("outputs") or {}
     joint_state_topics = spec.get("joint_state_topics")
+    if spacecraft.rods and magnetic_field is None:
+        raise ValueError(
+            "actuators.magnetorquers: the rods act on the Earth's field: the scene needs environment.magnetic_field "
+            "(on its orbit)"
+        )
     if joint_state_topics is not None and not spacecraft.wheels:
         raise ValueError("joint_state_topics: the scene has no reaction wheels (actuators.reaction_wheels)")
     namespace = spec.get("simulation_interfaces_namespace")

@@ -2,18 +2,17 @@
 with a reason), and the rods' torque on the step, ``(G_t clamp(m) + m_res) x b`` with IGRF's field at the step's
 start, held over the step.
 
-The Simulator refuses a scene with rods until the scene's environment gives it the Earth's field (issue 37's
-scene section); these tests build the engine's parts as the Simulator does and hand the stepper that field."""
+A scene with rods needs the Earth's field (``environment.magnetic_field`` on its ``orbit``); the stepper takes it
+from the scene."""
 
 from __future__ import annotations
 
-import datetime as dt
 import math
 
 import numpy as np
 import pytest
 
-from rigid_rot_sim.core import geomagnetic, magnetorquer, orbit
+from rigid_rot_sim.core import magnetorquer
 from rigid_rot_sim.core.dynamics import RigidBody
 from rigid_rot_sim.core.quaternion import rotate_inverse
 from rigid_rot_sim.run.clock import StepClock
@@ -21,13 +20,20 @@ from rigid_rot_sim.run.commands import CommandRejected, CommandSchedule
 from rigid_rot_sim.run.gyrostat_stepper import make_stepper
 from rigid_rot_sim.run.observables import Observables
 from rigid_rot_sim.run.simulator import Simulator
-from rigid_rot_sim.scene.scene import parse_scene_text
+from rigid_rot_sim.scene.features import refuse_unhonoured
+from rigid_rot_sim.scene.scene import SceneError, parse_scene_text
 
 J = 0.02  # kg*m^2: a sphere, so a torque held over a step changes omega by exactly tau dt / J
 SCENE = f"""
 body: {{principal_moments: [{J}, {J}, {J}]}}
 initial: {{angular_velocity: [0.1, -0.05, 0.08]}}
 integrator: {{method: rk4, dt: 0.1}}
+epoch: "2026-01-01T00:00:00Z"
+orbit:
+  elements: {{semi_major_axis: 6878137.0, eccentricity: 0.0, inclination_deg: 97.4, raan_deg: 17.0,
+             argument_of_periapsis_deg: 0.0, true_anomaly_deg: 0.0}}
+environment:
+  magnetic_field: {{model: igrf14}}
 actuators:
   magnetorquers:
     residual_dipole: [0.0, 0.0, 0.001]
@@ -45,11 +51,6 @@ def parts(scene_text: str = SCENE):
     commands = CommandSchedule(scene, clock)
     stepper = make_stepper(scene, body, Observables(scene, body), clock, commands, "rk4", {})
     return scene, clock, commands, stepper
-
-
-def igrf() -> geomagnetic.OrbitField:
-    kepler = orbit.kepler_orbit(orbit.EARTH_RADIUS + 500e3, 0.0, math.radians(97.4), 0.3, 0.0, 0.0)
-    return geomagnetic.orbit_field("igrf14", kepler, dt.datetime(2026, 1, 1, tzinfo=dt.timezone.utc), None)
 
 
 def test_dipoles_are_held_from_their_step_clamped_and_refused_with_a_reason():
@@ -76,15 +77,23 @@ def test_dipoles_are_held_from_their_step_clamped_and_refused_with_a_reason():
         plain.submit_rods("cli", [0.1], 0.0)
 
 
-def test_the_engine_refuses_rods_until_it_has_the_field():
-    with pytest.raises(ValueError, match="^spacecraft.magnetorquers: not run by the engine path"):
-        Simulator(parse_scene_text(SCENE))
+def test_rods_need_the_field_and_paths_that_do_not_run_them_refuse_them():
+    no_field = SCENE.replace("environment:\n  magnetic_field: {model: igrf14}\n", "")
+    with pytest.raises(SceneError, match="actuators.magnetorquers: the rods act on the Earth's field"):
+        parse_scene_text(no_field)
+    scene = parse_scene_text(SCENE)
+    Simulator(scene)  # the engine runs them
+    for path in ("resim", "sweep", "simulate"):
+        with pytest.raises(ValueError, match=f"^spacecraft.magnetorquers: not run by the {path} path"):
+            refuse_unhonoured(scene, path)
+    coupled = SCENE.replace("max_dipole: 0.1}", "max_dipole: 0.1, magnetometer_coupling: [0.0, 0.0, 1.0e-6]}")
+    with pytest.raises(ValueError, match="^spacecraft.magnetorquers.coupling: not run by the engine path"):
+        Simulator(parse_scene_text(coupled))
 
 
 def test_the_rods_torque_acts_on_the_step_as_the_cores_law_in_igrf():
     scene, clock, commands, stepper = parts()
-    assert not stepper.rods.active  # no field: no torque (and the Simulator refuses the scene)
-    stepper.rods.field = igrf()
+    assert stepper.rods.active
     commands.submit_rods("cli", [0.5, -0.1, 0.05], 0.0)
     stepper.set_command_torque()
     t0, q0, w0 = stepper.integrator.t, stepper.integrator.q.copy(), stepper.integrator.omega.copy()
@@ -104,7 +113,6 @@ def test_the_rods_torque_acts_on_the_step_as_the_cores_law_in_igrf():
 
 def test_rods_off_leave_the_residual_dipole_acting():
     _, _, _, stepper = parts()
-    stepper.rods.field = igrf()
     stepper.set_command_torque()
     b_body = np.array(rotate_inverse(stepper.integrator.q, stepper.rods.field.eci(0.0)))
     residual = stepper.rods.torque(0.0, stepper.integrator.q, (0.0, 0.0, 0.0))
