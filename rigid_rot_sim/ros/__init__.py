@@ -7,9 +7,10 @@
 * :mod:`.inputs`: the torque subscriptions and ``~/rejected``;
 * :mod:`.services`: ``~/compute_inertia`` and the run's services; :mod:`.simulation_services`:
   the standard ``simulation_interfaces`` ones, through the same actions;
-* :mod:`.wheel_inputs`: ``~/wheel_torque`` for the reaction wheels; :mod:`.lockstep`: the
-  read-only ``lockstep.*`` parameters and the turn engine's wiring; :mod:`.simulate_steps`: the
-  standard ``SimulateSteps`` action; :mod:`.recording`: the node's recorder;
+* :mod:`.wheel_inputs`: ``~/wheel_torque`` for the reaction wheels; :mod:`.rod_inputs`:
+  ``~/magnetorquer_command`` for the torque rods; :mod:`.lockstep`: the read-only ``lockstep.*``
+  parameters and the turn engine's wiring; :mod:`.simulate_steps`: the standard ``SimulateSteps``
+  action; :mod:`.recording`: the node's recorder;
   :mod:`.foxglove_live`: the Foxglove live server; :mod:`.live_views`: the optional live viewers' wiring;
 * :mod:`.run_loop`: the run loop (steps, commands, outputs; services on an executor thread);
   :mod:`.intake`: every command topic taken by the run loop in arrival order, losses counted;
