@@ -19,7 +19,8 @@
   wrong type on a command topic, named in the log; :mod:`.web_live`: the body's web page of a live run;
 * :mod:`.qos`: the QoS profiles. Message <-> numpy conversions: :mod:`rigid_rot_sim.conversions`.
 * :mod:`.controller`: apart from the node, ``rigid-rot-controller``, a quaternion-feedback
-  attitude controller and the template for a user's own.
+  attitude controller and the template for a user's own; :mod:`.detumble_controller`: the B-dot
+  detumble controller on ``~/magnetometer`` commanding the rods.
 
 The physics is in :mod:`rigid_rot_sim.core`, the run and its pacing in :mod:`rigid_rot_sim.run` (no ROS): the
 :class:`~rigid_rot_sim.run.simulator.Simulator` and the

@@ -6,9 +6,10 @@ with ``RODS``): a rod keeps its dipole until a command names it again (no timeou
 A dipole beyond a rod's max_dipole is clamped and said once per rod (a warning, and the recorded event on
 ``~/sim_events``); an unknown name, mismatched lengths, velocity or position only or a non-finite value is
 rejected as a whole with the reason on ``~/rejected``. The command takes effect at its header stamp when that is
-non-zero and not in the past, else on receipt. Why JointState: it names each rod, needs no new message, and is what
-ros2_control's topic hardware interface publishes for joints with an ``effort`` command interface
-(docs/spacecraft.md).
+non-zero and not in the past, else on receipt. ``lockstep.inputs`` may list ``~/magnetorquer_command``: each turn
+then waits for one command stamped with the turn's time. Why JointState: it names each rod, needs no new
+message, and is what ros2_control's topic hardware interface publishes for joints with an ``effort`` command
+interface (docs/spacecraft.md).
 """
 
 from __future__ import annotations
@@ -26,9 +27,7 @@ from rigid_rot_sim.ros.qos import COMMAND_QOS
 from rigid_rot_sim.run.joint_commands import RODS, effective_time, joint_efforts, merged_torques
 from rigid_rot_sim.run.simulator import CommandRejected, Simulator
 from rigid_rot_sim.scene.scene import Scene
-
-#: The topic of the rods' commands.
-ROD_COMMAND_TOPIC = "~/magnetorquer_command"
+from rigid_rot_sim.scene.spacecraft import ROD_COMMAND_TOPIC
 
 
 class RodCommandInput:
@@ -62,7 +61,7 @@ class RodCommandInput:
             efforts = joint_efforts(RODS, self.topic, self.names, names, position, velocity, effort)
             sim = self.sim
             effective = effective_time(self.topic, stamp, sim.clock.t)
-            sim.command_gate(self.topic, stamp if stamp > 0.0 else None)  # lockstep: a turn input, or it passes
+            sim.command_gate(ROD_COMMAND_TOPIC, stamp if stamp > 0.0 else None)  # lockstep.inputs names it so
             dipoles = merged_torques(sim.commands.rod_dipoles, efforts)
             for i in sim.submit_rod_dipoles(self.topic, dipoles, effective)[2]:
                 if i not in self._clamped_said and i in efforts:
