@@ -124,9 +124,8 @@ SETTINGS: Mapping[str, str] = {
 }
 
 _ALL = frozenset(FEATURES)
-#: What the engine runs but no recording carries yet: the rods' commands (resim would run them at zero), and
-#: the rods' field at the magnetometer (the engine's magnetometer reads the Earth's field alone).
-_WAITING = frozenset({"spacecraft.magnetorquers", "spacecraft.magnetorquers.coupling"})
+#: What no path runs yet: the rods' field at the magnetometer (the engine's magnetometer reads the Earth's alone).
+_WAITING = frozenset({"spacecraft.magnetorquers.coupling"})
 _SWEEP = frozenset(
     {
         "body",
@@ -140,7 +139,7 @@ _SWEEP = frozenset(
 #: What each path runs (a feature outside its set is refused by :func:`refuse_unhonoured`).
 PATHS: Mapping[str, frozenset[str]] = {
     # the run engine, rigid_rot_sim.run.simulator.Simulator (the node and lockstep drive it)
-    "engine": _ALL - {"spacecraft.magnetorquers.coupling"},
+    "engine": _ALL - _WAITING,
     # rigid_rot_sim.recording.resim: the engine fed the recorded commands and seeds
     "resim": _ALL - _WAITING,
     # rigid_rot_sim.sweep: the batch kernels, the engine per sample where none applies
