@@ -43,6 +43,8 @@ SUBCOMMANDS = [
     "identify",
     "run",
     "torque",
+    "wheels",
+    "mtb",
 ]
 
 PROG = "rigid-rot"

@@ -20,6 +20,8 @@ Modules, one job each:
 * :mod:`.exact` - the closed-form torque-free motion, on :mod:`.elliptic`; :mod:`.heavy_top` -
   the heavy symmetric top; :mod:`.wheels` - a spacecraft with reaction wheels (a gyrostat);
 * :mod:`.torque` - torque models; :mod:`.sensors` - a rate gyro and a star tracker;
+  :mod:`.magnetorquer` - torque rods (dipole, torque, their field at the magnetometer);
+  :mod:`.magnetic_control` - B-dot and B-cross detumbling, momentum unloading with the rods;
 * :mod:`.orbit` - Keplerian orbits with J2, the Earth's rotation, WGS-84, NED and LVLH;
   :mod:`.geomagnetic` - IGRF-14, WMM2025 and the dipole field, on the coefficients of
   :mod:`.geomagnetic_coefficients`;

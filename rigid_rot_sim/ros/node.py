@@ -91,6 +91,7 @@ from rigid_rot_sim.ros.lockstep import NodeLockstep, declare_lockstep_parameters
 from rigid_rot_sim.ros.outputs import Outputs
 from rigid_rot_sim.ros.parameters import RunParameters, declare_parameters, declare_scene_parameter, read_settings
 from rigid_rot_sim.ros.qos import output_qos
+from rigid_rot_sim.ros.rod_inputs import RodCommandInput
 from rigid_rot_sim.ros.run_loop import POLL_WALL, SLICE_WALL, RunCallbackGroup, RunLock, RunLoop
 from rigid_rot_sim.ros.services import InertiaService, RunServices
 from rigid_rot_sim.ros.topic_types import RivalPublisherWatch, WrongTypeWatch
@@ -147,6 +148,7 @@ class SceneRun:
         self.driver.between_chunks = self.intake.drain  # also while a service steps the run
         self.inputs = TorqueInputs(self.intake, sim, scene, settings[params.COMMAND_DEPTH], rejections)
         self.wheel_input = WheelTorqueInput(self.intake, sim, scene, settings[params.COMMAND_DEPTH], rejections)
+        self.rod_input = RodCommandInput(self.intake, sim, scene, settings[params.COMMAND_DEPTH], rejections)
         self.joint_state_door = JointStateDoor(
             self.intake,
             sim,
@@ -159,7 +161,10 @@ class SceneRun:
         self.driver.observers.append(self.joint_state_door)  # the states, at ~/wheels' steps
         self.type_watch = WrongTypeWatch(
             node,
-            self.inputs.subscriptions + self.wheel_input.subscriptions + self.joint_state_door.subscriptions,
+            self.inputs.subscriptions
+            + self.wheel_input.subscriptions
+            + self.rod_input.subscriptions
+            + self.joint_state_door.subscriptions,
         )
         self.clock_watch = (
             RivalPublisherWatch(node, CLOCK_TOPIC, CLOCK_RIVAL_ADVICE) if "clock" in self.outputs.publishers else None
@@ -225,13 +230,19 @@ class SceneRun:
             missing = (exc.name or "").split(".")[0] or str(exc)
             self.logger.error(f"recording disabled: {missing} is not installed (pip install mcap mcap-ros2-support)")
             return None
-        subscriptions = self.inputs.subscriptions + self.wheel_input.subscriptions + self.joint_state_door.subscriptions
+        subscriptions = (
+            self.inputs.subscriptions
+            + self.wheel_input.subscriptions
+            + self.rod_input.subscriptions
+            + self.joint_state_door.subscriptions
+        )
         recording = NodeRecording.start(node, self.sim, self.outputs, subscriptions, path, log_time)
         if recording is not None:
             self.sim.add_observer(recording)  # events: commands accepted, torques applied, set_state, ...
             self.outputs.listeners.append(recording)  # every message published, as the bytes published
             self.inputs.listeners.append(recording)  # every torque command as received
             self.wheel_input.listeners.append(recording)  # every wheel command as received
+            self.rod_input.listeners.append(recording)  # every rods' command as received
             self.joint_state_door.listeners.append(recording)  # every JointState command as received
         return recording
 
@@ -244,7 +255,12 @@ class SceneRun:
             built.insert(0, self.lockstep.describe())
         else:
             left_out.append("lockstep (commands act when they arrive)")
-        parts = (self.outputs.describe(sim.clock.dt), self.inputs.describe(), self.wheel_input.describe())
+        parts = (
+            self.outputs.describe(sim.clock.dt),
+            self.inputs.describe(),
+            self.wheel_input.describe(),
+            self.rod_input.describe(),
+        )
         for part_built, part_left_out in (*parts, self.joint_state_door.describe()):
             built += part_built
             left_out += part_left_out

@@ -100,6 +100,7 @@ class EventKind(enum.Enum):
     APPLY_END = "apply_end"  # an applied torque ends (payload: end time, serial of its start)
     SCHEDULE = "schedule"  # a schedule segment starts (payload: start time, schedule index, torque)
     WHEELS = "wheels"  # wheel motor torques start (payload: effective time, clamped torques, source)
+    RODS = "rods"  # torque-rod dipoles start (payload: effective time, clamped dipoles, source)
 
 
 @dataclass
@@ -128,6 +129,27 @@ def clamp_wheel_torques(wheels: Any, source: str, torques: Any) -> tuple[tuple[f
         if not math.isfinite(value):
             raise CommandRejected(source, f"non-finite torque for wheel {wheel.name!r}: {value}")
         clamped.append(min(max(value, -wheel.max_torque), wheel.max_torque))
+    return tuple(clamped), tuple(i for i, (a, b) in enumerate(zip(values, clamped, strict=True)) if a != b)
+
+
+def clamp_rod_dipoles(rods: Any, source: str, dipoles: Any) -> tuple[tuple[float, ...], tuple[int, ...]]:
+    """Rod dipoles (A*m^2, one per rod of ``rods``) clamped to each rod's max_dipole, and which were.
+
+    CommandRejected for a scene without rods, a wrong number of values or a non-finite one (the rule of
+    :func:`clamp_wheel_torques`: a clamp is said, never a rejection).
+    """
+    values = [float(v) for v in np.asarray(dipoles, dtype=float).reshape(-1)]
+    if not rods:
+        raise CommandRejected(source, "this scene has no torque rods (actuators.magnetorquers)")
+    if len(values) != len(rods):
+        raise CommandRejected(
+            source, f"{len(values)} dipole(s) for {len(rods)} rod(s) [{', '.join(r.name for r in rods)}]"
+        )
+    clamped = []
+    for value, rod in zip(values, rods, strict=True):
+        if not math.isfinite(value):
+            raise CommandRejected(source, f"non-finite dipole for rod {rod.name!r}: {value}")
+        clamped.append(min(max(value, -rod.max_dipole), rod.max_dipole))
     return tuple(clamped), tuple(i for i, (a, b) in enumerate(zip(values, clamped, strict=True)) if a != b)
 
 
@@ -162,6 +184,8 @@ class CommandSchedule:
         self.named_torques: tuple[tuple[str, Torque, str], ...] = ()
         #: The wheels' motor torques (N*m, clamped, scene order) acting from the current step on.
         self.wheel_torques: tuple[float, ...] = (0.0,) * len(self.spacecraft.wheels)
+        #: The torque rods' dipoles (A*m^2, clamped, scene order) held from the current step on.
+        self.rod_dipoles: tuple[float, ...] = (0.0,) * len(self.spacecraft.rods)
         if self.spacecraft.wheel_schedule is not None:
             for wheel_segment in self.spacecraft.wheel_schedule.segments:
                 torques = clamp_wheel_torques(self.spacecraft.wheels, WHEEL_SCHEDULE_SOURCE, wheel_segment.torques)[0]
@@ -235,6 +259,17 @@ class CommandSchedule:
         effective_time = validation.finite_scalar("effective_time", effective_time)
         step = self.clock.step_at_or_after(effective_time)
         self._push(step, EventKind.WHEELS, (effective_time, clamped, source))
+        return step, clamped, which
+
+    def submit_rods(
+        self, source: str, dipoles: Any, effective_time: float
+    ) -> tuple[int, tuple[float, ...], tuple[int, ...]]:
+        """Hold rod dipoles (:func:`clamp_rod_dipoles`) from ``effective_time`` (s), until the next command: the
+        wheels' hold rule. Returns (step, clamped dipoles, indexes of the rods clamped)."""
+        clamped, which = clamp_rod_dipoles(self.spacecraft.rods, source, dipoles)
+        effective_time = validation.finite_scalar("effective_time", effective_time)
+        step = self.clock.step_at_or_after(effective_time)
+        self._push(step, EventKind.RODS, (effective_time, clamped, source))
         return step, clamped, which
 
     def input_spec(self, source: str) -> TopicInput:
@@ -369,6 +404,8 @@ class CommandSchedule:
                 self._scheduled[index] = torque
             elif kind is EventKind.WHEELS:
                 self.wheel_torques = payload[1]
+            elif kind is EventKind.RODS:
+                self.rod_dipoles = payload[1]
         self.next_event = events[0][0] if events else None
         self._sum_torques()
 

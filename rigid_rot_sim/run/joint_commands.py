@@ -17,17 +17,35 @@ A wheel keeps its command until the next command that names it (no timeout): the
 changed-value threshold may suppress repetitions for as long as the value stays the same, and the
 wheel must still be driven. :func:`merged_torques` builds the full set of motor torques (scene
 order) the simulator then holds: the named wheels' new efforts, the others as they act now.
-No ROS here: the door (:mod:`rigid_rot_sim.ros.joint_state_door`) passes the message's arrays.
+No ROS here: the door (:mod:`rigid_rot_sim.ros.joint_state_door`) passes the message's arrays. The torque
+rods' command (``~/magnetorquer_command``) follows the same rule with their dipoles (A*m^2) in ``effort``
+(:func:`joint_efforts` with :data:`RODS`).
 """
 
 from __future__ import annotations
 
 import math
 from collections.abc import Sequence
+from dataclasses import dataclass
 
 from rigid_rot_sim.run.commands import STAMP_HORIZON, CommandRejected
 
-__all__ = ["wheel_efforts", "merged_torques", "effective_time"]
+__all__ = ["Actuators", "WHEELS", "RODS", "wheel_efforts", "joint_efforts", "merged_torques", "effective_time"]
+
+
+@dataclass(frozen=True)
+class Actuators:
+    """The words a door's reasons use for its joints: plural, short and singular names, quantity, unit."""
+
+    plural: str
+    short: str
+    singular: str
+    quantity: str
+    unit: str
+
+
+WHEELS = Actuators("reaction wheels", "wheels", "wheel", "motor torques", "N*m")
+RODS = Actuators("torque rods", "rods", "rod", "dipoles", "A*m^2")
 
 
 def wheel_efforts(
@@ -39,8 +57,22 @@ def wheel_efforts(
     effort: Sequence[float],
 ) -> dict[int, float]:
     """The efforts (N*m) of a JointState command by wheel index (scene order); CommandRejected with the reason."""
-    if not wheel_names:
-        raise CommandRejected(source, "this scene has no reaction wheels")
+    return joint_efforts(WHEELS, source, wheel_names, names, position, velocity, effort)
+
+
+def joint_efforts(
+    actuators: Actuators,
+    source: str,
+    joint_names: Sequence[str],
+    names: Sequence[str],
+    position: Sequence[float],
+    velocity: Sequence[float],
+    effort: Sequence[float],
+) -> dict[int, float]:
+    """The efforts of a JointState command by joint index (scene order) under the rule above (the rods' door
+    reads their dipoles, A*m^2, by the same rule); CommandRejected with the reason."""
+    if not joint_names:
+        raise CommandRejected(source, f"this scene has no {actuators.plural}")
     if not names:
         raise CommandRejected(source, "the command names no joint")
     if not effort:
@@ -48,21 +80,21 @@ def wheel_efforts(
         what = f"{given} only" if given else "no value"
         raise CommandRejected(
             source,
-            f"{what}: this door takes the wheels' motor torques in effort (N*m); "
+            f"{what}: this door takes the {actuators.short}' {actuators.quantity} in effort ({actuators.unit}); "
             "give the joints an effort command interface",
         )
     if len(effort) != len(names):
         raise CommandRejected(source, f"mismatched array lengths: {len(names)} name(s), {len(effort)} effort value(s)")
-    index = {name: i for i, name in enumerate(wheel_names)}
+    index = {name: i for i, name in enumerate(joint_names)}
     efforts: dict[int, float] = {}
     for name, value in zip(names, effort, strict=True):
         if name not in index:
-            raise CommandRejected(source, f"unknown joint {name!r} (the wheels: {', '.join(wheel_names)})")
+            raise CommandRejected(source, f"unknown joint {name!r} (the {actuators.short}: {', '.join(joint_names)})")
         if index[name] in efforts:
             raise CommandRejected(source, f"joint {name!r} is named twice")
         value = float(value)
         if not math.isfinite(value):
-            raise CommandRejected(source, f"non-finite effort for wheel {name!r}: {value}")
+            raise CommandRejected(source, f"non-finite effort for {actuators.singular} {name!r}: {value}")
         efforts[index[name]] = value
     return efforts
 

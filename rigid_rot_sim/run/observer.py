@@ -41,6 +41,12 @@ class SimulationObserver:
         """Wheel motor torques (N*m, clamped, scene order) were scheduled on ``source`` for ``effective_time``
         (s); ``clamped`` lists the wheels whose command exceeded max_torque."""
 
+    def rod_command_accepted(
+        self, step: int, source: str, dipoles: Sequence[float], effective_time: float, clamped: Sequence[int]
+    ) -> None:
+        """Torque-rod dipoles (A*m^2, clamped, scene order) were scheduled on ``source`` for ``effective_time``
+        (s); ``clamped`` lists the rods whose command exceeded max_dipole."""
+
     def torque_applied(self, step: int, command: TorqueCommand) -> None:
         """A torque for ``command.duration`` s was scheduled (the ``apply_torque`` request)."""
 

@@ -220,6 +220,21 @@ class Simulator:
             observer.wheel_command_accepted(step, source, result[1], effective, result[2])
         return result
 
+    def submit_rod_dipoles(
+        self, source: str, dipoles: Any, effective_time: float | None = None
+    ) -> tuple[int, tuple[float, ...], tuple[int, ...]]:
+        """Hold torque-rod dipoles (A*m^2, scene order) from now or ``effective_time`` (s), as wheel torques are
+        held (:meth:`submit_wheel_torques`; :meth:`CommandSchedule.submit_rods`)."""
+        step, effective = self.clock.k, self.clock.t if effective_time is None else effective_time
+        try:
+            result = self.commands.submit_rods(source, dipoles, effective)
+        except CommandRejected as rejected:
+            self._report_rejected(rejected, "", dipoles)
+            raise
+        for observer in self.observers:
+            observer.rod_command_accepted(step, source, result[1], effective, result[2])
+        return result
+
     def _report_rejected(self, rejected: CommandRejected, frame_id: str, torque: Any) -> None:
         for observer in self.observers:
             observer.command_rejected(self.clock.k, rejected.source, rejected.reason, frame_id, torque)

@@ -30,6 +30,7 @@ from rigid_rot_sim.run.clock import StepClock
 from rigid_rot_sim.run.commands import CommandSchedule
 from rigid_rot_sim.run.digest import DIGEST_SEED, fold_steps
 from rigid_rot_sim.run.observables import Observables, StateSnapshot
+from rigid_rot_sim.run.rod_torque import RodTorque
 from rigid_rot_sim.run.timeline import world_in_body
 from rigid_rot_sim.scene.scene import Scene
 
@@ -82,6 +83,8 @@ class Stepper:
         #: The run digest (:mod:`~rigid_rot_sim.run.digest`) of every step taken so far.
         self.digest = DIGEST_SEED
         self._i_min = float(np.min(body.principal_moments))
+        #: The torque rods' torque (:mod:`~rigid_rot_sim.run.rod_torque`) in the scene's field along its orbit.
+        self.rods = RodTorque.of(scene, observables.principal_from_body)
         self.configure(method, clock.dt, options, first=True)
 
     # ------------------------------------------------------------------ the integrator
@@ -100,7 +103,7 @@ class Stepper:
             omega_bound = advice.omega_bound(self.scene, self.body)
             method = advice.choose_integrator(self.body.principal_moments, omega_bound, dt, self.scene.torque_kind)
         cls = get_method(method)  # ValueError listing the valid names
-        commanded = bool(self.scene.topic_inputs or self.scene.schedules)
+        commanded = bool(self.scene.topic_inputs or self.scene.schedules or self.rods.present)
         if commanded or dry_run:
             # commands give the method a ConstantTorque between boundaries: refuse now, not mid-run,
             # a method that cannot take one (the exact flow is torque-free)
@@ -168,8 +171,8 @@ class Stepper:
         """
         self.check_spin(omega)
         self.set_state(self.clock.t, self.body.attitude_to_principal(q), self.body.vector_to_principal(omega))
-        if self.commands.world_sum is not None:
-            self.set_command_torque()  # the world-frame torque in the new body frame
+        if self.commands.world_sum is not None or self.rods.active:
+            self.set_command_torque()  # the world-frame torque, the rods' torque, in the new body frame
 
     def snapshot(self) -> StateSnapshot:
         """The integrator's state at the clock's step, as the user sees it (:meth:`Observables.snapshot`)."""
@@ -178,7 +181,9 @@ class Stepper:
         snapshot = self.observables.snapshot(
             self.clock.t, self.clock.k, integrator.q, integrator.omega, self.step_torque_body, self.digest
         )
-        sources = command_torques(self.commands, snapshot.orientation)
+        sources = command_torques(self.commands, snapshot.orientation) + self.rods.named(
+            integrator.t, integrator.q, self.commands.rod_dipoles
+        )
         if self.gravity is not None:
             gravity = self.body.vector_from_principal(self.gravity(0.0, integrator.q, integrator.omega))
             sources.append(("gravity", np.asarray(gravity, dtype=float)))
@@ -196,6 +201,7 @@ class Stepper:
         if world is not None:
             in_body = world_in_body(tuple(integrator.q), principal_from_body, world)
             body = (body[0] + in_body[0], body[1] + in_body[1], body[2] + in_body[2])
+        body = self.rods.add(body, integrator.t, integrator.q, self.commands.rod_dipoles)
         self.step_torque_body = body
         if not any(body):
             torque = None
@@ -220,9 +226,9 @@ class Stepper:
             due = commands.next_event is not None and clock.k >= commands.next_event
             if due:
                 commands.process_due()
-            if due or commands.world_sum is not None:  # a world torque: re-expressed at every boundary
+            if due or commands.world_sum is not None or self.rods.active:  # re-expressed at every boundary
                 self.set_command_torque()
-            if commands.world_sum is not None:
+            if commands.world_sum is not None or self.rods.active:
                 stop = clock.k + 1
             else:
                 stop = end if commands.next_event is None else min(end, commands.next_event)
@@ -282,7 +288,7 @@ class Stepper:
         """A bound (N*m) on the torque norm over the next steps."""
         if self.gravity is not None:
             return self.observables.gravity_torque_bound()
-        return self.commands.norm_bound()
+        return self.commands.norm_bound() + self.rods.bound(self.clock.t)
 
     def rotation_failure(self, dt_ahead: float) -> str | None:
         """Why the state violates the rotation limit after ``dt_ahead`` s under the current torque.

@@ -1,8 +1,11 @@
-"""A scene's spacecraft parts, validated: reaction wheels, their torque schedule, the gravity gradient.
+"""A scene's spacecraft parts, validated: reaction wheels, their torque schedule, the gravity gradient,
+torque rods.
 
 The schema is :mod:`rigid_rot_sim.scene.spacecraft_schema`; the equations are in
-:mod:`rigid_rot_sim.core.wheels`. A scene with either part is run by the gyrostat
-integrators (:mod:`rigid_rot_sim.core.integrators.gyrostat`).
+:mod:`rigid_rot_sim.core.wheels` and :mod:`rigid_rot_sim.core.magnetorquer`. A scene with wheels or
+gravity gradient is run by the gyrostat integrators (:mod:`rigid_rot_sim.core.integrators.gyrostat`);
+the rods need the Earth's field, and every path refuses them until one runs it
+(:mod:`rigid_rot_sim.scene.features`).
 """
 
 from __future__ import annotations
@@ -14,6 +17,7 @@ from typing import Any
 
 import numpy as np
 
+from rigid_rot_sim.core.magnetorquer import Magnetorquers
 from rigid_rot_sim.core.orbit import KeplerOrbit
 from rigid_rot_sim.core.wheels import (
     DEFAULT_STICTION_SPEED,
@@ -24,9 +28,21 @@ from rigid_rot_sim.core.wheels import (
     wheel_model,
 )
 
-__all__ = ["ReactionWheel", "WheelSegment", "WheelTorqueSchedule", "GravityGradient", "Spacecraft", "parse_spacecraft"]
+__all__ = [
+    "ReactionWheel",
+    "WheelSegment",
+    "WheelTorqueSchedule",
+    "GravityGradient",
+    "TorqueRod",
+    "ROD_COMMAND_TOPIC",
+    "Spacecraft",
+    "parse_spacecraft",
+]
 
 Vector3 = tuple[float, float, float]
+
+#: The node's topic of the rods' commands (sensor_msgs/JointState), as ``lockstep.inputs`` may list it.
+ROD_COMMAND_TOPIC = "~/magnetorquer_command"
 
 
 @dataclass(frozen=True)
@@ -77,12 +93,28 @@ class GravityGradient:
 
 
 @dataclass(frozen=True)
+class TorqueRod:
+    """One magnetorquer: ``axis`` (unit, body frame), ``max_dipole`` (A*m^2), and its field at the
+    magnetometer per unit dipole, ``magnetometer_coupling`` (T/(A*m^2), body frame)."""
+
+    name: str
+    axis: Vector3
+    max_dipole: float
+    magnetometer_coupling: Vector3 = (0.0, 0.0, 0.0)
+
+
+@dataclass(frozen=True)
 class Spacecraft:
-    """The spacecraft parts of a scene (all empty for a plain rigid body)."""
+    """The spacecraft parts of a scene (all empty for a plain rigid body).
+
+    ``rods`` and ``residual_dipole`` (A*m^2, body frame) are ``actuators.magnetorquers``.
+    """
 
     wheels: tuple[ReactionWheel, ...] = ()
     wheel_schedule: WheelTorqueSchedule | None = None
     gravity_gradient: GravityGradient | None = None
+    rods: tuple[TorqueRod, ...] = ()
+    residual_dipole: Vector3 = (0.0, 0.0, 0.0)
 
     def __bool__(self) -> bool:
         return bool(self.wheels) or self.gravity_gradient is not None
@@ -90,6 +122,22 @@ class Spacecraft:
     @property
     def wheel_names(self) -> tuple[str, ...]:
         return tuple(w.name for w in self.wheels)
+
+    @property
+    def rod_names(self) -> tuple[str, ...]:
+        return tuple(r.name for r in self.rods)
+
+    def magnetorquers(self) -> Magnetorquers | None:
+        """The rods as a :class:`Magnetorquers` (G_t, limits, residual, coupling), None without rods."""
+        if not self.rods:
+            return None
+        return Magnetorquers(
+            axes=np.array([r.axis for r in self.rods]).T,
+            max_dipoles=np.array([r.max_dipole for r in self.rods]),
+            names=self.rod_names,
+            residual=np.array(self.residual_dipole),
+            coupling=np.array([r.magnetometer_coupling for r in self.rods]).T,
+        )
 
     def wheel_model(self, inertia: Any) -> WheelModel | None:
         """The wheels as a :class:`WheelModel` in the user body frame (None without wheels)."""
@@ -116,6 +164,8 @@ class Spacecraft:
             parts.append(f"a wheel-torque schedule of {len(self.wheel_schedule.segments)} segment(s)")
         if self.gravity_gradient is not None:
             parts.append(f"gravity gradient (orbit radius {self.gravity_gradient.radius:g} m)")
+        if self.rods:
+            parts.append(f"{len(self.rods)} torque rod(s) [{', '.join(self.rod_names)}]")
         return ", ".join(parts)
 
 
@@ -200,9 +250,31 @@ def parse_spacecraft(
         if "mu" in gg:
             raise ValueError("environment.gravity_gradient.mu: the scene's orbit is the Earth's (mu is its own)")
         gravity_gradient = GravityGradient(kepler.mu, kepler.a, kepler.i, kepler)
-    spacecraft = Spacecraft(tuple(wheels), schedule, gravity_gradient)
+    rods, residual = _parse_rods(actuators.get("magnetorquers"))
+    spacecraft = Spacecraft(tuple(wheels), schedule, gravity_gradient, rods, residual)
     try:
         spacecraft.wheel_model(inertia)
     except ValueError as exc:
         raise ValueError(f"actuators.reaction_wheels: {exc}") from None
     return spacecraft
+
+
+def _parse_rods(spec: Mapping[str, Any] | None) -> tuple[tuple[TorqueRod, ...], Vector3]:
+    """``actuators.magnetorquers`` (passed the schema): the rods and the residual dipole; ValueError naming the key."""
+    if not spec:
+        return (), (0.0, 0.0, 0.0)
+    rods: list[TorqueRod] = []
+    for i, rod in enumerate(spec["rods"]):
+        key = f"actuators.magnetorquers.rods[{i}]"
+        name = rod["name"].strip()
+        if name in (r.name for r in rods):
+            raise ValueError(f"{key}.name: {name!r} is listed twice")
+        axis = np.array(rod["axis"], dtype=float)
+        norm = float(np.linalg.norm(axis))
+        if not (math.isfinite(norm) and norm > 0.0):
+            raise ValueError(f"{key}.axis: must be a non-zero vector, got {rod['axis']}")
+        ux, uy, uz = (axis / norm).tolist()
+        cx, cy, cz = (float(v) for v in rod.get("magnetometer_coupling") or (0.0, 0.0, 0.0))
+        rods.append(TorqueRod(name, (ux, uy, uz), float(rod["max_dipole"]), (cx, cy, cz)))
+    rx, ry, rz = (float(v) for v in spec.get("residual_dipole") or (0.0, 0.0, 0.0))
+    return tuple(rods), (rx, ry, rz)

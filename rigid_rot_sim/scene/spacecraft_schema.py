@@ -1,7 +1,8 @@
-"""The scene sections of a spacecraft: ``actuators`` (reaction wheels, a wheel-torque schedule) and
+"""The scene sections of a spacecraft: ``actuators`` (reaction wheels, a wheel-torque schedule, torque rods) and
 ``environment`` (gravity gradient), as JSON Schema pieces of :data:`~rigid_rot_sim.scene.scene_schema.SCENE_SCHEMA`.
 
-The physics and its conventions (Basilisk's balanced wheels) are in :mod:`rigid_rot_sim.core.wheels`.
+The physics and its conventions (Basilisk's balanced wheels) are in :mod:`rigid_rot_sim.core.wheels`;
+the torque rods' (Basilisk's ``MtbEffector``) in :mod:`rigid_rot_sim.core.magnetorquer`.
 """
 
 from __future__ import annotations
@@ -12,10 +13,12 @@ from rigid_rot_sim.core import limits
 from rigid_rot_sim.scene.orbit import MAGNETIC_FIELD
 from rigid_rot_sim.scene.schema import array, mapping, nullable, number, text, vector
 
-__all__ = ["ACTUATORS", "ENVIRONMENT", "MAX_WHEELS", "EARTH_MU"]
+__all__ = ["ACTUATORS", "ENVIRONMENT", "MAX_WHEELS", "MAX_RODS", "EARTH_MU"]
 
 #: Most reaction wheels a scene may have.
 MAX_WHEELS = 16
+#: Most torque rods a scene may have.
+MAX_RODS = 16
 #: Earth's gravitational parameter, m^3/s^2 (WGS 84).
 EARTH_MU = 3.986004418e14
 
@@ -68,9 +71,37 @@ _WHEEL_SEGMENT = mapping(
     required=["start", "torques"],
 )
 
+_ROD = mapping(
+    "A torque rod (magnetorquer): its dipole lies along its axis (a column of Basilisk's G_t).",
+    {
+        "name": text("The rod's name (the JointState name of its command; unique)."),
+        "axis": vector("Dipole axis [x, y, z], body frame; normalised on load.", 3),
+        "max_dipole": number(
+            "Largest dipole, A*m^2: a larger command is clamped (and said on ~/sim_events).", exclusive_minimum=0.0
+        ),
+        "magnetometer_coupling": vector(
+            "The rod's own field at the magnetometer per unit dipole, T/(A*m^2), body frame (a column of the "
+            "3 x n coupling matrix; zero: no pollution).",
+            3,
+        ),
+    },
+    required=["name", "axis", "max_dipole"],
+)
+
+_MAGNETORQUERS = nullable(
+    mapping(
+        "Torque rods: tau = (G_t clamp(m) + residual) x b (rigid_rot_sim.core.magnetorquer).",
+        {
+            "rods": array("The rods, in the order of the dipole commands.", _ROD, min_items=1, max_items=MAX_RODS),
+            "residual_dipole": vector("The spacecraft's residual dipole, A*m^2, body frame.", 3),
+        },
+        required=["rods"],
+    )
+)
+
 ACTUATORS: dict[str, Any] = nullable(
     mapping(
-        "Actuators of a spacecraft: reaction wheels and their motor-torque schedule.",
+        "Actuators of a spacecraft: reaction wheels and their motor-torque schedule, torque rods.",
         {
             "reaction_wheels": array(
                 "The wheels, in the order of the wheel commands.", _WHEEL, min_items=1, max_items=MAX_WHEELS
@@ -82,6 +113,7 @@ ACTUATORS: dict[str, Any] = nullable(
                     required=["segments"],
                 )
             ),
+            "magnetorquers": _MAGNETORQUERS,
         },
     )
 )

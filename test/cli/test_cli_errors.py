@@ -84,3 +84,20 @@ def test_inertia_overflow_and_bad_body_files_are_one_line(tmp_path, capsys):
     code = cli.main(["inertia", str(huge)])
     out, err = capsys.readouterr()
     assert code == 2 and "more than 10000 items" in err and err.count("\n") == 1
+
+
+@pytest.mark.parametrize(
+    ("args", "expected"),
+    [
+        (["mtb", "mtq_x"], "expected NAME=DIPOLE"),
+        (["mtb", "mtq_x=nan"], "expected NAME=DIPOLE"),
+        (["mtb", "a=1", "a=2"], "a rod is named twice"),
+        (["wheels"], "give one motor torque per wheel"),
+        (["wheels", "1", "--zero", "2"], "--zero N takes no torque values"),
+    ],
+)
+def test_actuator_commands_refuse_bad_arguments_in_one_line(args, expected):
+    completed = subprocess.run(
+        [str(BIN / "rigid-rot"), *args], capture_output=True, text=True, timeout=60, stdin=subprocess.DEVNULL
+    )
+    assert_one_line_error(completed, expected)
