@@ -56,7 +56,7 @@ from typing import Any, NamedTuple
 import numpy as np
 
 from rigid_rot_sim.core import validation
-from rigid_rot_sim.core.validation import FloatArray
+from rigid_rot_sim.core.arrays import FloatArray
 
 
 def bcross_dipole(omega: Any, b_body: Any, gain: float) -> FloatArray:

@@ -38,7 +38,7 @@ from typing import Any
 import numpy as np
 
 from rigid_rot_sim.core import validation
-from rigid_rot_sim.core.validation import FloatArray
+from rigid_rot_sim.core.arrays import FloatArray
 
 #: The shortest rod axis accepted before normalising, so that a typo (an all-zero axis) is refused.
 MIN_AXIS_NORM = 1e-9
