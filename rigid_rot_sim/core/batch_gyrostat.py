@@ -22,12 +22,12 @@ speed saturation and friction act inside, as in the single-body kernel).
 from __future__ import annotations
 
 import math
-from typing import Any
 
 import numpy as np
 from numba import prange
 from numba.extending import register_jitable
 
+from rigid_rot_sim.core.arrays import ArrayLike
 from rigid_rot_sim.core.integrators.base import NonFiniteStateError
 from rigid_rot_sim.core.integrators.gyrostat import rk4_advance
 from rigid_rot_sim.core.integrators.status import NON_FINITE, OK
@@ -301,7 +301,7 @@ def _rk4_soa_serial(
         _rk4_soa_chunk(start, stop, dt, n_steps, y, moments, wheels, hub_inverse, external, commands, done, status)
 
 
-def hub_inverses(principal_moments: Any, wheels: WheelModel) -> np.ndarray:
+def hub_inverses(principal_moments: ArrayLike, wheels: WheelModel) -> np.ndarray:
     """``inv(I - sum J g g^T)`` (N, 3, 3), 1/(kg*m^2), for each row of ``principal_moments`` (N, 3).
 
     Each matrix is inverted as :class:`~rigid_rot_sim.core.integrators.gyrostat.GyrostatIntegrator`
@@ -315,17 +315,17 @@ def hub_inverses(principal_moments: Any, wheels: WheelModel) -> np.ndarray:
 
 
 def advance_gyrostats(
-    principal_moments: Any,
+    principal_moments: ArrayLike,
     wheels: WheelModel,
-    q: Any,
-    omega: Any,
-    wheel_speeds: Any,
-    wheel_commands: Any,
+    q: ArrayLike,
+    omega: ArrayLike,
+    wheel_speeds: ArrayLike,
+    wheel_commands: ArrayLike,
     dt: float,
     n_steps: int,
     *,
-    torque_body: Any = None,
-    hub_inverse: Any = None,
+    torque_body: ArrayLike | None = None,
+    hub_inverse: ArrayLike | None = None,
     layout: str = "soa",
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Advance N gyrostats by ``n_steps`` RK4 steps of ``dt`` (s); returns new ``(q, omega, wheel_speeds)``.

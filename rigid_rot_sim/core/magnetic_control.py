@@ -51,15 +51,15 @@ Example
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Any, NamedTuple
+from typing import NamedTuple
 
 import numpy as np
 
 from rigid_rot_sim.core import validation
-from rigid_rot_sim.core.arrays import FloatArray
+from rigid_rot_sim.core.arrays import ArrayLike, FloatArray
 
 
-def bcross_dipole(omega: Any, b_body: Any, gain: float) -> FloatArray:
+def bcross_dipole(omega: ArrayLike, b_body: ArrayLike, gain: float) -> FloatArray:
     """The B-cross dipole ``m = k (omega x b) / |b|^2`` (eq. (2)), A*m^2, body frame; zero where b = 0."""
     b = np.asarray(b_body, dtype=float)
     b2 = float(b @ b)
@@ -69,18 +69,18 @@ def bcross_dipole(omega: Any, b_body: Any, gain: float) -> FloatArray:
     return result
 
 
-def bdot_dipole(b_rate: Any, gain: float) -> FloatArray:
+def bdot_dipole(b_rate: ArrayLike, gain: float) -> FloatArray:
     """The B-dot dipole ``m = -k db/dt`` (eq. (1)), A*m^2, body frame; ``b_rate`` in T/s, k in A*m^2*s/T."""
     result: FloatArray = -gain * np.asarray(b_rate, dtype=float)
     return result
 
 
-def unloading_dipole(h_wheels: Any, b_body: Any, gain: float) -> FloatArray:
+def unloading_dipole(h_wheels: ArrayLike, b_body: ArrayLike, gain: float) -> FloatArray:
     """The unloading dipole ``m = K (h_w x b) / |b|^2`` (eq. (3)), A*m^2, body frame; K in 1/s."""
     return bcross_dipole(h_wheels, b_body, gain)
 
 
-def unloading_wheel_torque(wheel_axes: Any, rod_torque: Any) -> FloatArray:
+def unloading_wheel_torque(wheel_axes: ArrayLike, rod_torque: ArrayLike) -> FloatArray:
     """Wheel motor torques u (N*m, one per wheel) with ``sum u_i g_i = tau_rods`` (least squares).
 
     ``wheel_axes`` (n, 3): the wheels' unit axes as rows (:class:`rigid_rot_sim.core.wheels.WheelModel`'s
@@ -91,7 +91,7 @@ def unloading_wheel_torque(wheel_axes: Any, rod_torque: Any) -> FloatArray:
     return result
 
 
-def wheel_momentum(wheel_axes: Any, spin_inertias: Any, speeds: Any) -> FloatArray:
+def wheel_momentum(wheel_axes: ArrayLike, spin_inertias: ArrayLike, speeds: ArrayLike) -> FloatArray:
     """The wheels' momentum ``h_w = sum J_i Omega_i g_i`` in the body, N*m*s (:mod:`.wheels` eq. (1))."""
     result: FloatArray = np.asarray(wheel_axes, dtype=float).T @ (
         np.asarray(spin_inertias, dtype=float) * np.asarray(speeds, dtype=float)
@@ -154,7 +154,9 @@ class BDotState(NamedTuple):
         return cls(np.full(3, np.nan), np.zeros(3))
 
 
-def bdot_step(schedule: BDotSchedule, state: BDotState, index: int, b_measured: Any) -> tuple[BDotState, FloatArray]:
+def bdot_step(
+    schedule: BDotSchedule, state: BDotState, index: int, b_measured: ArrayLike
+) -> tuple[BDotState, FloatArray]:
     """Feed the magnetometer sample ``index`` (0, 1, ...) and get the body dipole to hold until the next one.
 
     The dipole is A*m^2 in the body frame (zero while sensing); split it on the rods with

@@ -33,25 +33,26 @@ Example
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from typing import Any
 
 import numpy as np
 
 from rigid_rot_sim.core import validation
-from rigid_rot_sim.core.arrays import FloatArray
+from rigid_rot_sim.core.arrays import ArrayLike, FloatArray
 
 #: The shortest rod axis accepted before normalising, so that a typo (an all-zero axis) is refused.
 MIN_AXIS_NORM = 1e-9
 
 
-def clamp_dipoles(dipoles: Any, max_dipoles: Any) -> FloatArray:
+def clamp_dipoles(dipoles: ArrayLike, max_dipoles: ArrayLike) -> FloatArray:
     """Each rod's dipole clamped to ``[-max_i, max_i]``, A*m^2, shape (n,)."""
     limit = np.asarray(max_dipoles, dtype=float)
     result: FloatArray = np.clip(np.asarray(dipoles, dtype=float), -limit, limit)
     return result
 
 
-def body_dipole(gt_matrix: Any, dipoles: Any, max_dipoles: Any, residual: Any = None) -> FloatArray:
+def body_dipole(
+    gt_matrix: ArrayLike, dipoles: ArrayLike, max_dipoles: ArrayLike, residual: ArrayLike | None = None
+) -> FloatArray:
     """The body's magnetic dipole ``m_B = G_t clamp(m) + m_res`` (eq. (1)), A*m^2, body frame, shape (3,)."""
     m_body: FloatArray = np.asarray(gt_matrix, dtype=float) @ clamp_dipoles(dipoles, max_dipoles)
     if residual is not None:
@@ -59,7 +60,13 @@ def body_dipole(gt_matrix: Any, dipoles: Any, max_dipoles: Any, residual: Any = 
     return m_body
 
 
-def torque(gt_matrix: Any, dipoles: Any, b_body: Any, max_dipoles: Any, residual: Any = None) -> FloatArray:
+def torque(
+    gt_matrix: ArrayLike,
+    dipoles: ArrayLike,
+    b_body: ArrayLike,
+    max_dipoles: ArrayLike,
+    residual: ArrayLike | None = None,
+) -> FloatArray:
     """The rods' torque ``tau = (G_t clamp(m) + m_res) x b`` (eqs. (1)-(2)), N*m, body frame, shape (3,).
 
     ``gt_matrix`` (3, n): rod axes as columns (unit vectors, body frame); ``dipoles`` (n,):
@@ -69,13 +76,13 @@ def torque(gt_matrix: Any, dipoles: Any, b_body: Any, max_dipoles: Any, residual
     return np.cross(body_dipole(gt_matrix, dipoles, max_dipoles, residual), np.asarray(b_body, dtype=float))
 
 
-def rod_field(coupling: Any, dipoles: Any, max_dipoles: Any) -> FloatArray:
+def rod_field(coupling: ArrayLike, dipoles: ArrayLike, max_dipoles: ArrayLike) -> FloatArray:
     """The rods' own field at the magnetometer ``C clamp(m)`` (eq. (3)), T, body frame, shape (3,)."""
     result: FloatArray = np.asarray(coupling, dtype=float) @ clamp_dipoles(dipoles, max_dipoles)
     return result
 
 
-def allocate(gt_matrix: Any, m_body: Any, max_dipoles: Any) -> FloatArray:
+def allocate(gt_matrix: ArrayLike, m_body: ArrayLike, max_dipoles: ArrayLike) -> FloatArray:
     """Rod dipoles (n,) that make the body dipole ``m_body`` (A*m^2), scaled to respect every limit.
 
     The least-squares split ``pinv(G_t) m_B`` (exact for three or more independent rods), then one
@@ -133,19 +140,21 @@ class Magnetorquers:
         """The number of rods."""
         return int(self.axes.shape[1])
 
-    def torque(self, dipoles: Any, b_body: Any) -> FloatArray:
+    def torque(self, dipoles: ArrayLike, b_body: ArrayLike) -> FloatArray:
         """The torque (N*m, body frame) of the commanded ``dipoles`` (n,) in the field ``b_body`` (T)."""
         return torque(self.axes, dipoles, b_body, self.max_dipoles, self.residual)
 
-    def clamped(self, dipoles: Any) -> tuple[FloatArray, list[int]]:
+    def clamped(self, dipoles: ArrayLike) -> tuple[FloatArray, list[int]]:
         """The dipoles the rods make, and the indices of the rods the clamp limited (for ``~/sim_events``)."""
         wanted = validation.finite_array("dipoles", dipoles, (self.count,))
         made = clamp_dipoles(wanted, self.max_dipoles)
         return made, [i for i in range(self.count) if made[i] != wanted[i]]
 
-    def measured_field(self, b_body: Any, dipoles: Any) -> FloatArray:
+    def measured_field(self, b_body: ArrayLike, dipoles: ArrayLike) -> FloatArray:
         """The field a body-mounted magnetometer sees (eq. (3)): the true field plus the rods' own, T."""
-        return np.asarray(b_body, dtype=float) + rod_field(self.coupling, dipoles, self.max_dipoles)
+        assert self.coupling is not None  # zeros by default (__post_init__)
+        measured: FloatArray = np.asarray(b_body, dtype=float) + rod_field(self.coupling, dipoles, self.max_dipoles)
+        return measured
 
 
 def _frozen(value: np.ndarray) -> np.ndarray:
@@ -154,7 +163,7 @@ def _frozen(value: np.ndarray) -> np.ndarray:
     return array
 
 
-def rod_duty(dipoles: Any, max_dipoles: Any) -> FloatArray:
+def rod_duty(dipoles: ArrayLike, max_dipoles: ArrayLike) -> FloatArray:
     """Each rod's duty ``|clamp(m_i)| / max_i`` in [0, 1] (the PWM fraction a driver would run)."""
     limit = np.asarray(max_dipoles, dtype=float)
     result: FloatArray = np.abs(clamp_dipoles(dipoles, limit)) / limit
