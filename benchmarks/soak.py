@@ -126,7 +126,10 @@ class Watch:
         wall = time.monotonic() - self.start
         if self.samples and wall - self.samples[-1][0] < SAMPLE:
             return
-        self.samples.append((wall, rss_mib(self.pid), self.graph.sim_time))
+        rss = rss_mib(self.pid)
+        if math.isnan(rss):
+            return  # the process has ended (a zombie has no VmRSS): its last sample stands
+        self.samples.append((wall, rss, self.graph.sim_time))
         if wall >= 60.0 * (self.printed + 1):
             self.printed += 1
             earlier = next((s for s in self.samples if s[0] >= wall - 60.0), self.samples[0])
