@@ -336,8 +336,10 @@ def soak_commands(minutes: float, work: Path, viewers: bool) -> None:
             port = text.split("Foxglove live server ws://127.0.0.1:", 1)[1].split()[0].rstrip(")")
             foxglove = FoxgloveWatcher(f"ws://127.0.0.1:{int(port)}")
             foxglove.start()
-            page = next((line for line in text.splitlines() if "web page http" in line), "no web page line")
-            print(f"  {label} {page.split(']: ', 1)[-1][:120]}", flush=True)
+            page = (
+                "web page http" + text.split("web page http", 1)[-1].split(";", 1)[0] if "web page http" in text else ""
+            )
+            print(f"  {label} {page or 'no web page line'}", flush=True)
         watch = Watch(label, sim.pid, graph, minutes)
         message = WrenchStamped()
         message.header.frame_id = "base_link"
