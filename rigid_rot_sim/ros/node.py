@@ -64,6 +64,7 @@ next turn is otherwise timed by the turn's timeout. ``dt`` is fixed in lockstep.
 
 from __future__ import annotations
 
+import os
 import signal
 import sys
 import threading
@@ -548,6 +549,30 @@ def _serve(executor: SingleThreadedExecutor, stop: threading.Event) -> None:
         pass
 
 
+#: A diagnostic, off unless set: a directory where the node dumps tracemalloc snapshots (:func:`trace_memory`).
+TRACE_MEMORY_ENV = "RIGID_ROT_TRACEMALLOC"
+
+
+def trace_memory(directory: str) -> None:
+    """Trace Python's allocations (tracemalloc, 8 frames) and dump a snapshot into ``directory`` on SIGUSR1
+    and at exit (``snapshot_<n>.tracemalloc``, renamed into place once whole): what grew between two of them
+    is what benchmarks/firehose_memory.py prints. Off by default; tracing slows the node down."""
+    import atexit
+    import itertools
+    import tracemalloc
+
+    tracemalloc.start(8)
+    numbers = itertools.count(1)
+
+    def dump(*_: object) -> None:
+        path = os.path.join(directory, f"snapshot_{next(numbers)}.tracemalloc")
+        tracemalloc.take_snapshot().dump(path + ".part")
+        os.replace(path + ".part", path)
+
+    signal.signal(signal.SIGUSR1, dump)
+    atexit.register(dump)
+
+
 def main(args: list[str] | None = None, overrides: Sequence[Parameter] = ()) -> int:
     """Run the node until shut down or until the scene's duration is reached (exit code 0).
 
@@ -562,6 +587,8 @@ def main(args: list[str] | None = None, overrides: Sequence[Parameter] = ()) -> 
         return node
 
     ensure_ament_prefix_path()  # the console script works without activating the venv
+    if os.environ.get(TRACE_MEMORY_ENV):
+        trace_memory(os.environ[TRACE_MEMORY_ENV])
     try:
         init_ros(args)
     except RuntimeError as exc:  # rclpy's RCLError: e.g. an unparsable --ros-args rule
