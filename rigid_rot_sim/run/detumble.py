@@ -17,6 +17,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from rigid_rot_sim.core import magnetic_control, magnetorquer
+from rigid_rot_sim.core.steps import whole_steps
 from rigid_rot_sim.run.sensors import SensorSuite
 from rigid_rot_sim.run.simulator import Simulator
 from rigid_rot_sim.scene.scene import Scene
@@ -60,8 +61,8 @@ def run_bdot(
     sim = Simulator(scene)
     sensors = SensorSuite(scene.sensors, field=scene.orbit_field())
     period = 1.0 / magnetometer.rate
-    steps = round(period / sim.clock.dt)
-    if steps < 1 or abs(steps * sim.clock.dt - period) > 1e-9 * period:
+    steps = whole_steps(period, sim.clock.dt)
+    if steps is None:
         raise ValueError(f"{scene.name}: dt {sim.clock.dt:g} s does not divide the magnetometer's period {period:g} s")
     schedule = magnetic_control.BDotSchedule(gain, period, cycle_samples, sensing_samples)
     state = magnetic_control.BDotState.initial()
