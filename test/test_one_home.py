@@ -12,8 +12,7 @@ spelling looks like:
 * compiling a kernel (``core/jit.py``): no ``numba.njit`` / ``numba.jit`` outside it (use
   :func:`~rigid_rot_sim.core.jit.compiled`, which caches and refuses fastmath).
 
-``PENDING`` lists a second home another branch is removing (each entry must still be found, so the list
-only shrinks); :func:`test_each_rule_finds_a_planted_second_home` shows each rule failing on one.
+:func:`test_each_rule_finds_a_planted_second_home` shows each rule failing on one.
 """
 
 from __future__ import annotations
@@ -26,8 +25,6 @@ import pytest
 
 PACKAGE = Path(__file__).resolve().parents[1] / "rigid_rot_sim"
 
-#: rule -> files (relative to the package) still holding a second home, each removed on another branch.
-PENDING: dict[str, set[str]] = {}
 
 
 def _names(node: ast.AST) -> set[str]:
@@ -110,15 +107,8 @@ def second_homes(rule: str) -> dict[str, list[str]]:
 @pytest.mark.parametrize("rule", sorted(RULES))
 def test_each_rule_has_one_home(rule: str):
     found = second_homes(rule)
-    new = [hit for name, hits in found.items() if name not in PENDING.get(rule, set()) for hit in hits]
+    new = [hit for hits in found.values() for hit in hits]
     assert not new, f"a second home of the {rule} rule (its home is {RULES[rule][0]}):\n" + "\n".join(new)
-
-
-@pytest.mark.parametrize("rule", sorted(PENDING))
-def test_pending_second_homes_are_still_there(rule: str):
-    """A pending entry that was fixed leaves the list (the list only shrinks)."""
-    gone = sorted(PENDING[rule] - set(second_homes(rule)))
-    assert not gone, f"no longer a second home of the {rule} rule: remove {gone} from PENDING"
 
 
 PLANTED = {
