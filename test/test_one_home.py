@@ -26,7 +26,6 @@ import pytest
 PACKAGE = Path(__file__).resolve().parents[1] / "rigid_rot_sim"
 
 
-
 def _names(node: ast.AST) -> set[str]:
     """Every name and attribute name in an expression."""
     found = set()
