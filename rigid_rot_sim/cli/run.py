@@ -145,7 +145,7 @@ def check_conflicts(explicit: dict[str, tuple[str, str | float]], ros_args: list
     for path in files:
         overridden = sorted(_params_file_names(path) & explicit.keys())
         if overridden:
-            options = ", ".join(sorted({explicit[name][0] for name in overridden}, key=lambda o: o != "SCENE"))
+            options = ", ".join(sorted({explicit[name][0] for name in overridden}, key=lambda o: (o != "SCENE", o)))
             notes.append(f"{options} override {path}'s {', '.join(overridden)} (the command line wins)")
     return notes
 

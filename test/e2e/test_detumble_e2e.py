@@ -100,7 +100,9 @@ def test_bdot_in_lockstep_repeats_bit_for_bit_slows_the_tumble_and_resimulates(l
     assert _rate(first[end]) < _rate(first[start]) - math.radians(0.1), (_rate(first[start]), _rate(first[end]))
     events = [decode_event(e) for _, e in BagReader(bag).decoded([f"{NODE}/sim_events"])]
     rods = [e for e in events if e.kind == "rod_dipoles"]
-    assert len(rods) == round(DURATION / 0.1) + 1  # one command per turn, t = 0 included
+    # one command per turn that steps, t = 0 included; the answer to the turn at the duration itself acts on no
+    # step, and the run may end before it is taken
+    assert round(DURATION / 0.1) <= len(rods) <= round(DURATION / 0.1) + 1, len(rods)
     # the controller scales its dipoles to the rods' limits: the node never had to clamp, and the rods worked
     assert all(e.values["clamped"] == "[]" for e in rods)
     assert max(abs(v) for e in rods for v in e.vector("dipoles")) == 0.2

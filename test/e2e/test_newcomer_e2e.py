@@ -26,7 +26,7 @@ def test_run_options_win_over_a_params_file(tmp_path):
     assert done.returncode == 0, done.stderr
     assert "scene 'free_tumble'" in done.stderr and "duration 0.5 s" in done.stderr
     assert "duration reached: t = 0.5 s" in done.stderr
-    assert "SCENE, --record, --duration override" in done.stderr  # said, not silent
+    assert "SCENE, --duration, --record override" in done.stderr  # said, not silent (SCENE first, then by name)
     from rigid_rot_sim.recording.reader import BagReader
 
     metadata = BagReader(bag).metadata
