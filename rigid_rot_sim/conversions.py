@@ -154,8 +154,13 @@ def compute_inertia_response_to_mass_properties(response: ComputeInertia.Respons
 
 def seconds_to_time(seconds: float) -> Time:
     """Sim time (s, >= 0) -> builtin_interfaces/Time, rounded to the nanosecond."""
-    total_ns = int(round(float(seconds) * 1e9))
-    return Time(sec=total_ns // 1_000_000_000, nanosec=total_ns % 1_000_000_000)
+    return set_time(Time(), seconds)
+
+
+def set_time(stamp: Time, seconds: float) -> Time:
+    """Write sim time (s, >= 0) into a builtin_interfaces/Time in place, rounded to the nanosecond; returns it."""
+    stamp.sec, stamp.nanosec = divmod(int(round(float(seconds) * 1e9)), 1_000_000_000)
+    return stamp
 
 
 def array_to_vector3(values) -> Vector3:
@@ -189,7 +194,7 @@ def fill_rigid_body_state(
     msg: RigidBodyState, snapshot: StateSnapshot, world_frame: str, body_frame: str
 ) -> RigidBodyState:
     """Write every field of a RigidBodyState from a snapshot (stamp: sim time); returns it."""
-    msg.header.stamp = seconds_to_time(snapshot.t)
+    set_time(msg.header.stamp, snapshot.t)
     msg.header.frame_id = world_frame
     msg.child_frame_id = body_frame
     q = msg.orientation
@@ -224,9 +229,13 @@ def snapshot_to_orientation(snapshot: StateSnapshot, world_frame: str) -> Quater
 
 def vector_stamped(values, t: float, frame_id: str) -> Vector3Stamped:
     """ndarray (3,) at sim time t (s) in frame_id -> Vector3Stamped."""
-    msg = Vector3Stamped()
+    return fill_vector_stamped(Vector3Stamped(), values, t, frame_id)
+
+
+def fill_vector_stamped(msg: Vector3Stamped, values, t: float, frame_id: str) -> Vector3Stamped:
+    """Write every field of a Vector3Stamped: ndarray (3,) at sim time t (s) in frame_id; returns it."""
     _set_vector3(msg.vector, values)
-    msg.header.stamp = seconds_to_time(t)
+    set_time(msg.header.stamp, t)
     msg.header.frame_id = frame_id
     return msg
 

@@ -8,8 +8,10 @@ SCENE is a path, or the name of a scene shipped in config/scenes (found through 
 index: the installed share directory, or the checkout when not installed). The options become
 node parameters (``scene``, ``duration``, ``real_time_factor``, ``integrator``, ``dt``,
 ``record_path``, ``record_log_time``, ``foxglove``, ``web``); anything after ``--ros-args`` goes to ROS
-unchanged, so a params file,
-``-p`` or remappings work as with ``ros2 run`` (and win over the options). ``--echo PERIOD`` adds a subscriber
+unchanged, so a params file, ``-p`` or remappings work as with ``ros2 run``. An option given on the
+command line wins over a params file's value (said on stderr), as an explicit argument does in
+ROS tools; the same parameter given again with ``-p`` is refused (exit code 2, naming both).
+``--echo PERIOD`` adds a subscriber
 in the same process that prints the received ~/state every PERIOD s of sim time: what
 the node published, through DDS. Exit code 0 when the duration is reached or on Ctrl-C.
 """
@@ -17,13 +19,20 @@ the node published, through DDS. Exit code 0 when the duration is reached or on 
 from __future__ import annotations
 
 import argparse
+import itertools
 import os
-from typing import Any
+import sys
+from typing import TYPE_CHECKING, Any
+
+import yaml
 
 from rigid_rot_sim.cli.argtypes import nonnegative_number, positive_number
 from rigid_rot_sim.cli.ros_args import add_ros_args
 from rigid_rot_sim.recording import LOG_TIME_BASES
 from rigid_rot_sim.share import resolve_scene, scene_search_dirs  # noqa: F401 (both: API of this module)
+
+if TYPE_CHECKING:
+    from rclpy.parameter import Parameter
 
 
 def add_parser(subparsers) -> None:
@@ -66,39 +75,107 @@ def add_parser(subparsers) -> None:
     parser.set_defaults(handler=run)
 
 
-def node_arguments(args: argparse.Namespace) -> list[str]:
-    """The argv for the node: ``--ros-args -p name:=value ...`` plus the pass-through arguments."""
+def explicit_parameters(args: argparse.Namespace) -> dict[str, tuple[str, str | float]]:
+    """The parameters given by ``rigid-rot run``'s own options: name -> (option, value).
+
+    They win over ``--ros-args`` (a params file's value of the same name is overridden); the
+    same parameter given again with ``-p`` is a conflict (:func:`check_conflicts`).
+    """
     from rigid_rot_sim.ros import parameters as p  # the names, from the node's table (imports rclpy)
 
-    options: list[tuple[p.ParamSpec[Any], str | None]] = [
-        (p.SCENE, resolve_scene(args.scene)),
-        (p.DURATION, None if args.duration is None else repr(float(args.duration))),
-        (p.REAL_TIME_FACTOR, None if args.real_time_factor is None else repr(float(args.real_time_factor))),
-        (p.INTEGRATOR, args.integrator),
-        (p.DT, None if args.dt is None else repr(float(args.dt))),
-        (p.RECORD_PATH, None if args.record is None else os.path.abspath(args.record)),
-        (p.RECORD_LOG_TIME, args.record_log_time),
-        (p.FOXGLOVE, args.foxglove),
-        (p.WEB, args.web),
+    options: list[tuple[str, p.ParamSpec[Any], str | float | None]] = [
+        ("SCENE", p.SCENE, resolve_scene(args.scene)),  # ValueError for an unknown scene, before ROS starts
+        ("--duration", p.DURATION, None if args.duration is None else float(args.duration)),
+        (
+            "--realtime-factor",
+            p.REAL_TIME_FACTOR,
+            None if args.real_time_factor is None else float(args.real_time_factor),
+        ),
+        ("--integrator", p.INTEGRATOR, args.integrator),
+        ("--dt", p.DT, None if args.dt is None else float(args.dt)),
+        ("--record", p.RECORD_PATH, None if args.record is None else os.path.abspath(args.record)),
+        ("--record-log-time", p.RECORD_LOG_TIME, args.record_log_time),
+        ("--foxglove", p.FOXGLOVE, args.foxglove),
+        ("--web", p.WEB, args.web),
     ]
-    argv = ["rigid_rot_sim_node", "--ros-args"]
-    for spec, value in options:
-        if value is not None:
-            argv += ["-p", f"{spec.name}:={value}"]
-    # after ours, so that a params file or -p given here overrides the options above
-    return argv + list(args.ros_args or [])
+    return {spec.name: (option, value) for option, spec, value in options if value is not None}
+
+
+def _ros_parameter_rules(ros_args: list[str]) -> list[tuple[str, str]]:
+    """The ``-p [node:]name:=value`` rules of ``ros_args``, as (name, rule)."""
+    rules = []
+    for flag, rule in itertools.pairwise(ros_args):
+        if flag in ("-p", "--param") and ":=" in rule:
+            rules.append((rule.split(":=", 1)[0].rsplit(":", 1)[-1], rule))
+    return rules
+
+
+def _params_file_names(path: str) -> set[str]:
+    """The parameter names a params file gives any node (dotted for nested ones); empty if unreadable."""
+    try:
+        with open(path, encoding="utf-8") as stream:
+            document = yaml.safe_load(stream)
+    except (OSError, yaml.YAMLError):
+        return set()  # the node reports it as rcl does
+    names: set[str] = set()
+
+    def walk(prefix: str, mapping: Any) -> None:
+        for key, value in mapping.items():
+            if isinstance(value, dict):
+                walk(f"{prefix}{key}.", value)
+            else:
+                names.add(f"{prefix}{key}")
+
+    for section in (document or {}).values() if isinstance(document, dict) else ():
+        parameters = section.get("ros__parameters") if isinstance(section, dict) else None
+        if isinstance(parameters, dict):
+            walk("", parameters)
+    return names
+
+
+def check_conflicts(explicit: dict[str, tuple[str, str | float]], ros_args: list[str]) -> list[str]:
+    """ValueError naming an option also given as ``-p``; the notes on params files' values the options override."""
+    for name, rule in _ros_parameter_rules(ros_args):
+        if name in explicit:
+            option, value = explicit[name]
+            shown = option if option == "SCENE" else f"{option} {value}"
+            raise ValueError(f"{shown} and --ros-args -p {rule} both set the {name} parameter: give one")
+    notes = []
+    files = [path for flag, path in itertools.pairwise(ros_args) if flag == "--params-file"]
+    for path in files:
+        overridden = sorted(_params_file_names(path) & explicit.keys())
+        if overridden:
+            options = ", ".join(sorted({explicit[name][0] for name in overridden}, key=lambda o: o != "SCENE"))
+            notes.append(f"{options} override {path}'s {', '.join(overridden)} (the command line wins)")
+    return notes
+
+
+def node_arguments(args: argparse.Namespace) -> tuple[list[str], list[Parameter]]:
+    """The node's argv (``--ros-args`` as given) and the options' parameters, which win over it.
+
+    ValueError for an unknown scene or an option that ``-p`` gives again; a params file's
+    value that an option overrides is said on stderr.
+    """
+    from rclpy.parameter import Parameter
+
+    explicit = explicit_parameters(args)
+    ros_args = list(args.ros_args or [])
+    for note in check_conflicts(explicit, ros_args):
+        print(f"rigid-rot run: {note}", file=sys.stderr, flush=True)
+    argv = ["rigid_rot_sim_node", "--ros-args", *ros_args]
+    return argv, [Parameter(name, value=value) for name, (_, value) in explicit.items()]
 
 
 def run(args: argparse.Namespace) -> int:
-    argv = node_arguments(args)  # ValueError for an unknown scene, before ROS starts
+    argv, overrides = node_arguments(args)  # ValueError for an unknown scene or a conflict, before ROS starts
     if args.echo is None:
         from rigid_rot_sim.ros.node import main
 
-        return main(argv)
-    return _run_with_echo(argv, args.echo)
+        return main(argv, overrides)
+    return _run_with_echo(argv, overrides, args.echo)
 
 
-def _run_with_echo(argv: list[str], period: float) -> int:
+def _run_with_echo(argv: list[str], overrides: list[Parameter], period: float) -> int:
     """The node plus a subscriber to its ~/state in one executor, printing every ``period`` s."""
     import rclpy
     from rclpy.node import Node
@@ -134,7 +211,7 @@ def _run_with_echo(argv: list[str], period: float) -> int:
 
     def start(nodes: list[Node]) -> RigidRotSimNode:
         nonlocal state_topic
-        node = RigidRotSimNode()
+        node = RigidRotSimNode(parameter_overrides=overrides)
         nodes.append(node)
         echo = rclpy.create_node("rigid_rot_echo")
         nodes.append(echo)

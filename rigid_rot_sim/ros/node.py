@@ -64,11 +64,12 @@ next turn is otherwise timed by the turn's timeout. ``dt`` is fixed in lockstep.
 
 from __future__ import annotations
 
+import os
 import signal
 import sys
 import threading
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from typing import TYPE_CHECKING, Any
 
 import rclpy
@@ -76,6 +77,7 @@ from rclpy.duration import Duration
 from rclpy.exceptions import NameValidationException, ParameterException
 from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
 from rclpy.node import Node
+from rclpy.parameter import Parameter
 from rclpy.signals import SignalHandlerOptions
 from rclpy.subscription import Subscription
 from rclpy.time_source import CLOCK_TOPIC
@@ -523,25 +525,53 @@ def _serve(executor: SingleThreadedExecutor, stop: threading.Event) -> None:
         pass
 
 
-def _start_node(nodes: list[Node]) -> RigidRotSimNode:
-    node = RigidRotSimNode()
-    nodes.append(node)
-    return node
+#: A diagnostic, off unless set: a directory where the node dumps tracemalloc snapshots (:func:`trace_memory`).
+TRACE_MEMORY_ENV = "RIGID_ROT_TRACEMALLOC"
 
 
-def main(args: list[str] | None = None) -> int:
+def trace_memory(directory: str) -> None:
+    """Trace Python's allocations (tracemalloc, 8 frames) and dump a snapshot into ``directory`` on SIGUSR1
+    and at exit (``snapshot_<n>.tracemalloc``, renamed into place once whole): what grew between two of them
+    is what benchmarks/firehose_memory.py prints. Off by default; tracing slows the node down."""
+    import atexit
+    import itertools
+    import tracemalloc
+
+    tracemalloc.start(8)
+    numbers = itertools.count(1)
+
+    def dump(*_: object) -> None:
+        path = os.path.join(directory, f"snapshot_{next(numbers)}.tracemalloc")
+        tracemalloc.take_snapshot().dump(path + ".part")
+        os.replace(path + ".part", path)
+
+    signal.signal(signal.SIGUSR1, dump)
+    atexit.register(dump)
+
+
+def main(args: list[str] | None = None, overrides: Sequence[Parameter] = ()) -> int:
     """Run the node until shut down or until the scene's duration is reached (exit code 0).
 
+    ``overrides``: start-up values that win over ``--ros-args`` (rclpy applies a Node's
+    ``parameter_overrides`` after every ``-p`` and params file): ``rigid-rot run``'s own options.
     A bad scene, parameter or ROS argument: one line on stderr, exit code 2.
     """
+
+    def start_node(nodes: list[Node]) -> RigidRotSimNode:
+        node = RigidRotSimNode(parameter_overrides=list(overrides))
+        nodes.append(node)
+        return node
+
     ensure_ament_prefix_path()  # the console script works without activating the venv
+    if os.environ.get(TRACE_MEMORY_ENV):
+        trace_memory(os.environ[TRACE_MEMORY_ENV])
     try:
         init_ros(args)
     except RuntimeError as exc:  # rclpy's RCLError: e.g. an unparsable --ros-args rule
         print(startup_error_line(RuntimeError(f"bad ROS arguments: {exc}")), file=sys.stderr, flush=True)
         return 2
     try:
-        run_until_finished(_start_node)
+        run_until_finished(start_node)
     except STARTUP_ERRORS as exc:  # SceneError, a scene the integrator cannot run, a bad parameter
         print(startup_error_line(exc), file=sys.stderr, flush=True)
         return 2

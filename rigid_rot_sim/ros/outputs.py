@@ -79,6 +79,17 @@ OUTPUTS: dict[str, tuple[Any, MessageBuilder | None]] = {
 }
 assert tuple(OUTPUTS) == OUTPUT_NAMES, "one entry per scene output, in the scene's order"
 
+#: The outputs published at the step rate in a typical run, refilled in place instead of built anew
+#: (builder's twin: every field written, so the bytes are those of a fresh message; rclpy serialises
+#: at publish and no listener keeps the message): output name -> filler.
+REFILLED: dict[str, Callable[[Any, StateSnapshot, Outputs], Any]] = {
+    "state": lambda m, s, o: conversions.fill_rigid_body_state(m, s, o.frames.world, o.frames.body),
+    "angular_velocity": lambda m, s, o: conversions.fill_vector_stamped(m, s.angular_velocity_body, s.t, o.frames.body),
+    "angular_momentum": lambda m, s, o: conversions.fill_vector_stamped(
+        m, s.angular_momentum_world, s.t, o.frames.world
+    ),
+}
+
 #: A sensor reading's message from the sensors, the state, the frames and the ground-truth variance.
 SensorBuilder = Callable[[SensorSuite, StateSnapshot, Frames, float], Any]
 
@@ -171,6 +182,8 @@ class Outputs(SimulationObserver):
             self.publishers["tf_static"] = node.create_publisher(TFMessage, "/tf_static", TF_STATIC_QOS)
         self.publishers["mass_properties"] = node.create_publisher(InertiaStamped, "~/mass_properties", LATCHED_QOS)
         self.publishers["rejected"] = node.create_publisher(RejectedCommand, "~/rejected", REJECTED_QOS)
+        #: The one message of each REFILLED output built (refilled at each publish).
+        self.refilled = {name: OUTPUTS[name][0]() for name in REFILLED if name in self.publishers}
 
     def _offered(self) -> list[str]:
         """The outputs this scene can have (``top_state`` only with gravity, ``wheels`` only with reaction
@@ -263,6 +276,8 @@ class Outputs(SimulationObserver):
             if reading is not None:
                 assert self.sensors is not None  # readings are built from the sensors
                 self.publish(name, reading(self.sensors, snapshot, self.frames, self.ground_truth_variance))
+            elif name in self.refilled:
+                self.publish(name, REFILLED[name](self.refilled[name], snapshot, self))
             else:
                 builder = OUTPUTS[name][1]
                 assert builder is not None  # a sensor's output is built only with its sensor

@@ -46,13 +46,15 @@ def test_inertia_ros_args_need_the_service():
     assert "--ros-args needs --service" in done.stderr
 
 
-def test_run_passes_its_options_then_the_ros_args_to_the_node():
+def test_run_passes_the_ros_args_as_given_and_its_options_as_overrides_that_win():
     from rigid_rot_sim.cli import build_parser
     from rigid_rot_sim.cli.run import node_arguments
 
     args = build_parser("run").parse_args(
         ["run", "free_tumble", "--record", "x.mcap", "--record-log-time", "wall", "--ros-args", "-p", "body_frame:=sat"]
     )
-    argv = node_arguments(args)
-    assert argv[:2] == ["rigid_rot_sim_node", "--ros-args"]
-    assert "record_log_time:=wall" in argv and argv[-2:] == ["-p", "body_frame:=sat"]  # ours first, theirs win
+    argv, overrides = node_arguments(args)
+    assert argv == ["rigid_rot_sim_node", "--ros-args", "-p", "body_frame:=sat"]
+    values = {o.name: o.value for o in overrides}
+    assert values["record_log_time"] == "wall" and values["record_path"] == os.path.abspath("x.mcap")
+    assert values["scene"].endswith("free_tumble.yaml") and "duration" not in values  # only what was given

@@ -193,8 +193,8 @@ def test_run_web_becomes_the_nodes_web_parameter():
     from rigid_rot_sim.cli import build_parser
     from rigid_rot_sim.cli.run import node_arguments
 
-    argv = node_arguments(build_parser("run").parse_args(["run", "free_tumble", "--web", "127.0.0.1:8080"]))
-    assert argv[argv.index("web:=127.0.0.1:8080") - 1] == "-p"
+    _, overrides = node_arguments(build_parser("run").parse_args(["run", "free_tumble", "--web", "127.0.0.1:8080"]))
+    assert {o.name: o.value for o in overrides}["web"] == "127.0.0.1:8080"
     scene = parse_scene_text("body: {principal_moments: [1.0, 2.0, 3.0]}\nweb: 8080\n")
     assert scene.web == "8080"  # the scene key, the parameter's default
 
