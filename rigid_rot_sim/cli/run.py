@@ -169,7 +169,7 @@ def node_arguments(args: argparse.Namespace) -> tuple[list[str], list[Parameter]
 def run(args: argparse.Namespace) -> int:
     argv, overrides = node_arguments(args)  # ValueError for an unknown scene or a conflict, before ROS starts
     if args.echo is None:
-        from rigid_rot_sim.ros.node import main
+        from rigid_rot_sim.ros.node_process import main
 
         return main(argv, overrides)
     return _run_with_echo(argv, overrides, args.echo)
@@ -182,7 +182,8 @@ def _run_with_echo(argv: list[str], overrides: list[Parameter], period: float) -
 
     from rigid_rot_msgs.msg import RigidBodyState
     from rigid_rot_sim import conversions
-    from rigid_rot_sim.ros.node import STARTUP_ERRORS, RigidRotSimNode, init_ros, run_until_finished
+    from rigid_rot_sim.ros.node import RigidRotSimNode
+    from rigid_rot_sim.ros.node_process import STARTUP_ERRORS, init_ros, run_until_finished
     from rigid_rot_sim.ros.qos import STATE_QOS
 
     try:
