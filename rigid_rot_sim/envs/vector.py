@@ -24,7 +24,7 @@ from gymnasium.vector import AutoresetMode, VectorEnv
 from gymnasium.vector.utils import batch_space
 
 from rigid_rot_sim.envs.attitude import action_space, make_task, observation_space
-from rigid_rot_sim.envs.task import Episode, SensorSuite, SlewBodies
+from rigid_rot_sim.envs.task import Episode, ObservationSensors, SlewBodies
 
 __all__ = ["AttitudeControlVectorEnv", "WheelAttitudeControlVectorEnv", "slot_seeds"]
 
@@ -49,7 +49,7 @@ class AttitudeControlVectorEnv(VectorEnv):
         self,
         num_envs: int = 1,
         render_mode: str | None = None,
-        sensors: SensorSuite | bool | None = None,
+        sensors: ObservationSensors | bool | None = None,
         **kwargs: Any,
     ) -> None:
         if int(num_envs) != num_envs or num_envs < 1:
