@@ -5,7 +5,7 @@
 
 rclpy turns a request into Python objects in the executor thread that takes it (1e6
 geometry_msgs/Point: ~2.4 s), and only then does the callback refuse it (more than
-``limits.MAX_POINT_MASSES``). The node (``rigid_rot_sim.ros.node_process.main``) spins a
+``limits.MAX_POINT_MASSES``). The node (``rigid_rot_sim.ros.node.main``) spins a
 MultiThreadedExecutor with ``~/compute_inertia`` in a callback group of its own; the baseline,
 measured in the same run, is the same node spun by a SingleThreadedExecutor (the main loop
 before issue 19).

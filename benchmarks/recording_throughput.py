@@ -14,7 +14,7 @@
 
 3. The node itself (rclpy, in-process, no subscriber): torque_driven scene, rk4 at
    1 kHz, real-time factor 0, every output at its scene rate (100 Hz), spun like
-   ``rigid_rot_sim.ros.node_process.main`` until ``--sim-seconds`` of sim time are done, with
+   ``rigid_rot_sim.ros.node.main`` until ``--sim-seconds`` of sim time are done, with
    ``record_path`` unset and set.
 
 Figures are printed, never asserted.

@@ -90,10 +90,10 @@ def rigid_rot() -> int:
 
 
 def rigid_rot_sim_node() -> int:
-    """``rigid_rot_sim_node``: :func:`rigid_rot_sim.ros.node_process.main` (the kernels compiled first if never)."""
+    """``rigid_rot_sim_node``: :func:`rigid_rot_sim.ros.node.main` (the kernels compiled first if never)."""
     ensure_library_path()
     ensure_kernels()
-    from rigid_rot_sim.ros.node_process import main
+    from rigid_rot_sim.ros.node import main
 
     return main()
 

@@ -169,7 +169,7 @@ def node_arguments(args: argparse.Namespace) -> tuple[list[str], list[Parameter]
 def run(args: argparse.Namespace) -> int:
     argv, overrides = node_arguments(args)  # ValueError for an unknown scene or a conflict, before ROS starts
     if args.echo is None:
-        from rigid_rot_sim.ros.node_process import main
+        from rigid_rot_sim.ros.node import main
 
         return main(argv, overrides)
     return _run_with_echo(argv, overrides, args.echo)

@@ -32,7 +32,7 @@ from __future__ import annotations
 from collections.abc import Callable, Iterator
 from contextlib import contextmanager
 from dataclasses import dataclass, field
-from typing import Any
+from typing import Any, Protocol
 
 from rclpy.guard_condition import GuardCondition
 from rclpy.node import Node
@@ -41,6 +41,17 @@ from rclpy.subscription import Subscription
 
 from rigid_rot_sim.ros import rclpy_internals
 from rigid_rot_sim.ros.rclpy_internals import TAKEN_BY_THE_RUN_LOOP, Handler
+
+
+class CommandDoor(Protocol):
+    """A part of the node's run that takes commands through the intake (:mod:`.parts`): its subscriptions
+    and who hears each command as received (the recording); says what it built for the start-up line."""
+
+    subscriptions: list[Subscription]
+    listeners: list[Any]
+
+    def describe(self) -> tuple[list[str], list[str]]: ...
+
 
 #: Publishers told apart per topic (a new one beyond these forgets the oldest).
 MAX_STREAMS = 64
@@ -143,6 +154,10 @@ class CommandIntake:
             door.handler(msg, received_ns)
         return len(pending)
 
+    def losses(self) -> str:
+        """How many commands each topic that lost some took and lost ("" when none lost: a bound was never hit)."""
+        return "; ".join(f"{d.topic}: {d.lost} lost of {d.taken + d.lost}" for d in self.doors if d.lost)
+
     def _lost(self, door: Door, count: int, full: bool) -> None:
         door.lost += count
         why = (
@@ -167,4 +182,4 @@ class CommandIntake:
         self.guard.destroy()
 
 
-__all__ = ["TAKEN_BY_THE_RUN_LOOP", "CommandIntake", "Door"]
+__all__ = ["TAKEN_BY_THE_RUN_LOOP", "CommandDoor", "CommandIntake", "Door"]

@@ -1,77 +1,67 @@
 """The rigid_rot_sim ROS 2 node: a scene simulated by :class:`~rigid_rot_sim.run.simulator.Simulator`.
 
-The node wires: parameters (:mod:`.parameters`), outputs (:mod:`.outputs`), torque inputs
-(:mod:`.inputs`), services (:mod:`.services`, :mod:`.simulation_services`) and the
-recording (:mod:`rigid_rot_sim.ros.recording`) around the simulator and the
-run driver that paces it (:mod:`rigid_rot_sim.run.pacing`). It builds only what the scene
-needs (a :class:`SceneRun`) and logs one start-up line saying what was built and what was
-left out. Without a ``scene`` parameter it serves ``~/compute_inertia`` only (``node.run``
-is None). :func:`run_until_finished` is the one loop that runs it, for :func:`main` and for
-``rigid-rot run --echo``.
+:class:`SceneRun` wires the parts of a run (:mod:`.parts`: outputs, command doors, lockstep, services,
+live views, recording; each built from the scene) around the simulator and the run driver that paces
+it (:mod:`rigid_rot_sim.run.pacing`), and logs one start-up line saying what was built and what was left
+out. Without a ``scene`` parameter the node serves ``~/compute_inertia`` only (``node.run`` is None).
+:func:`main` runs it (:mod:`.node_process`: ``rclpy.init``, the run until it finishes).
 
 Topics (names relative to the node; QoS in the README, section "The simulation node")
 -----------------------------------------------------------------------------------
-~/state (rigid_rot_msgs/RigidBodyState), ~/orientation (geometry_msgs/QuaternionStamped),
-~/angular_velocity (Vector3Stamped, body frame), ~/angular_momentum (Vector3Stamped,
-world frame), ~/mass_properties (geometry_msgs/InertiaStamped, transient local, once),
-~/top_state (rigid_rot_msgs/HeavyTopState, gravity scenes), ~/rejected
-(rigid_rot_msgs/RejectedCommand), ~/imu (sensor_msgs/Imu; the gyro's readings when the scene
-has ``sensors.gyro``) and ~/odom (nav_msgs/Odometry) when the scene asks for them,
-~/star_tracker (geometry_msgs/PoseWithCovarianceStamped) with ``sensors.star_tracker``
-(docs/sensors.md), /tf (world -> body) and /tf_static (body -> principal frame, where it
-differs from the body frame), /clock (sim time; the frozen time while paused: :mod:`.paused_clock`),
-~/sim_events (live, the recent history latched: :mod:`.sim_events`), and for a scene with wheels
-the JointState door of ros2_control's topic hardware interface (:mod:`.joint_state_door`). QoS:
-rigid_rot_sim.ros.qos.
-Every header stamp is sim time. Frame names: the ``world_frame`` / ``body_frame``
-parameters (default: the scene's ``frames``, REP 105 ``odom`` / ``base_link``), used by
-every output, /tf and the recording. Torque inputs: the scene's topics (WrenchStamped or
-Vector3Stamped).
+~/state (rigid_rot_msgs/RigidBodyState), ~/orientation (geometry_msgs/QuaternionStamped), ~/angular_velocity
+(Vector3Stamped, body frame), ~/angular_momentum (Vector3Stamped, world frame), ~/mass_properties
+(geometry_msgs/InertiaStamped, transient local, once), ~/top_state (rigid_rot_msgs/HeavyTopState, gravity scenes),
+~/rejected (rigid_rot_msgs/RejectedCommand), ~/imu (sensor_msgs/Imu; the gyro's readings when the scene has
+``sensors.gyro``) and ~/odom (nav_msgs/Odometry) when the scene asks for them, ~/star_tracker
+(geometry_msgs/PoseWithCovarianceStamped) with ``sensors.star_tracker`` (docs/sensors.md), /tf (world -> body) and
+/tf_static (body -> principal frame, where it differs from the body frame), /clock (sim time; the frozen time while
+paused: :mod:`.paused_clock`), ~/sim_events (live, the recent history latched: :mod:`.sim_events`), and for a scene
+with wheels the JointState door of ros2_control's topic hardware interface (:mod:`.joint_state_door`). QoS:
+rigid_rot_sim.ros.qos. Every header stamp is sim time. Frame names: the ``world_frame`` / ``body_frame`` parameters
+(default: the scene's ``frames``, REP 105 ``odom`` / ``base_link``), used by every output, /tf and the recording.
+Torque inputs: the scene's topics (WrenchStamped or Vector3Stamped).
 
 Services
 --------
-~/compute_inertia, ~/set_state, ~/reset (std_srvs/Trigger), ~/pause (std_srvs/SetBool),
-~/step (rigid_rot_msgs/Step, while paused; at most ``limits.MAX_STEPS_PER_REQUEST`` steps,
-run in the service callback for at most ``services.STEP_REQUEST_WALL`` s: the reply says how many
-were done), ~/apply_torque, ~/step_with_torque (a torque over the next N steps, then the state, in
-one callback). A bad request gets ``success = false`` and the reason; nothing
-raises out of a callback. Where simulation_interfaces is installed, also the standard
-simulator services (:mod:`.simulation_services`), through the same actions
-(``~/step_simulation`` runs ``~/step``'s code, limits included) and the SimulateSteps action
-(``~/simulate_steps``, stepped by a timer of its own: :mod:`.simulate_steps`).
-The node loop (:mod:`.run_loop`, docs/architecture.md "The node loop"): the run's turns on the main
-thread, which also takes every command in arrival order (:mod:`.intake`); the services, parameters
-and actions on an executor thread, each holding the run lock (the node's default group), so a
-huge request is deserialised beside the stepping and the commands.
-Every limit is in :mod:`rigid_rot_sim.core.limits` (README, "Limits and failure behaviour").
+~/compute_inertia, ~/set_state, ~/reset (std_srvs/Trigger), ~/pause (std_srvs/SetBool), ~/step (rigid_rot_msgs/Step,
+while paused; at most ``limits.MAX_STEPS_PER_REQUEST`` steps, run in the service callback for at most
+``services.STEP_REQUEST_WALL`` s: the reply says how many were done), ~/apply_torque, ~/step_with_torque (a torque
+over the next N steps, then the state, in one callback). A bad request gets ``success = false`` and the reason;
+nothing raises out of a callback. Where simulation_interfaces is installed, also the standard simulator services
+(:mod:`.simulation_services`), through the same actions (``~/step_simulation`` runs ``~/step``'s code, limits
+included) and the SimulateSteps action (``~/simulate_steps``, stepped by a timer of its own:
+:mod:`.simulate_steps`). The node loop (:mod:`.run_loop`, docs/architecture.md "The node loop"): the run's turns on
+the main thread, which also takes every command in arrival order (:mod:`.intake`); the services, parameters and
+actions on an executor thread, each holding the run lock (the node's default group), so a huge request is
+deserialised beside the stepping and the commands. Every limit is in :mod:`rigid_rot_sim.core.limits` (README,
+"Limits and failure behaviour").
 
 Pacing
 ------
-``real_time_factor`` r > 0: each turn of the run loop advances the simulation to
-``r * (wall time since the anchor)`` (at most ``run_loop.SLICE_WALL`` of work per turn, so
-commands are taken in between), and the next turn comes when the next output is due; r = 0: as
-fast as possible, in turns of at most ``SLICE_WALL``. The states do not depend on r
-or on the publish rates (see the Simulator's determinism notes). The turns are timed on the
-steady clock: the node is the source of sim time (/clock), so ``use_sim_time`` true (a
-launch-wide setting) is accepted with a warning that says so: nothing here reads the ROS clock.
+``real_time_factor`` r > 0: each turn of the run loop advances the simulation to ``r * (wall time since the
+anchor)`` (at most ``run_loop.SLICE_WALL`` of work per turn, so commands are taken in between), and the next turn
+comes when the next output is due; r = 0: as fast as possible, in turns of at most ``SLICE_WALL``. The states do not
+depend on r or on the publish rates (see the Simulator's determinism notes). The turns are timed on the steady
+clock: the node is the source of sim time (/clock), so ``use_sim_time`` true (a launch-wide setting) is accepted
+with a warning that says so: nothing here reads the ROS clock.
 
-Lockstep (the scene's ``lockstep`` section or the read-only ``lockstep.*`` parameters): the
-run waits at every turn for the controllers' commands stamped with the turn's time
-(:mod:`rigid_rot_sim.run.lockstep` has the contract, :mod:`.lockstep` the wiring, docs/lockstep.md
-the user's view); the turn that takes a lockstep turn's last answer steps on at once, and the
-next turn is otherwise timed by the turn's timeout. ``dt`` is fixed in lockstep.
+Lockstep (the scene's ``lockstep`` section or the read-only ``lockstep.*`` parameters): the run waits at every turn
+for the controllers' commands stamped with the turn's time (:mod:`rigid_rot_sim.run.lockstep` has the contract,
+:mod:`.lockstep` the wiring, docs/lockstep.md the user's view); the turn that takes a lockstep turn's last answer
+steps on at once, and the next turn is otherwise timed by the turn's timeout. ``dt`` is fixed in lockstep.
 """
 
 from __future__ import annotations
 
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from typing import Any
 
 from rclpy.duration import Duration
 from rclpy.node import Node
+from rclpy.parameter import Parameter
 
-from rigid_rot_sim.ros import live_views, parts, paused_clock, sim_events
+from rigid_rot_sim.ros import live_views, node_process, parts, paused_clock, sim_events
 from rigid_rot_sim.ros import parameters as params
 from rigid_rot_sim.ros.inputs import Rejections
 from rigid_rot_sim.ros.intake import CommandIntake
@@ -85,7 +75,7 @@ from rigid_rot_sim.run.pacing import Progress
 from rigid_rot_sim.scene.scene import Scene, load_scene
 from rigid_rot_sim.share import resolve_scene
 
-NODE_NAME = "rigid_rot_sim"
+NODE_NAME = node_process.NODE_NAME
 
 
 class SceneRun:
@@ -221,18 +211,11 @@ class SceneRun:
     def close(self) -> None:
         """Close the parts that hold something (the recording's file complete, the live servers, the
         action server); idempotent."""
-        self.report_lost()
+        if lost := self.intake.losses():
+            self.logger.warning(f"commands lost before the node could take them: {lost}")
         for part in self.parts:
             if isinstance(part, Closing):
                 part.close()
-
-    def report_lost(self) -> None:
-        """At the end: how many commands each topic took, and how many it lost (0 unless a bound was hit)."""
-        lost = [
-            f"{door.topic}: {door.lost} lost of {door.taken + door.lost}" for door in self.intake.doors if door.lost
-        ]
-        if lost:
-            self.logger.warning(f"commands lost before the node could take them: {'; '.join(lost)}")
 
 
 class RigidRotSimNode(ClockTakenByTheRunLoop):
@@ -275,6 +258,11 @@ class RigidRotSimNode(ClockTakenByTheRunLoop):
         """The run reached its duration."""
         return self.run is not None and self.run.finished
 
+    def detach_run_loop(self) -> None:
+        """From now on the turns run on :meth:`spin_run`'s thread only, never on an executor's."""
+        if self.run is not None:
+            self.run.loop.detach()
+
     def spin_run(self, keep_going: Callable[[], bool]) -> None:
         """The run loop on this thread until ``keep_going()`` is False or the run finished (no scene: just wait)."""
         if self.run is None:
@@ -295,7 +283,12 @@ class RigidRotSimNode(ClockTakenByTheRunLoop):
         super().destroy_node()
 
 
-if __name__ == "__main__":  # python -m rigid_rot_sim.ros.node
-    from rigid_rot_sim.ros.node_process import main
+def main(args: list[str] | None = None, overrides: Sequence[Parameter] = ()) -> int:
+    """Run the node until shut down or until the scene's duration is reached (exit code 0); a bad scene, parameter
+    or ROS argument: one line on stderr, exit code 2 (:func:`.node_process.run_process`). ``overrides``: start-up
+    values that win over ``--ros-args`` (the Node's ``parameter_overrides``): ``rigid-rot run``'s own options."""
+    return node_process.run_process(lambda: RigidRotSimNode(parameter_overrides=list(overrides)), args)
 
+
+if __name__ == "__main__":
     raise SystemExit(main())

@@ -1,7 +1,8 @@
 """The node's process: ``rclpy.init``, the run until it finishes, and ``main`` (the console script).
 
-:func:`run_until_finished` is the one loop that runs a :class:`~rigid_rot_sim.ros.node.RigidRotSimNode`,
-for :func:`main` (``rigid_rot_sim_node``, ``python -m rigid_rot_sim.ros.node``) and for ``rigid-rot run``:
+:func:`run_until_finished` is the one loop that runs a :class:`~rigid_rot_sim.ros.node.RigidRotSimNode`
+(any :class:`SimulationNode`), for :func:`main` (``rigid_rot_sim.ros.node.main``: ``rigid_rot_sim_node``,
+``python -m rigid_rot_sim.ros.node``) and for ``rigid-rot run``:
 the run loop (:mod:`.run_loop`) on the main thread, the services, parameters and actions on an executor
 thread, SIGINT / SIGTERM honoured at once, the nodes closed here (the recording's file complete).
 """
@@ -12,20 +13,35 @@ import os
 import signal
 import sys
 import threading
-from collections.abc import Callable, Sequence
-from typing import Any
+from collections.abc import Callable
+from typing import Any, Protocol, cast
 
 import rclpy
 from rclpy.exceptions import NameValidationException, ParameterException
 from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
 from rclpy.node import Node
-from rclpy.parameter import Parameter
 from rclpy.signals import SignalHandlerOptions
 
 from rigid_rot_sim.core import limits
-from rigid_rot_sim.ros.node import NODE_NAME, RigidRotSimNode
 from rigid_rot_sim.ros.run_loop import POLL_WALL
 from rigid_rot_sim.share import ensure_ament_prefix_path
+
+#: The node's name (``rigid_rot_sim``), also in its start-up errors.
+NODE_NAME = "rigid_rot_sim"
+
+
+class SimulationNode(Protocol):
+    """What :func:`run_until_finished` runs (:class:`~rigid_rot_sim.ros.node.RigidRotSimNode`)."""
+
+    @property
+    def finished(self) -> bool: ...
+
+    def detach_run_loop(self) -> None: ...
+
+    def spin_run(self, keep_going: Callable[[], bool]) -> None: ...
+
+    def flush_publishers(self, timeout: float = 1.0) -> None: ...
+
 
 #: Most wall time (s) to wait at shutdown for a service in flight (a ~/step request is at most 0.25 s).
 EXECUTOR_SHUTDOWN_WAIT = 2.0
@@ -53,7 +69,7 @@ def init_ros(args: list[str] | None) -> None:
         signal.signal(signum, _interrupt)
 
 
-def run_until_finished(start: Callable[[list[Node]], RigidRotSimNode], drain: float = 0.0) -> None:
+def run_until_finished(start: Callable[[list[Node]], SimulationNode], drain: float = 0.0) -> None:
     """Start the nodes and run them until the run finishes, Ctrl-C, SIGTERM or shutdown.
 
     ``start`` creates the nodes, adding each to the list it is given as soon as it exists,
@@ -76,8 +92,7 @@ def run_until_finished(start: Callable[[list[Node]], RigidRotSimNode], drain: fl
         node = start(nodes)
         for signum in (signal.SIGINT, signal.SIGTERM):
             signal.signal(signum, lambda *_: stop.set())
-        if node.run is not None:
-            node.run.loop.detach()  # the turns run on this thread, never on the executor's
+        node.detach_run_loop()  # the turns run on this thread, never on the executor's
         executor = SingleThreadedExecutor()
         for each in nodes:
             executor.add_node(each)
@@ -133,17 +148,13 @@ def trace_memory(directory: str) -> None:
     atexit.register(dump)
 
 
-def main(args: list[str] | None = None, overrides: Sequence[Parameter] = ()) -> int:
-    """Run the node until shut down or until the scene's duration is reached (exit code 0).
+def run_process(new_node: Callable[[], SimulationNode], args: list[str] | None = None) -> int:
+    """:func:`init_ros` and :func:`run_until_finished` of the node ``new_node()`` makes, for a console script:
+    exit code 0; a bad scene, parameter or ROS argument: one line on stderr, exit code 2."""
 
-    ``overrides``: start-up values that win over ``--ros-args`` (rclpy applies a Node's
-    ``parameter_overrides`` after every ``-p`` and params file): ``rigid-rot run``'s own options.
-    A bad scene, parameter or ROS argument: one line on stderr, exit code 2.
-    """
-
-    def start_node(nodes: list[Node]) -> RigidRotSimNode:
-        node = RigidRotSimNode(parameter_overrides=list(overrides))
-        nodes.append(node)
+    def start_node(nodes: list[Node]) -> SimulationNode:
+        node = new_node()
+        nodes.append(cast(Node, node))  # RigidRotSimNode: a Node and a SimulationNode
         return node
 
     ensure_ament_prefix_path()  # the console script works without activating the venv
@@ -160,7 +171,3 @@ def main(args: list[str] | None = None, overrides: Sequence[Parameter] = ()) -> 
         print(startup_error_line(exc), file=sys.stderr, flush=True)
         return 2
     return 0
-
-
-if __name__ == "__main__":
-    raise SystemExit(main())

@@ -4,7 +4,7 @@ Each part owns one concern and is built by one small factory here from the scene
 (:class:`~rigid_rot_sim.ros.parameters.NodeSettings`) and the run's core (the simulator, the outputs,
 the run driver, the command intake). Every part says for the start-up line what it built and what it
 left out (:meth:`Part.describe`) and, where it holds something, closes (``close()``, idempotent). The
-command doors (:class:`CommandDoor`: the torque inputs, the wheel input, the JointState door) also
+command doors (:class:`~.intake.CommandDoor`: the torque inputs, the wheel input, the JointState door) also
 name their subscriptions (the wrong-type watch, the recording's topics) and take listeners (the
 recording hears every command as received).
 
@@ -18,7 +18,7 @@ from __future__ import annotations
 
 from collections.abc import Iterable, Sequence
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING, Any, Protocol, runtime_checkable
+from typing import TYPE_CHECKING, Protocol, runtime_checkable
 
 from rclpy.node import Node
 from rclpy.subscription import Subscription
@@ -26,7 +26,7 @@ from rclpy.subscription import Subscription
 from rigid_rot_sim.ros import parameters as params
 from rigid_rot_sim.ros import simulation_services as standard_services
 from rigid_rot_sim.ros.inputs import Rejections, TorqueInputs
-from rigid_rot_sim.ros.intake import CommandIntake
+from rigid_rot_sim.ros.intake import CommandDoor, CommandIntake
 from rigid_rot_sim.ros.joint_state_door import JointStateDoor
 from rigid_rot_sim.ros.lockstep import NodeLockstep, declare_lockstep_parameters, lockstep_from_parameters
 from rigid_rot_sim.ros.outputs import Outputs
@@ -56,13 +56,6 @@ class Closing(Protocol):
     """A part that holds something (a file, a server, an action): closed when the run ends, idempotent."""
 
     def close(self) -> None: ...
-
-
-class CommandDoor(Part, Protocol):
-    """A part that takes commands: its subscriptions (taken by the run loop) and who hears each command."""
-
-    subscriptions: list[Subscription]
-    listeners: list[Any]
 
 
 @dataclass

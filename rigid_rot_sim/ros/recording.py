@@ -11,7 +11,7 @@ and registers the node's topics; :meth:`NodeRecording.attach` (the node's record
   ``reset``, integrator / step changes (``integrator``);
 * ``outputs.listeners.append(recording)``: every message the node publishes, as the CDR
   bytes it published (:meth:`published`);
-* ``door.listeners.append(recording)`` for every command door (:class:`~rigid_rot_sim.ros.parts.CommandDoor`):
+* ``door.listeners.append(recording)`` for every command door (:class:`~rigid_rot_sim.ros.intake.CommandDoor`):
   every command as received, with its receive time (:meth:`received`).
 
 The node closes the recording in ``destroy_node``. ``/tf`` and ``/tf_static`` are recorded as
@@ -35,8 +35,8 @@ from rclpy.subscription import Subscription
 from rigid_rot_sim.recording import LOG_TIME_BASES
 from rigid_rot_sim.recording.session import RunRecorder
 from rigid_rot_sim.recording.writer import QosProfile, RecorderError
+from rigid_rot_sim.ros.intake import CommandDoor
 from rigid_rot_sim.ros.outputs import Outputs
-from rigid_rot_sim.ros.parts import CommandDoor
 from rigid_rot_sim.run.commands import TorqueCommand
 from rigid_rot_sim.run.digest import format_digest
 from rigid_rot_sim.run.observer import SimulationObserver
