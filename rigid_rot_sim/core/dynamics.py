@@ -25,8 +25,8 @@ import numpy as np
 from numba.extending import register_jitable
 from scipy.spatial.transform import Rotation
 
+from rigid_rot_sim.core import frames, validation
 from rigid_rot_sim.core import quaternion as quat
-from rigid_rot_sim.core import validation
 from rigid_rot_sim.core.inertia import principal_frame, principal_orientation
 from rigid_rot_sim.core.validation import FloatArray
 
@@ -192,8 +192,13 @@ class RigidBody:
         return world_to_body(np.broadcast_to(self.body_from_principal, np.shape(v_body)[:-1] + (4,)), v_body)
 
     def vector_from_principal(self, v_principal: Any) -> np.ndarray:
-        """Principal-frame vectors (..., 3) -> user body-frame coordinates."""
-        return body_to_world(np.broadcast_to(self.body_from_principal, np.shape(v_principal)[:-1] + (4,)), v_principal)
+        """Principal-frame vectors (..., 3) -> user body-frame coordinates.
+
+        The formula of :func:`rigid_rot_sim.core.frames.vector_from_principal` on each row, the run engine's.
+        """
+        rows = np.reshape(np.asarray(v_principal, dtype=float), (-1, 3))
+        v = frames.vector_from_principal(tuple(float(c) for c in self.body_from_principal), tuple(rows.T))
+        return np.stack(v, axis=-1).reshape(np.shape(v_principal))
 
     def attitude_to_principal(self, q_body: Any) -> np.ndarray:
         """Attitude body -> world (..., 4) -> attitude principal -> world, ``q (x) q_bp``."""
@@ -203,8 +208,12 @@ class RigidBody:
         return r.as_quat(canonical=False).reshape(np.shape(q_body))
 
     def attitude_from_principal(self, q_principal: Any) -> np.ndarray:
-        """Attitude principal -> world (..., 4) -> attitude body -> world, ``q (x) q_bp^-1``."""
-        r = quat.compose_rotations(
-            Rotation.from_quat(np.reshape(q_principal, (-1, 4))), Rotation.from_quat(self.body_from_principal).inv()
-        )
-        return r.as_quat(canonical=False).reshape(np.shape(q_principal))
+        """Attitude principal -> world (..., 4) -> attitude body -> world, ``q (x) q_bp^-1``.
+
+        The formula of :func:`rigid_rot_sim.core.frames.attitude_from_principal` on each row, the run
+        engine's: an attitude the engine and :func:`~rigid_rot_sim.core.simulate.simulate` report has the same bits.
+        """
+        rows = np.reshape(np.asarray(q_principal, dtype=float), (-1, 4))
+        principal_from_body = frames.principal_from_body(tuple(float(v) for v in self.body_from_principal))
+        q = frames.attitude_from_principal(tuple(rows.T), principal_from_body)
+        return np.stack(q, axis=-1).reshape(np.shape(q_principal))

@@ -234,11 +234,11 @@ def simulate(
         save_every = checked_save_every(save_every)
     integrator_class = get_method(method)
 
-    if is_principal:  # nothing to rotate (and no Rotation objects to build)
-        q0_p, omega0_p = q0, omega0
-    else:
-        q0_p = body.attitude_to_principal(q0)
-        omega0_p = body.vector_to_principal(omega0)
+    # the run engine's conversion of the attitude even for a principal body (scipy's composition renormalises: an
+    # ulp), so both start from the same bits; w = 1 (the identity, the default) and a principal body's rates convert
+    # exactly, without building Rotation objects
+    q0_p = q0 if is_principal and q0[3] == 1.0 else body.attitude_to_principal(q0)
+    omega0_p = omega0 if is_principal else body.vector_to_principal(omega0)
     integrator = integrator_class(
         body.principal_moments,
         dt,
@@ -345,11 +345,11 @@ def simulate_gyrostat(
     speeds0 = checked_wheel_speeds(wheels, wheel_speeds0)
     events = [] if wheels is None else wheel_torque_events(wheels, wheel_torque, dt)
 
-    if is_principal:
-        q0_p, omega0_p = q0, omega0
-    else:
-        q0_p = body.attitude_to_principal(q0)
-        omega0_p = body.vector_to_principal(omega0)
+    # the run engine's conversion of the attitude even for a principal body (scipy's composition renormalises: an
+    # ulp), so both start from the same bits; w = 1 (the identity, the default) and a principal body's rates convert
+    # exactly, without building Rotation objects
+    q0_p = q0 if is_principal and q0[3] == 1.0 else body.attitude_to_principal(q0)
+    omega0_p = omega0 if is_principal else body.vector_to_principal(omega0)
     integrator = integrator_class(
         moments,
         dt,
@@ -456,7 +456,18 @@ _IDENTITY_ATTITUDE = (0.0, 0.0, 0.0, 1.0)
 
 
 def attitude(q0: Any) -> np.ndarray:
-    """``validation.quaternion("q0", q0)``, with the identity (the default) looked up."""
+    """``validation.quaternion("q0", q0)``, with the identity (the default) looked up.
+
+    A q0 already of unit length to rounding (|q|^2 within 4 eps of 1: a scene's, normalised when it was read) is
+    kept as given, as the run engine keeps a scene's: the conversion to the principal frame normalises it once more
+    (scipy's rounding) in both, so they start from the same bits (normalising twice may move an ulp).
+    """
     if type(q0) is tuple and q0 == _IDENTITY_ATTITUDE:
         return np.array(_IDENTITY_ATTITUDE)
-    return validation.quaternion("q0", q0)
+    q = validation.quaternion("q0", q0)
+    given = np.asarray(q0, dtype=float)
+    return given if abs(float(given @ given) - 1.0) <= _UNIT_TOLERANCE else q
+
+
+#: |q|^2 of a quaternion normalised in double is 1 to within a few ulps.
+_UNIT_TOLERANCE = 4.0 * float(np.finfo(float).eps)

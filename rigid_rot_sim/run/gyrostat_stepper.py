@@ -55,6 +55,7 @@ class GyrostatStepper(Stepper):
                 else dataclasses.replace(wheels, axes=np.ascontiguousarray(self.body.vector_to_principal(wheels.axes)))
             )
             self._orbit = NO_ORBIT if spacecraft.gravity_gradient is None else spacecraft.gravity_gradient.model()
+            self._orbit_data = self._orbit.compiled()  # built once: a Kepler orbit's array costs ~10 us
         if dry_run:
             cls(self.body.principal_moments, dt, wheels=self._wheels, orbit=self._orbit, **options)
             return
@@ -129,7 +130,7 @@ class GyrostatStepper(Stepper):
             bound += wheel.max_torque + wheel.coulomb + wheel.viscous * wheel.max_speed
         if self._orbit.enabled:
             moments = self.body.principal_moments
-            bound += 1.5 * self._orbit.compiled()[0] * float(np.max(moments) - np.min(moments))
+            bound += 1.5 * self._orbit_data[0] * float(np.max(moments) - np.min(moments))
         return bound
 
     def snapshot(self) -> StateSnapshot:
@@ -163,7 +164,7 @@ class GyrostatStepper(Stepper):
             sources.append(("reaction_wheels", -(net @ wheels.axes)))
         if self._orbit.enabled:
             gg = gravity_gradient_torque(
-                self._orbit.compiled(), self.body.principal_moments, tuple(integrator.q), integrator.t
+                self._orbit_data, self.body.principal_moments, tuple(integrator.q), integrator.t
             )
             sources.append(("gravity_gradient", np.array(quat.rotate(body_from_principal, gg))))
         total = np.sum([v for _, v in sources], axis=0) if sources else np.zeros(3)

@@ -133,6 +133,12 @@ _SWEEP = frozenset(
         "initial",
         "schedules.body",
         "schedules.world",
+        "spacecraft.wheels",  # these four: the engine per sample (sweep/engine_runs.py)
+        "spacecraft.wheels.friction",
+        "spacecraft.wheel_schedule",
+        "spacecraft.gravity_gradient",
+        "orbit",  # the gravity gradient on it: the engine per sample
+        "environment.magnetic_field",  # acts on no state (a torque that reads it is its own feature)
         *MEASUREMENTS,  # no sensor columns: the bodies' states do not depend on them
     }
 )
@@ -146,7 +152,20 @@ PATHS: Mapping[str, frozenset[str]] = {
     # rigid_rot_sim.sweep: the batch kernels, the engine per sample where none applies
     "sweep": _SWEEP,
     # core.simulate.simulate / simulate_gyrostat: what a scene maps onto their arguments with the engine's bits
-    "simulate": frozenset({"body", "initial", *MEASUREMENTS}),
+    # (a schedule is not one: their torque is constant or a callable evaluated within the step)
+    "simulate": frozenset(
+        {
+            "body",
+            "initial",
+            "spacecraft.wheels",
+            "spacecraft.wheels.friction",
+            "spacecraft.wheel_schedule",  # wheel_torque=segments
+            "spacecraft.gravity_gradient",  # orbit=
+            "orbit",  # orbit=core.wheels.kepler_orbit_model(scene.orbit), the gradient's orbit
+            "environment.magnetic_field",  # acts on no state (a torque that reads it is its own feature)
+            *MEASUREMENTS,
+        }
+    ),
 }
 
 

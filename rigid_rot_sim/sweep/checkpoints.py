@@ -17,7 +17,7 @@ import math
 import numba
 import numpy as np
 
-__all__ = ["CheckpointTrack", "row_norms"]
+__all__ = ["CheckpointTrack", "row_norms", "checkpoint_steps", "checkpoint_time"]
 
 _TINY = float(np.finfo(float).tiny)
 
@@ -118,3 +118,14 @@ class CheckpointTrack:
     def nutation_range(self) -> np.ndarray:
         """(N,) rad: the largest minus the smallest nutation angle seen (NaN for a failed body)."""
         return np.arccos(self._cos_min) - np.arccos(self._cos_max)
+
+
+def checkpoint_steps(n_full: int, checkpoints: int) -> np.ndarray:
+    """The step boundaries of a run of ``n_full`` full steps where a sweep takes its ``checkpoints`` (0 included)."""
+    return np.unique(np.linspace(0, n_full, checkpoints + 1).round().astype(np.int64))
+
+
+def checkpoint_time(duration: float, dt: float, n_full: int, last: float, step_end: int) -> float:
+    """s: the time at the end of step ``step_end`` (of ``dt`` s; a run of ``n_full`` full steps and a last one of
+    ``last`` s, 0 for none, ending on ``duration``): the duration itself at the end, else ``step_end * dt``."""
+    return duration if step_end > n_full or (step_end == n_full and last == 0.0) else step_end * dt

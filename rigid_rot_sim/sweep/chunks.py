@@ -28,9 +28,10 @@ bit (``test/sweep/test_sweep_matches_engine.py``).
 
 from __future__ import annotations
 
+import dataclasses
 import math
 import time
-from dataclasses import dataclass, fields
+from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
@@ -43,9 +44,12 @@ from rigid_rot_sim.core.dynamics import RigidBody
 from rigid_rot_sim.core.integrators.base import NonFiniteStateError
 from rigid_rot_sim.core.steps import step_at_or_after, step_at_or_before, step_grid
 from rigid_rot_sim.run.timeline import Stretch, follows_attitude, stretch_at, stretches, world_in_body
-from rigid_rot_sim.sweep.checkpoints import CheckpointTrack, row_norms
+from rigid_rot_sim.scene.features import features_of
+from rigid_rot_sim.sweep.bodies import Bodies, Outcome, concat, split, subset
+from rigid_rot_sim.sweep.checkpoints import CheckpointTrack, checkpoint_steps, checkpoint_time, row_norms
 from rigid_rot_sim.sweep.draws import StreamDraws
-from rigid_rot_sim.sweep.spec import NORMAL_CUT_SIGMAS, Dispersion, SweepSpec
+from rigid_rot_sim.sweep.engine_runs import simulate_engine
+from rigid_rot_sim.sweep.spec import NORMAL_CUT_SIGMAS, Dispersion, SweepSpec, runs_per_sample
 
 __all__ = [
     "Chunk",
@@ -180,20 +184,6 @@ def _sample_draws(spec: SweepSpec, samples: np.ndarray) -> dict[str, np.ndarray]
     return out
 
 
-@dataclass
-class _Bodies:
-    """N bodies' inputs, as the batch runs them (principal frames) and as rows report them."""
-
-    moments: np.ndarray  # (N, 3) kg*m^2, principal
-    body_from_principal: Rotation  # N rotations
-    q0_body: np.ndarray  # (N, 4)
-    omega0_body: np.ndarray  # (N, 3)
-    torque_scale: np.ndarray  # (N, 3) multiplies the scheduled body torque
-    noise: np.ndarray  # (N, intervals, 3) N*m, body
-    misalignment: np.ndarray  # (N,) rad
-    attitude0_error: np.ndarray  # (N,) rad
-
-
 def _nominal_omega0(spec: SweepSpec, spin_rate: float | None) -> np.ndarray:
     omega = np.array(spec.scene.initial.angular_velocity, dtype=float)
     if spin_rate is not None:
@@ -201,7 +191,7 @@ def _nominal_omega0(spec: SweepSpec, spin_rate: float | None) -> np.ndarray:
     return omega
 
 
-def _bodies(spec: SweepSpec, spin_rate: float | None, samples: range | None) -> _Bodies:
+def _bodies(spec: SweepSpec, spin_rate: float | None, samples: range | None) -> Bodies:
     """The dispersed bodies of ``samples``, or the nominal body (``samples`` None)."""
     body = RigidBody.from_inertia(spec.scene.body.inertia_array, "body.inertia")
     draws = _sample_draws(spec, np.arange(samples.start, samples.stop)) if samples is not None else None
@@ -214,18 +204,26 @@ def _bodies(spec: SweepSpec, spin_rate: float | None, samples: range | None) -> 
     misalignment = stack("misalignment")
     attitude = stack("attitude")
     moments = np.asarray(body.principal_moments) * (1.0 + stack("moments"))
-    body_from_principal = quat.compose_rotations(
-        Rotation.from_quat(body.body_from_principal), Rotation.from_rotvec(misalignment)
-    )
-    q0 = quat.compose_rotations(
-        Rotation.from_quat(spec.scene.initial.orientation), Rotation.from_rotvec(attitude)
-    ).as_quat()
     d = spec.dispersions
+    # composed only where dispersed: a composition with the identity renormalises (an ulp), the engine's does not
+    body_from_principal_quat = np.tile(body.body_from_principal, (n, 1))
+    body_from_principal = Rotation.from_quat(body_from_principal_quat)
+    if d.axis_misalignment is not None:
+        body_from_principal = quat.compose_rotations(
+            Rotation.from_quat(body.body_from_principal), Rotation.from_rotvec(misalignment)
+        )
+        body_from_principal_quat = body_from_principal.as_quat(canonical=False)
+    q0 = np.tile(np.asarray(spec.scene.initial.orientation, dtype=float), (n, 1))
+    if d.initial_attitude is not None:
+        q0 = quat.compose_rotations(
+            Rotation.from_quat(spec.scene.initial.orientation), Rotation.from_rotvec(attitude)
+        ).as_quat()
     intervals = math.ceil(spec.duration / d.torque_noise_interval) if d.torque_noise_sigma is not None else 0
     noise = draws["noise"] if draws is not None else np.zeros((1, intervals, 3))
-    return _Bodies(
+    return Bodies(
         moments=moments,
         body_from_principal=body_from_principal,
+        body_from_principal_quat=body_from_principal_quat,
         q0_body=q0,
         omega0_body=_nominal_omega0(spec, spin_rate) + stack("omega"),
         torque_scale=1.0 + stack("torque_scale"),
@@ -281,22 +279,6 @@ def _advance_isolated(
     return np.concatenate(qs), np.concatenate(omegas), errors
 
 
-def _boundaries(
-    spec: SweepSpec, dt: float, n_full: int, timeline: tuple[Stretch, ...]
-) -> tuple[np.ndarray, np.ndarray]:
-    """Step indices where the torque may change (the timeline's, the noise's) or a checkpoint is taken, and the
-    checkpoint steps."""
-    checkpoints = np.unique(np.linspace(0, n_full, spec.checkpoints + 1).round().astype(np.int64))
-    marks = {0, n_full, *checkpoints.tolist(), *(stretch.start for stretch in timeline)}
-    if follows_attitude(spec.scene.schedules):
-        marks.update(range(n_full + 1))
-    if spec.dispersions.torque_noise_sigma is not None:
-        interval = spec.dispersions.torque_noise_interval
-        marks.update(step_at_or_after(k * interval, dt) for k in range(math.ceil(spec.duration / interval)))
-    within = [min(max(mark, 0), n_full) for mark in marks]
-    return np.array(sorted(set(within)), dtype=np.int64), checkpoints
-
-
 def _rows(helper: Any, *arrays: np.ndarray) -> np.ndarray:
     """A :mod:`~rigid_rot_sim.core.quaternion` helper applied row by row: (N, 4) / (N, 3) in, (N, 3 or 4) out.
 
@@ -308,7 +290,7 @@ def _rows(helper: Any, *arrays: np.ndarray) -> np.ndarray:
 
 def _body_torque(
     spec: SweepSpec,
-    bodies: _Bodies,
+    bodies: Bodies,
     stretch: Stretch,
     k: int,
     dt: float,
@@ -337,193 +319,210 @@ def _body_torque(
 _RECORDED_BYTES = 8 * 2**20
 
 
-@dataclass
-class _Outcome:
-    q_body: np.ndarray
-    omega_body: np.ndarray
-    errors: dict[int, str]
-    max_omega: np.ndarray
-    energy_drift: np.ndarray
-    momentum_drift: np.ndarray
-    omega_bound: np.ndarray
-    first_flip: np.ndarray
-    nutation_range: np.ndarray
+@dataclass(frozen=True)
+class _Plan:
+    """The segment plan of a run of ``spec.duration`` s at ``dt``: the step ranges ``segments`` between the boundaries
+    where the torque may change (the timeline's, the noise's) or a checkpoint is taken, the last shorter step
+    (``last`` s, 0 for none) as a segment of its own."""
+
+    spec: SweepSpec
+    dt: float
+    n_full: int
+    last: float
+    timeline: tuple[Stretch, ...]
+    segments: tuple[tuple[int, int], ...]
+    checkpoints: frozenset[int]
+    world_frame: bool  # torques that depend on the state
+
+    def step(self, a: int) -> float:
+        """s: the step of the segment starting at boundary ``a``."""
+        return self.last if a == self.n_full else self.dt
+
+    def time_of(self, step_end: int) -> float:
+        """s: the time at the end of a step (the duration itself at the last, shorter or full)."""
+        return checkpoint_time(self.spec.duration, self.dt, self.n_full, self.last, step_end)
+
+    def torque(self, bodies: Bodies, a: int, attitude: tuple[np.ndarray, np.ndarray] | None) -> np.ndarray:
+        """(N, 3) N*m, body frame: :func:`_body_torque` over the segment starting at ``a``."""
+        return _body_torque(self.spec, bodies, stretch_at(self.timeline, a), a, self.dt, attitude)
 
 
-def _simulate(spec: SweepSpec, bodies: _Bodies, method: str, dt: float) -> _Outcome:
-    """Run the bodies over the spec's duration; failed bodies end as NaN with their error."""
-    n = bodies.moments.shape[0]
+def _plan(spec: SweepSpec, dt: float) -> _Plan:
     n_full, last = step_grid(spec.duration, dt)
     timeline = stretches(spec.scene.schedules, dt, n_full + (last > 0.0))
-    marks, checkpoints = _boundaries(spec, dt, n_full, timeline)
-    checkpoint_set = set(checkpoints.tolist())
-    bp = bodies.body_from_principal
-    principal_from_body = _rows(frames.principal_from_body, bp.as_quat(canonical=False))
-    moments = bodies.moments
-    q = quat.compose_rotations(Rotation.from_quat(bodies.q0_body), bp).as_quat()  # principal -> world
-    omega = bp.apply(bodies.omega0_body, inverse=True)
-    alive = np.ones(n, dtype=bool)
-    errors: dict[int, str] = {}
-
-    def invariants(omega_p: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        momentum = moments * omega_p
-        return 0.5 * np.einsum("ij,ij->i", momentum, omega_p), row_norms(momentum)
-
-    def time_of(step_end: int) -> float:
-        """s: the time at the end of a full step (the duration itself at the last, with no shorter step after)."""
-        return spec.duration if step_end == n_full and last == 0.0 else step_end * dt
-
-    energy0, momentum0 = invariants(omega)
-    track = CheckpointTrack(moments, omega)
-    impulse = np.zeros(n)
-    track.observe(0.0, omega)
-    last_torque: tuple[Any, np.ndarray, np.ndarray] = (None, np.empty(0), np.empty(0))
-    world_frame = any(stretch.world is not None for stretch in timeline)  # torques that depend on the state
-    segments = [(int(a), int(b)) for a, b in zip(marks[:-1], marks[1:], strict=False) if b > a]
+    checkpoints = checkpoint_steps(n_full, spec.checkpoints)
+    marks = {0, n_full, *checkpoints.tolist(), *(stretch.start for stretch in timeline)}
+    if follows_attitude(spec.scene.schedules):
+        marks.update(range(n_full + 1))
+    if spec.dispersions.torque_noise_sigma is not None:
+        interval = spec.dispersions.torque_noise_interval
+        marks.update(step_at_or_after(k * interval, dt) for k in range(math.ceil(spec.duration / interval)))
+    bounds = sorted({min(max(mark, 0), n_full) for mark in marks})
+    segments = [(a, b) for a, b in zip(bounds[:-1], bounds[1:], strict=False) if b > a]
     if last > 0.0:
         segments.append((n_full, n_full + 1))  # the last, shorter step landing on the duration
-    k = 0
-    cut_until = 0  # segments before this one run one call each (a joined call failed there)
-    max_joined = max(2, _RECORDED_BYTES // (3 * 8 * n))  # the recorded rates of a call stay small
-    while k < len(segments) and alive.any():
-        a, b = segments[k]
-        t_a = a * dt
-        partial = a == n_full
-        step = last if partial else dt
-        everyone = len(errors) == 0  # no body has failed yet: no subsets to copy
-        live = slice(None) if everyone else alive
-        attitude = (q[live], principal_from_body[live]) if world_frame else None
-        live_bodies = bodies if everyone else _subset(bodies, alive)
-        torque_body = _body_torque(spec, live_bodies, stretch_at(timeline, a), a, dt, attitude)
-        # most segments of a run repeat the last one's torques (a torque-free run: all of them)
-        key = (step, torque_body.tobytes()) if everyone else None
-        if key is None or key != last_torque[0]:
-            last_torque = (
-                key,
-                row_norms(torque_body) * step,
-                _rows(frames.vector_to_principal, principal_from_body[live], torque_body),
-            )
-        _, impulse_rate, torque_p = last_torque
-        # the following segments under the same torques join this one in a call that records the
-        # checkpoints' rates (a return to Python at each costs ~5 % of a short run); their torques
-        # do not depend on the state unless a schedule is in the world frame
-        joined = [(a, b)]
-        if key is not None and not world_frame and not partial and k >= cut_until:  # key: no body has failed
-            joined = _same_torques(spec, bodies, timeline, segments[k : k + max_joined], dt, n_full, key)
-        if len(joined) > 1:
-            try:
-                q, omega, omega_at = advance_batch_recording(
-                    method, moments, q, omega, dt, [end - a for _, end in joined], torque_p, normalize_q=a == 0
-                )
-            except (NonFiniteStateError, ArithmeticError):
-                cut_until = k + len(joined)  # run them one at a time: the failing bodies fail alone
-                continue
-            for (a_j, b_j), omega_j in zip(joined, omega_at, strict=True):
-                impulse += impulse_rate * (b_j - a_j)
-                if b_j in checkpoint_set:
-                    track.observe(time_of(b_j), omega_j)
-            k += len(joined)
-            continue
-        impulse[live] += impulse_rate * (b - a)
-        # the first call normalises q as an integrator's set_state does; later ones continue from it
-        q_new, omega_new, failed = _advance_isolated(
-            method, moments[live], q[live], omega[live], step, b - a, torque_p, normalize_q=a == 0
-        )
-        if everyone:
-            q, omega = q_new, omega_new  # fresh arrays: no copy back
-        else:
-            q[live], omega[live] = q_new, omega_new
-        if failed:
-            index = np.flatnonzero(alive)
-            for i, message in failed.items():
-                errors[int(index[i])] = f"{message} (segment from t = {t_a:.9g} s, dt = {step:.9g} s)"
-                alive[index[i]] = False
-        if b in checkpoint_set or partial:
-            t_b = spec.duration if partial else time_of(b)
-            track.observe(t_b, omega if not errors else np.where(alive[:, None], omega, np.nan))
-        k += 1
-
-    energy, momentum = invariants(omega)
-    with np.errstate(divide="ignore", invalid="ignore"):
-        energy_drift = np.abs(energy - energy0) / np.where(energy0 > 0, energy0, 1.0)
-        momentum_drift = np.abs(momentum - momentum0) / np.where(momentum0 > 0, momentum0, 1.0)
-    q_alive = np.where(alive[:, None], q, [0.0, 0.0, 0.0, 1.0])
-    q_body = _rows(frames.attitude_from_principal, q_alive, principal_from_body)
-    q_body[~alive] = np.nan
-    omega_body = _rows(frames.vector_from_principal, bp.as_quat(canonical=False), np.where(alive[:, None], omega, 0.0))
-    omega_body[~alive] = np.nan
-    omega_bound = (momentum0 + impulse) / moments.min(axis=1)
-    return _Outcome(
-        q_body=q_body,
-        omega_body=omega_body,
-        errors=errors,
-        max_omega=np.where(alive, track.max_omega, np.nan),
-        energy_drift=energy_drift,
-        momentum_drift=momentum_drift,
-        omega_bound=omega_bound,
-        first_flip=track.first_flip,
-        nutation_range=np.where(alive, track.nutation_range(), np.nan),
+    return _Plan(
+        spec=spec,
+        dt=dt,
+        n_full=n_full,
+        last=last,
+        timeline=timeline,
+        segments=tuple(segments),
+        checkpoints=frozenset(checkpoints.tolist()) | ({n_full + 1} if last > 0.0 else set()),
+        world_frame=any(stretch.world is not None for stretch in timeline),
     )
 
 
-def _same_torques(
-    spec: SweepSpec,
-    bodies: _Bodies,
-    timeline: tuple[Stretch, ...],
-    segments: list[tuple[int, int]],
-    dt: float,
-    n_full: int,
-    key: tuple[float, bytes],
-) -> list[tuple[int, int]]:
-    """The first of ``segments`` and those right after it whose torques are the first's (``key``: its step and
-    torques' bytes), full steps only; the torques must not depend on the state (no world-frame schedule)."""
-    joined = segments[:1]
-    for a, b in segments[1:]:
-        if a == n_full or (dt, _body_torque(spec, bodies, stretch_at(timeline, a), a, dt, None).tobytes()) != key:
-            break
-        joined.append((a, b))
-    return joined
+class _BatchRun:
+    """N bodies stepped through a :class:`_Plan` by the batch kernel (principal frames); see :func:`simulate_batch`."""
 
+    def __init__(self, plan: _Plan, bodies: Bodies, method: str) -> None:
+        self.plan, self.bodies, self.method = plan, bodies, method
+        n = bodies.moments.shape[0]
+        bp = bodies.body_from_principal
+        self.principal_from_body = _rows(frames.principal_from_body, bodies.body_from_principal_quat)
+        self.q = quat.compose_rotations(Rotation.from_quat(bodies.q0_body), bp).as_quat()  # principal -> world
+        self.omega = bp.apply(bodies.omega0_body, inverse=True)
+        self.alive = np.ones(n, dtype=bool)
+        self.errors: dict[int, str] = {}
+        self.energy0, self.momentum0 = self.invariants()
+        self.track = CheckpointTrack(bodies.moments, self.omega)
+        self.track.observe(0.0, self.omega)
+        self.impulse = np.zeros(n)
+        self.cached: tuple[Any, np.ndarray, np.ndarray] = (None, np.empty(0), np.empty(0))
+        self.cut_until = 0  # segments before this one run one call each (a joined call failed there)
+        self.max_joined = max(2, _RECORDED_BYTES // (3 * 8 * n))  # the recorded rates of a call stay small
 
-def _subset(bodies: _Bodies, mask: np.ndarray) -> _Bodies:
-    """The bodies selected by ``mask``."""
-    return _Bodies(**{f.name: getattr(bodies, f.name)[mask] for f in fields(_Bodies)})
+    def invariants(self) -> tuple[np.ndarray, np.ndarray]:
+        momentum = self.bodies.moments * self.omega
+        return 0.5 * np.einsum("ij,ij->i", momentum, self.omega), row_norms(momentum)
 
+    def torques(self, a: int, live: Any) -> tuple[Any, np.ndarray, np.ndarray]:
+        """(key, |torque| x step, principal-frame torque) of the live bodies over the segment from ``a``; key None
+        once a body failed. Most segments repeat the last one's torques (a torque-free run: all of them)."""
+        plan, everyone = self.plan, not self.errors
+        attitude = (self.q[live], self.principal_from_body[live]) if plan.world_frame else None
+        torque_body = plan.torque(self.bodies if everyone else subset(self.bodies, self.alive), a, attitude)
+        key = (plan.step(a), torque_body.tobytes()) if everyone else None
+        if key is None or key != self.cached[0]:
+            principal = _rows(frames.vector_to_principal, self.principal_from_body[live], torque_body)
+            self.cached = (key, row_norms(torque_body) * plan.step(a), principal)
+        return self.cached
 
-def _concat(a: _Bodies, b: _Bodies) -> _Bodies:
-    """The bodies of ``a``, then those of ``b``."""
+    def joinable(self, k: int, key: Any) -> list[tuple[int, int]]:
+        """Segment k and those right after it under the same torques (full steps, no body failed, torques that do
+        not depend on the state): one kernel call that records the checkpoints' rates runs them."""
+        plan = self.plan
+        first = plan.segments[k]
+        if key is None or plan.world_frame or first[0] == plan.n_full or k < self.cut_until:
+            return [first]
+        joined = [first]
+        for a, b in plan.segments[k + 1 : k + self.max_joined]:
+            if a == plan.n_full or (plan.dt, plan.torque(self.bodies, a, None).tobytes()) != key:
+                break
+            joined.append((a, b))
+        return joined
 
-    def join(x: Any, y: Any) -> Any:
-        return Rotation.concatenate([x, y]) if isinstance(x, Rotation) else np.concatenate((x, y))
+    def run_joined(self, joined: list[tuple[int, int]], impulse_rate: np.ndarray, torque_p: np.ndarray) -> bool:
+        """Run ``joined`` in one recording call; False (nothing changed) when it fails."""
+        a = joined[0][0]
+        try:
+            self.q, self.omega, omega_at = advance_batch_recording(
+                self.method, self.bodies.moments, self.q, self.omega, self.plan.dt,
+                [end - a for _, end in joined], torque_p, normalize_q=a == 0,
+            )  # fmt: skip
+        except (NonFiniteStateError, ArithmeticError):
+            return False
+        for (a_j, b_j), omega_j in zip(joined, omega_at, strict=True):
+            self.impulse += impulse_rate * (b_j - a_j)
+            if b_j in self.plan.checkpoints:
+                self.track.observe(self.plan.time_of(b_j), omega_j)
+        return True
 
-    return _Bodies(**{f.name: join(getattr(a, f.name), getattr(b, f.name)) for f in fields(_Bodies)})
+    def run_one(self, a: int, b: int, live: Any, impulse_rate: np.ndarray, torque_p: np.ndarray) -> None:
+        """Run the segment (a, b) of the live bodies; a failing body fails alone (NaN, its error kept)."""
+        step = self.plan.step(a)
+        self.impulse[live] += impulse_rate * (b - a)
+        # the first call normalises q as an integrator's set_state does; later ones continue from it
+        q_new, omega_new, failed = _advance_isolated(
+            self.method, self.bodies.moments[live], self.q[live], self.omega[live], step, b - a, torque_p, a == 0
+        )
+        if isinstance(live, slice):
+            self.q, self.omega = q_new, omega_new  # fresh arrays: no copy back
+        else:
+            self.q[live], self.omega[live] = q_new, omega_new
+        index = np.flatnonzero(self.alive) if failed else np.empty(0, dtype=np.int64)
+        for i, message in failed.items():
+            self.errors[int(index[i])] = f"{message} (segment from t = {a * self.plan.dt:.9g} s, dt = {step:.9g} s)"
+            self.alive[index[i]] = False
+        if b in self.plan.checkpoints:
+            omega = self.omega if not self.errors else np.where(self.alive[:, None], self.omega, np.nan)
+            self.track.observe(self.plan.time_of(b), omega)
 
-
-def _split(outcome: _Outcome, n: int) -> tuple[_Outcome, _Outcome]:
-    """The first n bodies' outcome and the rest's."""
-
-    def part(select: slice, offset: int) -> _Outcome:
-        return _Outcome(
-            q_body=outcome.q_body[select],
-            omega_body=outcome.omega_body[select],
-            errors={i - offset: m for i, m in outcome.errors.items() if select.start <= i < (select.stop or 1 << 62)},
-            max_omega=outcome.max_omega[select],
-            energy_drift=outcome.energy_drift[select],
-            momentum_drift=outcome.momentum_drift[select],
-            omega_bound=outcome.omega_bound[select],
-            first_flip=outcome.first_flip[select],
-            nutation_range=outcome.nutation_range[select],
+    def outcome(self) -> Outcome:
+        alive = self.alive
+        energy, momentum = self.invariants()
+        with np.errstate(divide="ignore", invalid="ignore"):
+            energy_drift = np.abs(energy - self.energy0) / np.where(self.energy0 > 0, self.energy0, 1.0)
+            momentum_drift = np.abs(momentum - self.momentum0) / np.where(self.momentum0 > 0, self.momentum0, 1.0)
+        q_alive = np.where(alive[:, None], self.q, [0.0, 0.0, 0.0, 1.0])
+        q_body = _rows(frames.attitude_from_principal, q_alive, self.principal_from_body)
+        q_body[~alive] = np.nan
+        omega_alive = np.where(alive[:, None], self.omega, 0.0)
+        omega_body = _rows(frames.vector_from_principal, self.bodies.body_from_principal_quat, omega_alive)
+        omega_body[~alive] = np.nan
+        return Outcome(
+            q_body=q_body,
+            omega_body=omega_body,
+            errors=self.errors,
+            max_omega=np.where(alive, self.track.max_omega, np.nan),
+            energy_drift=energy_drift,
+            momentum_drift=momentum_drift,
+            omega_bound=(self.momentum0 + self.impulse) / self.bodies.moments.min(axis=1),
+            first_flip=self.track.first_flip,
+            nutation_range=np.where(alive, self.track.nutation_range(), np.nan),
         )
 
-    return part(slice(0, n), 0), part(slice(n, None), n)
+
+def simulate_batch(spec: SweepSpec, bodies: Bodies, method: str, dt: float) -> Outcome:
+    """Run the bodies over the spec's duration with the batch kernel; failed bodies end as NaN with their error."""
+    plan = _plan(spec, dt)
+    run = _BatchRun(plan, bodies, method)
+    k = 0
+    while k < len(plan.segments) and run.alive.any():
+        a, b = plan.segments[k]
+        live = slice(None) if not run.errors else run.alive
+        key, impulse_rate, torque_p = run.torques(a, live)
+        joined = run.joinable(k, key)
+        if len(joined) > 1:
+            if run.run_joined(joined, impulse_rate, torque_p):
+                k += len(joined)
+                continue
+            run.cut_until = k + len(joined)  # run them one at a time: the failing bodies fail alone
+        run.run_one(a, b, live, impulse_rate, torque_p)
+        k += 1
+    return run.outcome()
+
+
+def _simulate(spec: SweepSpec, bodies: Bodies, method: str, dt: float) -> Outcome:
+    """The bodies' runs: the batch kernel for a rigid-body scene, the run engine per sample for the others."""
+    if runs_per_sample(spec.scene):
+        return simulate_engine(spec, bodies, method, dt)
+    return simulate_batch(spec, bodies, method, dt)
+
+
+#: Sources that change the energy or the momentum of a scene besides its schedules: a run with one is not torque-free.
+_SOURCES = ("spacecraft.wheels.friction", "spacecraft.wheel_schedule", "spacecraft.gravity_gradient")
 
 
 def _torque_free(spec: SweepSpec) -> bool:
+    """Whether the energy and |L| (with wheels: eqs. (1), (6) of core.wheels) are the physics' invariants."""
     schedules = any(any(s.torque) for sched in spec.scene.schedules for s in sched.segments)
-    return not schedules and spec.dispersions.torque_noise_sigma is None
+    sources = set(_SOURCES) & set(features_of(spec.scene))
+    return not schedules and not sources and spec.dispersions.torque_noise_sigma is None
 
 
-def run_nominal(spec: SweepSpec, spin_rate: float | None) -> _Outcome:
+def run_nominal(spec: SweepSpec, spin_rate: float | None) -> Outcome:
     """The undispersed run at ``spin_rate`` with the spec's ``nominal`` integrator.
 
     One task per spin rate when the spec names a nominal integrator; its result is passed
@@ -534,7 +533,7 @@ def run_nominal(spec: SweepSpec, spin_rate: float | None) -> _Outcome:
     return _simulate(spec, _bodies(spec, spin_rate, None), spec.nominal_method, spec.nominal_dt)
 
 
-def run_chunk(spec: SweepSpec, chunk: Chunk, nominal: _Outcome | None = None) -> dict[str, Any]:
+def run_chunk(spec: SweepSpec, chunk: Chunk, nominal: Outcome | None = None) -> dict[str, Any]:
     """Simulate one chunk; returns its rows as columns (:data:`COLUMNS`), one row per sample.
 
     ``nominal``: :func:`run_nominal` of the chunk's spin rate, required when the spec
@@ -546,8 +545,8 @@ def run_chunk(spec: SweepSpec, chunk: Chunk, nominal: _Outcome | None = None) ->
     n = chunk.size
     if spec.nominal_method is None:
         # the nominal body rides along in the same batch (its bits do not depend on the others)
-        both = _simulate(spec, _concat(bodies, _bodies(spec, spin_rate, None)), method, dt)
-        outcome, nominal = _split(both, n)
+        both = _simulate(spec, concat(bodies, _bodies(spec, spin_rate, None)), method, dt)
+        outcome, nominal = split(both, n)
     else:
         if nominal is None:
             nominal = run_nominal(spec, spin_rate)
@@ -630,6 +629,23 @@ def measure_step_cost(method: str, sizes: tuple[int, int] = (1, 256), steps: int
     return fixed, per_body
 
 
+def measure_engine_step_cost(spec: SweepSpec, steps: int = 200) -> tuple[float, float]:
+    """(0, per-body) cost of one step of a sweep run by the engine per sample, s: a short nominal run of the scene.
+
+    The engine's runs are one per body, so there is no fixed part shared by a batch.
+    """
+    dt = min(spec.dts)
+    scene = dataclasses.replace(spec.scene, duration=None)
+    start = time.perf_counter()
+    simulate_engine(
+        dataclasses.replace(spec, scene=scene, duration=steps * dt, checkpoints=1),
+        _bodies(spec, None, None),
+        spec.methods[0],
+        dt,
+    )
+    return 0.0, max((time.perf_counter() - start) / steps, 1e-12)
+
+
 def choose_chunk_size(
     spec: SweepSpec, workers: int, target_seconds: float = 5.0, tasks_per_worker: int = 4
 ) -> tuple[int, dict[str, float]]:
@@ -640,7 +656,9 @@ def choose_chunk_size(
     as long as every worker gets ``tasks_per_worker`` tasks (load balance, and little
     work lost when a worker dies) and no task runs longer than about ``target_seconds``.
     """
-    fixed, per_body = measure_step_cost(spec.methods[0])
+    fixed, per_body = (
+        measure_engine_step_cost(spec) if runs_per_sample(spec.scene) else measure_step_cost(spec.methods[0])
+    )
     steps = max(spec.duration / min(spec.dts), 1.0)
     bounded = max(1, math.floor(target_seconds / (steps * per_body)))
     balanced = math.ceil(spec.n_runs / (tasks_per_worker * max(workers, 1)))

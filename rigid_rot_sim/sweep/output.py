@@ -200,13 +200,23 @@ def write_plots(result: SweepResult, out: Path) -> dict[str, str]:
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    spec, columns = result.spec, result.columns
-    metric = np.asarray(columns[spec.metric], dtype=float)
-    grid_point = np.asarray(columns["grid_point"])
+    spec = result.spec
+    metric = np.asarray(result.columns[spec.metric], dtype=float)
     positive = metric[np.isfinite(metric) & (metric > 0)]
     log = positive.size > 1 and positive.max() / positive.min() > 100.0
-    paths: dict[str, str] = {}
+    paths = {"histogram": str(_histogram(result, metric, positive, log, out / "histogram.png", plt))}
+    scatter = _scatter(result, metric, log, out / "scatter.png", plt)
+    if scatter is not None:
+        paths["scatter"] = str(scatter)
+    if len(spec.dts) > 1 or (spec.spin_rates is not None and len(spec.spin_rates) > 1):
+        paths["map"] = str(_stability_map(result, out / "map.png", plt))
+    return paths
 
+
+def _histogram(result: SweepResult, metric: np.ndarray, positive: np.ndarray, log: bool, path: Path, plt: Any) -> Path:
+    """The metric's histogram per grid point (the first 12), log-binned when it spans more than 100x."""
+    spec, columns = result.spec, result.columns
+    grid_point = np.asarray(columns["grid_point"])
     fig, ax = plt.subplots(figsize=(8, 4.5), dpi=110)
     points = _grid_points(columns)
     for g, label in points[:12]:
@@ -224,37 +234,39 @@ def write_plots(result: SweepResult, out: Path) -> dict[str, str]:
     if len(points) > 1:
         ax.legend(fontsize=7)
     fig.tight_layout()
-    fig.savefig(out / "histogram.png")
+    fig.savefig(path)
     plt.close(fig)
-    paths["histogram"] = str(out / "histogram.png")
+    return path
 
-    def varies(values: np.ndarray) -> bool:
-        finite = values[np.isfinite(values)]
-        return finite.size > 1 and bool(finite.min() < finite.max())
 
-    inputs = [c for c in INPUT_COLUMNS if varies(np.asarray(columns[c], dtype=float))]
-    if inputs:
-        cols = min(4, len(inputs))
-        rows = math.ceil(len(inputs) / cols)
-        fig, axes = plt.subplots(rows, cols, figsize=(3.2 * cols, 2.8 * rows), dpi=100, squeeze=False)
-        for ax, name in zip(axes.flat, inputs, strict=False):
-            x = np.asarray(columns[name], dtype=float)
-            ax.scatter(x, metric, s=4, alpha=0.5)
-            ax.set_xlabel(name)
-            ax.set_ylabel(spec.metric, fontsize=7)
-            if log:
-                ax.set_yscale("log")
-        for ax in list(axes.flat)[len(inputs) :]:
-            ax.axis("off")
-        fig.suptitle(f"{spec.name}: inputs against {spec.metric}")
-        fig.tight_layout()
-        fig.savefig(out / "scatter.png")
-        plt.close(fig)
-        paths["scatter"] = str(out / "scatter.png")
+def _varies(values: np.ndarray) -> bool:
+    finite = values[np.isfinite(values)]
+    return finite.size > 1 and bool(finite.min() < finite.max())
 
-    if len(spec.dts) > 1 or (spec.spin_rates is not None and len(spec.spin_rates) > 1):
-        paths["map"] = str(_stability_map(result, out / "map.png", plt))
-    return paths
+
+def _scatter(result: SweepResult, metric: np.ndarray, log: bool, path: Path, plt: Any) -> Path | None:
+    """The metric against every input that varies (None when none does)."""
+    spec, columns = result.spec, result.columns
+    inputs = [c for c in INPUT_COLUMNS if _varies(np.asarray(columns[c], dtype=float))]
+    if not inputs:
+        return None
+    cols = min(4, len(inputs))
+    rows = math.ceil(len(inputs) / cols)
+    fig, axes = plt.subplots(rows, cols, figsize=(3.2 * cols, 2.8 * rows), dpi=100, squeeze=False)
+    for ax, name in zip(axes.flat, inputs, strict=False):
+        x = np.asarray(columns[name], dtype=float)
+        ax.scatter(x, metric, s=4, alpha=0.5)
+        ax.set_xlabel(name)
+        ax.set_ylabel(spec.metric, fontsize=7)
+        if log:
+            ax.set_yscale("log")
+    for ax in list(axes.flat)[len(inputs) :]:
+        ax.axis("off")
+    fig.suptitle(f"{spec.name}: inputs against {spec.metric}")
+    fig.tight_layout()
+    fig.savefig(path)
+    plt.close(fig)
+    return path
 
 
 def _stability_map(result: SweepResult, path: Path, plt: Any) -> Path:

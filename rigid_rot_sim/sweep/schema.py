@@ -60,7 +60,11 @@ def _dispersion(name: str) -> dict[str, Any]:
     )
 
 
-_METHODS = _one_or_more("Batch methods (rigid_rot_sim.core.batch.BATCH_METHODS), e.g. rk4.", text("A batch method."))
+_METHODS = _one_or_more(
+    "Methods of the engine's registry: batch methods (rigid_rot_sim.core.batch.BATCH_METHODS, default rk4), or for a "
+    "scene with reaction wheels or gravity gradient the gyrostat methods (gyrostat_rk4, the default, or dopri5).",
+    text("A method name."),
+)
 _GRID = mapping(
     "The grid: every combination runs `samples` dispersed bodies.",
     {
@@ -108,7 +112,7 @@ SWEEP_SCHEMA: dict[str, Any] = {
                 mapping(
                     "The nominal run's integrator (default: the grid point's).",
                     {
-                        "method": text("A batch method.", default="rk4"),
+                        "method": text("A method name, as in grid.method (default: its first)."),
                         "dt": _positive("Fixed step, s."),
                     },
                     required=["dt"],

@@ -52,9 +52,10 @@ from typing import Any
 import numpy as np
 
 from rigid_rot_sim.core.batch import BATCH_METHODS
+from rigid_rot_sim.core.integrators.gyrostat import GYROSTAT_METHODS
 from rigid_rot_sim.core.validation import TRIANGLE_RTOL
 from rigid_rot_sim.scene.bounded_yaml import load_input, read_input
-from rigid_rot_sim.scene.features import refuse_unhonoured
+from rigid_rot_sim.scene.features import MEASUREMENTS, PATHS, features_of, refuse_unhonoured
 from rigid_rot_sim.scene.scene import Scene, SceneError, load_scene
 from rigid_rot_sim.scene.schema import validated
 from rigid_rot_sim.share import resolve_scene
@@ -70,6 +71,9 @@ __all__ = [
     "EVENTS",
     "METRICS",
     "NORMAL_CUT_SIGMAS",
+    "BATCH_FEATURES",
+    "runs_per_sample",
+    "methods_for",
 ]
 
 #: Normal draws beyond this many sigmas are drawn again (so a spec can be checked at its extremes).
@@ -89,6 +93,25 @@ METRICS = {
     "first_flip": EVENTS["first_flip"],
     "nutation_range": EVENTS["nutation_range"],
 }
+
+
+#: The features (:mod:`rigid_rot_sim.scene.features`) the rigid-body batch kernel (core/batch.py) runs; a scene
+#: with another feature the sweep runs (wheels, gravity gradient) is run by the engine per sample
+#: (:mod:`~rigid_rot_sim.sweep.engine_runs`).
+BATCH_FEATURES = frozenset({"body", "initial", "schedules.body", "schedules.world", *MEASUREMENTS})
+#: Dispersions that map onto no key of such a scene (they act on the batch's body-frame torque).
+_BATCH_ONLY_DISPERSIONS = ("torque_scale", "torque_noise")
+
+
+def runs_per_sample(scene: Scene) -> bool:
+    """Whether the sweep runs ``scene`` in the engine per sample (a feature the sweep runs outside
+    :data:`BATCH_FEATURES`)."""
+    return bool(set(features_of(scene)) & (PATHS["sweep"] - BATCH_FEATURES))
+
+
+def methods_for(scene: Scene) -> tuple[str, ...]:
+    """The engine's method names a sweep of ``scene`` runs: the batch kernel's, or the gyrostat methods."""
+    return tuple(GYROSTAT_METHODS) if runs_per_sample(scene) else BATCH_METHODS
 
 
 class SweepSpecError(ValueError):
@@ -204,9 +227,11 @@ def _floats(value: Any) -> tuple[float, ...]:
     return tuple(float(v) for v in (value if isinstance(value, list) else [value]))
 
 
-def _batch_method(name: str, key: str) -> str:
-    if name not in BATCH_METHODS:
-        raise ValueError(f"{key}: must be a batch method ({', '.join(BATCH_METHODS)}), got {name!r}")
+def _method(name: str, key: str, scene: Scene) -> str:
+    methods = methods_for(scene)
+    if name not in methods:
+        what = "a gyrostat method (the engine per sample)" if runs_per_sample(scene) else "a batch method"
+        raise ValueError(f"{key}: must be {what} for scene {scene.name} ({', '.join(methods)}), got {name!r}")
     return name
 
 
@@ -223,14 +248,21 @@ def _sweep(spec: Mapping[str, Any], source: str, text: str) -> SweepSpec:
     if duration is None:
         raise ValueError(f"duration: missing (the scene {scene.name} runs unbounded)")
     grid = spec["grid"]
-    methods = grid.get("method", ["rk4"])
-    methods = tuple(_batch_method(m, f"grid.method[{i}]") for i, m in enumerate(_listed(methods)))
+    methods = grid.get("method", [methods_for(scene)[0]])
+    methods = tuple(_method(m, f"grid.method[{i}]", scene) for i, m in enumerate(_listed(methods)))
     spin_rates = None
     if grid.get("spin_rate") is not None:
         spin_rates = _floats(grid["spin_rate"])
         if not any(scene.initial.angular_velocity):
             raise ValueError(f"grid.spin_rate: the scene {scene.name} starts at rest: no spin axis to scale")
     dispersions = _dispersions(spec.get("dispersions") or {}, np.linalg.eigvalsh(scene.body.inertia_array))
+    if runs_per_sample(scene):
+        for name in _BATCH_ONLY_DISPERSIONS:
+            if (spec.get("dispersions") or {}).get(name) is not None:
+                raise ValueError(
+                    f"dispersions.{name}: maps onto no key of scene {scene.name}, which the sweep runs in the engine "
+                    f"per sample ({', '.join(sorted(set(features_of(scene)) - BATCH_FEATURES))})"
+                )
     nominal = spec.get("nominal")
     events = tuple(_known(e, f"events[{i}]", EVENTS, "event") for i, e in enumerate(spec.get("events") or ()))
     metric = _known(spec.get("metric", "final_attitude_error"), "metric", METRICS, "metric")
@@ -247,7 +279,9 @@ def _sweep(spec: Mapping[str, Any], source: str, text: str) -> SweepSpec:
         dts=_floats(grid.get("dt", scene.integrator.dt)),
         spin_rates=spin_rates,
         dispersions=dispersions,
-        nominal_method=None if nominal is None else _batch_method(nominal.get("method", "rk4"), "nominal.method"),
+        nominal_method=None
+        if nominal is None
+        else _method(nominal.get("method", methods_for(scene)[0]), "nominal.method", scene),
         nominal_dt=None if nominal is None else float(nominal["dt"]),
         checkpoints=spec.get("checkpoints", 200),
         energy_tolerance=float(spec.get("energy_tolerance", 1e-3)),

@@ -20,9 +20,10 @@ import pytest
 from rigid_rot_sim.core.steps import step_at_or_after, step_grid
 from rigid_rot_sim.run.simulator import Simulator
 from rigid_rot_sim.run.timeline import stretches
+from rigid_rot_sim.scene.features import PATHS, features_of
 from rigid_rot_sim.scene.scene import load_scene
 from rigid_rot_sim.sweep.chunks import run_nominal
-from rigid_rot_sim.sweep.spec import SweepSpec, parse_sweep_text
+from rigid_rot_sim.sweep.spec import SweepSpec, SweepSpecError, methods_for, parse_sweep_text, runs_per_sample
 
 SCENES = Path(__file__).resolve().parents[2] / "config" / "scenes"
 SHIPPED_WITH_SCHEDULE = sorted(path.name for path in SCENES.glob("*.yaml") if load_scene(str(path)).schedules)
@@ -128,3 +129,87 @@ def test_the_timeline_changes_the_torque_where_the_engines_command_schedule_does
     end = step_at_or_after(loaded.duration, dt)
     assert len(_engine_changes(loaded, dt, end)) > 1  # the scene does switch
     assert _timeline_changes(loaded, dt, end) == _engine_changes(loaded, dt, end)
+
+
+# ------------------------------------------------------------------ every shipped scene: the engine's end, or refused
+
+ALL_SHIPPED = sorted(path.name for path in SCENES.glob("*.yaml"))
+#: At most this many steps per scene (gravity_gradient_satellite runs 20000 steps of 1 s: all of them).
+MAX_STEPS = 20_000
+
+
+@pytest.mark.parametrize("scene", ALL_SHIPPED)
+def test_a_shipped_scenes_nominal_sweep_ends_where_the_engine_ends_or_is_refused_in_one_line(scene):
+    """The sweep's nominal run, with the grid's first method of the engine's registry for the scene (gyrostat_rk4 for
+    wheels and gravity gradient) at the scene's dt, against Simulator with the same method and dt: the same bits at
+    the end, or a one-line refusal naming the first feature the sweep does not run."""
+    loaded = load_scene(str(SCENES / scene))
+    dt = loaded.integrator.dt
+    duration = min(loaded.duration or 10.0, MAX_STEPS * dt)
+    method = methods_for(loaded)[0]
+    text = (
+        f"scene: {scene}\nseed: 1\nsamples: 1\nduration: {duration!r}\n"
+        f"grid: {{method: [{method}], dt: [{dt!r}]}}\nnominal: {{method: {method}, dt: {dt!r}}}\ncheckpoints: 4\n"
+    )
+    unrun = [key for key in features_of(loaded) if key not in PATHS["sweep"]]
+    if unrun:
+        with pytest.raises(SweepSpecError) as refused:
+            parse_sweep_text(text, "sweep.yaml")
+        assert str(refused.value).startswith(f"sweep.yaml: scene: {unrun[0]}: ") and "\n" not in str(refused.value)
+        return
+    spec = parse_sweep_text(text, "sweep.yaml")
+    sweep = run_nominal(spec, None)
+    assert not sweep.errors
+    sim = Simulator(spec.scene, method=method, dt=dt)
+    n_full, last = step_grid(duration, dt)
+    assert last == 0.0
+    sim.advance_to(n_full)
+    engine = sim.snapshot()
+    assert sim.failure is None and sim.clock.k == n_full
+    assert np.array_equal(sweep.omega_body[0], engine.angular_velocity_body), scene
+    q = sweep.q_body[0]
+    assert np.array_equal(q, engine.orientation) or np.array_equal(-q, engine.orientation), scene
+
+
+def test_the_shipped_scenes_cover_both_paths_and_the_refusals():
+    kinds = {runs_per_sample(load_scene(str(SCENES / s))) for s in ALL_SHIPPED if s not in ("heavy_top.yaml",)}
+    assert kinds == {True, False}
+    refused = [s for s in ALL_SHIPPED if not set(features_of(load_scene(str(SCENES / s)))) <= PATHS["sweep"]]
+    assert "heavy_top.yaml" in refused and "torque_driven.yaml" in refused
+    assert "wheel_slew.yaml" not in refused and "gravity_gradient_satellite.yaml" not in refused
+
+
+WHEELS = """
+scene: wheel_slew
+seed: 4
+samples: 5
+duration: 20.0
+grid: {method: [gyrostat_rk4], dt: [0.05]}
+dispersions:
+  principal_moments: {relative: 0.02}
+  axis_misalignment: {sigma: 1.0e-3}
+  initial_omega: {sigma: 1.0e-4}
+  initial_attitude: {sigma: 1.0e-3}
+checkpoints: 10
+"""
+
+
+def test_a_dispersed_wheel_sweep_runs_each_sample_in_the_engine_on_its_own_scene():
+    from rigid_rot_sim.sweep.chunks import Chunk, _bodies, run_chunk
+    from rigid_rot_sim.sweep.engine_runs import dispersed_scene
+
+    spec = parse_sweep_text(WHEELS, "wheels.yaml")
+    rows = run_chunk(spec, Chunk(0, 0, spec.samples))
+    assert rows["error"] == [None] * spec.samples and set(rows["verdict"]) == {"stable"}
+    assert np.all(rows["final_attitude_error"] > 0.0)  # every sample is dispersed
+    bodies = _bodies(spec, None, range(0, spec.samples))
+    for i in (0, 3):
+        scene = dispersed_scene(spec, bodies, i)
+        sim = Simulator(scene, method="gyrostat_rk4", dt=0.05)
+        sim.advance_to(400)
+        assert np.array_equal(sim.snapshot().angular_velocity_body, [rows[f"final_omega_{a}"][i] for a in "xyz"])
+        # the dispersed body: its principal moments are the row's (the engine diagonalises the tensor again)
+        assert np.allclose(np.sort(sim.body.principal_moments), np.sort([rows[f"I{j}"][i] for j in (1, 2, 3)]))
+    # the nominal body is the scene itself, bits included
+    nominal = dispersed_scene(spec, _bodies(spec, None, None), 0)
+    assert nominal.body == spec.scene.body and nominal.initial == spec.scene.initial

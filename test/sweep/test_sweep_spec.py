@@ -82,6 +82,18 @@ BAD = [
         GOOD.replace("scene: free_tumble", "scene: heavy_top"),
         "bad.yaml: scene: gravity: not run by the sweep path (scene heavy_top;",
     ),
+    (
+        "a batch method for a wheel scene",
+        GOOD.replace("scene: free_tumble", "scene: wheel_slew"),
+        "bad.yaml: grid.method[0]: must be a gyrostat method (the engine per sample) for scene wheel_slew "
+        "(gyrostat_rk4, dopri5), got 'rk4'",
+    ),
+    (
+        "torque noise on a wheel scene",
+        GOOD.replace("scene: free_tumble", "scene: wheel_slew").replace("[rk4]", "[gyrostat_rk4]")
+        + "  torque_noise: {sigma: 1.0e-3}\n",
+        "bad.yaml: dispersions.torque_noise: maps onto no key of scene wheel_slew",
+    ),
     ("unknown metric", GOOD + "metric: pointing\n", "bad.yaml: metric: unknown metric 'pointing'"),
     ("not YAML", "scene: [unclosed\n", "bad.yaml: not valid YAML"),
 ]
