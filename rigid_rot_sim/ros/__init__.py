@@ -9,9 +9,10 @@
 * :mod:`.inputs`: the torque subscriptions and ``~/rejected``;
 * :mod:`.services`: ``~/compute_inertia`` and the run's services; :mod:`.simulation_services`:
   the standard ``simulation_interfaces`` ones, through the same actions;
-* :mod:`.wheel_inputs`: ``~/wheel_torque`` for the reaction wheels; :mod:`.lockstep`: the
-  read-only ``lockstep.*`` parameters and the turn engine's wiring; :mod:`.simulate_steps`: the
-  standard ``SimulateSteps`` action; :mod:`.recording`: the node's recorder;
+* :mod:`.wheel_inputs`: ``~/wheel_torque`` for the reaction wheels; :mod:`.rod_inputs`:
+  ``~/magnetorquer_command`` for the torque rods; :mod:`.lockstep`: the read-only ``lockstep.*``
+  parameters and the turn engine's wiring; :mod:`.simulate_steps`: the standard ``SimulateSteps``
+  action; :mod:`.recording`: the node's recorder;
   :mod:`.foxglove_live`: the Foxglove live server; :mod:`.live_views`: the optional live viewers' wiring;
 * :mod:`.run_loop`: the run loop (steps, commands, outputs; services on an executor thread);
   :mod:`.intake`: every command topic taken by the run loop in arrival order, losses counted;
@@ -21,7 +22,8 @@
   wrong type on a command topic, named in the log; :mod:`.web_live`: the body's web page of a live run;
 * :mod:`.qos`: the QoS profiles. Message <-> numpy conversions: :mod:`rigid_rot_sim.conversions`.
 * :mod:`.controller`: apart from the node, ``rigid-rot-controller``, a quaternion-feedback
-  attitude controller and the template for a user's own.
+  attitude controller and the template for a user's own; :mod:`.detumble_controller`: the B-dot
+  detumble controller on ``~/magnetometer`` commanding the rods.
 
 The physics is in :mod:`rigid_rot_sim.core`, the run and its pacing in :mod:`rigid_rot_sim.run` (no ROS): the
 :class:`~rigid_rot_sim.run.simulator.Simulator` and the

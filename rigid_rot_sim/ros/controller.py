@@ -38,7 +38,7 @@ import math
 import signal
 import sys
 import threading
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from typing import Any
 
 import rclpy
@@ -131,6 +131,11 @@ def _executor() -> Executor:
 
 def main(args: list[str] | None = None) -> int:
     """Run the controller until Ctrl-C / SIGTERM (exit 0); a bad parameter: one line on stderr, exit 2."""
+    return run_node(AttitudeController, NODE_NAME, args)
+
+
+def run_node(factory: Callable[[], Node], name: str, args: list[str] | None = None) -> int:
+    """Spin the node ``factory`` builds until Ctrl-C / SIGTERM (exit 0); a ValueError: one line on stderr, exit 2."""
     ensure_ament_prefix_path()
     rclpy.init(args=args, signal_handler_options=SignalHandlerOptions.NO)
     stop = threading.Event()
@@ -138,7 +143,7 @@ def main(args: list[str] | None = None) -> int:
         signal.signal(signum, lambda *_: stop.set())
     node = None
     try:
-        node = AttitudeController()
+        node = factory()
         executor = _executor()
         executor.add_node(node)
         while rclpy.ok() and not stop.is_set():
@@ -146,7 +151,7 @@ def main(args: list[str] | None = None) -> int:
     except (KeyboardInterrupt, ExternalShutdownException):
         pass
     except ValueError as exc:
-        print(f"{NODE_NAME}: error: {exc}", file=sys.stderr, flush=True)
+        print(f"{name}: error: {exc}", file=sys.stderr, flush=True)
         return 2
     finally:
         if node is not None:

@@ -23,6 +23,7 @@ from rigid_rot_sim.ros import parameters as params
 from rigid_rot_sim.run.lockstep import TURN_OUTPUTS, Lockstep
 from rigid_rot_sim.run.pacing import RunDriver
 from rigid_rot_sim.scene.scene import LockstepSpec, Scene, lockstep_spec
+from rigid_rot_sim.scene.spacecraft import ROD_COMMAND_TOPIC
 
 #: The ``lockstep.*`` parameters' names (their entries are in the parameter table, ros/parameters.py).
 LOCKSTEP_PARAMETERS = tuple(spec.name for spec in params.LOCKSTEP)
@@ -51,7 +52,8 @@ def lockstep_from_parameters(node: Node, scene: Scene, dt: float) -> LockstepSpe
         "on_timeout": on_timeout,
     }
     commands = value(params.JOINT_STATE_COMMANDS)  # the wheels' JointState door may be a turn input too
-    return lockstep_spec(section, scene.topic_inputs, dt, (commands,) if commands else ())
+    actuators = ((commands,) if commands else ()) + ((ROD_COMMAND_TOPIC,) if scene.spacecraft.rods else ())
+    return lockstep_spec(section, scene.topic_inputs, dt, actuators)
 
 
 class NodeLockstep:

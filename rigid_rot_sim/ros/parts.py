@@ -9,7 +9,8 @@ name their subscriptions (the wrong-type watch, the recording's topics) and take
 recording hears every command as received).
 
 The parts, in the start-up line's order: lockstep (:mod:`.lockstep`), the integrator, the outputs
-(:mod:`.outputs`), the command doors (:mod:`.inputs`, :mod:`.wheel_inputs`, :mod:`.joint_state_door`),
+(:mod:`.outputs`), the command doors (:mod:`.inputs`, :mod:`.wheel_inputs`, :mod:`.rod_inputs`,
+:mod:`.joint_state_door`),
 the scene's physics and sensors, the standard simulation services (:mod:`.simulation_services`), the
 recording (:mod:`.recording`), the live views (:mod:`.live_views`).
 """
@@ -32,6 +33,7 @@ from rigid_rot_sim.ros.lockstep import NodeLockstep, declare_lockstep_parameters
 from rigid_rot_sim.ros.outputs import Outputs
 from rigid_rot_sim.ros.parameters import NodeSettings
 from rigid_rot_sim.ros.qos import output_qos
+from rigid_rot_sim.ros.rod_inputs import RodCommandInput
 from rigid_rot_sim.ros.services import RunServices
 from rigid_rot_sim.ros.wheel_inputs import WheelTorqueInput
 from rigid_rot_sim.run.pacing import OutputSchedule, Pacer, RunDriver
@@ -118,15 +120,17 @@ def driver(settings: NodeSettings, sim: Simulator, outputs: Outputs) -> RunDrive
 
 def command_doors(
     intake: CommandIntake, settings: NodeSettings, run: RunDriver, outputs: Outputs, rejections: Rejections
-) -> tuple[TorqueInputs, WheelTorqueInput, JointStateDoor]:
-    """The scene's command topics: the torque inputs, ``~/wheel_torque``, the wheels' JointState door."""
+) -> tuple[TorqueInputs, WheelTorqueInput, RodCommandInput, JointStateDoor]:
+    """The scene's command topics: the torque inputs, ``~/wheel_torque``, ``~/magnetorquer_command``, the wheels'
+    JointState door."""
     sim, scene, depth = run.sim, settings.scene, settings[params.COMMAND_DEPTH]
     joint_state_topics = (settings[params.JOINT_STATE_COMMANDS], settings[params.JOINT_STATE_STATES])
     inputs = TorqueInputs(intake, sim, scene, depth, rejections)
     wheel_input = WheelTorqueInput(intake, sim, scene, depth, rejections)
+    rod_input = RodCommandInput(intake, sim, scene, depth, rejections)
     door = JointStateDoor(intake, sim, scene, joint_state_topics, outputs.rates.get("wheels", 0.0), depth, rejections)
     run.observers.append(door)  # the states, at ~/wheels' steps
-    return inputs, wheel_input, door
+    return inputs, wheel_input, rod_input, door
 
 
 def subscriptions(doors: Sequence[CommandDoor]) -> list[Subscription]:

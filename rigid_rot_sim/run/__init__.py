@@ -16,7 +16,8 @@
 * :mod:`.sensors` - the scene's sensors and their sample sequences; :mod:`.digest` - the run digest;
 * :mod:`.lockstep` - the run waits at each controller turn; :mod:`.step_requests` - steps of a
   paused run with their own input;
-* :mod:`.body_view` - what a viewer draws of the body (inertia box, omega, L).
+* :mod:`.body_view` - what a viewer draws of the body (inertia box, omega, L);
+* :mod:`.detumble` - a B-dot detumble run in the engine on the scene's magnetometer and rods.
 
 Built on :mod:`rigid_rot_sim.core` and :mod:`rigid_rot_sim.scene`; no ROS.
 """

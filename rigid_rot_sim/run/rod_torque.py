@@ -16,6 +16,7 @@ import numpy as np
 
 from rigid_rot_sim.core.magnetorquer import Magnetorquers
 from rigid_rot_sim.run.timeline import world_in_body
+from rigid_rot_sim.scene.scene import Scene
 
 __all__ = ["RodTorque"]
 
@@ -29,6 +30,12 @@ class RodTorque:
     rods: Magnetorquers | None
     principal_from_body: Any
     field: Any = None
+
+    @classmethod
+    def of(cls, scene: Scene, principal_from_body: Any) -> RodTorque:
+        """The rods of ``scene`` in its field along its orbit (a scene with rods has one: scene validation)."""
+        rods = scene.spacecraft.magnetorquers()
+        return cls(rods, principal_from_body, scene.orbit_field() if rods is not None else None)
 
     @property
     def present(self) -> bool:

@@ -85,8 +85,7 @@ class Stepper:
         self.digest = DIGEST_SEED
         self._i_min = float(np.min(body.principal_moments))
         #: The torque rods' torque (:mod:`~rigid_rot_sim.run.rod_torque`) in the scene's field along its orbit.
-        rods = scene.spacecraft.magnetorquers()
-        self.rods = RodTorque(rods, observables.principal_from_body, scene.orbit_field() if rods else None)
+        self.rods = RodTorque.of(scene, observables.principal_from_body)
         self.configure(method, clock.dt, options, first=True)
 
     # ------------------------------------------------------------------ the integrator

@@ -71,7 +71,7 @@ from rigid_rot_sim.scene.scene_schema import (
     TORQUE_MESSAGE_TYPES,
 )
 from rigid_rot_sim.scene.schema import validated
-from rigid_rot_sim.scene.spacecraft import GravityGradient, Spacecraft, parse_spacecraft
+from rigid_rot_sim.scene.spacecraft import ROD_COMMAND_TOPIC, GravityGradient, Spacecraft, parse_spacecraft
 
 __all__ = [
     "SceneError",
@@ -578,7 +578,8 @@ def _scene(spec: Mapping[str, Any], source: str, text: str) -> Scene:
             spec.get("lockstep"),
             topics,
             dt,
-            () if joint_state_topics is None else (joint_state_topics["commands"].strip(),),
+            (() if joint_state_topics is None else (joint_state_topics["commands"].strip(),))
+            + ((ROD_COMMAND_TOPIC,) if spacecraft.rods else ()),
         ),
         joint_state_topics=None
         if joint_state_topics is None
@@ -592,8 +593,9 @@ def _scene(spec: Mapping[str, Any], source: str, text: str) -> Scene:
 def lockstep_spec(
     spec: Mapping[str, Any] | None, topics: tuple[TopicInput, ...], dt: float, wheel_inputs: tuple[str, ...] = ()
 ) -> LockstepSpec | None:
-    """The lockstep section: its inputs are topic inputs of the scene (or the wheels' JointState commands
-    topic, ``wheel_inputs``), its period whole steps of dt."""
+    """The lockstep section: its inputs are topic inputs of the scene (or the actuators' command topics,
+    ``wheel_inputs``: the wheels' JointState commands, the rods' ``~/magnetorquer_command``), its period whole
+    steps of dt."""
     if spec is None:
         return None
     known = [t.topic for t in topics] + list(wheel_inputs)

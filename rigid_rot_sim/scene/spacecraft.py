@@ -34,11 +34,15 @@ __all__ = [
     "WheelTorqueSchedule",
     "GravityGradient",
     "TorqueRod",
+    "ROD_COMMAND_TOPIC",
     "Spacecraft",
     "parse_spacecraft",
 ]
 
 Vector3 = tuple[float, float, float]
+
+#: The node's topic of the rods' commands (sensor_msgs/JointState), as ``lockstep.inputs`` may list it.
+ROD_COMMAND_TOPIC = "~/magnetorquer_command"
 
 
 @dataclass(frozen=True)

@@ -24,6 +24,7 @@ SHIPPED = {
     "excitation": "schedule",
     "excitation_gentle": "schedule",
     "cubesat_orbit": "spacecraft",
+    "cubesat_detumble": "spacecraft",
 }
 
 MINIMAL = "body: {principal_moments: [1.0, 2.0, 3.0]}\n"
