@@ -126,7 +126,10 @@ class Watch:
         wall = time.monotonic() - self.start
         if self.samples and wall - self.samples[-1][0] < SAMPLE:
             return
-        self.samples.append((wall, rss_mib(self.pid), self.graph.sim_time))
+        rss = rss_mib(self.pid)
+        if math.isnan(rss):
+            return  # the process has ended (a zombie has no VmRSS): its last sample stands
+        self.samples.append((wall, rss, self.graph.sim_time))
         if wall >= 60.0 * (self.printed + 1):
             self.printed += 1
             earlier = next((s for s in self.samples if s[0] >= wall - 60.0), self.samples[0])
@@ -333,8 +336,10 @@ def soak_commands(minutes: float, work: Path, viewers: bool) -> None:
             port = text.split("Foxglove live server ws://127.0.0.1:", 1)[1].split()[0].rstrip(")")
             foxglove = FoxgloveWatcher(f"ws://127.0.0.1:{int(port)}")
             foxglove.start()
-            page = next((line for line in text.splitlines() if "web page http" in line), "no web page line")
-            print(f"  {label} {page.split(']: ', 1)[-1][:120]}", flush=True)
+            page = (
+                "web page http" + text.split("web page http", 1)[-1].split(";", 1)[0] if "web page http" in text else ""
+            )
+            print(f"  {label} {page or 'no web page line'}", flush=True)
         watch = Watch(label, sim.pid, graph, minutes)
         message = WrenchStamped()
         message.header.frame_id = "base_link"
