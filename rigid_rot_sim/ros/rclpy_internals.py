@@ -31,6 +31,10 @@ from rclpy.guard_condition import GuardCondition
 # rclpy's own wait_for_message and executors use this one. Not needed from the rclpy version that
 # adds a public ``rclpy.wait_set.WaitSet`` (none up to 7.1.6).
 from rclpy.impl.implementation_singleton import rclpy_implementation as _rclpy
+
+# Internal module, public class: the type of ``Node.get_logger()``, for annotations. Missing public API: the
+# logger class under a public module (rclpy.logging has none); not needed from the rclpy version that exports it.
+from rclpy.impl.rcutils_logger import RcutilsLogger as Logger
 from rclpy.node import Node
 from rclpy.subscription import Subscription
 from rclpy.time_source import CLOCK_TOPIC
@@ -198,6 +202,7 @@ class ClockTakenByTheRunLoop(Node):
 
 __all__ = [
     "TAKEN_BY_THE_RUN_LOOP",
+    "Logger",
     "ClockTakenByTheRunLoop",
     "add_to_wait_set",
     "is_ready",

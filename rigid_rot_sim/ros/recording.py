@@ -28,7 +28,6 @@ from collections.abc import Sequence
 from pathlib import Path
 from typing import Any, cast
 
-from rclpy.impl.rcutils_logger import RcutilsLogger
 from rclpy.node import Node
 from rclpy.subscription import Subscription
 
@@ -37,6 +36,7 @@ from rigid_rot_sim.recording.session import RunRecorder
 from rigid_rot_sim.recording.writer import QosProfile, RecorderError
 from rigid_rot_sim.ros.intake import CommandDoor
 from rigid_rot_sim.ros.outputs import Outputs
+from rigid_rot_sim.ros.rclpy_internals import Logger
 from rigid_rot_sim.run.commands import TorqueCommand
 from rigid_rot_sim.run.digest import format_digest
 from rigid_rot_sim.run.observer import SimulationObserver
@@ -62,7 +62,7 @@ _ROLES = (
 class NodeRecording(SimulationObserver):
     """The run's file, fed by the simulator's reports and the node's published and received messages."""
 
-    def __init__(self, file: RunRecorder, sim: Simulator, logger: RcutilsLogger) -> None:
+    def __init__(self, file: RunRecorder, sim: Simulator, logger: Logger) -> None:
         self.file = file
         self.sim = sim
         self.logger = logger
