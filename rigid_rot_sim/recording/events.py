@@ -22,7 +22,16 @@ from typing import Any
 
 EVENT_TYPE = "diagnostic_msgs/msg/DiagnosticStatus"
 EVENT_PREFIX = "rigid_rot_sim/"
-KINDS = ("torque", "apply_torque", "set_state", "reset", "integrator", "wheel_torque", "lockstep_timeout")
+KINDS = (
+    "torque",
+    "apply_torque",
+    "set_state",
+    "reset",
+    "integrator",
+    "wheel_torque",
+    "rod_dipoles",
+    "lockstep_timeout",
+)
 
 
 @dataclass(frozen=True)

@@ -191,6 +191,9 @@ def _apply(sim: Simulator, event: SimEvent, override_method: str | None) -> None
     elif kind == "wheel_torque":  # the torques as clamped then: they clamp to themselves
         torques = event.vector("torques", len(sim.scene.spacecraft.wheels))
         sim.submit_wheel_torques(event.values["source"], torques, effective_time=event.number("effective_time"))
+    elif kind == "rod_dipoles":  # the dipoles as clamped then: they clamp to themselves
+        dipoles = event.vector("dipoles", len(sim.scene.spacecraft.rods))
+        sim.submit_rod_dipoles(event.values["source"], dipoles, effective_time=event.number("effective_time"))
     elif kind == "apply_torque":
         frame_id = sim.frames.body if event.values["frame"] == "body" else sim.frames.world
         sim.apply_torque(

@@ -203,6 +203,20 @@ class NodeRecording(SimulationObserver):
             clamped=list(clamped),
         )
 
+    def rod_command_accepted(
+        self, step: int, source: str, dipoles: Sequence[float], effective_time: float, clamped: Sequence[int]
+    ) -> None:
+        said = f"; clamped to max_dipole: rod(s) {list(clamped)}" if clamped else ""
+        self._event(
+            "rod_dipoles",
+            step,
+            f"{source}: rod dipoles {list(dipoles)} A*m^2 from t = {effective_time:.9g} s{said}",
+            source=source,
+            dipoles=tuple(float(v) for v in dipoles),
+            effective_time=float(effective_time),
+            clamped=list(clamped),
+        )
+
     def torque_applied(self, step: int, command: TorqueCommand) -> None:
         self._event(
             "apply_torque",

@@ -8,7 +8,9 @@ is a part of a scene that acts on the state, named by its scene key (``schedules
 ``spacecraft.wheels.friction``, ...): :func:`features_of` lists those a scene uses. :data:`PATHS`
 declares, per path, the features it runs; :func:`refuse_unhonoured` is the one check every path makes
 before any work: a ``ValueError`` naming the first feature the path does not run, in one line (the CLI
-turns it into stderr and exit 2). A path never runs a scene without one of its sources.
+turns it into stderr and exit 2). A path never runs a scene without one of its sources. The Gymnasium
+envs take no scene today (they build their bodies from arguments): an env that takes one declares its
+path here and calls :func:`refuse_unhonoured` in its constructor.
 
 Every field of :class:`~rigid_rot_sim.scene.scene.Scene`, recursively, is classified in
 :data:`FEATURE_FIELDS` (a field a feature reads) or in :data:`SETTINGS` (a field that acts on no state:
@@ -124,9 +126,8 @@ SETTINGS: Mapping[str, str] = {
 }
 
 _ALL = frozenset(FEATURES)
-#: What the engine runs but no recording carries yet: the rods' commands (resim would run them at zero), and
-#: the rods' field at the magnetometer (the engine's magnetometer reads the Earth's field alone).
-_WAITING = frozenset({"spacecraft.magnetorquers", "spacecraft.magnetorquers.coupling"})
+#: What no path runs yet: the rods' field at the magnetometer (the engine's magnetometer reads the Earth's alone).
+_WAITING = frozenset({"spacecraft.magnetorquers.coupling"})
 _SWEEP = frozenset(
     {
         "body",
@@ -146,7 +147,7 @@ _SWEEP = frozenset(
 #: What each path runs (a feature outside its set is refused by :func:`refuse_unhonoured`).
 PATHS: Mapping[str, frozenset[str]] = {
     # the run engine, rigid_rot_sim.run.simulator.Simulator (the node and lockstep drive it)
-    "engine": _ALL - {"spacecraft.magnetorquers.coupling"},
+    "engine": _ALL - _WAITING,
     # rigid_rot_sim.recording.resim: the engine fed the recorded commands and seeds
     "resim": _ALL - _WAITING,
     # rigid_rot_sim.sweep: the batch kernels, the engine per sample where none applies

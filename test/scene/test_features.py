@@ -123,3 +123,18 @@ def test_features_of_a_scene():
         "spacecraft.wheels.friction",
     )
     assert features.MEASUREMENTS <= set(FEATURES)
+
+
+def test_each_path_checks_its_declaration_before_any_work(monkeypatch):
+    """A feature taken off a path's declaration is refused there by name: the engine, the sweep."""
+    from rigid_rot_sim.run.simulator import Simulator
+    from rigid_rot_sim.sweep.spec import SweepSpecError, parse_sweep_text
+
+    scene = load_scene(str(SCENES / "gravity_gradient_satellite.yaml"))
+    for path in ("engine", "sweep"):
+        monkeypatch.setitem(PATHS, path, PATHS[path] - {"spacecraft.gravity_gradient"})
+    with pytest.raises(ValueError, match=r"^spacecraft\.gravity_gradient: not run by the engine path"):
+        Simulator(scene)
+    spec = "scene: gravity_gradient_satellite\nseed: 1\nsamples: 1\ngrid: {method: [gyrostat_rk4], dt: [1.0]}\n"
+    with pytest.raises(SweepSpecError, match=r"^g\.yaml: scene: spacecraft\.gravity_gradient: not run by the sweep"):
+        parse_sweep_text(spec, "g.yaml")

@@ -213,3 +213,23 @@ def test_a_dispersed_wheel_sweep_runs_each_sample_in_the_engine_on_its_own_scene
     # the nominal body is the scene itself, bits included
     nominal = dispersed_scene(spec, _bodies(spec, None, None), 0)
     assert nominal.body == spec.scene.body and nominal.initial == spec.scene.initial
+
+
+def test_a_run_by_the_engine_per_sample_ends_on_the_duration_with_a_last_shorter_step():
+    """1.005 s at dt = 0.01 s: 100 steps, then the engine's dt changed to the remainder for one last step, as a
+    node's set_integrator does."""
+    spec = parse_sweep_text(
+        "scene: wheel_slew\nseed: 1\nsamples: 1\nduration: 1.005\n"
+        "grid: {method: [gyrostat_rk4], dt: [0.01]}\nnominal: {method: gyrostat_rk4, dt: 0.01}\ncheckpoints: 4\n",
+        "short.yaml",
+    )
+    sweep = run_nominal(spec, None)
+    sim = Simulator(spec.scene, method="gyrostat_rk4", dt=0.01)
+    n_full, last = step_grid(1.005, 0.01)  # the remainder, as the batch's last step: 1.005 - 100 x 0.01
+    assert n_full == 100 and last == pytest.approx(0.005, abs=1e-15)
+    sim.advance_to(100)
+    sim.set_integrator(dt=last)
+    sim.advance(1)
+    assert sim.clock.t == pytest.approx(1.005, abs=1e-15)
+    assert np.array_equal(sweep.omega_body[0], sim.snapshot().angular_velocity_body)
+    assert not sweep.errors and np.isfinite(sweep.max_omega[0]) and sweep.max_omega[0] > 0.0
