@@ -83,7 +83,8 @@ def test_rods_need_the_field_and_paths_that_do_not_run_them_refuse_them():
         parse_scene_text(no_field)
     scene = parse_scene_text(SCENE)
     Simulator(scene)  # the engine runs them
-    for path in ("resim", "sweep", "simulate"):
+    refuse_unhonoured(scene, "resim")  # resim replays the recorded rod commands
+    for path in ("sweep", "simulate"):
         with pytest.raises(ValueError, match=f"^spacecraft.magnetorquers: not run by the {path} path"):
             refuse_unhonoured(scene, path)
     coupled = SCENE.replace("max_dipole: 0.1}", "max_dipole: 0.1, magnetometer_coupling: [0.0, 0.0, 1.0e-6]}")

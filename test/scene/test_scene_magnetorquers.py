@@ -1,5 +1,5 @@
 """``actuators.magnetorquers``: parsed into the core's Magnetorquers, bad rods refused naming the key, every
-path but the engine refusing the rods by name."""
+path but the engine and resim refusing the rods by name."""
 
 from __future__ import annotations
 
@@ -54,11 +54,11 @@ def test_bad_rods_are_refused_naming_the_key(edit, message):
         parse_scene_text(BASE.replace(*edit))
 
 
-def test_the_engine_runs_rods_and_every_other_path_refuses_them_by_name():
+def test_the_engine_and_resim_run_rods_and_the_other_paths_refuse_them_by_name():
     scene = parse_scene_text(BASE.replace(", magnetometer_coupling: [0.0, 1.0e-6, 0.0]", ""))
     assert "spacecraft.magnetorquers" in features_of(scene)
     for path in PATHS:
-        if path == "engine":
+        if path in ("engine", "resim"):
             refuse_unhonoured(scene, path)
             continue
         with pytest.raises(ValueError, match=r"^spacecraft.magnetorquers: not run by the"):
