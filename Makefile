@@ -53,6 +53,12 @@ TEST_PINS := pytest==9.2.0 hypothesis==6.170.15 rosbags==0.11.9 websockets==15.0
 	ruff==0.17.6 mypy==2.4.1 types-PyYAML==6.0.12.20261113 scipy-stubs==1.17.1.5 mpmath==1.3.0 \
 	geomaglib==1.2.4
 
+# colcon, for test/test_colcon.py only (installed there into a throwaway venv, never into .venv): the
+# versions colcon_defaults.yaml is checked with (colcon-common-extensions' discovery: recursive crawl,
+# workspace defaults, ROS package identification).
+COLCON_PINS := colcon-core==0.21.3 colcon-defaults==0.2.9 colcon-recursive-crawl==0.2.3 colcon-ros==0.5.0 \
+	colcon-package-information==0.4.1
+
 # The compiled kernels are built from these (rigid_rot_sim/core/jit.py keys their cache on them).
 CORE_SOURCES := $(shell find rigid_rot_sim/core -name '*.py' 2>/dev/null)
 
@@ -65,7 +71,15 @@ MSGS_SOURCES := $(wildcard rigid_rot_msgs/CMakeLists.txt rigid_rot_msgs/package.
 # index entry, bin/activate). Both idempotent.
 TOOLS := $(CURDIR)/tools
 
-.PHONY: setup demo test clean check-tools FORCE
+.PHONY: setup demo test clean check-tools print-ros-pins print-colcon-pins FORCE
+
+# The pinned ROS 2 Jazzy wheels, one per line: what building rigid_rot_msgs into another venv needs
+# (docs/install.md).
+print-ros-pins:
+	@printf '%s\n' $(ROS_PINS)
+
+print-colcon-pins:
+	@printf '%s\n' $(COLCON_PINS)
 
 setup: check-tools $(STAMPS)/kernels $(STAMPS)/workspace
 
@@ -153,7 +167,8 @@ $(STAMPS)/workspace: $(STAMPS)/package tools/install_workspace.py $(VENV)/bin/ac
 	touch $@
 
 # The main job: the free_tumble scene (embedded defaults), 12 s of sim time at 4x wall pace on a private
-# DDS domain, its states echoed as they arrive over DDS, the run recorded to MCAP; then the
+# DDS domain (an exported ROS_DOMAIN_ID is honoured, as every ROS tool does; else one from the PID,
+# localhost only), its states echoed as they arrive over DDS, the run recorded to MCAP; then the
 # recording is summarised, re-simulated bit for bit without DDS, and plotted.
 DEMO_SCENE := free_tumble
 DEMO_BAG := out/demo_$(DEMO_SCENE).mcap
@@ -180,7 +195,7 @@ demo: setup
 	@mkdir -p out && rm -f $(DEMO_BAG)
 	@echo "== rigid-rot run $(DEMO_SCENE): the node over DDS, recorded to $(DEMO_BAG) =="
 	@if [ -n "$(WEB)" ]; then echo "web page: open http://127.0.0.1:$(WEB_PORT)/ in a browser (offline; docs/viewer.md)"; fi
-	@export ROS_DOMAIN_ID=$$(( ($$$$ % 100) + 1 )) ROS_AUTOMATIC_DISCOVERY_RANGE=LOCALHOST; \
+	@export ROS_DOMAIN_ID=$${ROS_DOMAIN_ID:-$$(( ($$$$ % 100) + 1 ))} ROS_AUTOMATIC_DISCOVERY_RANGE=$${ROS_AUTOMATIC_DISCOVERY_RANGE:-LOCALHOST}; \
 	"$(VENV)/bin/rigid-rot" run $(DEMO_SCENE) --duration 12 --realtime-factor $(if $(WEB),1,4) --echo 1 --record $(DEMO_BAG) \
 		$(if $(WEB),--web 127.0.0.1:$(WEB_PORT))
 	@echo
@@ -194,7 +209,7 @@ demo: setup
 	@"$(VENV)/bin/rigid-rot" plot $(DEMO_BAG) --out out/demo_plots
 	@echo
 	@echo "== closed loop in lockstep: rigid-rot-controller slews the body 60 deg, twice, as fast as it answers =="
-	@export ROS_DOMAIN_ID=$$(( ($$$$ % 100) + 101 )) ROS_AUTOMATIC_DISCOVERY_RANGE=LOCALHOST; \
+	@export ROS_DOMAIN_ID=$${ROS_DOMAIN_ID:-$$(( ($$$$ % 100) + 101 ))} ROS_AUTOMATIC_DISCOVERY_RANGE=$${ROS_AUTOMATIC_DISCOVERY_RANGE:-LOCALHOST}; \
 	for run in 1 2; do \
 		rm -f out/demo_loop_$$run.mcap; \
 		"$(VENV)/bin/rigid-rot-controller" --ros-args --log-level warn -p target:="$(LOOP_TARGET)" & controller=$$!; \

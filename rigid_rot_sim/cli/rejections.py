@@ -9,6 +9,12 @@ node) and keeps the rejections of this CLI's own commands: those on its topic th
 frame_id and a torque it sent. (RejectedCommand carries no sender, so an identical command of
 another publisher at the same time would be taken for ours.)
 
+The node also says what it accepted: a ``torque`` event on its live ``~/sim_events`` for each
+command it scheduled (:mod:`rigid_rot_sim.ros.sim_events`). The watch subscribes to those too,
+volatile (the topic's latched history is of earlier commands), so that a CLI knows when the
+node has answered every command it sent (:meth:`RejectionWatch.answered`) instead of listening
+for a fixed time.
+
 ``rigid-rot torque`` uses it; its module docstring says how long it listens.
 """
 
@@ -24,6 +30,7 @@ from rigid_rot_sim.core import limits
 __all__ = ["REJECTED_TYPE", "RejectionWatch", "resolve_source"]
 
 REJECTED_TYPE = "rigid_rot_msgs/msg/RejectedCommand"
+EVENTS_TYPE = "diagnostic_msgs/msg/DiagnosticStatus"
 
 
 def resolve_source(source: str, node_namespace: str, node_name: str) -> str:
@@ -54,11 +61,24 @@ class RejectionWatch:
         self._sent: set[tuple[str, tuple[float, ...]]] = set()
         #: (node, reason) of each rejection of this CLI's commands, in arrival order.
         self.rejections: list[tuple[str, str]] = []
+        #: Fully qualified ~/sim_events topics watched -> their subscription.
+        self.events: dict[str, Any] = {}
+        #: How many of this CLI's commands the nodes accepted (their ``torque`` events), and sent.
+        self.accepted = 0
+        self.count = 0
 
     def discover(self) -> None:
         """Subscribe to the ~/rejected of each node now subscribed to the command topic."""
+        from diagnostic_msgs.msg import DiagnosticStatus
+        from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
+
         from rigid_rot_msgs.msg import RejectedCommand  # generated, untyped
         from rigid_rot_sim.ros.qos import REJECTED_QOS
+
+        # volatile: the node's latched history holds earlier commands' events, not ours
+        EVENTS_QOS = QoSProfile(
+            depth=1000, reliability=ReliabilityPolicy.RELIABLE, durability=DurabilityPolicy.VOLATILE
+        )
 
         for info in self.node.get_subscriptions_info_by_topic(self.topic):
             peer = f"{info.node_namespace.rstrip('/')}/{info.node_name}"
@@ -70,14 +90,42 @@ class RejectionWatch:
             self.watched[rejected] = self.node.create_subscription(
                 RejectedCommand, rejected, self._listener(info.node_namespace, info.node_name, peer), REJECTED_QOS
             )
+            events = f"{peer}/sim_events"
+            if any(p.topic_type == EVENTS_TYPE for p in self.node.get_publishers_info_by_topic(events)):
+                self.events[events] = self.node.create_subscription(
+                    DiagnosticStatus, events, self._event_listener(info.node_namespace, info.node_name), EVENTS_QOS
+                )
 
     def ready(self) -> bool:
-        """Every watched ~/rejected is matched with its node's publisher."""
-        return all(sub.get_publisher_count() > 0 for sub in self.watched.values())
+        """Every watched ~/rejected and ~/sim_events is matched with its node's publisher."""
+        return all(sub.get_publisher_count() > 0 for sub in (*self.watched.values(), *self.events.values()))
 
     def sent(self, frame_id: str, torque: Iterable[float]) -> None:
         """Remember a command published (its frame_id and torque, N*m)."""
         self._sent.add((limits.clip_text(frame_id), tuple(float(v) for v in torque)))
+        self.count += 1
+
+    def answered(self) -> bool:
+        """The nodes accepted or refused every command sent (False when no ~/sim_events is watched)."""
+        return bool(self.events) and self.accepted + len(self.rejections) >= self.count
+
+    def _event_listener(self, namespace: str, name: str) -> Callable[[Any], None]:
+        return lambda msg: self._event(msg, namespace, name)
+
+    def _event(self, msg: Any, namespace: str, name: str) -> None:
+        from rigid_rot_sim.recording.events import EVENT_PREFIX
+
+        if msg.name != f"{EVENT_PREFIX}torque":
+            return
+        values = {str(kv.key): str(kv.value) for kv in msg.values}
+        if resolve_source(values.get("source", ""), namespace, name) != self.topic:
+            return
+        try:
+            torque = tuple(float(values[f"torque_{i}"]) for i in range(3))
+        except (KeyError, ValueError):
+            return
+        if any(torque == sent for _, sent in self._sent):
+            self.accepted += 1
 
     def _listener(self, namespace: str, name: str, peer: str) -> Callable[[Any], None]:
         return lambda msg: self._received(msg, namespace, name, peer)

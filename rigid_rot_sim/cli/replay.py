@@ -3,9 +3,10 @@
 The commands go out as recorded (same bytes: header stamps, frames and values), with the
 original timing scaled by ``--rate``. ``--topics`` picks topics (default: the recording
 node's torque inputs, else every WrenchStamped topic), ``--remap OLD:=NEW`` renames one
-(a real robot's command topic onto the simulator's input), ``--clock`` publishes /clock
-from the bag's time. The timing is the bag's log time: sim time for the simulator's own
-recordings (the default), so a replay runs at the recorded sim pace. ``--ros-args`` passes
+(a real robot's command topic onto the simulator's input), ``--clock [HZ]`` publishes /clock
+from the bag's time (40 Hz without a value). The timing is the bag's log time, from the bag's
+start, as ``ros2 bag play`` times it: sim time for the simulator's own recordings (the
+default), so a replay runs at the recorded sim pace. ``--ros-args`` passes
 remappings, a namespace or parameters to ROS.
 
 Like ``rigid-rot torque``, it watches the ``~/rejected`` of the nodes it commands
@@ -23,6 +24,7 @@ from typing import Any
 from rigid_rot_sim.cli.argtypes import nonnegative_number
 from rigid_rot_sim.cli.ros_args import add_ros_args, rclpy_args
 from rigid_rot_sim.cli.torque import DEFAULT_CONFIRM, REJECTED_DISCOVERY
+from rigid_rot_sim.recording.replay import CLOCK_RATE
 
 #: A command as the node echoes it on ~/rejected: frame_id and torque (N*m).
 Command = tuple[str, tuple[float, float, float]]
@@ -36,7 +38,16 @@ def add_parser(subparsers) -> None:
     parser.add_argument("--rate", type=float, default=1.0, help="playback speed factor (default 1.0)")
     parser.add_argument("--topics", nargs="+", metavar="TOPIC", help="recorded topics to replay")
     parser.add_argument("--remap", action="append", default=[], metavar="OLD:=NEW", help="publish OLD on NEW")
-    parser.add_argument("--clock", action="store_true", help="also publish /clock from the bag's time")
+    parser.add_argument(
+        "--clock",
+        type=nonnegative_number,
+        nargs="?",
+        const=CLOCK_RATE,
+        default=0.0,
+        metavar="HZ",
+        help=f"also publish /clock from the bag's time, from its start, at HZ (default {CLOCK_RATE:g}, "
+        "as ros2 bag play --clock)",
+    )
     parser.add_argument(
         "--wait",
         type=float,

@@ -16,8 +16,11 @@ The node may refuse a command it received (a ``--frame`` the scene does not name
 above ``commands.max_torque``): it says so on its ``~/rejected``, which this command watches
 (:mod:`.rejections`). A refused command ends it with the node's reason as one line on stderr
 and exit code 2 (with ``--duration``, at the first refusal, after a zero torque). Having sent,
-it listens ``--confirm`` s (default 1) after the node acknowledged the last command before it
-reports success: a refusal later than that goes unseen.
+it waits until the node has answered every command (accepted, on its live ``~/sim_events``, or
+refused), at most ``--confirm`` s (default 1): done within a few hundredths of a second of the
+last command, not after a fixed window. A node without ``~/sim_events`` (no ``mcap`` packages)
+is listened to for ``--confirm`` s after it acknowledged the last command; a refusal later than
+that goes unseen.
 ``--ros-args`` passes remappings, a namespace or parameters to ROS, as with ``ros2 run``.
 """
 
@@ -31,7 +34,7 @@ from rigid_rot_sim.cli.argtypes import finite_number, nonnegative_number, positi
 from rigid_rot_sim.cli.ros_args import add_ros_args, rclpy_args
 
 DEFAULT_TOPIC = "/rigid_rot_sim/torque"
-#: Seconds to listen for a refusal after the node acknowledged the last command.
+#: Most seconds to wait for the node's answer to the commands (a fixed window without ~/sim_events).
 DEFAULT_CONFIRM = 1.0
 #: Most seconds to wait, once the node subscribes, for its ~/rejected to be on the graph and matched.
 REJECTED_DISCOVERY = 2.0
@@ -58,7 +61,7 @@ def add_parser(subparsers) -> None:
         "--confirm",
         type=nonnegative_number,
         default=DEFAULT_CONFIRM,
-        help=f"seconds to listen to the node's ~/rejected after the last command (default {DEFAULT_CONFIRM:g})",
+        help=f"most seconds to wait for the node's answer after the last command (default {DEFAULT_CONFIRM:g})",
     )
     add_ros_args(parser)
     parser.set_defaults(handler=run)
@@ -132,17 +135,24 @@ def run(args: argparse.Namespace) -> int:
                 sent += 1
                 spin_until(lambda: bool(watch.rejections), start + min(sent * period, args.duration))
             send((0.0, 0.0, 0.0))
-        # reliable delivery: the node has every command, then a moment for its verdict
-        publisher.wait_for_all_acked(rclpy.duration.Duration(seconds=2.0))
-        if watch.watched:
-            spin_until(lambda: bool(watch.rejections), time.monotonic() + args.confirm)
+        if watch.events:  # the node's answer to every command: as soon as it is in
+            spin_until(watch.answered, time.monotonic() + args.confirm)
+        else:  # reliable delivery: the node has every command, then a moment for its verdict
+            publisher.wait_for_all_acked(rclpy.duration.Duration(seconds=2.0))
+            if watch.watched:
+                spin_until(lambda: bool(watch.rejections), time.monotonic() + args.confirm)
         if watch.rejections:
             peer, reason = watch.rejections[0]
             raise ValueError(
                 f"{peer} rejected the command on {publisher.topic_name} "
                 f"({len(watch.rejections)} of {sent + (args.duration is not None)} refused): {reason}"
             )
-        unwatched = "" if watch.watched else " (not confirmed: no ~/rejected of the subscriber to watch)"
+        if not watch.watched:
+            unwatched = " (not confirmed: no ~/rejected of the subscriber to watch)"
+        elif watch.events and not watch.answered():
+            unwatched = f" (the node answered {watch.accepted} of {watch.count} within --confirm {args.confirm:g} s)"
+        else:
+            unwatched = ""
         print(
             f"rigid-rot torque: {sent} command(s) {list(torque)} N*m in frame {args.frame!r} on {publisher.topic_name}"
             + (", then zero" if args.duration is not None else "")

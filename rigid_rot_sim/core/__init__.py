@@ -25,6 +25,7 @@ Modules, one job each:
 * :mod:`.orbit` - Keplerian orbits with J2, the Earth's rotation, WGS-84, NED and LVLH;
   :mod:`.geomagnetic` - IGRF-14, WMM2025 and the dipole field, on the coefficients of
   :mod:`.geomagnetic_coefficients`;
+  :mod:`.sensitivities` - Euler's equations with parameter sensitivities (``rigid-rot identify``'s model);
 * :mod:`.quaternion` - quaternion helpers on floats; :mod:`.steps` - which step a time lands on
   and how many steps a duration takes;
 * :mod:`.jit` - numba with an on-disk cache; :mod:`.precompile` - fills that cache;

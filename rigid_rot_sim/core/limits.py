@@ -23,6 +23,8 @@ __all__ = [
     "MAX_ERROR_CHARS",
     "DT_RANGE",
     "REAL_TIME_FACTOR_RANGE",
+    "MIN_REAL_TIME_FACTOR",
+    "check_real_time_factor",
     "DURATION_RANGE",
     "RATE_RANGE",
     "MIN_RATE",
@@ -64,6 +66,9 @@ MAX_ERROR_CHARS = 300
 # Parameter ranges (inclusive), shared by the scene schema (scene/scene_schema.py) and the node's descriptors.
 DT_RANGE = (1e-7, 10.0)  # s
 REAL_TIME_FACTOR_RANGE = (0.0, 1000.0)  # 0 = as fast as possible
+#: Slowest pace other than 0 (as fast as possible): a second of sim time in at most about 11.6 days of
+#: wall time. A slower one (a subnormal 5e-324) never reaches a step: the run would never advance.
+MIN_REAL_TIME_FACTOR = 1e-6
 DURATION_RANGE = (0.0, 1e9)  # s of sim time; 0 = unbounded (parameter)
 RATE_RANGE = (0.0, 1e6)  # Hz of sim time; 0 = not published
 #: Slowest rate (Hz of sim time) other than 0: a period of at most the longest duration. A slower
@@ -85,6 +90,17 @@ def check_rate(rate: float) -> float:
     raise ValueError(
         f"must be 0 (not published) or from {MIN_RATE:g} to {RATE_RANGE[1]:g} Hz "
         f"(a period of at most {DURATION_RANGE[1]:g} s), got {rate!r}"
+    )
+
+
+def check_real_time_factor(real_time_factor: float) -> float:
+    """``real_time_factor`` when it is 0 (as fast as possible) or from :data:`MIN_REAL_TIME_FACTOR` to
+    ``REAL_TIME_FACTOR_RANGE[1]``, else ValueError saying the range (scene files, parameters)."""
+    if real_time_factor == 0.0 or MIN_REAL_TIME_FACTOR <= real_time_factor <= REAL_TIME_FACTOR_RANGE[1]:
+        return real_time_factor
+    raise ValueError(
+        f"must be 0 (as fast as possible) or from {MIN_REAL_TIME_FACTOR:g} to {REAL_TIME_FACTOR_RANGE[1]:g} "
+        f"(a slower pace never reaches a step), got {real_time_factor!r}"
     )
 
 

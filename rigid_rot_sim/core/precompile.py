@@ -28,7 +28,7 @@ import numpy as np
 
 def entry_points() -> dict[str, Any]:
     """The compiled entry points of the core (numba dispatchers, which numba does not type), by name."""
-    from rigid_rot_sim.core import batch, batch_gyrostat, exact, geomagnetic, slew
+    from rigid_rot_sim.core import batch, batch_gyrostat, exact, geomagnetic, sensitivities, slew
     from rigid_rot_sim.core.integrators import gyrostat, kernels, taylor
 
     return {
@@ -47,6 +47,7 @@ def entry_points() -> dict[str, Any]:
         "batch_gyrostat._advance_parallel": batch_gyrostat._advance_parallel,
         "slew.slew_update": slew.slew_update,
         "geomagnetic.field_eci_on_orbit_compiled": geomagnetic.field_eci_on_orbit_compiled,
+        "sensitivities.integrate_segments": sensitivities.integrate_segments,
     }
 
 
@@ -107,6 +108,22 @@ def exercise() -> None:
     from rigid_rot_sim.core.orbit import kepler_orbit
 
     orbit_field("igrf14", kepler_orbit(7e6, 0.0, 1.0, 0.0, 0.0, 0.0), datetime.datetime(2025, 1, 1), None).eci(1.0)
+    from rigid_rot_sim.core.sensitivities import integrate_segments
+
+    for k, with_sens in ((6, True), (0, False)):  # rigid-rot identify's fit, then its validation replays
+        integrate_segments(
+            np.array([0.0, 0.1, 0.2]),
+            np.zeros((3, 3)),
+            np.arange(3, dtype=np.int64),
+            np.array([0, 3], dtype=np.int64),
+            np.diag(moments),
+            np.zeros((k, 3, 3)),
+            np.zeros(3),
+            np.ones((1, 3)),
+            np.array([[0.0, 0.0, 0.0, 1.0]]),
+            3,
+            with_sens,
+        )
     from rigid_rot_sim.core.exact import torque_free_flow, torque_free_solution
 
     solution = torque_free_solution(moments, (1.0, 0.1, 0.5))
@@ -161,7 +178,8 @@ def ensure_compiled(say: Callable[[str], None]) -> float:
     if kernels_cached():
         return 0.0
     say(
-        "compiling the numba kernels once for this install (about 15-60 s; they are cached for later runs, "
+        "compiling the numba kernels once for this install (about 1.5 min of CPU time, minutes more on a busy "
+        "machine: docs/benchmarks.md; they are cached for later runs, "
         "`python -m rigid_rot_sim.core.precompile` does it ahead)"
     )
     start = time.perf_counter()

@@ -5,7 +5,8 @@ is a thin shell over it. Modules:
 
 * :mod:`rigid_rot_sim.identify.data`: :class:`~rigid_rot_sim.identify.data.Measurements` (gyro samples,
   attitude) and :class:`~rigid_rot_sim.identify.data.PiecewiseTorque` (piecewise-constant body torque);
-* :mod:`rigid_rot_sim.identify.kernel`: Euler's equations with parameter sensitivities (compiled RK4);
+* (the model, Euler's equations with parameter sensitivities, compiled RK4, is the core's
+  :mod:`rigid_rot_sim.core.sensitivities`, precompiled with every other kernel);
 * :mod:`rigid_rot_sim.identify.fit`: :func:`~rigid_rot_sim.identify.fit.identify`, equation error then
   output error, covariance and observability;
 * :mod:`rigid_rot_sim.identify.report`: validation replays, the JSON object, the body YAML, the summary;

@@ -8,7 +8,7 @@
    with the measured ``w`` (trapezoid rule) and the torque integrated exactly. A linear least
    squares gives the starting tensor (moved into the physical set if noise left it outside).
 2. **Output error**: the window is cut into segments (``segment`` s each), each re-simulated
-   from its own initial angular velocity by :func:`rigid_rot_sim.identify.kernel.integrate_segments`;
+   from its own initial angular velocity by :func:`rigid_rot_sim.core.sensitivities.integrate_segments`;
    the residuals ``w_model + gyro_bias - w_measured``, weighted per axis by the noise measured in
    them, are minimised over (tensor, torque bias, gyro bias, initial rates) by
    ``scipy.optimize.least_squares`` with the exact Jacobian (forward sensitivities).
@@ -30,8 +30,8 @@ from dataclasses import dataclass, field
 import numpy as np
 from scipy.optimize import least_squares
 
+from rigid_rot_sim.core.sensitivities import integrate_segments
 from rigid_rot_sim.identify.data import Measurements
-from rigid_rot_sim.identify.kernel import integrate_segments
 
 #: Names of the tensor's six values, the order of the covariance matrices.
 INERTIA_NAMES = ("Ixx", "Iyy", "Izz", "Ixy", "Ixz", "Iyz")

@@ -16,9 +16,9 @@ from typing import Any
 import numpy as np
 from scipy.spatial.transform import Rotation
 
+from rigid_rot_sim.core.sensitivities import integrate_segments
 from rigid_rot_sim.identify.data import Measurements
 from rigid_rot_sim.identify.fit import Identification, build_grid
-from rigid_rot_sim.identify.kernel import integrate_segments
 
 
 @dataclass(frozen=True)

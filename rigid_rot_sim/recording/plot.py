@@ -9,7 +9,9 @@
 * ``polhode.png``: the path of ω on the energy ellipsoid ω·Iω = 2T in the principal
   frame (the polhode), coloured by time;
 * ``sensors.png`` (runs with sensor models): the gyro's reading minus the true ω and the
-  star tracker's attitude error about the body axes, against their 1-sigma noise.
+  star tracker's attitude error about the body axes, against their 1-sigma noise;
+* ``wheels.png`` (runs with reaction wheels, ``~/wheels`` recorded): each wheel's speed relative
+  to the body and its motor torque over sim time.
 """
 
 from __future__ import annotations
@@ -29,6 +31,9 @@ from rigid_rot_sim.scene.scene import parse_scene_text
 
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
+
+#: The type of the recorded ~/wheels (the node's JointState of its reaction wheels).
+WHEELS_TYPE = "sensor_msgs/msg/JointState"
 
 _AXIS_COLOURS = ("tab:red", "tab:green", "tab:blue")
 
@@ -198,13 +203,16 @@ def plot_run(path: str | os.PathLike[str], out_dir: str | os.PathLike[str] | Non
         xlim=(-span, span),
         ylim=(-span, span),
         zlim=(-span, span),
-        xlabel=f"ω1 (rad/s), I1 = {moments[0]:.4g}",
-        ylabel=f"ω2 (rad/s), I2 = {moments[1]:.4g}",
-        zlabel=f"ω3 (rad/s), I3 = {moments[2]:.4g}",
+        xlabel="ω1 (rad/s)",
+        ylabel="ω2 (rad/s)",
+        zlabel="ω3 (rad/s)",
     )
-    ax3.set_box_aspect((1, 1, 1))
+    ax3.set_box_aspect((1, 1, 1), zoom=0.9)  # room for the z label inside the axes (it met the next plot's)
     ax3.set_title(
-        "on the energy ellipsoid ω·Iω = 2T0" + ("\n(initial energy; torques move ω off it)" if driven else "")
+        "on the energy ellipsoid ω·Iω = 2T0, I = "
+        + ", ".join(f"{m:.4g}" for m in moments)
+        + " kg*m^2"
+        + ("\n(initial energy; torques move ω off it)" if driven else "")
     )
     # the same path seen along the principal axis ω stays closest to: the polhode's shape
     along = int(np.argmax(np.mean(np.abs(omega_p), axis=0)))
@@ -228,7 +236,38 @@ def plot_run(path: str | os.PathLike[str], out_dir: str | os.PathLike[str] | Non
     figure = _sensor_errors(reader)
     if figure is not None:
         save(figure, "sensors.png")
+    figure = wheel_figure(reader)
+    if figure is not None:
+        save(figure, "wheels.png")
     return written
+
+
+def wheel_figure(reader: BagReader):
+    """The reaction wheels' speeds and motor torques over sim time (the recorded ~/wheels); None without them."""
+    topic = reader.find_topic("wheels", WHEELS_TYPE)
+    if topic is None:
+        return None
+    t: list[float] = []
+    speeds: list[list[float]] = []
+    torques: list[list[float]] = []
+    names: list[str] = []
+    for _, msg in reader.decoded([topic]):
+        names = list(msg.name) or names
+        t.append(time_to_seconds(msg.header.stamp))
+        speeds.append(list(msg.velocity))
+        torques.append(list(msg.effort))
+    if not t or not names:
+        return None
+    fig, (top, bottom) = plt.subplots(2, 1, figsize=(9, 6.5), sharex=True)
+    for i, name in enumerate(names):
+        top.plot(t, [row[i] if i < len(row) else np.nan for row in speeds], label=name)
+        bottom.plot(t, [row[i] if i < len(row) else np.nan for row in torques], label=name)
+    top.set(ylabel="wheel speed, relative to the body (rad/s)", title=_title(reader, "Reaction wheels"))
+    bottom.set(xlabel="sim time (s)", ylabel="motor torque (N*m)")
+    for ax in (top, bottom):
+        ax.grid(True, alpha=0.3)
+        ax.legend(loc="best")
+    return fig
 
 
 def _sensor_errors(reader: BagReader):

@@ -138,6 +138,7 @@ class BagReader:
         if not self.path.is_file():
             raise FileNotFoundError(f"no such recording: {self.path}")
         self.complete = self._has_summary()
+        self._start_time_ns: int | None = None
         self._scan: ScanResult | None = None if self.complete else scan(self.path)
         self.topics: dict[str, Topic] = {}
         self.metadata: dict[str, dict[str, str]] = {}
@@ -148,6 +149,9 @@ class BagReader:
                 assert summary is not None
                 schemas, channels = summary.schemas, summary.channels
                 metadata = list(reader.iter_metadata())
+                statistics = summary.statistics
+                if statistics is not None and statistics.message_count:
+                    self._start_time_ns = int(statistics.message_start_time)
         else:
             assert self._scan is not None
             schemas, channels, metadata = self._scan.schemas, self._scan.channels, self._scan.metadata
@@ -162,6 +166,18 @@ class BagReader:
             )
         for record in metadata:
             self.metadata[record.name] = dict(record.metadata)
+
+    @property
+    def start_time_ns(self) -> int | None:
+        """The bag's start: the log time of its first message on any topic (ns), None when it has none.
+
+        The Statistics record's ``message_start_time``, as rosbag2 reads it (``ros2 bag info``'s
+        start, where ``ros2 bag play`` starts its clock); a file without a summary: its first message's.
+        """
+        if self._start_time_ns is None and not self.complete:
+            first = next(iter(self.messages()), None)
+            self._start_time_ns = None if first is None else first.log_time_ns
+        return self._start_time_ns
 
     def _has_summary(self) -> bool:
         size = self.path.stat().st_size

@@ -5,8 +5,12 @@ so header stamps, frames and values reach the node exactly as they were recorded
 bag from a real robot drives the simulator like the robot's controller did. Timing
 follows the recorded receive times (MCAP log time), scaled by ``rate``: for the node's
 own recordings these are sim times (``record_log_time`` ``sim``, the default), so the
-replay runs at the recorded sim pace; ``clock`` publishes ``/clock`` from the bag's time,
-like ``ros2 bag play --clock``, which then agrees with the recorded ``/clock``.
+replay runs at the recorded sim pace. As ``ros2 bag play`` (rosbag2's player, Jazzy), the
+replay's time starts at the bag's start (its first message on any topic, not the first one
+replayed): a command recorded 2 s into the bag goes out 2 s / ``rate`` after the start; and
+``clock`` (Hz) publishes ``/clock`` from the bag's time, from the bag's start, like ``ros2 bag
+play --clock [HZ]`` (whose rate is 40 Hz when given without a value: :data:`CLOCK_RATE`), which
+then agrees with the recorded ``/clock``.
 
 By default the topics replayed are the torque inputs the recording node had (its
 ``rigid_rot_sim`` metadata record), or else every WrenchStamped topic of the bag.
@@ -28,7 +32,8 @@ import yaml
 from rigid_rot_sim.recording.reader import BagReader
 
 TORQUE_TYPES = ("geometry_msgs/msg/WrenchStamped", "geometry_msgs/msg/Vector3Stamped")
-CLOCK_PERIOD = 0.01  # s of wall time between /clock messages (100 Hz, as ros2 bag play)
+#: Hz of wall time: ``ros2 bag play --clock``'s rate when given without a value (ros2bag's ``const=40``).
+CLOCK_RATE = 40.0
 
 
 @dataclass(frozen=True)
@@ -93,7 +98,7 @@ def replay(
     rate: float = 1.0,
     topics: Iterable[str] | None = None,
     remap: Mapping[str, str] | None = None,
-    clock: bool = False,
+    clock: float = 0.0,
     wait_for_subscribers: float = 5.0,
     node: Any = None,
     stop: threading.Event | None = None,
@@ -104,10 +109,13 @@ def replay(
     node ``rigid_rot_replay`` is created in the default context and destroyed after.
     Before the first message, waits up to ``wait_for_subscribers`` s for every publisher
     to be matched (discovery takes a moment; messages published before it are lost).
-    ``stop`` ends the replay early when set.
+    The replay's time starts at the bag's start; ``clock`` > 0: ``/clock`` at that many Hz
+    of wall time. ``stop`` ends the replay early when set.
     """
     if not (rate > 0.0 and rate < float("inf")):
         raise ValueError(f"rate must be finite and > 0, got {rate}")
+    if not (clock >= 0.0 and clock < float("inf")):
+        raise ValueError(f"clock must be a finite rate >= 0 Hz, got {clock}")
     reader = BagReader(path)
     chosen = select_topics(reader, topics)
     remap = dict(remap or {})
@@ -134,10 +142,11 @@ def replay(
         published: Counter[str] = Counter()
         if not messages:
             return ReplayReport({}, 0.0, 0.0)
-        first_ns = messages[0].log_time_ns
+        bag_start = reader.start_time_ns
+        first_ns = messages[0].log_time_ns if bag_start is None else min(bag_start, messages[0].log_time_ns)
         start = time.monotonic()
-        if clock:
-            clock_thread = _start_clock(node, first_ns, start, rate, stop)
+        if clock > 0.0:
+            clock_thread = _start_clock(node, first_ns, start, rate, 1.0 / clock, stop)
         lateness = 0.0
         for message in messages:
             target = start + (message.log_time_ns - first_ns) / 1e9 / rate
@@ -169,7 +178,9 @@ def _wait_until_delivered(publishers: Any, timeout_s: float = 5.0) -> None:
         publisher.wait_for_all_acked(Duration(seconds=timeout_s))
 
 
-def _start_clock(node: Any, first_ns: int, start: float, rate: float, stop: threading.Event) -> threading.Thread:
+def _start_clock(
+    node: Any, first_ns: int, start: float, rate: float, period: float, stop: threading.Event
+) -> threading.Thread:
     from rosgraph_msgs.msg import Clock
 
     publisher = node.create_publisher(Clock, "/clock", 10)
@@ -180,7 +191,7 @@ def _start_clock(node: Any, first_ns: int, start: float, rate: float, stop: thre
             now_ns = first_ns + int((time.monotonic() - start) * rate * 1e9)
             message.clock.sec, message.clock.nanosec = divmod(now_ns, 1_000_000_000)
             publisher.publish(message)
-            stop.wait(CLOCK_PERIOD)
+            stop.wait(period)
 
     thread = threading.Thread(target=run, name="replay-clock", daemon=True)
     thread.start()

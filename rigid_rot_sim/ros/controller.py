@@ -22,7 +22,13 @@ Parameters: ``target`` [x, y, z, w] (body -> world, normalised), ``kp``, ``kd``,
 (N*m; 0 = no clip), ``rate`` (Hz of sim time; 0 = answer every state; otherwise states closer
 than 1/rate to the last answered one are skipped: do not set it below the lockstep turn rate),
 ``state_topic``, ``torque_topic``, ``frame_id`` (header.frame_id of the torque; the node's body
-frame).
+frame), ``rejected_topic`` (default: the ``rejected`` beside ``torque_topic``, the node's
+``~/rejected``).
+
+A command the node refuses (a frame it does not name, a torque above its ``commands.max_torque``,
+a stamp lockstep cannot use) is said on the node's ``~/rejected``; the controller watches it and
+logs a warning with the node's reason, the first time for each reason and then every
+``REJECTION_LOG_EVERY``-th time, so that a loop that does nothing says why.
 
 Writing your own, with rclpy or any DDS stack: subscribe to the state (reliable, keep-last
 depth 10 is enough: one state per turn), compute, publish one WrenchStamped per state with
@@ -49,11 +55,14 @@ from rclpy.node import Node
 from rclpy.qos import QoSProfile, ReliabilityPolicy
 from rclpy.signals import SignalHandlerOptions
 
-from rigid_rot_msgs.msg import RigidBodyState
+from rigid_rot_msgs.msg import RejectedCommand, RigidBodyState
 from rigid_rot_sim.core import quaternion as quat
+from rigid_rot_sim.ros.qos import REJECTED_QOS
 from rigid_rot_sim.share import ensure_ament_prefix_path
 
 NODE_NAME = "attitude_controller"
+#: After the first rejection for a reason, log every this many (a refused loop refuses every turn).
+REJECTION_LOG_EVERY = 100
 #: Reliable, keep-last 10: one state and one command per turn, nothing lost.
 CONTROL_QOS = QoSProfile(depth=10, reliability=ReliabilityPolicy.RELIABLE)
 
@@ -88,6 +97,8 @@ class AttitudeController(Node):
         state_topic = declare("state_topic", "/rigid_rot_sim/state", "The simulation node's state topic")
         torque_topic = declare("torque_topic", "/rigid_rot_sim/torque", "The simulation node's torque input")
         self.frame_id = declare("frame_id", "base_link", "header.frame_id of the torque (the body frame)")
+        beside_torque = f"{torque_topic.rsplit('/', 1)[0]}/rejected" if "/" in torque_topic else "rejected"
+        rejected_topic = declare("rejected_topic", beside_torque, "The node's ~/rejected (its refusals)")
         norm = math.sqrt(sum(float(v) * float(v) for v in target))
         if len(target) != 4 or not (norm > 0.0 and math.isfinite(norm)):
             raise ValueError(f"target must be a non-zero quaternion [x, y, z, w], got {list(target)}")
@@ -96,6 +107,11 @@ class AttitudeController(Node):
         self.answered = 0
         self.publisher = self.create_publisher(WrenchStamped, torque_topic, CONTROL_QOS)
         self.subscription = self.create_subscription(RigidBodyState, state_topic, self.state_callback, CONTROL_QOS)
+        #: Rejections of this controller's commands, by the node's reason.
+        self.rejections: dict[str, int] = {}
+        self.rejected_subscription = self.create_subscription(
+            RejectedCommand, rejected_topic, self.rejected_callback, REJECTED_QOS
+        )
         self.get_logger().info(
             f"attitude controller: {state_topic} -> {torque_topic}, target {list(self.target)}, kp {self.kp:g}, "
             f"kd {self.kd:g}, max_torque {self.max_torque:g}, "
@@ -116,6 +132,17 @@ class AttitudeController(Node):
         self.publisher.publish(command)
         self.last_answered_ns = stamp_ns
         self.answered += 1
+
+    def rejected_callback(self, msg: RejectedCommand) -> None:
+        """A refusal of one of this controller's commands (its frame_id): a warning with the node's reason."""
+        if msg.header.frame_id != self.frame_id:
+            return  # another client's command
+        count = self.rejections.get(msg.reason, 0) + 1
+        self.rejections[msg.reason] = count
+        if count == 1 or count % REJECTION_LOG_EVERY == 0:
+            self.get_logger().warning(
+                f"the node rejected this controller's command on {msg.source} ({count} so far): {msg.reason}"
+            )
 
 
 def _executor() -> Executor:

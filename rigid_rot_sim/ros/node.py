@@ -99,6 +99,7 @@ class SceneRun:
         self.doors = parts.command_doors(self.intake, settings, self.driver, self.outputs, rejections)
         self.inputs = self.doors[0]
         self.type_watch = WrongTypeWatch(node, parts.subscriptions(self.doors))
+        self.clock_watch = parts.clock_watch(node, self.outputs)  # another node on /clock, named in the log
         self.lockstep = parts.lockstep(node, settings, self.driver)
         self.services = RunServices(node, self.driver, scene, rejections, self.report_progress)
         self.simulation_services = parts.simulation_services(node, settings, self.services)
@@ -108,7 +109,7 @@ class SceneRun:
         self.parts: list[Part] = [
             parts.lockstep_part(self.lockstep),
             parts.integrator_part(settings, sim),
-            self.outputs,
+            parts.OutputsPart(self.outputs, sim),
             *self.doors,
             parts.physics_part(scene, self.outputs.sensors),
             parts.simulation_services_part(self.simulation_services),

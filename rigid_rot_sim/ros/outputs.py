@@ -233,14 +233,20 @@ class Outputs(SimulationObserver):
             return []
         return [conversions.static_transform(*pose, self.frames.body, self.frames.principal)]
 
-    def describe(self) -> tuple[list[str], list[str]]:
-        """For the start-up line: (what was built, what was left out and why)."""
+    def describe(self, dt: float | None = None) -> tuple[list[str], list[str]]:
+        """For the start-up line: (what was built, what was left out and why). ``dt`` (s): a rate above
+        the step rate is said as what it is, one message per step."""
         built: list[str] = []
         left_out: list[str] = []
         for name in self._offered():
             if name in self.publishers:
                 qos = describe_qos(self.publishers[name].qos_profile)
-                built.append(f"{output_topic(name)} {self.rates[name]:g} Hz ({qos})")
+                rate = self.rates[name]
+                if dt is not None and rate * dt > 1.0:
+                    said = f"{1.0 / dt:g} Hz (every step; {rate:g} Hz asked)"
+                else:
+                    said = f"{rate:g} Hz"
+                built.append(f"{output_topic(name)} {said} ({qos})")
             else:
                 left_out.append(f"{output_topic(name)} (rate 0)")
         if self.static_transforms:

@@ -164,6 +164,18 @@ def _set_integrator(run: RunParameters, change: Change) -> None:
     _set_rates(run, change)  # periods in steps depend on dt
 
 
+def _check_real_time_factor_value(value: float) -> None:
+    """ValueError outside :func:`limits.check_real_time_factor`'s range (5e-324 would never step)."""
+    try:
+        limits.check_real_time_factor(value)
+    except ValueError as exc:
+        raise ValueError(f"{REAL_TIME_FACTOR.name} {exc}") from None
+
+
+def _check_real_time_factor(run: RunParameters, change: Change) -> None:
+    _check_real_time_factor_value(change[REAL_TIME_FACTOR])
+
+
 def _set_real_time_factor(run: RunParameters, change: Change) -> None:
     run.driver.pacer.real_time_factor = change[REAL_TIME_FACTOR]
     run.driver.pacer.anchor(run.driver.sim.clock.t)
@@ -227,6 +239,7 @@ REAL_TIME_FACTOR = ParamSpec(
     lambda scene: scene.real_time_factor,
     "Sim seconds per wall second; 0 = as fast as possible",
     range=limits.REAL_TIME_FACTOR_RANGE,
+    check=_check_real_time_factor,
     apply=_set_real_time_factor,
 )
 DURATION = ParamSpec(
@@ -556,6 +569,8 @@ def read_settings(node: Node, scene: Scene, specs: Iterable[ParamSpec[Any]] = PA
     for spec in specs:
         spec.check_choice(settings[spec])
     _check_rate_values((spec, settings[spec]) for spec in RATES.values() if spec.name in values)
+    if REAL_TIME_FACTOR.name in values:
+        _check_real_time_factor_value(settings[REAL_TIME_FACTOR])
     frames = Frames(settings[WORLD_FRAME], settings[BODY_FRAME]).checked()
     return dataclasses.replace(settings, scene=dataclasses.replace(scene, frames=frames))
 

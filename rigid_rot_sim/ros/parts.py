@@ -23,6 +23,7 @@ from typing import TYPE_CHECKING, Protocol, runtime_checkable
 
 from rclpy.node import Node
 from rclpy.subscription import Subscription
+from rclpy.time_source import CLOCK_TOPIC
 
 from rigid_rot_sim.ros import parameters as params
 from rigid_rot_sim.ros import simulation_services as standard_services
@@ -35,6 +36,7 @@ from rigid_rot_sim.ros.parameters import NodeSettings
 from rigid_rot_sim.ros.qos import output_qos
 from rigid_rot_sim.ros.rod_inputs import RodCommandInput
 from rigid_rot_sim.ros.services import RunServices
+from rigid_rot_sim.ros.topic_types import RivalPublisherWatch
 from rigid_rot_sim.ros.wheel_inputs import WheelTorqueInput
 from rigid_rot_sim.run.pacing import OutputSchedule, Pacer, RunDriver
 from rigid_rot_sim.run.sensors import SensorSuite
@@ -142,6 +144,29 @@ def lockstep(node: Node, settings: NodeSettings, run: RunDriver) -> NodeLockstep
     """The lockstep turns of the scene or the ``lockstep.*`` parameters; None without."""
     spec = lockstep_from_parameters(node, settings.scene, run.sim.clock.dt)
     return None if spec is None else NodeLockstep(node, spec, run)
+
+
+@dataclass
+class OutputsPart:
+    """The outputs as a part: their rates said against the run's step (a rate above it is one per step)."""
+
+    outputs: Outputs
+    sim: Simulator
+
+    def describe(self) -> tuple[list[str], list[str]]:
+        return self.outputs.describe(self.sim.clock.dt)
+
+
+#: The end of the warning about another node on /clock: what its consumers see, and the fix.
+CLOCK_RIVAL_ADVICE = (
+    "every use_sim_time node sees two timelines and its time jumps back (a tf2 buffer is cleared each time); "
+    "keep one /clock: rates.clock:=0 on the others, or remap one (-r /clock:=/other/clock)"
+)
+
+
+def clock_watch(node: Node, outputs: Outputs) -> RivalPublisherWatch | None:
+    """Another node publishing /clock beside this one's, named in the log (None: this node publishes no /clock)."""
+    return RivalPublisherWatch(node, CLOCK_TOPIC, CLOCK_RIVAL_ADVICE) if "clock" in outputs.publishers else None
 
 
 def lockstep_part(lockstep: NodeLockstep | None) -> Part:

@@ -85,6 +85,10 @@ class InertiaService:
         return response
 
 
+class _Logged(ValueError):
+    """A refusal already logged (a rejected command: ~/rejected and its throttled warning): not logged again."""
+
+
 class RunServices:
     """``~/set_state``, ``~/reset``, ``~/pause``, ``~/step``, ``~/apply_torque``, ``~/step_with_torque`` on ``run``.
 
@@ -161,7 +165,7 @@ class RunServices:
                 command = self.sim.apply_torque(torque, request.frame_id, duration)
             except CommandRejected as exc:
                 self.rejections.reject(self.apply_torque_name, exc.reason, request.frame_id, torque)
-                raise ValueError(exc.reason) from None
+                raise _Logged(exc.reason) from None
             return (
                 f"torque {list(command.torque)} N*m ({command.frame} frame) from t = {command.effective_time:.9g} s "
                 f"for {duration:g} s"
@@ -177,7 +181,8 @@ class RunServices:
         except ValueError as exc:
             response.success = False
             response.message = str(exc)
-            self.logger.warning(f"{name} refused: {exc}")
+            if not isinstance(exc, _Logged):
+                self.logger.warning(f"{name} refused: {exc}")
         except Exception as exc:  # a callback must never raise: the node keeps serving
             response.success = False
             response.message = f"internal error: {exc!r}"

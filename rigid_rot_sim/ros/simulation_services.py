@@ -47,6 +47,8 @@ from __future__ import annotations
 from collections.abc import Callable
 from typing import Any
 
+from rigid_rot_sim.core import limits
+
 try:
     from simulation_interfaces.msg import Result, SimulationState, SimulatorFeatures
     from simulation_interfaces.srv import (
@@ -199,6 +201,9 @@ class SimulationServices:
             "unsupported); nothing is spawned. "
             f"Also served: {self.node.get_name()}'s ~/step (returns the state), ~/set_state, ~/apply_torque, "
             "~/step_with_torque (a torque over the next N steps, then the state, in one call). "
+            f"StepSimulation and ~/step: at most {limits.MAX_STEPS_PER_REQUEST} steps per request (more are "
+            "refused with OPERATION_FAILED; SimulateSteps takes any number). "
+            "SetSimulationState: STOPPED = reset + pause; from STOPPED, PAUSED keeps the initial state paused. "
             "SimulateSteps: feedback at most 50 times per second of wall time and always after the last step; "
             "a cancel is honoured within 20 ms."
         )

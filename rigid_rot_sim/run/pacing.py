@@ -160,14 +160,17 @@ class Pacer:
     def target_step(self, sim: Simulator, now: float) -> tuple[int | None, float | None]:
         """The step the run is due at ``now`` (None: unbounded) and the backlog dropped (wall s) or None.
 
-        A backlog of more than ``MAX_BACKLOG_WALL`` is dropped: the run re-anchors half a
-        tick before ``now``, so it goes on at pace from where it is.
+        The backlog is how late the next step is (wall time since it fell due); one of more than
+        ``MAX_BACKLOG_WALL`` is dropped: the run re-anchors half a tick before ``now``, so it goes
+        on at pace from where it is.
         """
         r = self.real_time_factor
         if r <= 0.0:
             return None, None
         target_t = self._anchor_t + (now - self._anchor_wall) * r
-        behind_wall = (target_t - sim.clock.t) / r
+        # how late the next step is (it is due once target_t reaches its end): a long step is not a backlog
+        # while it is not due (dt 10 s at r = 1 is 10 s of wall time between two steps, on pace)
+        behind_wall = (target_t - sim.clock.t - sim.clock.dt) / r
         dropped = None
         if behind_wall > MAX_BACKLOG_WALL:
             dropped = behind_wall

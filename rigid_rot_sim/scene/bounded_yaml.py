@@ -5,10 +5,13 @@ A plain ``yaml.safe_load`` runs no code from tags, but it expands aliases (a few
 deep nesting) and reads files of any size. :func:`load_bounded` first walks the parser's
 event stream, which is flat and cheap, and refuses the document at the first event beyond
 a limit; only a document within every limit is then built. Errors are
-:class:`BoundedYAMLError` (a ValueError) with a one-line message.
+:class:`BoundedYAMLError` (a ValueError) with a one-line message. Numbers are read as YAML 1.2
+reads them (``1e-3`` is a float, as in a ROS params file), not as YAML 1.1's string.
 
 >>> load_bounded("a: [1, 2]")
 {'a': [1, 2]}
+>>> load_bounded("dt: 1e-3")  # YAML 1.2 (a string in YAML 1.1)
+{'dt': 0.001}
 >>> load_bounded("a: &x [1]\\nb: *x")
 Traceback (most recent call last):
 ...
@@ -18,6 +21,7 @@ rigid_rot_sim.scene.bounded_yaml.BoundedYAMLError: line 2: YAML aliases (*x) are
 from __future__ import annotations
 
 import os
+import re
 from typing import Any
 
 import yaml
@@ -27,7 +31,19 @@ from rigid_rot_sim.core import limits
 __all__ = ["BoundedYAMLError", "load_bounded", "read_bounded", "read_input", "load_input"]
 
 # libyaml's parser where PyYAML was built with it (the PyPI wheels, Debian's python3-yaml)
-_Loader = getattr(yaml, "CSafeLoader", yaml.SafeLoader)
+_BaseLoader: Any = getattr(yaml, "CSafeLoader", yaml.SafeLoader)
+
+#: YAML 1.2's core-schema floats that YAML 1.1 (PyYAML's resolver) reads as strings: an exponent
+#: without a dot or without a signed exponent (``1e-3``, ``1E5``, ``2.5e3``, ``.5e-3``), as ROS params
+#: files, ``-p`` and JSON Schema read them. YAML 1.1's own forms keep their meaning.
+YAML12_FLOAT = re.compile(r"^[-+]?(?:\.[0-9]+|[0-9][0-9_]*(?:\.[0-9_]*)?)[eE][-+]?[0-9]+$")
+
+
+class _Loader(_BaseLoader):  # type: ignore[misc]  # PyYAML's loaders are untyped classes
+    """The safe loader, with YAML 1.2's floats (:data:`YAML12_FLOAT`) resolved as floats."""
+
+
+_Loader.add_implicit_resolver("tag:yaml.org,2002:float", YAML12_FLOAT, list("-+0123456789."))
 
 
 class BoundedYAMLError(ValueError):

@@ -561,7 +561,9 @@ def _scene(spec: Mapping[str, Any], source: str, text: str) -> Scene:
         integrator=_integrator(spec.get("integrator") or {}, bool(spacecraft)),
         spacecraft=spacecraft,
         duration=None if duration is None else float(duration),
-        real_time_factor=float(spec.get("real_time_factor", 1.0)),
+        real_time_factor=_at(
+            "real_time_factor", limits.check_real_time_factor, float(spec.get("real_time_factor", 1.0))
+        ),
         outputs=OutputRates(_sensor_rates(sensors, _output_rates(outputs))),
         sensors=sensors,
         qos=OutputQos(

@@ -25,7 +25,7 @@ from rigid_rot_sim.run.digest import format_digest
 from rigid_rot_sim.scene.scene import parse_scene_text
 from rigid_rot_sim.viewer.web import MAX_RATE, PLOT_SAMPLES, BodyPage, Frame
 
-__all__ = ["WebRecordingPlayer", "recorded_frames"]
+__all__ = ["WebRecordingPlayer", "next_position", "recorded_frames"]
 
 _STATE_TYPE = "rigid_rot_msgs/msg/RigidBodyState"
 #: Speeds the slider offers (x real time).
@@ -62,6 +62,28 @@ def recorded_frames(path: str | Path) -> tuple[Any, list[Frame]]:
     return scene, frames
 
 
+def next_position(
+    position: float, elapsed: float, playing: bool, speed: float, seek: float | None, pressed: bool, end: float
+) -> tuple[float, bool]:
+    """The playback position (s of the playback clock) after ``elapsed`` s of wall time, and whether it jumped.
+
+    A seek jumps; Play pressed at the end replays from the start (a media player's Play, not a no-op);
+    playing advances by ``elapsed * speed``, up to ``end``.
+
+    >>> next_position(10.0, 0.1, True, 1.0, None, True, 10.0)
+    (0.0, True)
+    >>> next_position(2.0, 0.5, True, 2.0, None, False, 10.0)
+    (3.0, False)
+    """
+    if seek is not None:
+        return seek, True
+    if pressed and position >= end:
+        return 0.0, True
+    if playing:
+        return min(position + elapsed * speed, end), False
+    return position, False
+
+
 class WebRecordingPlayer:
     """One recording on a :class:`BodyPage`; :meth:`play` runs until the end (``once``) or :meth:`stop`.
 
@@ -79,6 +101,8 @@ class WebRecordingPlayer:
         self.playing = True
         self.speed = min(max(speed, SPEED_RANGE[0]), SPEED_RANGE[1])
         self._seek: float | None = None
+        #: Play was pressed (from the end of the recording it replays from the start).
+        self._play_pressed = False
         self._stop = threading.Event()
         gui = self.page.server.gui
         with self.page.controls:
@@ -106,6 +130,7 @@ class WebRecordingPlayer:
         with self._lock:
             if playing is not None:
                 self.playing = playing
+                self._play_pressed = self._play_pressed or playing
             if speed is not None:
                 self.speed = speed
             if seek is not None:
@@ -138,11 +163,10 @@ class WebRecordingPlayer:
             now = time.monotonic()
             with self._lock:
                 playing, speed, seek, self._seek = self.playing, self.speed, self._seek, None
-            if seek is not None:
-                position = seek
+                pressed, self._play_pressed = self._play_pressed, False
+            position, jumped = next_position(position, now - last, playing, speed, seek, pressed, self.clock[-1])
+            if jumped:
                 self.page.clear_trail()
-            elif playing:
-                position = min(position + (now - last) * speed, self.clock[-1])
             last = now
             index = max(0, bisect.bisect_right(self.clock, position) - 1)
             if index != shown:

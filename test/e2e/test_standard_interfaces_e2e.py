@@ -85,6 +85,7 @@ def test_simulation_interfaces_services_refuse_bad_requests_and_serve_good_ones(
         SimulatorFeatures.SIMULATION_STATE_PAUSE,
     } <= set(features.features)
     assert SimulatorFeatures.SPAWNING not in features.features and "ResetSimulation" in features.custom_info
+    assert "at most 10000 steps per request" in features.custom_info  # StepSimulation's limit, said (issue 40)
     assert run_state() == SimulationState.STATE_PLAYING
 
     # set state: bad (already there, QUITTING, unknown) then good

@@ -148,3 +148,19 @@ def test_too_few_samples_and_unknown_estimates_are_refused(excited):
         identify(m.window(0.0, 0.05))
     with pytest.raises(ValueError, match="unknown"):
         identify(m, estimate=("mass",))
+
+
+def test_the_identify_kernel_is_precompiled_with_the_types_identify_calls_it_with(excited):
+    """``make setup``'s precompile compiles the identify kernel, and the fit and the validation replays
+    call it with exactly those types: the first ``rigid-rot identify`` compiles nothing (issue 40)."""
+    from rigid_rot_sim.core import precompile
+    from rigid_rot_sim.core.sensitivities import integrate_segments
+
+    assert precompile.entry_points()["sensitivities.integrate_segments"] is integrate_segments
+    precompile.exercise()
+    compiled = set(integrate_segments.signatures)
+    assert len(compiled) == 1
+    torque = PiecewiseTorque(excited.command_times, excited.commands)
+    m = Measurements(excited.t, gyro(excited, 1e-3, np.zeros(3), 5), torque, excited.q)
+    validate(m, identify(m, estimate=("inertia", "torque_bias", "gyro_bias")), np.diag([0.02, 0.03, 0.04]))
+    assert set(integrate_segments.signatures) == compiled  # no signature of its own: nothing compiled at run time

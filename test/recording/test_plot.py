@@ -43,3 +43,53 @@ def test_recording_without_states_is_a_value_error(tmp_path):
         recorder.add_topic("/x", "geometry_msgs/msg/WrenchStamped")
     with pytest.raises(ValueError, match="nothing to plot"):
         plot_run(bag, tmp_path / "plots")
+
+
+def test_a_recording_with_reaction_wheels_gets_their_speeds_plotted(tmp_path):
+    """``rigid-rot plot`` of a wheel run: wheels.png with each wheel's speed and torque (issue 40)."""
+    from sensor_msgs.msg import JointState
+
+    from rigid_rot_sim.recording.plot import wheel_figure
+
+    bag = tmp_path / "wheels.mcap"
+    with Recorder(bag) as recorder:
+        recorder.add_topic("/rigid_rot_sim/wheels", "sensor_msgs/msg/JointState")
+        for k in range(20):
+            msg = JointState(name=["w1", "w2"], velocity=[10.0 * k, -5.0 * k], effort=[0.01, -0.02])
+            msg.header.stamp.nanosec = k * 10_000_000
+            recorder.write_message("/rigid_rot_sim/wheels", msg, k * 10_000_000)
+    figure = wheel_figure(BagReader(bag))
+    assert figure is not None
+    speeds, torques = figure.axes
+    assert [line.get_label() for line in speeds.get_lines()] == ["w1", "w2"]
+    assert list(speeds.get_lines()[0].get_ydata()) == [10.0 * k for k in range(20)]
+    assert list(torques.get_lines()[1].get_ydata()) == [-0.02] * 20
+    no_wheels = tmp_path / "run.mcap"
+    record_like_the_node(no_wheels, "free_tumble", 60, 10, {})
+    assert wheel_figure(BagReader(no_wheels)) is None
+
+
+def test_the_polhode_labels_do_not_overlap(tmp_path, monkeypatch):
+    """The 3D plot's ω3 label used to run into the 2D plot's ω2 label (2 px apart; issue 40)."""
+    from rigid_rot_sim.recording import plot
+
+    figures = []
+    monkeypatch.setattr(plot.plt, "close", figures.append)
+    bag = tmp_path / "run.mcap"
+    record_like_the_node(bag, "free_tumble", 600, 10, {})
+    plot_run(bag, tmp_path / "plots")
+    (figure,) = [f for f in figures if any(ax.name == "3d" for ax in f.axes)]
+    figure.canvas.draw()
+    renderer = figure.canvas.get_renderer()
+    ax3 = next(ax for ax in figure.axes if ax.name == "3d")
+    ax2 = figure.axes[1]
+    texts = [ax3.zaxis.label, ax3.xaxis.label, ax3.yaxis.label]
+    others = [ax2.yaxis.label, *ax2.get_yticklabels(), ax2.title]
+    from matplotlib.transforms import Bbox
+
+    for text in texts:
+        box = text.get_window_extent(renderer)
+        padded = Bbox.from_extents(box.x0 - 10, box.y0, box.x1 + 10, box.y1)  # 10 px apart at least (was 2)
+        for other in others:
+            if other.get_text():
+                assert not padded.overlaps(other.get_window_extent(renderer)), (text.get_text(), other.get_text())

@@ -29,10 +29,15 @@ def ros_context():
     rclpy.try_shutdown(context=context)
 
 
-def timed_bag(path: Path, gaps_s: list[float]) -> None:
+def timed_bag(path: Path, gaps_s: list[float], lead_s: float = 0.0) -> None:
+    """Torque commands at 1 s + the gaps (since the epoch); ``lead_s``: a message on another topic that
+    far before the first command, which then starts the bag."""
     with Recorder(path) as recorder:
         recorder.add_topic("/robot/torque_cmd", "geometry_msgs/msg/WrenchStamped")
         t = 1_000_000_000
+        if lead_s:
+            recorder.add_topic("/robot/status", "geometry_msgs/msg/WrenchStamped")
+            recorder.write_message("/robot/status", WrenchStamped(), t - int(lead_s * 1e9))
         for i, gap in enumerate(gaps_s):
             t += int(gap * 1e9)
             msg = WrenchStamped()
@@ -112,7 +117,7 @@ def test_clock_follows_the_bag_time_at_the_replay_rate(tmp_path, ros_context):
     spinner = threading.Thread(target=executor.spin, daemon=True)
     spinner.start()
     try:
-        report = replay(bag, rate=2.0, clock=True, node=publisher_node, wait_for_subscribers=10.0)
+        report = replay(bag, rate=2.0, clock=100.0, node=publisher_node, wait_for_subscribers=10.0)
         # the newest /clock is never dropped (keep last): wait until the end of the bag's time arrives
         deadline = time.monotonic() + 30.0
         while not (clocks and clocks[-1] >= 1.5) and time.monotonic() < deadline:
@@ -125,3 +130,41 @@ def test_clock_follows_the_bag_time_at_the_replay_rate(tmp_path, ros_context):
     # how many of the 100 Hz clocks arrive depends on the machine's load; their values do not
     assert clocks and clocks == sorted(clocks)
     assert all(1.0 <= c <= 1.7 for c in clocks) and clocks[-1] >= 1.5  # bag time: 0.6 s of it, from 1.0 s
+
+
+def test_replay_time_and_clock_start_at_the_bag_start_as_ros2_bag_play(tmp_path, ros_context):
+    """rosbag2's player starts its clock at the bag's start (metadata starting_time), not at the first
+    message it plays; ``--clock`` without a value is 40 Hz (ros2bag's play verb, Jazzy)."""
+    from rosgraph_msgs.msg import Clock
+
+    from rigid_rot_sim.recording.replay import CLOCK_RATE
+
+    assert CLOCK_RATE == 40.0
+    bag = tmp_path / "late.mcap"
+    timed_bag(bag, [0.0, 0.2], lead_s=0.6)  # the bag starts at 0.4 s, the commands at 1.0 and 1.2 s
+    assert BagReader(bag).start_time_ns == 400_000_000
+    listener = rclpy.create_node("late_listener", context=ros_context)
+    publisher_node = rclpy.create_node("late_replayer", context=ros_context)
+    clocks = []
+    listener.create_subscription(WrenchStamped, "/robot/torque_cmd", lambda m: None, 10)
+    listener.create_subscription(Clock, "/clock", lambda m: clocks.append(m.clock.sec + m.clock.nanosec * 1e-9), 10)
+    executor = SingleThreadedExecutor(context=ros_context)
+    executor.add_node(listener)
+    spinner = threading.Thread(target=executor.spin, daemon=True)
+    spinner.start()
+    try:
+        report = replay(
+            bag, topics=["/robot/torque_cmd"], clock=CLOCK_RATE, node=publisher_node, wait_for_subscribers=10.0
+        )
+        deadline = time.monotonic() + 30.0
+        while not (clocks and clocks[-1] >= 1.1) and time.monotonic() < deadline:
+            time.sleep(0.01)
+    finally:
+        executor.shutdown()
+        listener.destroy_node()
+        publisher_node.destroy_node()
+    assert report.published == {"/robot/torque_cmd": 2}
+    assert report.wall_time >= 0.8  # from the bag's start (0.4 s) to the last command (1.2 s), at rate 1
+    assert clocks and clocks == sorted(clocks)
+    assert clocks[0] < 0.9, clocks[:3]  # the clock ran before the first command (1.0 s), from the bag's start
+    assert all(c >= 0.4 for c in clocks)

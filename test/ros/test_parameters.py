@@ -150,3 +150,13 @@ def test_the_topic_table_of_docs_node_md_names_every_output():
     others = {"~/mass_properties", "~/rejected", "/tf_static", "~/wheel_torque", "~/sim_events"}
     others |= {"joint_state_topics.commands", "joint_state_topics.states"}
     assert topics - outputs == others, sorted(topics - outputs)
+
+
+def test_a_real_time_factor_that_never_reaches_a_step_is_refused_at_run_time(node):
+    """5e-324 is within the descriptor's range (0 to 1000) but the run would never advance (issue 40)."""
+    pace = node.run.driver.pacer.real_time_factor
+    refused = node.set_parameters([Parameter("real_time_factor", value=5e-324)])[0]
+    assert not refused.successful
+    assert refused.reason.startswith("real_time_factor must be 0 (as fast as possible) or from 1e-06"), refused.reason
+    assert node.run.driver.pacer.real_time_factor == pace
+    assert node.set_parameters([Parameter("real_time_factor", value=0.0)])[0].successful  # as fast as possible

@@ -272,3 +272,24 @@ def test_the_node_simulate_and_the_sweep_take_the_same_number_of_steps(duration)
     n_full, last = step_grid(duration, dt)  # what the sweep's chunks take
     assert sim.clock.k == len(trajectory.t) - 1 == n_full + (last > 0.0)
     assert trajectory.t[-1] == duration
+
+
+def test_a_long_step_on_pace_is_not_a_backlog():
+    """dt 10 s at r = 1: 10 s of wall time between two steps is the pace, not falling behind (issue 40)."""
+    clock = FakeClock()
+    sim = FakeSim(clock, dt=10.0)
+    run, _ = driver(clock, sim, rtf=1.0)
+    warnings = []
+    for _ in range(350):  # 35 s of wall time in 0.1 s ticks
+        clock.now += 0.1
+        warnings.append(run.tick().falling_behind)
+    assert warnings == [None] * 350
+    assert sim.clock.k == 3  # each 10 s step done when it fell due
+
+
+def test_a_late_long_step_is_still_a_backlog():
+    clock = FakeClock()
+    sim = FakeSim(clock, dt=10.0)
+    run, _ = driver(clock, sim, rtf=1.0)
+    clock.now += 10.0 + MAX_BACKLOG_WALL + 0.2  # the first step fell due 0.7 s ago (the process was stopped)
+    assert "cannot keep up" in (run.tick().falling_behind or "")

@@ -308,3 +308,24 @@ def test_mass_properties_about_com_undo_the_pivot_shift_of_a_gravity_scene():
     free = load_scene(SCENES / "free_tumble.yaml")  # no gravity: the tensor is already about the COM
     free_mass, free_com, free_tensor = free.mass_properties_about_com()
     assert free_com == (0.0, 0.0, 0.0) and np.array_equal(free_tensor, free.body.inertia_array)
+
+
+def test_yaml_1_2_numbers_are_numbers_everywhere_a_scene_reads_them():
+    """``1e-3`` is a float in YAML 1.2 (ROS params files, ``-p``, JSON Schema), a string in YAML 1.1 (issue 40)."""
+    text = """
+body: {principal_moments: [8e-1, 1.2E0, 15e-1]}
+initial: {angular_velocity: [1e-3, -2e-1, 2E+0]}
+integrator: {method: rk4, dt: 5e-4}
+duration: 1e1
+"""
+    scene = parse(text, "yaml12.yaml")
+    assert np.array_equal(np.diag(scene.body.inertia_array), [0.8, 1.2, 1.5])
+    assert scene.initial.angular_velocity == (0.001, -0.2, 2.0)
+    assert scene.integrator.dt == 5e-4 and scene.duration == 10.0
+    assert parse('body: {principal_moments: [1, 2, 3]}\nname: "1e-3"\n', "q.yaml").name == "1e-3"  # quoted: a string
+
+
+def test_a_subnormal_real_time_factor_is_refused_naming_the_key():
+    with pytest.raises(SceneError, match=r"real_time_factor: must be 0 \(as fast as possible\) or from 1e-06"):
+        parse(MINIMAL + "real_time_factor: 5.0e-324\n", "slow.yaml")
+    assert parse(MINIMAL + "real_time_factor: 1.0e-6\n").real_time_factor == 1e-6

@@ -132,3 +132,9 @@ def test_zero_workers_is_one_line(tmp_path, capsys, command):
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and "--workers" in err and "0" in err, err
     assert not (tmp_path / "out").exists()
+
+
+def test_yaml_1_2_numbers_are_numbers_in_a_sweep_spec():
+    text = GOOD.replace("dt: [0.01]", "dt: [1e-2]").replace("duration: 1.0", "duration: 1e0")
+    spec = parse_sweep_text(text, "s.yaml")
+    assert spec.grid == [("rk4", 0.01, None)] and spec.duration == 1.0

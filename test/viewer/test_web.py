@@ -221,3 +221,15 @@ def test_while_nobody_watches_nothing_is_sent_and_the_first_browser_gets_the_lat
     finally:
         pump.close()
     assert pump.sent == 1  # the latest, once (nothing new came after)
+
+
+def test_play_on_a_finished_recording_replays_it_from_the_start():
+    """``rigid-rot view --web`` of a recording: Play at the end starts again, as a media player's (issue 40)."""
+    from rigid_rot_sim.viewer.web_playback import next_position
+
+    end = 12.0
+    assert next_position(end, 0.1, True, 1.0, None, True, end) == (0.0, True)  # ended, Play pressed: from 0
+    assert next_position(end, 0.1, True, 1.0, None, False, end) == (end, False)  # ended, nothing pressed: stays
+    assert next_position(5.0, 0.1, True, 1.0, None, True, end) == (5.1, False)  # Play while playing: goes on
+    assert next_position(5.0, 0.1, False, 1.0, None, False, end) == (5.0, False)  # paused
+    assert next_position(5.0, 0.1, True, 1.0, 2.0, False, end) == (2.0, True)  # a seek

@@ -6,7 +6,7 @@ under a known piecewise-constant body-frame torque ``tau`` plus a constant bias 
     J dw/dt + w x (J w) = tau(t) + tau_b
 
 The tensor is affine in the fitted parameters, ``J = J0 + sum_i theta_i E_i`` (``E_i``
-symmetric; :mod:`rigid_rot_sim.identify.fit` chooses the basis: the six entries, or five
+symmetric; ``rigid_rot_sim.identify.fit`` chooses the basis: the six entries, or five
 with the trace fixed). With ``S = dw/dp`` for ``p = (theta, tau_b, w0)`` the forward
 sensitivities obey ``dS/dt = A(w) S + B(w)``, ``A = -J^-1 ([w]x J - [J w]x)``,
 ``B_theta_i = -J^-1 (E_i f + w x E_i w)`` and ``B_tau_b = J^-1``. Both are advanced by the
@@ -23,10 +23,11 @@ beside ``w`` for replays (``dq/dt = q (x) (w, 0) / 2``, renormalised each step).
 from __future__ import annotations
 
 import numpy as np
-from numba import njit
+
+from rigid_rot_sim.core.jit import compiled
 
 
-@njit(cache=True)
+@compiled
 def _rates(
     w: np.ndarray,
     S: np.ndarray,
@@ -88,7 +89,7 @@ def _rates(
             dS[r, k + j] += Jinv[r, j]
 
 
-@njit(cache=True)
+@compiled
 def _stage(
     w: np.ndarray,
     S: np.ndarray,
@@ -108,7 +109,7 @@ def _stage(
                 Ss[r, c] = S[r, c] + a * K[r, c]
 
 
-@njit(cache=True)
+@compiled
 def _qdot(q: np.ndarray, w: np.ndarray) -> np.ndarray:
     # q (x) (w, 0) / 2, Hamilton product, scalar last
     out = np.empty(4)
@@ -119,7 +120,7 @@ def _qdot(q: np.ndarray, w: np.ndarray) -> np.ndarray:
     return out
 
 
-@njit(cache=True)
+@compiled
 def integrate_segments(
     node_t: np.ndarray,
     node_torque: np.ndarray,
