@@ -40,15 +40,18 @@ def one_error_line(done: subprocess.CompletedProcess) -> str:
 
 def test_rigid_rot_torque_exits_2_with_the_nodes_reason_when_its_commands_are_refused(launch_node, ros_env):
     node = torque_driven(launch_node, "refusing")
+    # each refused command: the CLI listens for the verdict until it comes (--confirm is that wait's bound, and
+    # the default 1 s after the acknowledgement is shorter than a loaded machine's path through the node)
+    refused = ("--wait", "60", "--confirm", str(WAIT))
     # a frame the scene does not name: the node refuses it on ~/rejected (before: "1 command(s)", exit 0)
-    line = one_error_line(rigid_rot(ros_env, "torque", "0", "0", "0.004", "--frame", "body", "--wait", "60"))
+    line = one_error_line(rigid_rot(ros_env, "torque", "0", "0", "0.004", "--frame", "body", *refused))
     assert line.startswith(f"rigid-rot torque: error: /rigid_rot_sim rejected the command on {TORQUE_TOPIC} (1 of 1")
     assert "'body'" in line and "base_link" in line, line  # the node's reason names the frame and the known ones
     # above commands.max_torque (1 N*m)
-    line = one_error_line(rigid_rot(ros_env, "torque", "0", "0", "5", "--wait", "60"))
+    line = one_error_line(rigid_rot(ros_env, "torque", "0", "0", "5", *refused))
     assert "max_torque" in line, line
     # repeated: it stops at the first refusal, long before the 100 commands of 5 s at 20 Hz
-    line = one_error_line(rigid_rot(ros_env, "torque", "0", "0", "5", "--duration", "5", "--wait", "60"))
+    line = one_error_line(rigid_rot(ros_env, "torque", "0", "0", "5", "--duration", "5", *refused))
     sent = int(line.split(" refused)")[0].split(" of ")[-1])
     assert 1 <= sent < 100, line
     # an accepted command still succeeds, with the count it sent
