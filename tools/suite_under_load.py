@@ -73,7 +73,7 @@ def main(argv: list[str] | None = None) -> int:
         for number in range(1, args.rounds + 1):
             code, tally, elapsed, failed = one_round(args.pytest_args, args.logs / f"round_{number}.log")
             rounds.append(code)
-            failures.update(failed)
+            failures.update(failed.keys())
             for name, why in failed.items():
                 reasons.setdefault(name, why)
             print(
