@@ -9,7 +9,7 @@ The node of benchmarks/fuzz_node.py's part 1 (``torque_driven``, rk4, real-time 
 sets between them (none with ``--only-commands``), until ``--commands`` commands were sent in the round.
 After each round (1 s of quiet):
 the node's RSS (``VmRSS``) and, unless ``--no-trace``, a tracemalloc snapshot of the node's Python allocations
-(the node runs with ``RIGID_ROT_TRACEMALLOC``, :func:`rigid_rot_sim.ros.node.trace_memory`; dumped on SIGUSR1).
+(the node runs with ``RIGID_ROT_TRACEMALLOC``, :func:`rigid_rot_sim.ros.node_process.trace_memory`; dumped on SIGUSR1).
 At the end: the largest growths from the first round's snapshot to the last, by source line, and the total
 traced. RSS counts what tracemalloc does not see (DDS, numba's compiled kernels, the allocator's free lists),
 and tracing itself costs memory: compare rounds, not runs. The parameter sets that took effect are listed:

@@ -34,10 +34,10 @@ import numpy as np  # noqa: E402
 from scipy.integrate import solve_ivp  # noqa: E402
 from scipy.optimize import least_squares  # noqa: E402
 
-from rigid_rot_sim.identify import Measurements, TorqueSchedule, identify  # noqa: E402
+from rigid_rot_sim.identify import Measurements, PiecewiseTorque, identify  # noqa: E402
 from rigid_rot_sim.identify.bag import BagInputs, read_bag  # noqa: E402
 from rigid_rot_sim.identify.fit import Basis, build_grid, equation_error  # noqa: E402
-from rigid_rot_sim.identify.report import replay  # noqa: E402
+from rigid_rot_sim.identify.report import simulate_window  # noqa: E402
 from rigid_rot_sim.recording.definitions import complete_definition  # noqa: E402
 
 REPO = Path(__file__).resolve().parents[1]
@@ -49,17 +49,17 @@ def truth_inertia() -> np.ndarray:
     return np.array([[0.020, 0.0015, -0.0020], [0.0015, 0.030, 0.0025], [-0.0020, 0.0025, 0.040]])
 
 
-def make_data(inertia: np.ndarray) -> tuple[np.ndarray, np.ndarray, TorqueSchedule]:
+def make_data(inertia: np.ndarray) -> tuple[np.ndarray, np.ndarray, PiecewiseTorque]:
     rng = np.random.default_rng(120)
     times = np.arange(0.0, DURATION, 1.0)
-    torque = TorqueSchedule(times, rng.uniform(-0.01, 0.01, size=(times.size, 3)))
+    torque = PiecewiseTorque(times, rng.uniform(-0.01, 0.01, size=(times.size, 3)))
     t = np.arange(int(DURATION * RATE) + 1) / RATE
-    clean = replay(Measurements(t, np.zeros((t.size, 3)), torque), inertia, np.array([0.3, -0.2, 0.4]), "truth",
-                   max_step=2.5e-4).omega  # fmt: skip
+    measurements = Measurements(t, np.zeros((t.size, 3)), torque)
+    clean = simulate_window(measurements, inertia, np.array([0.3, -0.2, 0.4]), "truth", max_step=2.5e-4).omega
     return t, clean + NOISE * rng.standard_normal(clean.shape), torque
 
 
-def write_bag(path: Path, t: np.ndarray, omega: np.ndarray, torque: TorqueSchedule) -> None:
+def write_bag(path: Path, t: np.ndarray, omega: np.ndarray, torque: PiecewiseTorque) -> None:
     from mcap_ros2.writer import Writer
 
     t0 = 1_700_000_000_000_000_000

@@ -18,8 +18,8 @@ from pathlib import Path
 import numpy as np
 import yaml
 
-from rigid_rot_sim.identify import Measurements, TorqueSchedule, identify
-from rigid_rot_sim.identify.report import replay
+from rigid_rot_sim.identify import Measurements, PiecewiseTorque, identify
+from rigid_rot_sim.identify.report import simulate_window
 
 REPO = Path(__file__).resolve().parents[1]
 PROFILES = ("excitation", "excitation_gentle")
@@ -28,10 +28,10 @@ LENGTHS = (5.0, 10.0, 20.0, 40.0, 60.0)  # s
 RATE = 100.0  # Hz
 
 
-def profile(name: str) -> tuple[np.ndarray, np.ndarray, TorqueSchedule]:
+def profile(name: str) -> tuple[np.ndarray, np.ndarray, PiecewiseTorque]:
     scene = yaml.safe_load((REPO / "config" / "scenes" / f"{name}.yaml").read_text(encoding="utf-8"))
     segments = scene["torque_inputs"][0]["schedule"]["segments"]
-    torque = TorqueSchedule([s["start"] for s in segments], [s["torque"] for s in segments])
+    torque = PiecewiseTorque([s["start"] for s in segments], [s["torque"] for s in segments])
     return np.array(scene["body"]["inertia_tensor"]), np.array(scene["initial"]["angular_velocity"]), torque
 
 
@@ -42,7 +42,9 @@ def sweep() -> dict[tuple[str, float], np.ndarray]:
         inertia, omega0, torque = profile(name)
         moments = np.linalg.eigvalsh(inertia)
         t = np.arange(int(max(LENGTHS) * RATE) + 1) / RATE
-        clean = replay(Measurements(t, np.zeros((t.size, 3)), torque), inertia, omega0, "truth", max_step=5e-4).omega
+        clean = simulate_window(
+            Measurements(t, np.zeros((t.size, 3)), torque), inertia, omega0, "truth", max_step=5e-4
+        ).omega
         for noise in NOISE:
             rng = np.random.default_rng(31)
             readings = clean + noise * rng.standard_normal(clean.shape)

@@ -182,7 +182,8 @@ def _run_with_echo(argv: list[str], overrides: list[Parameter], period: float) -
 
     from rigid_rot_msgs.msg import RigidBodyState
     from rigid_rot_sim import conversions
-    from rigid_rot_sim.ros.node import STARTUP_ERRORS, RigidRotSimNode, init_ros, run_until_finished
+    from rigid_rot_sim.ros.node import RigidRotSimNode
+    from rigid_rot_sim.ros.node_process import STARTUP_ERRORS, init_ros, run_until_finished
     from rigid_rot_sim.ros.qos import STATE_QOS
 
     try:

@@ -19,9 +19,9 @@ from __future__ import annotations
 
 from gymnasium.envs.registration import register, registry
 
-from rigid_rot_sim.envs.task import DEFAULT_SENSORS, SensorSuite, SlewTask
+from rigid_rot_sim.envs.task import DEFAULT_SENSORS, ObservationSensors, SlewTask
 
-__all__ = ["DEFAULT_SENSORS", "SensorSuite", "SlewTask", "MAX_EPISODE_STEPS", "ENV_IDS"]
+__all__ = ["DEFAULT_SENSORS", "ObservationSensors", "SlewTask", "MAX_EPISODE_STEPS", "ENV_IDS"]
 
 #: The registered episode length (control periods): ``make`` applies it with TimeLimit, ``make_vec``
 #: passes it to the vector environment; both environments also truncate there themselves.

@@ -9,7 +9,7 @@ their reaction; a wheel's torque fades to zero at its maximum speed, as the engi
 Observation (float64): the attitude quaternion (x, y, z, w, body -> world), the body rate (rad/s,
 body axes), the attitude error to the target as a rotation vector (rad) and, with wheels, the three
 wheel speeds (rad/s, relative to the body); ``sensors=`` replaces the first two by the seeded gyro
-and star-tracker readings (:class:`~rigid_rot_sim.envs.task.SensorSuite`). Reward, hold test and
+and star-tracker readings (:class:`~rigid_rot_sim.envs.task.ObservationSensors`). Reward, hold test and
 draws: :mod:`rigid_rot_sim.core.slew` and :class:`~rigid_rot_sim.envs.task.SlewTask`.
 ``terminated``: held within tolerance for ``hold_periods`` periods; ``truncated``: after
 ``max_episode_steps`` periods. ``reset(seed=s)`` fixes every random number of the episode
@@ -27,7 +27,7 @@ import gymnasium as gym
 import numpy as np
 from gymnasium import spaces
 
-from rigid_rot_sim.envs.task import DEFAULT_SENSORS, SensorSuite, SlewBodies, SlewTask
+from rigid_rot_sim.envs.task import DEFAULT_SENSORS, ObservationSensors, SlewBodies, SlewTask
 
 __all__ = [
     "AttitudeControlEnv",
@@ -42,7 +42,9 @@ __all__ = [
 TASK_ARGUMENTS = tuple(f.name for f in dataclasses.fields(SlewTask) if f.name != "sensors")
 
 
-def make_task(owner: str, own: tuple[str, ...], sensors: SensorSuite | bool | None = None, **kwargs: Any) -> SlewTask:
+def make_task(
+    owner: str, own: tuple[str, ...], sensors: ObservationSensors | bool | None = None, **kwargs: Any
+) -> SlewTask:
     """A :class:`SlewTask` from ``owner``'s keyword arguments (``sensors=True``: :data:`DEFAULT_SENSORS`).
 
     An argument that is no field of the task is refused by name, with the arguments ``owner``
@@ -87,7 +89,7 @@ class AttitudeControlEnv(gym.Env[np.ndarray, np.ndarray]):
     metadata: dict[str, Any] = {"render_modes": []}
     with_wheels = False
 
-    def __init__(self, render_mode: str | None = None, sensors: SensorSuite | bool | None = None, **kwargs: Any):
+    def __init__(self, render_mode: str | None = None, sensors: ObservationSensors | bool | None = None, **kwargs: Any):
         if render_mode is not None:
             raise ValueError(f"render_mode must be None (no rendering), got {render_mode!r}")
         self.task = make_task(type(self).__name__, ("render_mode", "sensors"), sensors, **kwargs)

@@ -33,13 +33,13 @@ from rigid_rot_sim.core.slew import slew_update
 from rigid_rot_sim.core.steps import whole_steps
 from rigid_rot_sim.core.wheels import WheelModel, wheel_model
 
-__all__ = ["SlewTask", "SensorSuite", "Episode", "draw_episode", "SlewBodies", "DEFAULT_SENSORS"]
+__all__ = ["SlewTask", "ObservationSensors", "Episode", "draw_episode", "SlewBodies", "DEFAULT_SENSORS"]
 
 _SQRT3 = math.sqrt(3.0)
 
 
 @dataclass(frozen=True)
-class SensorSuite:
+class ObservationSensors:
     """The seeded sensors that replace the true state in the observation (models of :mod:`rigid_rot_sim.core.sensors`).
 
     Both are sampled once per control period (sample k at the end of period k, sample 0 at the
@@ -52,7 +52,7 @@ class SensorSuite:
 
 
 #: A tactical-grade gyro and an arc-second-class star tracker.
-DEFAULT_SENSORS = SensorSuite(
+DEFAULT_SENSORS = ObservationSensors(
     GyroModel(
         rate=10.0,
         angle_random_walk=5e-5,
@@ -100,7 +100,7 @@ class SlewTask:
     observation_horizon: int = 300
     wheel_inertia: float = 0.005
     wheel_max_speed: float = 300.0
-    sensors: SensorSuite | None = field(default=None)
+    sensors: ObservationSensors | None = field(default=None)
 
     def __post_init__(self) -> None:
         for name in ("control_period", "dt", "max_torque", "wheel_inertia", "wheel_max_speed"):

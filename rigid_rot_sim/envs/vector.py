@@ -31,7 +31,7 @@ from gymnasium.vector import AutoresetMode, VectorEnv
 from gymnasium.vector.utils import batch_space
 
 from rigid_rot_sim.envs.attitude import action_space, make_task, observation_space
-from rigid_rot_sim.envs.task import SensorSuite, SlewBodies
+from rigid_rot_sim.envs.task import ObservationSensors, SlewBodies
 
 __all__ = ["AttitudeControlVectorEnv", "WheelAttitudeControlVectorEnv", "slot_seeds"]
 
@@ -56,7 +56,7 @@ class AttitudeControlVectorEnv(VectorEnv):
         self,
         num_envs: int = 1,
         render_mode: str | None = None,
-        sensors: SensorSuite | bool | None = None,
+        sensors: ObservationSensors | bool | None = None,
         autoreset_mode: AutoresetMode | str = AutoresetMode.NEXT_STEP,
         **kwargs: Any,
     ) -> None:

@@ -4,7 +4,7 @@ Arrays in, a frozen result out, no ROS needed; ``rigid-rot identify`` (:mod:`rig
 is a thin shell over it. Modules:
 
 * :mod:`rigid_rot_sim.identify.data`: :class:`~rigid_rot_sim.identify.data.Measurements` (gyro samples,
-  attitude) and :class:`~rigid_rot_sim.identify.data.TorqueSchedule` (piecewise-constant body torque);
+  attitude) and :class:`~rigid_rot_sim.identify.data.PiecewiseTorque` (piecewise-constant body torque);
 * (the model, Euler's equations with parameter sensitivities, compiled RK4, is the core's
   :mod:`rigid_rot_sim.core.sensitivities`, precompiled with every other kernel);
 * :mod:`rigid_rot_sim.identify.fit`: :func:`~rigid_rot_sim.identify.fit.identify`, equation error then
@@ -21,13 +21,13 @@ torque acting = commanded + torque_bias (body frame), gyro reading = true rate +
 Example (noise-free data from a known body recovers it)::
 
     >>> import numpy as np
-    >>> from rigid_rot_sim.identify import Measurements, TorqueSchedule, identify
-    >>> from rigid_rot_sim.identify.report import replay
+    >>> from rigid_rot_sim.identify import Measurements, PiecewiseTorque, identify
+    >>> from rigid_rot_sim.identify.report import simulate_window
     >>> J = np.array([[0.02, 0.001, 0.0], [0.001, 0.03, 0.002], [0.0, 0.002, 0.04]])
     >>> t = np.arange(2001) * 0.005
-    >>> torque = TorqueSchedule([0.0, 3.0, 6.0], [[0.01, 0.0, 0.0], [0.0, 0.01, 0.005], [0.0, 0.0, -0.01]])
+    >>> torque = PiecewiseTorque([0.0, 3.0, 6.0], [[0.01, 0.0, 0.0], [0.0, 0.01, 0.005], [0.0, 0.0, -0.01]])
     >>> truth = Measurements(t, np.zeros((t.size, 3)), torque)
-    >>> omega = replay(truth, J, np.array([0.2, -0.1, 0.3]), "truth").omega
+    >>> omega = simulate_window(truth, J, np.array([0.2, -0.1, 0.3]), "truth").omega
     >>> result = identify(Measurements(t, omega, torque))
     >>> bool(np.allclose(result.inertia, J, rtol=1e-6, atol=1e-9)), result.identifiable
     (True, 'full')
@@ -35,7 +35,7 @@ Example (noise-free data from a known body recovers it)::
 
 from __future__ import annotations
 
-from rigid_rot_sim.identify.data import Measurements, TorqueSchedule
+from rigid_rot_sim.identify.data import Measurements, PiecewiseTorque
 from rigid_rot_sim.identify.fit import ESTIMATES, Identification, identify
 
-__all__ = ["ESTIMATES", "Identification", "Measurements", "TorqueSchedule", "identify"]
+__all__ = ["ESTIMATES", "Identification", "Measurements", "PiecewiseTorque", "identify"]

@@ -1,8 +1,8 @@
 """Measurements from a bag: an MCAP file or a rosbag2 directory, ours or anyone's.
 
 Messages are decoded from the definitions stored in the file (``ros2msg`` schemas, read by
-:class:`rigid_rot_sim.recording.reader.BagReader` with mcap-ros2-support), so no ROS installation
-is needed. Times are header stamps (the log time when a stamp is zero), in s from the first
+:class:`rigid_rot_sim.recording.reader.Bag`: a file or a rosbag2 directory; mcap-ros2-support), so no
+ROS installation is needed. Times are header stamps (the log time when a stamp is zero), in s from the first
 sample of the rate source.
 
 Inputs (:class:`BagInputs`): the rate from ``sensor_msgs/Imu`` (``angular_velocity``; its
@@ -17,17 +17,16 @@ before each state, so held backwards) and its attitude.
 from __future__ import annotations
 
 import os
-from collections.abc import Iterator, Sequence
+from collections.abc import Sequence
 from dataclasses import dataclass, field
-from pathlib import Path
 from typing import Any
 
 import numpy as np
-import yaml
 from scipy.spatial.transform import Rotation, Slerp
 
-from rigid_rot_sim.identify.data import Measurements, TorqueSchedule, world_torque_in_body
-from rigid_rot_sim.recording.reader import BagReader, RecordedMessage, Topic
+from rigid_rot_sim.identify.data import Measurements, PiecewiseTorque, world_torque_in_body
+from rigid_rot_sim.recording.reader import Bag, RecordedMessage
+from rigid_rot_sim.scene.scene import parse_scene_text
 
 IMU = "sensor_msgs/msg/Imu"
 VECTOR3_STAMPED = "geometry_msgs/msg/Vector3Stamped"
@@ -58,62 +57,6 @@ class BagData:
     sources: dict[str, str]
     scene_text: str | None = None
     topics: dict[str, str] = field(default_factory=dict)
-
-
-class Bag:
-    """One MCAP file, or the MCAP files of a rosbag2 directory (``metadata.yaml``), read as one."""
-
-    def __init__(self, path: str | os.PathLike[str]) -> None:
-        self.path = Path(path)
-        self.readers = [BagReader(p) for p in _mcap_files(self.path)]
-        self.topics: dict[str, Topic] = {}
-        self.metadata: dict[str, dict[str, str]] = {}
-        for reader in self.readers:
-            self.topics.update(reader.topics)
-            for name, record in reader.metadata.items():
-                self.metadata.setdefault(name, record)
-
-    def listing(self) -> str:
-        """The bag's topics and types, for error messages."""
-        return ", ".join(f"{t.name} ({t.type_name})" for t in sorted(self.topics.values(), key=lambda t: t.name))
-
-    def require(self, topic: str, types: Sequence[str], option: str) -> None:
-        if topic not in self.topics:
-            raise ValueError(f"{option} {topic}: no such topic in {self.path}; it has {self.listing()}")
-        if self.topics[topic].type_name not in types:
-            raise ValueError(f"{option} {topic}: type {self.topics[topic].type_name}, expected {' or '.join(types)}")
-
-    def decoded(self, topic: str) -> Iterator[tuple[RecordedMessage, Any]]:
-        for reader in self.readers:
-            if topic in reader.topics:
-                yield from reader.decoded([topic])
-
-    def find_topic(self, role: str, type_name: str) -> str | None:
-        for reader in self.readers:
-            found = reader.find_topic(role, type_name)
-            if found is not None:
-                return found
-        return None
-
-
-def _mcap_files(path: Path) -> list[Path]:
-    if path.is_file():
-        return [path]
-    if not path.is_dir():
-        raise FileNotFoundError(f"no such bag: {path}")
-    metadata = path / "metadata.yaml"
-    files: list[Path] = []
-    if metadata.is_file():
-        info = (yaml.safe_load(metadata.read_text(encoding="utf-8")) or {}).get("rosbag2_bagfile_information", {})
-        storage = info.get("storage_identifier", "mcap")
-        if storage != "mcap":
-            raise ValueError(f"{path}: storage {storage!r}; only MCAP bags are read (ros2 bag convert them)")
-        files = [path / name for name in info.get("relative_file_paths", [])]
-    if not files:
-        files = sorted(path.glob("*.mcap"))
-    if not files:
-        raise ValueError(f"{path}: a directory without MCAP files")
-    return files
 
 
 def _stamp_ns(message: RecordedMessage, decoded: Any) -> int:
@@ -212,7 +155,7 @@ def read_bag(path: str | os.PathLike[str], inputs: BagInputs = BagInputs()) -> B
         bag.require(torque_topic, [WRENCH], "--torque")
         c_stamps, values, is_world = _commands(bag, torque_topic, body, inputs.world_frames)
         times = (c_stamps - t0) * 1e-9
-        body_part = TorqueSchedule(times, np.where(is_world[:, None], 0.0, values))
+        body_part = PiecewiseTorque(times, np.where(is_world[:, None], 0.0, values))
         schedules.append(body_part)
         if np.any(is_world):
             if orientation is None:
@@ -240,7 +183,7 @@ def _read_ours(bag: Bag, scene: str | None) -> BagData:
         )
     s_stamps, s_omega, s_q, _, torque = _rate_samples(bag, state_topic, "state")
     imu_topic = bag.find_topic("imu", IMU)
-    gyro = scene is not None and "gyro" in ((yaml.safe_load(scene) or {}).get("sensors") or {})
+    gyro = scene is not None and parse_scene_text(scene, source="<recorded scene>").sensors.gyro is not None
     if imu_topic is not None and gyro:
         stamps, omega, _, _, _ = _rate_samples(bag, imu_topic, "imu")
         sources = {"rate": imu_topic, "torque": f"{state_topic} torque_body", "orientation": state_topic}
@@ -252,7 +195,7 @@ def _read_ours(bag: Bag, scene: str | None) -> BagData:
     ts = (s_stamps - t0) * 1e-9
     # torque_body of the state at t_k is the torque over the step before t_k: from the previous state on
     starts = np.concatenate([[ts[0] - (ts[1] - ts[0]) if ts.shape[0] > 1 else ts[0]], ts[:-1]])
-    schedule = TorqueSchedule(starts, torque)
+    schedule = PiecewiseTorque(starts, torque)
     # the attitude at the rate samples (the state's, interpolated where the streams differ)
     orientation = None
     if s_q is not None and ts.shape[0] > 1:
@@ -262,10 +205,10 @@ def _read_ours(bag: Bag, scene: str | None) -> BagData:
     )
 
 
-def _sum(schedules: list[TorqueSchedule]) -> TorqueSchedule:
+def _sum(schedules: list[PiecewiseTorque]) -> PiecewiseTorque:
     if not schedules:
-        return TorqueSchedule.none()
+        return PiecewiseTorque.none()
     if len(schedules) == 1:
         return schedules[0]
     times = np.unique(np.concatenate([s.times for s in schedules]))
-    return TorqueSchedule(times, sum((s.at(times) for s in schedules), np.zeros((times.shape[0], 3))))
+    return PiecewiseTorque(times, sum((s.at(times) for s in schedules), np.zeros((times.shape[0], 3))))

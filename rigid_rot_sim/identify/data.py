@@ -16,7 +16,7 @@ from scipy.spatial.transform import Rotation, Slerp
 
 
 @dataclass(frozen=True)
-class TorqueSchedule:
+class PiecewiseTorque:
     """A piecewise-constant body-frame torque: ``values[j]`` (N*m) from ``times[j]`` to ``times[j + 1]``.
 
     Zero before ``times[0]``; the last value holds to the end. Empty arrays: no torque.
@@ -38,7 +38,7 @@ class TorqueSchedule:
         object.__setattr__(self, "values", values)
 
     @classmethod
-    def none(cls) -> TorqueSchedule:
+    def none(cls) -> PiecewiseTorque:
         """No torque at all."""
         return cls(np.zeros(0), np.zeros((0, 3)))
 
@@ -78,7 +78,7 @@ class Measurements:
 
     t: np.ndarray
     omega: np.ndarray
-    torque: TorqueSchedule
+    torque: PiecewiseTorque
     orientation: np.ndarray | None = None
 
     def __post_init__(self) -> None:
@@ -118,7 +118,7 @@ class Measurements:
 
 def world_torque_in_body(
     times: np.ndarray, world_values: np.ndarray, t: np.ndarray, orientation: np.ndarray, end: float
-) -> TorqueSchedule:
+) -> PiecewiseTorque:
     """A world-frame piecewise-constant torque as a body-frame schedule, with the measured attitude.
 
     The body sees a world-fixed torque turn as the body turns, so the schedule gets a piece
@@ -130,11 +130,11 @@ def world_torque_in_body(
     :param end: s, the last time the schedule must cover.
     """
     times = np.asarray(times, dtype=float)
-    world = TorqueSchedule(times, world_values)
+    world = PiecewiseTorque(times, world_values)
     t = np.asarray(t, dtype=float)
     grid = np.union1d(times[times <= end], t[t <= end])
     grid = grid[grid >= min(t[0], times[0] if times.size else t[0])]
     mid = np.append(0.5 * (grid[:-1] + grid[1:]), grid[-1])
     slerp = Slerp(t, Rotation.from_quat(orientation))
     rotation = slerp(np.clip(mid, t[0], t[-1]))
-    return TorqueSchedule(grid, rotation.inv().apply(world.at(mid)))
+    return PiecewiseTorque(grid, rotation.inv().apply(world.at(mid)))

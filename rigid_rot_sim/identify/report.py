@@ -22,7 +22,7 @@ from rigid_rot_sim.identify.fit import Identification, build_grid
 
 
 @dataclass(frozen=True)
-class Replay:
+class SimulatedWindow:
     """One model replayed over the window: the gyro it predicts (n, 3) rad/s, its attitude (n, 4) or None."""
 
     label: str
@@ -37,11 +37,11 @@ class Replay:
 class Validation:
     """The bag replayed with the nominal tensor (None when there is none) and with the identified one."""
 
-    nominal: Replay | None
-    identified: Replay
+    nominal: SimulatedWindow | None
+    identified: SimulatedWindow
 
 
-def replay(
+def simulate_window(
     measurements: Measurements,
     inertia: np.ndarray,
     omega0: np.ndarray,
@@ -49,7 +49,7 @@ def replay(
     torque_bias: np.ndarray | None = None,
     gyro_bias: np.ndarray | None = None,
     max_step: float = 0.005,
-) -> Replay:
+) -> SimulatedWindow:
     """Re-simulate the window from ``omega0`` (rad/s, true rate at the first sample) with ``inertia`` (kg*m^2)."""
     grid = build_grid(measurements, math.inf, max_step)
     q0 = measurements.orientation[0] if measurements.orientation is not None else np.array([0.0, 0.0, 0.0, 1.0])
@@ -64,20 +64,22 @@ def replay(
     if measurements.orientation is not None:
         angles = (Rotation.from_quat(measurements.orientation).inv() * Rotation.from_quat(q)).magnitude()
         attitude_rms = float(np.sqrt(np.mean(angles**2)))
-    return Replay(label, np.asarray(inertia, dtype=float), reading, q if measurements.orientation is not None else None,
-                  omega_rms, attitude_rms)  # fmt: skip
+    orientation = q if measurements.orientation is not None else None
+    return SimulatedWindow(label, np.asarray(inertia, dtype=float), reading, orientation, omega_rms, attitude_rms)
 
 
 def validate(measurements: Measurements, result: Identification, nominal: np.ndarray | None) -> Validation:
     """Replays with the nominal tensor (if given) and the identified model, from the fitted initial rate."""
     omega0 = result.segment_omega0[0]
-    identified = replay(measurements, result.inertia, omega0, "identified", result.torque_bias, result.gyro_bias)
+    identified = simulate_window(
+        measurements, result.inertia, omega0, "identified", result.torque_bias, result.gyro_bias
+    )
     nominal_replay = None
     if nominal is not None:
         tensor = np.asarray(nominal, dtype=float)
         if result.identifiable == "ratios":
             tensor = tensor / np.trace(tensor)  # no torque: only the ratios matter, compare like with like
-        nominal_replay = replay(measurements, tensor, omega0, "nominal")
+        nominal_replay = simulate_window(measurements, tensor, omega0, "nominal")
     return Validation(nominal_replay, identified)
 
 
@@ -88,7 +90,7 @@ def _matrix(a: np.ndarray | None) -> Any:
 def as_json(result: Identification, validation: Validation | None, sources: dict[str, str]) -> dict[str, Any]:
     """The JSON object of ``rigid-rot identify --json`` (SI units, body frame of the measurements)."""
 
-    def rms(r: Replay | None) -> Any:
+    def rms(r: SimulatedWindow | None) -> Any:
         return None if r is None else {"omega": r.omega_rms, "attitude": r.attitude_rms}
 
     return {

@@ -13,7 +13,7 @@ import io
 import os
 import struct
 from collections import Counter
-from collections.abc import Iterable, Iterator
+from collections.abc import Iterable, Iterator, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -251,6 +251,64 @@ class BagReader:
     def counts(self) -> Counter[str]:
         """Messages per topic (from a pass over the messages, not from the summary)."""
         return Counter(m.topic for m in self.messages())
+
+
+class Bag:
+    """One MCAP file, or the MCAP files of a rosbag2 directory (``metadata.yaml``), read as one (topics,
+    metadata and decoded messages of every file)."""
+
+    def __init__(self, path: str | os.PathLike[str]) -> None:
+        self.path = Path(path)
+        self.readers = [BagReader(p) for p in mcap_files(self.path)]
+        self.topics: dict[str, Topic] = {}
+        self.metadata: dict[str, dict[str, str]] = {}
+        for reader in self.readers:
+            self.topics.update(reader.topics)
+            for name, record in reader.metadata.items():
+                self.metadata.setdefault(name, record)
+
+    def listing(self) -> str:
+        """The bag's topics and types, for error messages."""
+        return ", ".join(f"{t.name} ({t.type_name})" for t in sorted(self.topics.values(), key=lambda t: t.name))
+
+    def require(self, topic: str, types: Sequence[str], option: str) -> None:
+        if topic not in self.topics:
+            raise ValueError(f"{option} {topic}: no such topic in {self.path}; it has {self.listing()}")
+        if self.topics[topic].type_name not in types:
+            raise ValueError(f"{option} {topic}: type {self.topics[topic].type_name}, expected {' or '.join(types)}")
+
+    def decoded(self, topic: str) -> Iterator[tuple[RecordedMessage, Any]]:
+        for reader in self.readers:
+            if topic in reader.topics:
+                yield from reader.decoded([topic])
+
+    def find_topic(self, role: str, type_name: str) -> str | None:
+        for reader in self.readers:
+            found = reader.find_topic(role, type_name)
+            if found is not None:
+                return found
+        return None
+
+
+def mcap_files(path: Path) -> list[Path]:
+    """The MCAP files of a bag: the file itself, or a rosbag2 directory's (its ``metadata.yaml`` order)."""
+    if path.is_file():
+        return [path]
+    if not path.is_dir():
+        raise FileNotFoundError(f"no such bag: {path}")
+    metadata = path / "metadata.yaml"
+    files: list[Path] = []
+    if metadata.is_file():
+        info = (yaml.safe_load(metadata.read_text(encoding="utf-8")) or {}).get("rosbag2_bagfile_information", {})
+        storage = info.get("storage_identifier", "mcap")
+        if storage != "mcap":
+            raise ValueError(f"{path}: storage {storage!r}; only MCAP bags are read (ros2 bag convert them)")
+        files = [path / name for name in info.get("relative_file_paths", [])]
+    if not files:
+        files = sorted(path.glob("*.mcap"))
+    if not files:
+        raise ValueError(f"{path}: a directory without MCAP files")
+    return files
 
 
 @dataclass(frozen=True)

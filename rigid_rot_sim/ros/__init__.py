@@ -1,6 +1,8 @@
 """The ROS layer: the node and one small module per concern, like ros2/demos.
 
-* :mod:`.node`: :class:`~.node.RigidRotSimNode` (the wiring, one page) and ``main``;
+* :mod:`.node`: :class:`~.node.RigidRotSimNode` and :class:`~.node.SceneRun` (the wiring of the parts);
+  :mod:`.parts`: the run's parts, each built from the scene, and the start-up line; :mod:`.node_process`:
+  ``rclpy.init``, the run until it finishes, and ``main``;
 * :mod:`.parameters`: declarations with descriptors, the validate / apply callbacks;
 * :mod:`.outputs`: the publishers in one table keyed on the scene's output names, and the
   one path every message takes out of the node (:meth:`.outputs.Outputs.publish`);
@@ -14,6 +16,7 @@
   :mod:`.foxglove_live`: the Foxglove live server; :mod:`.live_views`: the optional live viewers' wiring;
 * :mod:`.run_loop`: the run loop (steps, commands, outputs; services on an executor thread);
   :mod:`.intake`: every command topic taken by the run loop in arrival order, losses counted;
+  :mod:`.rclpy_internals`: every use of rclpy's internals (the run loop's waits and takes), in one place;
 * :mod:`.joint_state_door`: the wheels' JointState door for ros2_control; :mod:`.paused_clock`: /clock
   while paused; :mod:`.sim_events`: the live ``~/sim_events``; :mod:`.topic_types`: publishers of a
   wrong type on a command topic, named in the log; :mod:`.web_live`: the body's web page of a live run;
@@ -62,5 +65,5 @@ A torque command's route, top to bottom
 
 There is one route: no method or publisher is wrapped, and whether the run is recorded
 only decides whether the recorder is among the observers and listeners
-(``SceneRun._start_recording``).
+(``parts.recording``, ``recording.NodeRecording.attach``).
 """

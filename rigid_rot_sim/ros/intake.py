@@ -7,8 +7,8 @@ exclusive group, timers yielded first, a refused handler returns without taking)
 stretches nothing was taken, and the reader's keep-last history overwrote what arrived beyond
 its depth: commands were lost before any callback saw them, silently.
 
-Here a command subscription belongs to :data:`TAKEN_BY_THE_RUN_LOOP`, a callback group no
-executor ever runs (``can_execute`` is False: the executor does not even wait on it). The run
+Here a command subscription belongs to :data:`~.rclpy_internals.TAKEN_BY_THE_RUN_LOOP`, a callback
+group no executor ever runs (``can_execute`` is False: the executor does not even wait on it). The run
 loop (:mod:`rigid_rot_sim.ros.run_loop`) waits on the subscriptions itself and, before and
 between its steps, calls :meth:`CommandIntake.drain`: every message each reader holds is taken,
 the messages of all topics are handed on in the order DDS received them (the reception
@@ -29,43 +29,35 @@ type, the topic, its QoS and a handler ``handler(msg, received_ns)``; ``~/torque
 
 from __future__ import annotations
 
-import time
 from collections.abc import Callable, Iterator
-from contextlib import ExitStack, contextmanager
+from contextlib import contextmanager
 from dataclasses import dataclass, field
-from typing import Any
+from typing import Any, Protocol
 
-from rclpy.callback_groups import CallbackGroup
-from rclpy.exceptions import InvalidHandle
 from rclpy.guard_condition import GuardCondition
-from rclpy.impl.implementation_singleton import rclpy_implementation as _rclpy
 from rclpy.node import Node
 from rclpy.qos import QoSProfile
 from rclpy.subscription import Subscription
 
+from rigid_rot_sim.ros import rclpy_internals
+from rigid_rot_sim.ros.rclpy_internals import TAKEN_BY_THE_RUN_LOOP, Handler
+
+
+class CommandDoor(Protocol):
+    """A part of the node's run that takes commands through the intake (:mod:`.parts`): its subscriptions
+    and who hears each command as received (the recording); says what it built for the start-up line."""
+
+    subscriptions: list[Subscription]
+    listeners: list[Any]
+
+    def describe(self) -> tuple[list[str], list[str]]: ...
+
+
 #: Publishers told apart per topic (a new one beyond these forgets the oldest).
 MAX_STREAMS = 64
 
-Handler = Callable[[Any, int], None]
 #: ``lost(topic, count, why)``: ``count`` commands on ``topic`` never reached the handler.
 LostReport = Callable[[str, int, str], None]
-
-
-class _TakenByTheRunLoop(CallbackGroup):
-    """A callback group no executor runs: its members are waited on and taken by the run loop."""
-
-    def can_execute(self, entity: Any) -> bool:
-        return False
-
-    def beginning_execution(self, entity: Any) -> bool:
-        return False
-
-    def ending_execution(self, entity: Any) -> None:
-        pass
-
-
-#: The group of every command subscription (one instance: membership is all it tracks).
-TAKEN_BY_THE_RUN_LOOP = _TakenByTheRunLoop()
 
 
 def _never_called(msg: Any) -> None:  # the executor never runs a TAKEN_BY_THE_RUN_LOOP member
@@ -141,26 +133,18 @@ class CommandIntake:
         """Take every message the readers hold and hand each on, all topics in reception order; how many."""
         pending: list[tuple[int, int, Door, Any]] = []
         for door in list(self.doors):
-            subscription = door.subscription
             taken = missing = 0
-            try:
-                subscription.handle.__enter__()
-            except InvalidHandle:  # destroyed meanwhile (rclpy's /clock when use_sim_time turns false)
+
+            def take(msg: Any, info: dict[str, Any], door: Door = door) -> None:
+                nonlocal taken, missing
+                taken += 1
+                if door.counts_gaps:
+                    missing += door.gap(info.get("publication_sequence_number"))
+                pending.append((rclpy_internals.received_ns(info), len(pending), door, msg))
+
+            if not rclpy_internals.take_all(door.subscription, take):  # destroyed meanwhile (/clock)
                 self.doors.remove(door)
                 continue
-            try:
-                while True:
-                    got = subscription.handle.take_message(subscription.msg_type, subscription.raw)
-                    if got is None:
-                        break
-                    msg, info = got
-                    taken += 1
-                    received_ns = info.get("received_timestamp") or time.time_ns()
-                    if door.counts_gaps:
-                        missing += door.gap(info.get("publication_sequence_number"))
-                    pending.append((received_ns, len(pending), door, msg))
-            finally:
-                subscription.handle.__exit__(None, None, None)
             door.taken += taken
             if missing:  # a full history overflowed; else a publisher's own history dropped them
                 self._lost(door, missing, full=taken >= door.depth)
@@ -169,6 +153,10 @@ class CommandIntake:
         for received_ns, _, door, msg in pending:
             door.handler(msg, received_ns)
         return len(pending)
+
+    def losses(self) -> str:
+        """How many commands each topic that lost some took and lost ("" when none lost: a bound was never hit)."""
+        return "; ".join(f"{d.topic}: {d.lost} lost of {d.taken + d.lost}" for d in self.doors if d.lost)
 
     def _lost(self, door: Door, count: int, full: bool) -> None:
         door.lost += count
@@ -187,27 +175,11 @@ class CommandIntake:
         """A wait on the command topics and the wake-up, for the run loop: ``wait(timeout_s)`` (None:
         until something arrives) returns True when something is ready. The entities stay in use
         (not destroyable) inside the ``with``."""
-        with ExitStack() as stack:
-            handles = [door.subscription.handle for door in self.doors]
-            guard = self.guard.handle
-            for handle in (*handles, guard, self.context.handle):
-                stack.enter_context(handle)
-            wait_set = _rclpy.WaitSet(len(handles), 1, 0, 0, 0, 0, self.context.handle)
-
-            def wait(timeout: float | None) -> bool:
-                wait_set.clear_entities()
-                for handle in handles:
-                    wait_set.add_subscription(handle)
-                wait_set.add_guard_condition(guard)
-                wait_set.wait(-1 if timeout is None else max(0, int(timeout * 1e9)))
-                return bool(wait_set.get_ready_entities("subscription")) or bool(
-                    wait_set.get_ready_entities("guard_condition")
-                )
-
+        with rclpy_internals.waiting(self.context, self.subscriptions, self.guard) as wait:
             yield wait
 
     def destroy(self) -> None:
         self.guard.destroy()
 
 
-__all__ = ["TAKEN_BY_THE_RUN_LOOP", "CommandIntake", "Door"]
+__all__ = ["TAKEN_BY_THE_RUN_LOOP", "CommandDoor", "CommandIntake", "Door"]

@@ -8,6 +8,7 @@ published), the web page observes the run driver (the latest state, at most 30 u
 
 from __future__ import annotations
 
+from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
 from rclpy.node import Node
@@ -21,7 +22,38 @@ if TYPE_CHECKING:  # imported when asked for only: the extras are optional
     from rigid_rot_sim.ros.foxglove_live import FoxgloveLive
     from rigid_rot_sim.ros.web_live import WebLive
 
-__all__ = ["start_foxglove", "start_web"]
+__all__ = ["LiveView", "start", "start_foxglove", "start_web"]
+
+
+@dataclass
+class LiveView:
+    """A live viewer as a part of the node's run (:class:`~rigid_rot_sim.ros.parts.Part`): built, or left
+    out and why (the start-up line's words); closed with the run."""
+
+    live: FoxgloveLive | WebLive | None
+    words: str
+
+    def describe(self) -> tuple[list[str], list[str]]:
+        if not self.words:
+            return [], []
+        return ([self.words], []) if self.live is not None else ([], [self.words])
+
+    def close(self) -> None:
+        if self.live is not None:
+            self.live.close()
+
+
+def start(
+    node: Node, foxglove: str, web: str, sim: Simulator, outputs: Outputs, driver: RunDriver, scene: Scene
+) -> list[LiveView]:
+    """The live viewers the ``foxglove`` and ``web`` addresses ask for; ValueError when one cannot serve."""
+    views = [LiveView(*start_foxglove(node, foxglove, sim, outputs, scene))]
+    try:
+        views.append(LiveView(*start_web(node, web, sim, outputs, driver, scene)))
+    except BaseException:
+        views[0].close()
+        raise
+    return views
 
 
 def start_foxglove(

@@ -73,13 +73,17 @@ class NodeLockstep:
         sim.add_observer(self.turns)
         sim.command_gate = self.turns.admit
 
-    def describe(self) -> str:
+    def describe(self) -> tuple[list[str], list[str]]:
+        """For the start-up line (:class:`~rigid_rot_sim.ros.parts.Part`): the turns and what they wait for."""
         spec = self.turns.spec
-        return (
+        return [
             f"LOCKSTEP on: a turn every {spec.period:g} s of sim time ({self.turns.period_steps} steps), "
             f"waits for {', '.join(spec.inputs)} (commands stamped t_k), timeout {spec.timeout:g} s -> "
             f"{spec.on_timeout}; {', '.join(self.turn_outputs)} once per turn"
-        )
+        ], []
+
+    def close(self) -> None:
+        """Nothing to close (the turns end with the simulator)."""
 
 
 __all__ = [

@@ -1,125 +1,85 @@
 """The rigid_rot_sim ROS 2 node: a scene simulated by :class:`~rigid_rot_sim.run.simulator.Simulator`.
 
-The node wires: parameters (:mod:`.parameters`), outputs (:mod:`.outputs`), torque inputs
-(:mod:`.inputs`), services (:mod:`.services`, :mod:`.simulation_services`) and the
-recording (:mod:`rigid_rot_sim.ros.recording`) around the simulator and the
-run driver that paces it (:mod:`rigid_rot_sim.run.pacing`). It builds only what the scene
-needs (a :class:`SceneRun`) and logs one start-up line saying what was built and what was
-left out. Without a ``scene`` parameter it serves ``~/compute_inertia`` only (``node.run``
-is None). :func:`run_until_finished` is the one loop that runs it, for :func:`main` and for
-``rigid-rot run --echo``.
+:class:`SceneRun` wires the parts of a run (:mod:`.parts`: outputs, command doors, lockstep, services,
+live views, recording; each built from the scene) around the simulator and the run driver that paces
+it (:mod:`rigid_rot_sim.run.pacing`), and logs one start-up line saying what was built and what was left
+out. Without a ``scene`` parameter the node serves ``~/compute_inertia`` only (``node.run`` is None).
+:func:`main` runs it (:mod:`.node_process`: ``rclpy.init``, the run until it finishes).
 
 Topics (names relative to the node; QoS in the README, section "The simulation node")
 -----------------------------------------------------------------------------------
-~/state (rigid_rot_msgs/RigidBodyState), ~/orientation (geometry_msgs/QuaternionStamped),
-~/angular_velocity (Vector3Stamped, body frame), ~/angular_momentum (Vector3Stamped,
-world frame), ~/mass_properties (geometry_msgs/InertiaStamped, transient local, once),
-~/top_state (rigid_rot_msgs/HeavyTopState, gravity scenes), ~/rejected
-(rigid_rot_msgs/RejectedCommand), ~/imu (sensor_msgs/Imu; the gyro's readings when the scene
-has ``sensors.gyro``) and ~/odom (nav_msgs/Odometry) when the scene asks for them,
-~/star_tracker (geometry_msgs/PoseWithCovarianceStamped) with ``sensors.star_tracker``
-(docs/sensors.md), /tf (world -> body) and /tf_static (body -> principal frame, where it
-differs from the body frame), /clock (sim time; the frozen time while paused: :mod:`.paused_clock`),
-~/sim_events (live, the recent history latched: :mod:`.sim_events`), and for a scene with wheels
-the JointState door of ros2_control's topic hardware interface (:mod:`.joint_state_door`). QoS:
-rigid_rot_sim.ros.qos.
-Every header stamp is sim time. Frame names: the ``world_frame`` / ``body_frame``
-parameters (default: the scene's ``frames``, REP 105 ``odom`` / ``base_link``), used by
-every output, /tf and the recording. Torque inputs: the scene's topics (WrenchStamped or
-Vector3Stamped).
+~/state (rigid_rot_msgs/RigidBodyState), ~/orientation (geometry_msgs/QuaternionStamped), ~/angular_velocity
+(Vector3Stamped, body frame), ~/angular_momentum (Vector3Stamped, world frame), ~/mass_properties
+(geometry_msgs/InertiaStamped, transient local, once), ~/top_state (rigid_rot_msgs/HeavyTopState, gravity scenes),
+~/rejected (rigid_rot_msgs/RejectedCommand), ~/imu (sensor_msgs/Imu; the gyro's readings when the scene has
+``sensors.gyro``) and ~/odom (nav_msgs/Odometry) when the scene asks for them, ~/star_tracker
+(geometry_msgs/PoseWithCovarianceStamped) with ``sensors.star_tracker`` (docs/sensors.md), /tf (world -> body) and
+/tf_static (body -> principal frame, where it differs from the body frame), /clock (sim time; the frozen time while
+paused: :mod:`.paused_clock`), ~/sim_events (live, the recent history latched: :mod:`.sim_events`), and for a scene
+with wheels the JointState door of ros2_control's topic hardware interface (:mod:`.joint_state_door`). QoS:
+rigid_rot_sim.ros.qos. Every header stamp is sim time. Frame names: the ``world_frame`` / ``body_frame`` parameters
+(default: the scene's ``frames``, REP 105 ``odom`` / ``base_link``), used by every output, /tf and the recording.
+Torque inputs: the scene's topics (WrenchStamped or Vector3Stamped).
 
 Services
 --------
-~/compute_inertia, ~/set_state, ~/reset (std_srvs/Trigger), ~/pause (std_srvs/SetBool),
-~/step (rigid_rot_msgs/Step, while paused; at most ``limits.MAX_STEPS_PER_REQUEST`` steps,
-run in the service callback for at most ``services.STEP_REQUEST_WALL`` s: the reply says how many
-were done), ~/apply_torque, ~/step_with_torque (a torque over the next N steps, then the state, in
-one callback). A bad request gets ``success = false`` and the reason; nothing
-raises out of a callback. Where simulation_interfaces is installed, also the standard
-simulator services (:mod:`.simulation_services`), through the same actions
-(``~/step_simulation`` runs ``~/step``'s code, limits included) and the SimulateSteps action
-(``~/simulate_steps``, stepped by a timer of its own: :mod:`.simulate_steps`).
-The node loop (:mod:`.run_loop`, docs/architecture.md "The node loop"): the run's turns on the main
-thread, which also takes every command in arrival order (:mod:`.intake`); the services, parameters
-and actions on an executor thread, each holding the run lock (the node's default group), so a
-huge request is deserialised beside the stepping and the commands.
-Every limit is in :mod:`rigid_rot_sim.core.limits` (README, "Limits and failure behaviour").
+~/compute_inertia, ~/set_state, ~/reset (std_srvs/Trigger), ~/pause (std_srvs/SetBool), ~/step (rigid_rot_msgs/Step,
+while paused; at most ``limits.MAX_STEPS_PER_REQUEST`` steps, run in the service callback for at most
+``services.STEP_REQUEST_WALL`` s: the reply says how many were done), ~/apply_torque, ~/step_with_torque (a torque
+over the next N steps, then the state, in one callback). A bad request gets ``success = false`` and the reason;
+nothing raises out of a callback. Where simulation_interfaces is installed, also the standard simulator services
+(:mod:`.simulation_services`), through the same actions (``~/step_simulation`` runs ``~/step``'s code, limits
+included) and the SimulateSteps action (``~/simulate_steps``, stepped by a timer of its own:
+:mod:`.simulate_steps`). The node loop (:mod:`.run_loop`, docs/architecture.md "The node loop"): the run's turns on
+the main thread, which also takes every command in arrival order (:mod:`.intake`); the services, parameters and
+actions on an executor thread, each holding the run lock (the node's default group), so a huge request is
+deserialised beside the stepping and the commands. Every limit is in :mod:`rigid_rot_sim.core.limits` (README,
+"Limits and failure behaviour").
 
 Pacing
 ------
-``real_time_factor`` r > 0: each turn of the run loop advances the simulation to
-``r * (wall time since the anchor)`` (at most ``run_loop.SLICE_WALL`` of work per turn, so
-commands are taken in between), and the next turn comes when the next output is due; r = 0: as
-fast as possible, in turns of at most ``SLICE_WALL``. The states do not depend on r
-or on the publish rates (see the Simulator's determinism notes). The turns are timed on the
-steady clock: the node is the source of sim time (/clock), so ``use_sim_time`` true (a
-launch-wide setting) is accepted with a warning that says so: nothing here reads the ROS clock.
+``real_time_factor`` r > 0: each turn of the run loop advances the simulation to ``r * (wall time since the
+anchor)`` (at most ``run_loop.SLICE_WALL`` of work per turn, so commands are taken in between), and the next turn
+comes when the next output is due; r = 0: as fast as possible, in turns of at most ``SLICE_WALL``. The states do not
+depend on r or on the publish rates (see the Simulator's determinism notes). The turns are timed on the steady
+clock: the node is the source of sim time (/clock), so ``use_sim_time`` true (a launch-wide setting) is accepted
+with a warning that says so: nothing here reads the ROS clock.
 
-Lockstep (the scene's ``lockstep`` section or the read-only ``lockstep.*`` parameters): the
-run waits at every turn for the controllers' commands stamped with the turn's time
-(:mod:`rigid_rot_sim.run.lockstep` has the contract, :mod:`.lockstep` the wiring, docs/lockstep.md
-the user's view); the turn that takes a lockstep turn's last answer steps on at once, and the
-next turn is otherwise timed by the turn's timeout. ``dt`` is fixed in lockstep.
+Lockstep (the scene's ``lockstep`` section or the read-only ``lockstep.*`` parameters): the run waits at every turn
+for the controllers' commands stamped with the turn's time (:mod:`rigid_rot_sim.run.lockstep` has the contract,
+:mod:`.lockstep` the wiring, docs/lockstep.md the user's view); the turn that takes a lockstep turn's last answer
+steps on at once, and the next turn is otherwise timed by the turn's timeout. ``dt`` is fixed in lockstep.
 """
 
 from __future__ import annotations
 
-import os
-import signal
-import sys
-import threading
 import time
 from collections.abc import Callable, Sequence
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
-import rclpy
 from rclpy.duration import Duration
-from rclpy.exceptions import NameValidationException, ParameterException
-from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
 from rclpy.node import Node
 from rclpy.parameter import Parameter
-from rclpy.signals import SignalHandlerOptions
-from rclpy.subscription import Subscription
-from rclpy.time_source import CLOCK_TOPIC
 
-from rigid_rot_sim.core import limits
-from rigid_rot_sim.ros import live_views, paused_clock, sim_events, simulation_services
+from rigid_rot_sim.ros import live_views, node_process, parts, paused_clock, sim_events
 from rigid_rot_sim.ros import parameters as params
-from rigid_rot_sim.ros.inputs import Rejections, TorqueInputs
-from rigid_rot_sim.ros.intake import TAKEN_BY_THE_RUN_LOOP, CommandIntake
-from rigid_rot_sim.ros.joint_state_door import JointStateDoor
-from rigid_rot_sim.ros.lockstep import NodeLockstep, declare_lockstep_parameters, lockstep_from_parameters
-from rigid_rot_sim.ros.outputs import Outputs
-from rigid_rot_sim.ros.parameters import RunParameters, declare_parameters, declare_scene_parameter, read_settings
-from rigid_rot_sim.ros.qos import output_qos
-from rigid_rot_sim.ros.rod_inputs import RodCommandInput
+from rigid_rot_sim.ros.inputs import Rejections
+from rigid_rot_sim.ros.intake import CommandIntake
+from rigid_rot_sim.ros.parameters import RunParameters, declare_scene_parameter
+from rigid_rot_sim.ros.parts import Closing, Part
+from rigid_rot_sim.ros.rclpy_internals import ClockTakenByTheRunLoop
 from rigid_rot_sim.ros.run_loop import POLL_WALL, SLICE_WALL, RunCallbackGroup, RunLock, RunLoop
 from rigid_rot_sim.ros.services import InertiaService, RunServices
-from rigid_rot_sim.ros.topic_types import RivalPublisherWatch, WrongTypeWatch
-from rigid_rot_sim.ros.wheel_inputs import WheelTorqueInput
-from rigid_rot_sim.run.pacing import OutputSchedule, Pacer, Progress, RunDriver
-from rigid_rot_sim.run.sensors import SensorSuite
-from rigid_rot_sim.run.simulator import Simulator
-from rigid_rot_sim.scene.scene import OutputQos, Scene, load_scene
-from rigid_rot_sim.share import ensure_ament_prefix_path, resolve_scene
+from rigid_rot_sim.ros.topic_types import WrongTypeWatch
+from rigid_rot_sim.run.pacing import Progress
+from rigid_rot_sim.scene.scene import Scene, load_scene
+from rigid_rot_sim.share import resolve_scene
 
-if TYPE_CHECKING:  # imported when recording only: the mcap packages are optional at run time
-    from rigid_rot_sim.ros.foxglove_live import FoxgloveLive
-    from rigid_rot_sim.ros.recording import NodeRecording
-    from rigid_rot_sim.ros.web_live import WebLive
-
-NODE_NAME = "rigid_rot_sim"
-#: The end of the warning about another node on /clock: what its consumers see, and the fix.
-CLOCK_RIVAL_ADVICE = (
-    "every use_sim_time node sees two timelines and its time jumps back (a tf2 buffer is cleared each time); "
-    "keep one /clock: rates.clock:=0 on the others, or remap one (-r /clock:=/other/clock)"
-)
-#: Most wall time (s) to wait at shutdown for a service in flight (a ~/step request is at most 0.25 s).
-EXECUTOR_SHUTDOWN_WAIT = 2.0
+NODE_NAME = node_process.NODE_NAME
 
 
 class SceneRun:
-    """A scene being simulated by ``node``: the simulator, its run driver and the ROS parts around them.
+    """A scene being simulated by ``node``: the simulator, its run driver and the parts around them (:mod:`.parts`).
 
     Built only when the node has a scene; declares the node's parameters (:mod:`.parameters`)
     with the scene's values as defaults.
@@ -127,175 +87,65 @@ class SceneRun:
 
     def __init__(self, node: Node, scene: Scene) -> None:
         self.logger = node.get_logger()
-        declare_parameters(node, scene)
-        declare_lockstep_parameters(node, scene)
-        settings = read_settings(node, scene)
+        settings = parts.settings(node, scene)
         self.scene = scene = settings.scene  # with the frame parameters' names
-        self.sim = sim = Simulator(scene, method=settings[params.INTEGRATOR], dt=settings[params.DT])
-        sim.commands.max_torque = float(settings[params.MAX_TORQUE])
-        state_qos = output_qos(OutputQos(settings[params.QOS_RELIABILITY], settings[params.QOS_DEPTH]))
-        models = (scene.sensors.gyro, scene.sensors.star_tracker, scene.sensors.magnetometer)
-        has_sensors = any(model is not None for model in models)
-        self.sensors = SensorSuite(scene.sensors, field=scene.orbit_field()) if has_sensors else None
-        self.outputs = Outputs(
-            node, scene, settings.rates(), state_qos, settings[params.GROUND_TRUTH_VARIANCE], self.sensors
-        )
-        schedule = OutputSchedule.from_rates(self.outputs.rates, sim.clock.dt)
-        pacer = Pacer(settings[params.REAL_TIME_FACTOR])
-        self.driver = RunDriver(sim, schedule, pacer, settings[params.DURATION] or None, observers=[self.outputs])
+        self.sim = sim = parts.simulator(settings)
+        self.outputs = parts.outputs(node, settings, sim)
+        self.driver = parts.driver(settings, sim, self.outputs)
         rejections = Rejections(node, sim, self.outputs)
         # every command topic is taken by the run loop, in arrival order (never by the executor)
         self.intake = CommandIntake(node, lost=rejections.lost)
         self.driver.between_chunks = self.intake.drain  # also while a service steps the run
-        self.inputs = TorqueInputs(self.intake, sim, scene, settings[params.COMMAND_DEPTH], rejections)
-        self.wheel_input = WheelTorqueInput(self.intake, sim, scene, settings[params.COMMAND_DEPTH], rejections)
-        self.rod_input = RodCommandInput(self.intake, sim, scene, settings[params.COMMAND_DEPTH], rejections)
-        self.joint_state_door = JointStateDoor(
-            self.intake,
-            sim,
-            scene,
-            (settings[params.JOINT_STATE_COMMANDS], settings[params.JOINT_STATE_STATES]),
-            self.outputs.rates.get("wheels", 0.0),
-            settings[params.COMMAND_DEPTH],
-            rejections,
-        )
-        self.driver.observers.append(self.joint_state_door)  # the states, at ~/wheels' steps
-        self.type_watch = WrongTypeWatch(
-            node,
-            self.inputs.subscriptions
-            + self.wheel_input.subscriptions
-            + self.rod_input.subscriptions
-            + self.joint_state_door.subscriptions,
-        )
-        self.clock_watch = (
-            RivalPublisherWatch(node, CLOCK_TOPIC, CLOCK_RIVAL_ADVICE) if "clock" in self.outputs.publishers else None
-        )
-        self.lockstep: NodeLockstep | None = None
-        lockstep = lockstep_from_parameters(node, scene, sim.clock.dt)
-        if lockstep is not None:
-            self.lockstep = NodeLockstep(node, lockstep, self.driver)
+        self.doors = parts.command_doors(self.intake, settings, self.driver, self.outputs, rejections)
+        self.inputs = self.doors[0]
+        self.type_watch = WrongTypeWatch(node, parts.subscriptions(self.doors))
+        self.clock_watch = parts.clock_watch(node, self.outputs)  # another node on /clock, named in the log
+        self.lockstep = parts.lockstep(node, settings, self.driver)
         self.services = RunServices(node, self.driver, scene, rejections, self.report_progress)
-        self._action_destroyed = False
-        self.simulation_services = (
-            simulation_services.SimulationServices(
-                node, self.services, settings[params.SIMULATION_INTERFACES_NAMESPACE]
-            )
-            if simulation_services.AVAILABLE
-            else None
-        )
+        self.simulation_services = parts.simulation_services(node, settings, self.services)
         self.sim_events = sim_events.start(node, sim)  # ~/sim_events, live (latched recent history)
         self.paused_clock = paused_clock.start(node, sim, self.outputs.publishers, self.outputs.rates)
-        self.recording: NodeRecording | None = None
-        if settings[params.RECORD_PATH]:
-            self.recording = self._start_recording(node, settings[params.RECORD_PATH], settings[params.RECORD_LOG_TIME])
-        self.foxglove: FoxgloveLive | None = None
-        self.foxglove_words = ""
-        self.web: WebLive | None = None
-        self.web_words = ""
+        self.recording = parts.recording(node, settings, sim, self.outputs, self.doors)
+        self.parts: list[Part] = [
+            parts.lockstep_part(self.lockstep),
+            parts.integrator_part(settings, sim),
+            parts.OutputsPart(self.outputs, sim),
+            *self.doors,
+            parts.physics_part(scene, self.outputs.sensors),
+            parts.simulation_services_part(self.simulation_services),
+            parts.recording_part(settings, self.recording),
+        ]
         try:
-            self.foxglove, self.foxglove_words = live_views.start_foxglove(
-                node, settings[params.FOXGLOVE], sim, self.outputs, scene
-            )
-            self.web, self.web_words = live_views.start_web(
-                node, settings[params.WEB], sim, self.outputs, self.driver, scene
-            )
-            sim.pause(settings[params.START_PAUSED])
-            self.driver.pacer.anchor(sim.clock.t)
-            # the run loop's turns (run_loop): paced on the steady clock, never on /clock, which this node publishes
-            self.loop = RunLoop(node, self.intake, self.turn)
-            if isinstance(node.default_callback_group, RunCallbackGroup):
-                node.default_callback_group.wake = self.intake.wake
-            self.parameters = RunParameters(node, self.driver, self.intake.wake)
-            self.logger.info(
-                self._startup_line(
-                    settings[params.INTEGRATOR] == "auto",
-                    settings[params.RECORD_PATH],
-                    settings[params.RECORD_LOG_TIME],
-                )
-            )
-            for warning in sim.warnings():
-                self.logger.warning(warning)
-            self.outputs.publish_latched(sim.clock.t)
-            self.driver.publish_due(force=True)
-            self.intake.wake()  # the first turn
+            self._start(node, settings)
         except BaseException:  # e.g. Ctrl-C / SIGTERM while starting (main's start-up handler)
             self.close()  # the recording started above ends as a complete file
             raise
 
-    def _start_recording(self, node: Node, path: str, log_time: str) -> NodeRecording | None:
-        """The recording, an observer of the simulator and a listener of the outputs and inputs;
-        None (error logged) when it cannot start: the run goes on."""
-        try:
-            from rigid_rot_sim.ros.recording import NodeRecording  # imported only when recording
-        except ImportError as exc:  # the mcap packages are optional at run time
-            missing = (exc.name or "").split(".")[0] or str(exc)
-            self.logger.error(f"recording disabled: {missing} is not installed (pip install mcap mcap-ros2-support)")
-            return None
-        subscriptions = (
-            self.inputs.subscriptions
-            + self.wheel_input.subscriptions
-            + self.rod_input.subscriptions
-            + self.joint_state_door.subscriptions
+    def _start(self, node: Node, settings: params.NodeSettings) -> None:
+        """The live views, the run loop and the parameters' callbacks; the start-up line; the first outputs."""
+        self.parts += live_views.start(
+            node, settings[params.FOXGLOVE], settings[params.WEB], self.sim, self.outputs, self.driver, self.scene
         )
-        recording = NodeRecording.start(node, self.sim, self.outputs, subscriptions, path, log_time)
-        if recording is not None:
-            self.sim.add_observer(recording)  # events: commands accepted, torques applied, set_state, ...
-            self.outputs.listeners.append(recording)  # every message published, as the bytes published
-            self.inputs.listeners.append(recording)  # every torque command as received
-            self.wheel_input.listeners.append(recording)  # every wheel command as received
-            self.rod_input.listeners.append(recording)  # every rods' command as received
-            self.joint_state_door.listeners.append(recording)  # every JointState command as received
-        return recording
+        self.sim.pause(settings[params.START_PAUSED])
+        self.driver.pacer.anchor(self.sim.clock.t)
+        # the run loop's turns (run_loop): paced on the steady clock, never on /clock, which this node publishes
+        self.loop = RunLoop(node, self.intake, self.turn)
+        if isinstance(node.default_callback_group, RunCallbackGroup):
+            node.default_callback_group.wake = self.intake.wake
+        self.parameters = RunParameters(node, self.driver, self.intake.wake)
+        self.logger.info(parts.startup_line(self._headline(), self.parts))
+        for warning in self.sim.warnings():
+            self.logger.warning(warning)
+        self.outputs.publish_latched(self.sim.clock.t)
+        self.driver.publish_due(force=True)
+        self.intake.wake()  # the first turn
 
-    def _startup_line(self, auto: bool, record_path: str, log_time: str) -> str:
-        """What was built and what was left out (and why), in one line."""
-        sim, scene, pacer, duration = self.sim, self.scene, self.driver.pacer, self.driver.duration
-        built = [f"integrator {sim.stepper.method} (dt {sim.clock.dt:g} s{', auto' if auto else ''})"]
-        left_out: list[str] = []
-        if self.lockstep is not None:
-            built.insert(0, self.lockstep.describe())
-        else:
-            left_out.append("lockstep (commands act when they arrive)")
-        parts = (
-            self.outputs.describe(sim.clock.dt),
-            self.inputs.describe(),
-            self.wheel_input.describe(),
-            self.rod_input.describe(),
-        )
-        for part_built, part_left_out in (*parts, self.joint_state_door.describe()):
-            built += part_built
-            left_out += part_left_out
-        if self.sensors is None:
-            left_out.append("sensor models (~/imu, if asked for, is ideal; no ~/star_tracker)")
-        else:
-            drawn = "" if scene.sensors.seed is not None else ", drawn"
-            built.append(f"sensors {', '.join(self.sensors.names)} (seed {self.sensors.seed}{drawn})")
-        if scene.schedules:
-            built.append(f"{len(scene.schedules)} torque schedule(s)")
-        if scene.gravity is None:
-            left_out.append("gravity (no potential energy, no ~/top_state)")
-        else:
-            built.append(f"gravity {scene.gravity.acceleration:g} m/s^2 about the pivot")
-        if self.simulation_services is not None:
-            built.append(self.simulation_services.describe())
-        else:
-            left_out.append("simulation_interfaces services (package not installed)")
-        if record_path:
-            built.append(
-                f"recording to {record_path} (log time: {log_time})"
-                if self.recording
-                else "no recording (see the error above)"
-            )
-        else:
-            left_out.append("recorder (nothing recorded)")
-        if self.foxglove_words:
-            (built if self.foxglove is not None else left_out).append(self.foxglove_words)
-        if self.web_words:
-            (built if self.web is not None else left_out).append(self.web_words)
+    def _headline(self) -> str:
+        """The start-up line's head: the scene, the pacing, the duration."""
+        pacer, duration = self.driver.pacer, self.driver.duration
         return (
-            f"scene {scene.name!r} ({scene.source}), rtf {pacer.real_time_factor:g}, {'paused, ' if sim.paused else ''}"
-            f"duration {'unbounded' if duration is None else f'{duration:g} s'}; "
-            f"built: {'; '.join(built)}; left out: {'; '.join(left_out) or 'nothing'}"
+            f"scene {self.scene.name!r} ({self.scene.source}), rtf {pacer.real_time_factor:g}, "
+            f"{'paused, ' if self.sim.paused else ''}duration {'unbounded' if duration is None else f'{duration:g} s'}"
         )
 
     @property
@@ -360,31 +210,16 @@ class SceneRun:
                 self.logger.info(self.lockstep.turns.summary())
 
     def close(self) -> None:
-        """Close the recording (summary and indexes: the file is complete) and the live server; idempotent."""
-        self.report_lost()
-        if self.recording is not None:
-            self.recording.close()
-        if self.foxglove is not None:
-            self.foxglove.close()
-        if self.web is not None:
-            self.web.close()
-        action = self.simulation_services.simulate_steps if self.simulation_services is not None else None
-        if action is not None and not self._action_destroyed:
-            # rclpy's destroy_node leaves action servers alone; one left holds the node, which then
-            # stays on the graph after destroy_node
-            action.destroy()
-            self._action_destroyed = True
-
-    def report_lost(self) -> None:
-        """At the end: how many commands each topic took, and how many it lost (0 unless a bound was hit)."""
-        lost = [
-            f"{door.topic}: {door.lost} lost of {door.taken + door.lost}" for door in self.intake.doors if door.lost
-        ]
-        if lost:
-            self.logger.warning(f"commands lost before the node could take them: {'; '.join(lost)}")
+        """Close the parts that hold something (the recording's file complete, the live servers, the
+        action server); idempotent."""
+        if lost := self.intake.losses():
+            self.logger.warning(f"commands lost before the node could take them: {lost}")
+        for part in self.parts:
+            if isinstance(part, Closing):
+                part.close()
 
 
-class RigidRotSimNode(Node):
+class RigidRotSimNode(ClockTakenByTheRunLoop):
     """Node ``rigid_rot_sim``; keyword arguments go to :class:`rclpy.node.Node`.
 
     ``run``: the :class:`SceneRun` of the ``scene`` parameter; None without one (the node then
@@ -395,7 +230,6 @@ class RigidRotSimNode(Node):
         # the default group (services, parameters, actions) holds the run lock: the run loop steps beside it
         self.run_lock = RunLock()
         self._run_group = RunCallbackGroup(self.run_lock)
-        self._clock_subscriptions: list[tuple[Subscription, Callable[[Any], None]]] = []
         super().__init__(NODE_NAME, **kwargs)
         params.accept_integers_for_doubles(self)  # `ros2 param set ... real_time_factor 2` stores 2.0
         params.explain_use_sim_time(self)  # with or without a scene
@@ -403,9 +237,7 @@ class RigidRotSimNode(Node):
         self.run: SceneRun | None = None
         scene_path = declare_scene_parameter(self)
         if not scene_path:
-            for subscription, _ in self._clock_subscriptions:  # no run loop: the executor takes /clock
-                subscription.callback_group = self.default_callback_group
-                self.default_callback_group.add_entity(subscription)
+            self.hand_clock_to(None)  # no run loop: the executor takes /clock
             self.get_logger().info(
                 "no scene parameter: serving ~/compute_inertia only (rigid-rot run SCENE starts a simulation)"
             )
@@ -415,25 +247,7 @@ class RigidRotSimNode(Node):
         except BaseException:
             super().destroy_node()  # a node that could not start leaves the graph at once
             raise
-        for subscription, callback in self._clock_subscriptions:
-            self.run.intake.adopt(subscription, _message_only(callback))
-
-    def create_subscription(
-        self, msg_type: Any, topic: str, callback: Callable[[Any], None], qos_profile: Any, **kwargs: Any
-    ) -> Subscription:
-        """As rclpy's, but rclpy's own ``/clock`` subscription (``use_sim_time`` true) is taken by the run
-        loop between its turns: its messages (this node's own /clock, at its rate) never wake the executor.
-        The node reads no ROS time (module docstring); the ROS clock still follows /clock."""
-        if topic != CLOCK_TOPIC or kwargs.get("callback_group") is not None:
-            return super().create_subscription(msg_type, topic, callback, qos_profile, **kwargs)
-        subscription = super().create_subscription(
-            msg_type, topic, callback, qos_profile, callback_group=TAKEN_BY_THE_RUN_LOOP, **kwargs
-        )
-        self._clock_subscriptions.append((subscription, callback))
-        run = getattr(self, "run", None)  # None while rclpy's Node.__init__ subscribes (the scene comes later)
-        if run is not None:
-            run.intake.adopt(subscription, _message_only(callback))
-        return subscription
+        self.hand_clock_to(self.run.intake)  # rclpy's /clock (use_sim_time) taken between the turns
 
     @property
     def default_callback_group(self) -> RunCallbackGroup:
@@ -444,6 +258,11 @@ class RigidRotSimNode(Node):
     def finished(self) -> bool:
         """The run reached its duration."""
         return self.run is not None and self.run.finished
+
+    def detach_run_loop(self) -> None:
+        """From now on the turns run on :meth:`spin_run`'s thread only, never on an executor's."""
+        if self.run is not None:
+            self.run.loop.detach()
 
     def spin_run(self, keep_going: Callable[[], bool]) -> None:
         """The run loop on this thread until ``keep_going()`` is False or the run finished (no scene: just wait)."""
@@ -465,141 +284,11 @@ class RigidRotSimNode(Node):
         super().destroy_node()
 
 
-def _message_only(callback: Callable[[Any], None]) -> Callable[[Any, int], None]:
-    """An intake handler ``(msg, received_ns)`` calling a subscription callback ``(msg)``."""
-    return lambda msg, received_ns: callback(msg)
-
-
-#: What a bad scene, parameter or name raises while the node starts: exit code 2, one line.
-STARTUP_ERRORS = (ValueError, ParameterException, NameValidationException)
-
-
-def startup_error_line(exc: BaseException) -> str:
-    """The one line (at most ``limits.MAX_ERROR_CHARS``) that reports a start-up error."""
-    return limits.one_line(f"{NODE_NAME}: error: {exc}")
-
-
-def _interrupt(signum: int, frame: Any) -> None:
-    raise KeyboardInterrupt
-
-
-def init_ros(args: list[str] | None) -> None:
-    """``rclpy.init`` without rclpy's signal handlers: while nodes start, Ctrl-C / SIGTERM stop them at once.
-
-    RuntimeError (rclpy's RCLError) for ROS arguments rcl cannot parse.
-    """
-    rclpy.init(args=args, signal_handler_options=SignalHandlerOptions.NO)
-    for signum in (signal.SIGINT, signal.SIGTERM):
-        signal.signal(signum, _interrupt)
-
-
-def run_until_finished(start: Callable[[list[Node]], RigidRotSimNode], drain: float = 0.0) -> None:
-    """Start the nodes and run them until the run finishes, Ctrl-C, SIGTERM or shutdown.
-
-    ``start`` creates the nodes, adding each to the list it is given as soon as it exists,
-    and returns the simulation node. The run loop (:mod:`.run_loop`) runs on this thread;
-    an executor on a thread of its own serves every node's services, parameters and actions
-    (and the other nodes' callbacks). Once they are started, SIGINT and SIGTERM only ask the
-    loop to stop: the nodes (and the recording) then close here, never interrupted in a
-    callback or a file write. When the run reached its duration, reliable subscribers get
-    what was published (at most 1 s per publisher) and the executor serves ``drain`` s more
-    for them. Then the executor's thread ends, every node is destroyed (last started first)
-    and rclpy shut down: nothing of rclpy runs while the nodes are destroyed, so nothing is
-    left to fail on a destroyed entity. A start-up error (:data:`STARTUP_ERRORS`) is raised
-    after that.
-    """
-    nodes: list[Node] = []
-    stop = threading.Event()
-    executor: SingleThreadedExecutor | None = None
-    server: threading.Thread | None = None
-    try:
-        node = start(nodes)
-        for signum in (signal.SIGINT, signal.SIGTERM):
-            signal.signal(signum, lambda *_: stop.set())
-        if node.run is not None:
-            node.run.loop.detach()  # the turns run on this thread, never on the executor's
-        executor = SingleThreadedExecutor()
-        for each in nodes:
-            executor.add_node(each)
-        server = threading.Thread(target=_serve, args=(executor, stop), name="rigid_rot_sim services", daemon=True)
-        server.start()
-        node.spin_run(lambda: rclpy.ok() and not stop.is_set())
-        if node.finished and not stop.is_set():
-            node.flush_publishers()
-            stop.wait(drain)
-    except (KeyboardInterrupt, ExternalShutdownException):
-        pass
-    finally:
-        stop.set()
-        if server is not None:
-            server.join(EXECUTOR_SHUTDOWN_WAIT)  # a service in flight ends before the recording closes
-        if executor is not None:
-            executor.shutdown(timeout_sec=0)
-        for each in reversed(nodes):
-            each.destroy_node()
-        rclpy.try_shutdown()
-
-
-def _serve(executor: SingleThreadedExecutor, stop: threading.Event) -> None:
-    """The services' thread: spin until asked to stop (each wait at most ``POLL_WALL``)."""
-    try:
-        while not stop.is_set() and executor.context.ok():
-            executor.spin_once(timeout_sec=POLL_WALL)
-    except ExternalShutdownException:
-        pass
-
-
-#: A diagnostic, off unless set: a directory where the node dumps tracemalloc snapshots (:func:`trace_memory`).
-TRACE_MEMORY_ENV = "RIGID_ROT_TRACEMALLOC"
-
-
-def trace_memory(directory: str) -> None:
-    """Trace Python's allocations (tracemalloc, 8 frames) and dump a snapshot into ``directory`` on SIGUSR1
-    and at exit (``snapshot_<n>.tracemalloc``, renamed into place once whole): what grew between two of them
-    is what benchmarks/firehose_memory.py prints. Off by default; tracing slows the node down."""
-    import atexit
-    import itertools
-    import tracemalloc
-
-    tracemalloc.start(8)
-    numbers = itertools.count(1)
-
-    def dump(*_: object) -> None:
-        path = os.path.join(directory, f"snapshot_{next(numbers)}.tracemalloc")
-        tracemalloc.take_snapshot().dump(path + ".part")
-        os.replace(path + ".part", path)
-
-    signal.signal(signal.SIGUSR1, dump)
-    atexit.register(dump)
-
-
 def main(args: list[str] | None = None, overrides: Sequence[Parameter] = ()) -> int:
-    """Run the node until shut down or until the scene's duration is reached (exit code 0).
-
-    ``overrides``: start-up values that win over ``--ros-args`` (rclpy applies a Node's
-    ``parameter_overrides`` after every ``-p`` and params file): ``rigid-rot run``'s own options.
-    A bad scene, parameter or ROS argument: one line on stderr, exit code 2.
-    """
-
-    def start_node(nodes: list[Node]) -> RigidRotSimNode:
-        node = RigidRotSimNode(parameter_overrides=list(overrides))
-        nodes.append(node)
-        return node
-
-    ensure_ament_prefix_path()  # the console script works without activating the venv
-    if os.environ.get(TRACE_MEMORY_ENV):
-        trace_memory(os.environ[TRACE_MEMORY_ENV])
-    try:
-        init_ros(args)
-    except RuntimeError as exc:  # rclpy's RCLError: e.g. an unparsable --ros-args rule
-        print(startup_error_line(RuntimeError(f"bad ROS arguments: {exc}")), file=sys.stderr, flush=True)
-        return 2
-    try:
-        run_until_finished(start_node)
-    except STARTUP_ERRORS as exc:  # SceneError, a scene the integrator cannot run, a bad parameter
-        print(startup_error_line(exc), file=sys.stderr, flush=True)
-        return 2
-    return 0
+    """Run the node until shut down or until the scene's duration is reached (exit code 0); a bad scene, parameter
+    or ROS argument: one line on stderr, exit code 2 (:func:`.node_process.run_process`). ``overrides``: start-up
+    values that win over ``--ros-args`` (the Node's ``parameter_overrides``): ``rigid-rot run``'s own options."""
+    return node_process.run_process(lambda: RigidRotSimNode(parameter_overrides=list(overrides)), args)
 
 
 if __name__ == "__main__":

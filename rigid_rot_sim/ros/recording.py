@@ -1,8 +1,8 @@
 """Recording the node's run: one observer of the simulator, one listener of the node's messages.
 
 :meth:`NodeRecording.start` opens a :class:`~rigid_rot_sim.recording.session.RunRecorder`
-and registers the node's topics; the node then attaches the recording in three visible
-lines (``SceneRun._start_recording`` in :mod:`.node`):
+and registers the node's topics; :meth:`NodeRecording.attach` (the node's recording part,
+:func:`rigid_rot_sim.ros.parts.recording`) then attaches it in three visible lines:
 
 * ``sim.add_observer(recording)``: the simulator reports every change made from outside
   the physics (:class:`~rigid_rot_sim.run.observer.SimulationObserver`), which is recorded
@@ -11,8 +11,8 @@ lines (``SceneRun._start_recording`` in :mod:`.node`):
   ``reset``, integrator / step changes (``integrator``);
 * ``outputs.listeners.append(recording)``: every message the node publishes, as the CDR
   bytes it published (:meth:`published`);
-* ``inputs.listeners.append(recording)``: every torque command as received, with its
-  receive time (:meth:`received`).
+* ``door.listeners.append(recording)`` for every command door (:class:`~rigid_rot_sim.ros.intake.CommandDoor`):
+  every command as received, with its receive time (:meth:`received`).
 
 The node closes the recording in ``destroy_node``. ``/tf`` and ``/tf_static`` are recorded as
 published, like every other output.
@@ -28,14 +28,15 @@ from collections.abc import Sequence
 from pathlib import Path
 from typing import Any, cast
 
-from rclpy.impl.rcutils_logger import RcutilsLogger
 from rclpy.node import Node
 from rclpy.subscription import Subscription
 
 from rigid_rot_sim.recording import LOG_TIME_BASES
 from rigid_rot_sim.recording.session import RunRecorder
 from rigid_rot_sim.recording.writer import QosProfile, RecorderError
+from rigid_rot_sim.ros.intake import CommandDoor
 from rigid_rot_sim.ros.outputs import Outputs
+from rigid_rot_sim.ros.rclpy_internals import Logger
 from rigid_rot_sim.run.commands import TorqueCommand
 from rigid_rot_sim.run.digest import format_digest
 from rigid_rot_sim.run.observer import SimulationObserver
@@ -61,10 +62,31 @@ _ROLES = (
 class NodeRecording(SimulationObserver):
     """The run's file, fed by the simulator's reports and the node's published and received messages."""
 
-    def __init__(self, file: RunRecorder, sim: Simulator, logger: RcutilsLogger) -> None:
+    def __init__(self, file: RunRecorder, sim: Simulator, logger: Logger) -> None:
         self.file = file
         self.sim = sim
         self.logger = logger
+        #: For the start-up line: where it records (set by :meth:`attach`).
+        self.words = "recording"
+
+    @classmethod
+    def attach(
+        cls, node: Node, sim: Simulator, outputs: Outputs, doors: Sequence[CommandDoor], path: str, log_time: str
+    ) -> NodeRecording | None:
+        """:meth:`start`, then the recording hears the run: None (error logged) if it cannot start."""
+        subscriptions = [subscription for door in doors for subscription in door.subscriptions]
+        recording = cls.start(node, sim, outputs, subscriptions, path, log_time)
+        if recording is not None:
+            recording.words = f"recording to {path} (log time: {log_time})"
+            sim.add_observer(recording)  # events: commands accepted, torques applied, set_state, ...
+            outputs.listeners.append(recording)  # every message published, as the bytes published
+            for door in doors:  # every command as received, on every command topic
+                door.listeners.append(recording)
+        return recording
+
+    def describe(self) -> tuple[list[str], list[str]]:
+        """For the start-up line (:class:`~rigid_rot_sim.ros.parts.Part`)."""
+        return [self.words], []
 
     @classmethod
     def start(

@@ -12,12 +12,14 @@ Design (docs/architecture.md, "The node loop"; issue 27):
   command subscriptions themselves), or a service, parameter change or action changed the run
   (:class:`RunCallbackGroup` wakes the loop after each). Nothing fires for nothing: a paused node
   waits on its inputs, with one look every :data:`POLL_WALL` (SIGINT, a change made by a direct call).
-* **Who runs it**: :func:`rigid_rot_sim.ros.node.run_until_finished` (``rigid-rot run``, the console
+* **Who runs it**: :func:`rigid_rot_sim.ros.node_process.run_until_finished` (``rigid-rot run``, the console
   script) runs :meth:`RunLoop.spin` on the main thread, beside an executor thread that serves the
   services, parameters and actions; neither path waits for the other except for the
   :class:`RunLock` (one holder of the run at a time, a service first). Any other executor that
   spins the node (tests, a composed process) runs the same turns: :class:`RunLoop` is also an
   rclpy ``Waitable`` of the node, with a one-shot steady timer for the next turn.
+* **rclpy's internals**: the waits and takes the loop needs beyond rclpy's public API are in
+  :mod:`rigid_rot_sim.ros.rclpy_internals`, each use with the public API it stands in for.
 """
 
 from __future__ import annotations
@@ -35,7 +37,9 @@ from rclpy.subscription import Subscription
 from rclpy.timer import Timer
 from rclpy.waitable import NumberOfEntities, Waitable
 
-from rigid_rot_sim.ros.intake import TAKEN_BY_THE_RUN_LOOP, CommandIntake
+from rigid_rot_sim.ros import rclpy_internals
+from rigid_rot_sim.ros.intake import CommandIntake
+from rigid_rot_sim.ros.rclpy_internals import TAKEN_BY_THE_RUN_LOOP
 
 #: Most wall time (s) a turn steps before the commands are taken again.
 SLICE_WALL = 0.002
@@ -117,7 +121,7 @@ class RunLoop(Waitable):
             context=node.context,
             autostart=False,
         )
-        self._indices: tuple[list[int], int, int] = ([], 0, 0)
+        self._indices: rclpy_internals.WaitSetIndices = ([], 0, 0)
         node.add_waitable(self)
 
     # ---------------------------------------------------------------- on a thread of its own
@@ -154,22 +158,15 @@ class RunLoop(Waitable):
         return NumberOfEntities(len(self.intake.doors), 1, 1, 0, 0, 0)
 
     def add_to_wait_set(self, wait_set: Any) -> None:
-        subs = [wait_set.add_subscription(door.subscription.handle) for door in self.intake.doors]
-        self._indices = (
-            subs,
-            wait_set.add_guard_condition(self.intake.guard.handle),
-            wait_set.add_timer(self.timer.handle),
+        self._indices = rclpy_internals.add_to_wait_set(
+            wait_set, self.intake.subscriptions, self.intake.guard, self.timer
         )
 
     def is_ready(self, wait_set: Any) -> bool:
-        subs, guard, timer = self._indices
-        if any(wait_set.is_ready("subscription", i) for i in subs) or wait_set.is_ready("guard_condition", guard):
-            return True
-        return bool(wait_set.is_ready("timer", timer)) and self.timer.handle.is_timer_ready()
+        return rclpy_internals.is_ready(wait_set, self._indices, self.timer)
 
     def take_data(self) -> bool:
-        if self.timer.handle.is_timer_ready():
-            self.timer.handle.call_timer()
+        rclpy_internals.take_timer(self.timer)
         return True
 
     async def execute(self, taken_data: Any) -> None:

@@ -164,6 +164,7 @@ class SimulationServices:
             for name, (kind, callback) in zip(self.names, callbacks, strict=True)
         ]
         self.simulate_steps = None
+        self._closed = False
         if SimulateSteps is not None:
             from rigid_rot_sim.ros.simulate_steps import SimulateStepsAction
 
@@ -171,10 +172,17 @@ class SimulationServices:
                 node, self, SimulateSteps, OK, OPERATION_FAILED, served_name(namespace, "simulate_steps")
             )
 
-    def describe(self) -> str:
-        """For the start-up line: where the services are."""
+    def describe(self) -> tuple[list[str], list[str]]:
+        """For the start-up line (:class:`~rigid_rot_sim.ros.parts.Part`): where the services are."""
         first = self.services[3].srv_name  # the fully resolved name of step_simulation
-        return f"simulation_interfaces services ({first}, ...{', SimulateSteps' if self.simulate_steps else ''})"
+        return [f"simulation_interfaces services ({first}, ...{', SimulateSteps' if self.simulate_steps else ''})"], []
+
+    def close(self) -> None:
+        """Destroy the action server (idempotent): rclpy's destroy_node leaves action servers alone, and one
+        left holds the node, which then stays on the graph after destroy_node."""
+        if self.simulate_steps is not None and not self._closed:
+            self.simulate_steps.destroy()
+        self._closed = True
 
     # ------------------------------------------------------------------ queries
 

@@ -461,6 +461,18 @@ def parse_scene(data: Any, source: str = "<string>", text: str = "") -> Scene:
         return validated(data, SCENE_SCHEMA, source, SceneError, lambda spec: _scene(spec, source, text))
 
 
+def parse_body(spec: Mapping[str, Any], source: str) -> Body:
+    """A body section alone (``principal_moments``, ``inertia_tensor`` or ``point_masses``), checked as a
+    scene's body is (inertia about the centre of mass); ValueError naming ``source``."""
+    if not any(key in spec for key in ("principal_moments", "inertia_tensor", "point_masses")):
+        raise ValueError(f"{source}: no inertia_tensor, principal_moments or point_masses")
+    try:
+        with np.errstate(all="ignore"):
+            return _body(spec, under_gravity=False)
+    except (ValueError, KeyError, TypeError) as exc:
+        raise ValueError(f"{source}: {exc}") from None
+
+
 # ------------------------------------------- what the schema cannot say (the data passed it)
 
 

@@ -160,7 +160,9 @@ def test_bad_input_is_refused_with_a_clear_error():
         rigid_rot_sim.envs.attitude.AttitudeControlEnv(principal_moments=(1.0, 1.0, 1.9), inertia_dispersion=0.1)
     with pytest.raises(ValueError, match="saturation"):
         rigid_rot_sim.envs.attitude.AttitudeControlEnv(
-            sensors=rigid_rot_sim.envs.SensorSuite(rigid_rot_sim.core.sensors.GyroModel(), DEFAULT_SENSORS.star_tracker)
+            sensors=rigid_rot_sim.envs.ObservationSensors(
+                rigid_rot_sim.core.sensors.GyroModel(), DEFAULT_SENSORS.star_tracker
+            )
         )
 
 

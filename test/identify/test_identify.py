@@ -9,7 +9,7 @@ import pytest
 import yaml
 from identify_truth import INERTIA, excitation, gyro, simulate, write_bag  # beside this file
 
-from rigid_rot_sim.identify import Measurements, TorqueSchedule, identify
+from rigid_rot_sim.identify import Measurements, PiecewiseTorque, identify
 from rigid_rot_sim.identify.bag import BagInputs, read_bag
 from rigid_rot_sim.identify.fit import INERTIA_NAMES
 from rigid_rot_sim.identify.report import body_yaml, validate
@@ -44,7 +44,7 @@ def test_noise_free_bag_recovers_the_full_tensor(tmp_path, excited):
 def test_errors_are_within_3_sigma_and_sigma_matches_the_spread_over_seeds(excited):
     """Gyro white noise 2e-3 rad/s; 8 fixed seeds: each value within 3 reported sigma of the truth,
     and the reported sigma within a factor 2 of the spread of the estimates across the seeds."""
-    torque = TorqueSchedule(excited.command_times, excited.commands)
+    torque = PiecewiseTorque(excited.command_times, excited.commands)
     estimates, sigmas = [], []
     for seed in range(8):
         m = Measurements(excited.t, gyro(excited, 2e-3, np.zeros(3), seed), torque)
@@ -91,7 +91,7 @@ def test_world_frame_torque_is_turned_with_the_bag_attitude(tmp_path, excited):
     result = identify(read_bag(bag, INPUTS).measurements)
     assert np.max(np.abs(result.inertia - INERTIA)) / np.max(np.abs(INERTIA)) < 1e-4
     # read as if in the body frame, the same commands give a wrong model: the frame matters
-    wrong = identify(Measurements(truth.t, truth.omega, TorqueSchedule(times, values)))
+    wrong = identify(Measurements(truth.t, truth.omega, PiecewiseTorque(times, values)))
     assert np.max(np.abs(wrong.inertia - INERTIA)) / np.max(np.abs(INERTIA)) > 1e-2
     assert result.warnings == () and any("noise floor" in w for w in wrong.warnings)  # and it says so
 
@@ -113,7 +113,7 @@ def test_vector3_rates_and_summed_torque_topics(tmp_path, excited):
 
 
 def test_validation_rms_drops_from_nominal_to_identified(excited):
-    torque = TorqueSchedule(excited.command_times, excited.commands)
+    torque = PiecewiseTorque(excited.command_times, excited.commands)
     m = Measurements(excited.t, gyro(excited, 1e-3, np.zeros(3), 5), torque, excited.q)
     result = identify(m)
     validation = validate(m, result, np.diag([0.02, 0.03, 0.04]))
@@ -129,21 +129,21 @@ def test_rotation_about_one_axis_leaves_parameters_unobservable():
     diagonal = np.diag([0.02, 0.03, 0.04])
     truth = simulate(diagonal, np.array([0.0, 0.0, 0.2]), 6.0, 100.0, times, values)
     readings = gyro(truth, 1e-4, np.zeros(3), seed=0)
-    result = identify(Measurements(truth.t, readings, TorqueSchedule(times, values)))
+    result = identify(Measurements(truth.t, readings, PiecewiseTorque(times, values)))
     assert result.unobservable
     text = " ".join(result.unobservable)
     assert "Ixx" in text and "1 independent axis only" in text
 
 
 def test_written_body_yaml_is_a_body_the_scene_loader_accepts(excited):
-    result = identify(Measurements(excited.t, excited.omega, TorqueSchedule(excited.command_times, excited.commands)))
+    result = identify(Measurements(excited.t, excited.omega, PiecewiseTorque(excited.command_times, excited.commands)))
     body = yaml.safe_load(body_yaml(result))["body"]
     scene = parse_scene({"name": "check", "body": body, "initial": {"angular_velocity": [0.0, 0.0, 0.1]}})
     assert np.allclose(scene.body.inertia_array, INERTIA, rtol=1e-6)
 
 
 def test_too_few_samples_and_unknown_estimates_are_refused(excited):
-    m = Measurements(excited.t, excited.omega, TorqueSchedule(excited.command_times, excited.commands))
+    m = Measurements(excited.t, excited.omega, PiecewiseTorque(excited.command_times, excited.commands))
     with pytest.raises(ValueError, match="at least"):
         identify(m.window(0.0, 0.05))
     with pytest.raises(ValueError, match="unknown"):
@@ -160,7 +160,7 @@ def test_the_identify_kernel_is_precompiled_with_the_types_identify_calls_it_wit
     precompile.exercise()
     compiled = set(integrate_segments.signatures)
     assert len(compiled) == 1
-    torque = TorqueSchedule(excited.command_times, excited.commands)
+    torque = PiecewiseTorque(excited.command_times, excited.commands)
     m = Measurements(excited.t, gyro(excited, 1e-3, np.zeros(3), 5), torque, excited.q)
     validate(m, identify(m, estimate=("inertia", "torque_bias", "gyro_bias")), np.diag([0.02, 0.03, 0.04]))
     assert set(integrate_segments.signatures) == compiled  # no signature of its own: nothing compiled at run time
