@@ -40,7 +40,8 @@ PYTHON_KEYS: dict[str, set[str]] = {
 #: Modules without any rosdep key (rosdistro's python.yaml has no dask, distributed or pyarrow):
 #: optional, for sweeps only; declared for pip as setup.py's `sweep` extra, installed by make setup.
 #: psutil (used by the distributed-sweep tests) is a dependency of distributed. foxglove-sdk and viser: the
-#: viewer and web extras (no rosdep keys either).
+#: viewer and web extras (no rosdep keys either). geomaglib: NOAA's reference IGRF/WMM code, a test's reference only
+#: (test/core/test_geomagnetic.py; setup.py's tests_require, the Makefile's TEST_PINS).
 PIP_ONLY = {
     "dask": "dask[distributed]",
     "distributed": "dask[distributed]",
@@ -48,6 +49,7 @@ PIP_ONLY = {
     "pyarrow": "pyarrow",
     "foxglove": "foxglove-sdk",
     "viser": "viser",
+    "geomaglib": "geomaglib",
 }
 #: ROS packages imported as Python modules: the key is the package name.
 ROS_PACKAGES = {
