@@ -50,6 +50,8 @@ PIP_ONLY = {
     "foxglove": "foxglove-sdk",
     "viser": "viser",
     "geomaglib": "geomaglib",
+    # envs/sb3.py's adapter subclasses Stable-Baselines3's VecEnv when it is installed (it pulls in torch: an extra)
+    "stable_baselines3": "stable-baselines3",
 }
 #: ROS packages imported as Python modules: the key is the package name.
 ROS_PACKAGES = {

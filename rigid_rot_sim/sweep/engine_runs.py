@@ -50,14 +50,16 @@ def dispersed_scene(spec: SweepSpec, bodies: Bodies, i: int) -> Scene:
         rotation = bodies.body_from_principal[i].as_matrix()
         tensor = rotation @ np.diag(bodies.moments[i]) @ rotation.T
         tensor = 0.5 * (tensor + tensor.T)
-        rows = tuple((float(r[0]), float(r[1]), float(r[2])) for r in tensor)
-        body = dataclasses.replace(body, inertia=rows, given_as="inertia_tensor")  # type: ignore[arg-type]
+        r0, r1, r2 = ((float(r[0]), float(r[1]), float(r[2])) for r in tensor)
+        body = dataclasses.replace(body, inertia=(r0, r1, r2), given_as="inertia_tensor")
     orientation = scene.initial.orientation
     if bodies.attitude0_error[i] != 0.0:
-        orientation = tuple(float(v) for v in bodies.q0_body[i])  # type: ignore[assignment]
+        qx, qy, qz, qw = (float(v) for v in bodies.q0_body[i])
+        orientation = (qx, qy, qz, qw)
     omega = scene.initial.angular_velocity
     if not np.array_equal(bodies.omega0_body[i], omega):
-        omega = tuple(float(v) for v in bodies.omega0_body[i])  # type: ignore[assignment]
+        wx, wy, wz = (float(v) for v in bodies.omega0_body[i])
+        omega = (wx, wy, wz)
     return dataclasses.replace(scene, body=body, initial=InitialState(orientation, omega))
 
 
