@@ -41,7 +41,13 @@ setup(
     # sweeps (`rigid-rot sweep`, --scheduler): no rosdep keys exist for these; pip installs them
     # viewer (`--foxglove`, `rigid-rot view`): the Foxglove live server, without ROS
     # web (`--web`): the body's own web page (viser), offline, without ROS for `rigid-rot view`
-    extras_require={"sweep": ["dask[distributed]", "pyarrow"], "viewer": ["foxglove-sdk"], "web": ["viser"]},
+    # sb3: Stable-Baselines3, for envs/sb3.py's VecEnv adapter (it pulls in torch; the adapter works without it)
+    extras_require={
+        "sweep": ["dask[distributed]", "pyarrow"],
+        "viewer": ["foxglove-sdk"],
+        "web": ["viser"],
+        "sb3": ["stable-baselines3"],
+    },
     zip_safe=True,
     maintainer="rigid_rot_sim maintainers",
     maintainer_email="maintainers@rigid-rot-sim.org",
