@@ -8,9 +8,11 @@ their reaction; a wheel's torque fades to zero at its maximum speed, as the engi
 
 Observation (float64): the attitude quaternion (x, y, z, w, body -> world), the body rate (rad/s,
 body axes), the attitude error to the target as a rotation vector (rad) and, with wheels, the three
-wheel speeds (rad/s, relative to the body); ``sensors=`` replaces the first two by the seeded gyro
-and star-tracker readings (:class:`~rigid_rot_sim.envs.task.ObservationSensors`). Reward, hold test and
-draws: :mod:`rigid_rot_sim.core.slew` and :class:`~rigid_rot_sim.envs.task.SlewTask`.
+wheel speeds (rad/s, relative to the body), and with ``field_observation=True`` the Earth's magnetic
+field in the body axes (T; :func:`~rigid_rot_sim.envs.task.world_field`, docs/gym.md); ``sensors=``
+replaces the first two by the seeded gyro and star-tracker readings
+(:class:`~rigid_rot_sim.envs.task.ObservationSensors`). Reward, hold test and draws:
+:mod:`rigid_rot_sim.core.slew` and :class:`~rigid_rot_sim.envs.task.SlewTask`.
 ``terminated``: held within tolerance for ``hold_periods`` periods; ``truncated``: after
 ``max_episode_steps`` periods. ``reset(seed=s)`` fixes every random number of the episode
 (inertia, target, initial state, sensor noise): the same seed and actions give the same
@@ -27,7 +29,7 @@ import gymnasium as gym
 import numpy as np
 from gymnasium import spaces
 
-from rigid_rot_sim.envs.task import DEFAULT_SENSORS, ObservationSensors, SlewBodies, SlewTask
+from rigid_rot_sim.envs.task import DEFAULT_SENSORS, ObservationSensors, SlewBodies, SlewTask, world_field
 
 __all__ = [
     "AttitudeControlEnv",
@@ -74,6 +76,8 @@ def observation_space(task: SlewTask, with_wheels: bool) -> spaces.Box:
     high = [1.0] * 4 + [rate] * 3 + [math.pi] * 3
     if with_wheels:
         high += [task.wheel_speed_bound()] * 3
+    if task.field_observation:
+        high += [1.01 * math.hypot(*world_field())] * 3  # each body-axis component is at most |B|
     bound = np.array(high)
     return spaces.Box(-bound, bound, dtype=np.float64)
 

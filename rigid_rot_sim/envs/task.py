@@ -11,6 +11,7 @@ kernel (:func:`rigid_rot_sim.core.slew.slew_update`). The single environment is 
 
 from __future__ import annotations
 
+import functools
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass, field
@@ -18,6 +19,7 @@ from typing import Any
 
 import numpy as np
 
+from rigid_rot_sim.core import geomagnetic
 from rigid_rot_sim.core import quaternion as quat
 from rigid_rot_sim.core.batch import advance_batch
 from rigid_rot_sim.core.batch_gyrostat import advance_gyrostats, hub_inverses
@@ -33,7 +35,20 @@ from rigid_rot_sim.core.slew import slew_update
 from rigid_rot_sim.core.steps import whole_steps
 from rigid_rot_sim.core.wheels import WheelModel, wheel_model
 
-__all__ = ["SlewTask", "ObservationSensors", "Episode", "draw_episode", "SlewBodies", "DEFAULT_SENSORS"]
+__all__ = [
+    "SlewTask",
+    "ObservationSensors",
+    "Episode",
+    "draw_episode",
+    "SlewBodies",
+    "DEFAULT_SENSORS",
+    "world_field",
+    "FIELD_POINT",
+]
+
+#: Where the observed field is taken (``field_observation``): geodetic latitude and longitude (deg), height (m)
+#: and decimal year, in the centred dipole of IGRF-14's degree-1 terms (docs/gym.md says why a fixed point).
+FIELD_POINT = (0.0, 0.0, 500e3, 2026.0)
 
 _SQRT3 = math.sqrt(3.0)
 
@@ -81,6 +96,8 @@ class SlewTask:
     spaces never depend on the episode length (``max_episode_steps`` may not exceed it).
     Wheels (wheel environment only): three wheels on the body axes of spin inertia
     ``wheel_inertia`` (kg*m^2) and ``wheel_max_speed`` (rad/s), frictionless, starting at rest.
+    ``field_observation``: the observation ends with the true magnetic field in the body axes (T), the
+    constant world field :func:`world_field` seen at the true attitude (docs/gym.md).
     """
 
     control_period: float = 0.1
@@ -100,6 +117,7 @@ class SlewTask:
     observation_horizon: int = 300
     wheel_inertia: float = 0.005
     wheel_max_speed: float = 300.0
+    field_observation: bool = False
     sensors: ObservationSensors | None = field(default=None)
 
     def __post_init__(self) -> None:
@@ -140,6 +158,8 @@ class SlewTask:
             raise ValueError("the sensors' gyro needs a saturation > 0 rad/s: it bounds the rate observation")
         if self.wheel_inertia >= low[0]:
             raise ValueError("wheel_inertia must be smaller than the smallest principal moment")
+        if not isinstance(self.field_observation, bool):
+            raise ValueError(f"field_observation must be True or False, got {self.field_observation!r}")
 
     @property
     def substeps(self) -> int:
@@ -183,6 +203,14 @@ class SlewTask:
     def wheel_speed_bound(self) -> float:
         """A bound (rad/s) on every wheel speed: ``|Omega_i| <= |a_i| / J + |omega|``."""
         return 1.01 * (self._axial_bound() / self.wheel_inertia + self.rate_bound(True))
+
+
+@functools.lru_cache(maxsize=1)
+def world_field() -> tuple[float, float, float]:
+    """The field (T) in the environments' world axes, taken as north, east, down at :data:`FIELD_POINT`:
+    IGRF-14's centred dipole there (:func:`rigid_rot_sim.core.geomagnetic.field_ned`), constant over an episode."""
+    north, east, down = (float(v) * 1e-9 for v in geomagnetic.field_ned("dipole", *FIELD_POINT))
+    return (north, east, down)
 
 
 @dataclass(frozen=True)
@@ -231,7 +259,8 @@ class SlewBodies:
 
     ``with_wheels``: the torque comes from three reaction wheels (the action: motor torques) instead
     of the body torque (the action: body torque). Observation columns: ``q`` (4), ``omega`` (3), the
-    error rotation vector (3), and with wheels the wheel speeds (3).
+    error rotation vector (3), with wheels the wheel speeds (3), and with ``field_observation`` the
+    field in the body axes (3, T).
     """
 
     def __init__(self, task: SlewTask, n: int, with_wheels: bool) -> None:
@@ -247,7 +276,9 @@ class SlewBodies:
         self.hub_inverse = hub_inverses(self.moments, self.wheel_model) if self.wheel_model is not None else None
         self.hold = np.zeros(n, dtype=np.int64)
         self.steps = np.zeros(n, dtype=np.int64)
-        self.observation = np.zeros((n, 13 if with_wheels else 10))
+        self.field_world = world_field() if task.field_observation else None
+        width = 10 + (3 if with_wheels else 0) + (3 if self.field_world is not None else 0)
+        self.observation = np.zeros((n, width))
         self._weights = np.array([task.w_attitude, task.w_rate, task.w_effort])
         self._tolerances = np.array([task.angle_tolerance, task.rate_tolerance, float(task.hold_periods)])
         self._sensor_seed = [0] * n
@@ -358,5 +389,7 @@ class SlewBodies:
         )
         self.observation[rows, :10] = observation
         if self.with_wheels:
-            self.observation[rows, 10:] = self.speeds[rows]
+            self.observation[rows, 10:13] = self.speeds[rows]
+        if self.field_world is not None:  # the true field at the true attitude: R(q)^T B_world
+            self.observation[rows, -3:] = np.column_stack(quat.rotate_inverse(self.q[rows].T, self.field_world))
         return reward, terminated

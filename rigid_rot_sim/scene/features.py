@@ -138,8 +138,8 @@ _SWEEP = frozenset(
         "spacecraft.wheels.friction",
         "spacecraft.wheel_schedule",
         "spacecraft.gravity_gradient",
-        "orbit",  # the gravity gradient on it: the engine per sample
-        "environment.magnetic_field",  # acts on no state (a torque that reads it is its own feature)
+        "orbit",  # the gravity gradient on it: the engine per sample; dispersions.orbit_phase
+        "environment.magnetic_field",  # acts on no state: the metric final_field_* (T, body); dispersions.epoch
         *MEASUREMENTS,  # no sensor columns: the bodies' states do not depend on them
     }
 )

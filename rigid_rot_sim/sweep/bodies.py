@@ -30,6 +30,8 @@ class Bodies:
     noise: np.ndarray  # (N, intervals, 3) N*m, body
     misalignment: np.ndarray  # (N,) rad
     attitude0_error: np.ndarray  # (N,) rad
+    orbit_phase: np.ndarray  # (N,) rad added to the orbit's true anomaly at t = 0
+    epoch_offset: np.ndarray  # (N,) s added to the scene's epoch (whole microseconds)
 
 
 @dataclass
@@ -37,7 +39,8 @@ class Outcome:
     """N runs' ends (body frame; NaN for a failed run, its error in ``errors`` by index) and checkpoint figures.
 
     ``omega_bound`` (rad/s): what |omega| cannot exceed without a numerical drift (the verdict of a
-    run under torque); ``energy_drift`` and ``momentum_drift`` are relative, for torque-free runs.
+    run under torque); ``energy_drift`` and ``momentum_drift`` are relative, for torque-free runs;
+    ``field_body`` (T, body frame) the true field at the end (NaN: a scene without a field, a failed run).
     """
 
     q_body: np.ndarray
@@ -49,6 +52,7 @@ class Outcome:
     omega_bound: np.ndarray
     first_flip: np.ndarray
     nutation_range: np.ndarray
+    field_body: np.ndarray
 
 
 def subset(bodies: Bodies, mask: np.ndarray) -> Bodies:
@@ -79,6 +83,7 @@ def split(outcome: Outcome, n: int) -> tuple[Outcome, Outcome]:
             omega_bound=outcome.omega_bound[select],
             first_flip=outcome.first_flip[select],
             nutation_range=outcome.nutation_range[select],
+            field_body=outcome.field_body[select],
         )
 
     return part(slice(0, n), 0), part(slice(n, None), n)

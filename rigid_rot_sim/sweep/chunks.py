@@ -70,11 +70,15 @@ _STREAMS = (
     "initial_attitude",
     "torque_scale",
     "torque_noise",
+    "orbit_phase",
+    "epoch",
 )
 
 #: Output columns in order, with their Arrow types. I1, I2, I3 are the run's principal moments
 #: (kg*m^2) about the base body's principal axes, numbered by the base body's ascending moments; omega
-#: columns are rad/s in the body frame; event columns are NaN unless the spec asks for them.
+#: columns are rad/s in the body frame; event columns are NaN unless the spec asks for them; ``orbit_phase`` rad
+#: and ``epoch_offset`` s are the dispersions of the orbit and the epoch; ``final_field_*`` T, body frame, the true
+#: field at the end (NaN for a scene without a field).
 COLUMNS: dict[str, str] = {
     "run": "int64",
     "grid_point": "int32",
@@ -94,6 +98,8 @@ COLUMNS: dict[str, str] = {
     "torque_scale_y": "float64",
     "torque_scale_z": "float64",
     "torque_noise_rms": "float64",
+    "orbit_phase": "float64",
+    "epoch_offset": "float64",
     "final_attitude_error": "float64",
     "final_omega_x": "float64",
     "final_omega_y": "float64",
@@ -104,6 +110,9 @@ COLUMNS: dict[str, str] = {
     "momentum_drift": "float64",
     "first_flip": "float64",
     "nutation_range": "float64",
+    "final_field_x": "float64",
+    "final_field_y": "float64",
+    "final_field_z": "float64",
     "verdict": "string",
     "error": "string",
 }
@@ -141,7 +150,8 @@ def sample_inputs(spec: SweepSpec, sample: int) -> dict[str, np.ndarray]:
 
     Keys: ``moments`` (relative, per principal axis), ``misalignment`` (rotation vector,
     rad, principal frame), ``omega`` (rad/s, body), ``attitude`` (rotation vector, rad,
-    body), ``torque_scale`` (relative, per body axis), ``noise`` ((intervals, 3) N*m, body).
+    body), ``torque_scale`` (relative, per body axis), ``noise`` ((intervals, 3) N*m, body),
+    ``orbit_phase`` (rad) and ``epoch`` (s), one number each.
     """
     return {key: value[0] for key, value in _sample_draws(spec, np.array([sample])).items()}
 
@@ -157,14 +167,14 @@ def _sample_draws(spec: SweepSpec, samples: np.ndarray) -> dict[str, np.ndarray]
     n = len(samples)
     draws = StreamDraws()
 
-    def stream(name: str, dispersion: Dispersion | None) -> np.ndarray:
+    def stream(name: str, dispersion: Dispersion | None, count: int = 3) -> np.ndarray:
         if not dispersion:
-            return np.zeros((n, 3))
+            return np.zeros((n, count))
         k = _STREAMS.index(name)
         if dispersion.distribution == "uniform":
-            z = draws.uniforms(spec.seed, samples, k, 3, -1.0, 1.0)
+            z = draws.uniforms(spec.seed, samples, k, count, -1.0, 1.0)
         else:
-            z = draws.normals(spec.seed, samples, k, 3, cut=NORMAL_CUT_SIGMAS)
+            z = draws.normals(spec.seed, samples, k, count, cut=NORMAL_CUT_SIGMAS)
         return z * np.asarray(dispersion.size)
 
     out = {
@@ -173,6 +183,8 @@ def _sample_draws(spec: SweepSpec, samples: np.ndarray) -> dict[str, np.ndarray]
         "omega": stream("initial_omega", d.initial_omega),
         "attitude": stream("initial_attitude", d.initial_attitude),
         "torque_scale": stream("torque_scale", d.torque_scale),
+        "orbit_phase": stream("orbit_phase", d.orbit_phase, 1)[:, 0],
+        "epoch": np.round(stream("epoch", d.epoch, 1)[:, 0], 6),  # whole microseconds: what a datetime holds
     }
     if d.torque_noise_sigma is not None:
         intervals = math.ceil(spec.duration / d.torque_noise_interval)
@@ -200,6 +212,9 @@ def _bodies(spec: SweepSpec, spin_rate: float | None, samples: range | None) -> 
 
     def stack(key: str) -> np.ndarray:
         return draws[key] if draws is not None else zeros
+
+    def one(key: str) -> np.ndarray:
+        return draws[key] if draws is not None else np.zeros(n)
 
     misalignment = stack("misalignment")
     attitude = stack("attitude")
@@ -230,6 +245,8 @@ def _bodies(spec: SweepSpec, spin_rate: float | None, samples: range | None) -> 
         noise=noise,
         misalignment=row_norms(misalignment),
         attitude0_error=row_norms(attitude),
+        orbit_phase=one("orbit_phase"),
+        epoch_offset=one("epoch"),
     )
 
 
@@ -481,6 +498,7 @@ class _BatchRun:
             omega_bound=(self.momentum0 + self.impulse) / self.bodies.moments.min(axis=1),
             first_flip=self.track.first_flip,
             nutation_range=np.where(alive, self.track.nutation_range(), np.nan),
+            field_body=np.full((len(alive), 3), np.nan),  # a batch scene has no field (an orbit runs per sample)
         )
 
 
@@ -590,6 +608,8 @@ def run_chunk(spec: SweepSpec, chunk: Chunk, nominal: Outcome | None = None) -> 
         "torque_scale_y": bodies.torque_scale[:, 1],
         "torque_scale_z": bodies.torque_scale[:, 2],
         "torque_noise_rms": np.sqrt(np.mean(bodies.noise**2, axis=(1, 2))) if bodies.noise.shape[1] else np.zeros(n),
+        "orbit_phase": bodies.orbit_phase,
+        "epoch_offset": bodies.epoch_offset,
         "final_attitude_error": attitude_error,
         "final_omega_x": outcome.omega_body[:, 0],
         "final_omega_y": outcome.omega_body[:, 1],
@@ -600,6 +620,9 @@ def run_chunk(spec: SweepSpec, chunk: Chunk, nominal: Outcome | None = None) -> 
         "momentum_drift": outcome.momentum_drift if torque_free else nan,
         "first_flip": outcome.first_flip if "first_flip" in spec.events else nan,
         "nutation_range": outcome.nutation_range if "nutation_range" in spec.events else nan,
+        "final_field_x": outcome.field_body[:, 0],
+        "final_field_y": outcome.field_body[:, 1],
+        "final_field_z": outcome.field_body[:, 2],
         "verdict": verdict,
         "error": error,
     }

@@ -12,8 +12,13 @@ schedule, the gravity gradient, the torque schedules).
 Dispersions map onto the scene: ``principal_moments`` and ``axis_misalignment`` give the body's
 inertia tensor (``R diag(I) R^T``, which the engine diagonalises again; the wheels' validity is
 then the engine's check, a body it refuses is a row with the reason), ``initial_omega``,
-``initial_attitude`` and the grid's spin rate the initial state. ``torque_scale`` and
-``torque_noise`` map onto no scene key: the spec refuses them for such a scene.
+``initial_attitude`` and the grid's spin rate the initial state, ``orbit_phase`` the orbit's true anomaly
+at t = 0 (the other elements and the J2 rates kept: the mean anomaly of the shifted true anomaly; the
+gravity gradient follows), ``epoch`` the scene's epoch (an offset in whole microseconds, an ISO 8601
+date as the scene writes one). ``torque_scale`` and ``torque_noise`` map onto no scene key: the spec refuses them for
+such a scene. Each run also reports the true field at its end (T, body frame; NaN without a field): the
+scene's :meth:`~rigid_rot_sim.scene.scene.Scene.orbit_field` at the end's time and attitude, as
+``~/magnetic_field`` publishes it.
 
 The verdict of a run under torque compares its largest ``|omega|`` with a bound of the physics:
 ``I omega = H - h_w`` (eq. (1) of :mod:`rigid_rot_sim.core.wheels`), with ``|H|`` growing at most by
@@ -23,13 +28,16 @@ the engine's bound on the torques times the duration and ``|h_w| <= sum J_i max_
 from __future__ import annotations
 
 import dataclasses
+import datetime
 import math
 
 import numpy as np
 
+from rigid_rot_sim.core import orbit as core_orbit
 from rigid_rot_sim.core.dynamics import RigidBody
 from rigid_rot_sim.core.steps import step_grid
 from rigid_rot_sim.run.simulator import Simulator
+from rigid_rot_sim.scene.orbit import epoch_datetime
 from rigid_rot_sim.scene.scene import InitialState, Scene
 from rigid_rot_sim.sweep.bodies import Bodies, Outcome
 from rigid_rot_sim.sweep.checkpoints import CheckpointTrack, checkpoint_steps, checkpoint_time
@@ -60,7 +68,33 @@ def dispersed_scene(spec: SweepSpec, bodies: Bodies, i: int) -> Scene:
     if not np.array_equal(bodies.omega0_body[i], omega):
         wx, wy, wz = (float(v) for v in bodies.omega0_body[i])
         omega = (wx, wy, wz)
-    return dataclasses.replace(scene, body=body, initial=InitialState(orientation, omega))
+    scene = dataclasses.replace(scene, body=body, initial=InitialState(orientation, omega))
+    if bodies.orbit_phase[i] != 0.0:
+        scene = _with_orbit(scene, _phase_shifted(scene, float(bodies.orbit_phase[i])))
+    if bodies.epoch_offset[i] != 0.0:
+        shifted = epoch_datetime(scene.epoch) + datetime.timedelta(seconds=float(bodies.epoch_offset[i]))
+        scene = dataclasses.replace(scene, epoch=shifted.strftime("%Y-%m-%dT%H:%M:%S.%fZ"))
+    return scene
+
+
+def _with_orbit(scene: Scene, kepler: core_orbit.KeplerOrbit) -> Scene:
+    """``scene`` on ``kepler``: its orbit, and the gravity gradient's where it follows the scene's orbit."""
+    gradient = scene.spacecraft.gravity_gradient
+    if gradient is not None and gradient.kepler is not None:
+        spacecraft = dataclasses.replace(
+            scene.spacecraft, gravity_gradient=dataclasses.replace(gradient, kepler=kepler)
+        )
+        scene = dataclasses.replace(scene, spacecraft=spacecraft)
+    return dataclasses.replace(scene, orbit=kepler)
+
+
+def _phase_shifted(scene: Scene, phase: float) -> core_orbit.KeplerOrbit:
+    """The scene's orbit with ``phase`` rad added to its true anomaly at t = 0."""
+    kepler = scene.orbit
+    assert kepler is not None  # the spec refuses orbit_phase for a scene without an orbit
+    nu = core_orbit.mean_to_true_anomaly(kepler.mean_anomaly, kepler.e) + phase
+    # the rates depend on a, e and i alone: kept, bits included
+    return dataclasses.replace(kepler, mean_anomaly=core_orbit.true_to_mean_anomaly(nu, kepler.e))
 
 
 @dataclasses.dataclass
@@ -73,6 +107,7 @@ class _Run:
     energy_drift: float = math.nan
     momentum_drift: float = math.nan
     omega_bound: float = math.nan
+    field_body: np.ndarray = dataclasses.field(default_factory=lambda: np.full(3, np.nan))
     error: str | None = None
 
 
@@ -92,6 +127,7 @@ def _run(scene: Scene, method: str, dt: float, duration: float, checkpoints: int
     a change of the engine's dt, as a node would make it)."""
     try:
         sim = Simulator(scene, method=method, dt=dt)
+        field = scene.orbit_field()  # a dispersed epoch may leave the model's validity
     except ValueError as exc:
         return _failed(f"ValueError: {exc}")
     n_full, last = step_grid(duration, dt)
@@ -119,6 +155,7 @@ def _run(scene: Scene, method: str, dt: float, duration: float, checkpoints: int
         energy_drift=abs(end.energy_drift),
         momentum_drift=abs(end.angular_momentum_drift),
         omega_bound=momentum / float(np.min(sim.body.principal_moments)),
+        field_body=np.full(3, np.nan) if field is None else field.body(end.t, end.orientation),
     )
 
 
@@ -142,4 +179,5 @@ def simulate_engine(spec: SweepSpec, bodies: Bodies, method: str, dt: float) -> 
         omega_bound=np.array([run.omega_bound for run in runs]),
         first_flip=figure("first_flip"),
         nutation_range=np.array([np.nan if run.track is None else run.track.nutation_range()[0] for run in runs]),
+        field_body=np.array([run.field_body for run in runs]),
     )

@@ -53,6 +53,8 @@ INPUT_COLUMNS = (
     "torque_scale_y",
     "torque_scale_z",
     "torque_noise_rms",
+    "orbit_phase",
+    "epoch_offset",
     "spin_rate",
     "dt",
 )
@@ -141,7 +143,13 @@ def summary_markdown(result: SweepResult, files: dict[str, str] | None = None) -
         + " |"
     )
     rule = "|---|---:|" + "---:|" * len(PERCENTILES)
-    metrics = [m for m in METRICS if m not in ("first_flip", "nutation_range") or m in spec.events]
+    field = spec.scene.magnetic_field is not None
+    metrics = [
+        m
+        for m in METRICS
+        if (m not in ("first_flip", "nutation_range") or m in spec.events)
+        and (field or not m.startswith("final_field"))
+    ]
     lines = [
         f"# Sweep {spec.name}" + (" (quick)" if result.quick else ""),
         "",

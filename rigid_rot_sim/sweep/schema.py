@@ -17,7 +17,7 @@ from typing import Any
 
 from rigid_rot_sim.scene.schema import DIALECT, array, choice, dump, integer, mapping, nullable, number, text, vector
 
-__all__ = ["SWEEP_SCHEMA", "DISPERSION_KINDS", "DISTRIBUTIONS"]
+__all__ = ["SWEEP_SCHEMA", "DISPERSION_KINDS", "DISTRIBUTIONS", "SCALAR_DISPERSIONS"]
 
 #: What a spec can disperse: name -> (key of the size, its unit, what is perturbed).
 DISPERSION_KINDS = {
@@ -26,7 +26,11 @@ DISPERSION_KINDS = {
     "initial_omega": ("sigma", "rad/s", "the initial angular velocity, rad/s per axis"),
     "initial_attitude": ("sigma", "rad", "the initial attitude, rad per axis"),
     "torque_scale": ("relative", "1", "the scheduled torque: torque (1 + relative z)"),
+    "orbit_phase": ("sigma", "rad", "the orbit's true anomaly at t = 0 (a scene with orbit:), rad"),
+    "epoch": ("sigma", "s", "the scene's epoch, s of offset (rounded to the microsecond; a scene with a field)"),
 }
+#: Dispersions of one number per sample (the others: one per axis).
+SCALAR_DISPERSIONS = ("orbit_phase", "epoch")
 DISTRIBUTIONS = ("normal", "uniform")
 
 
@@ -46,14 +50,17 @@ def _per_axis(description: str) -> dict[str, Any]:
 
 def _dispersion(name: str) -> dict[str, Any]:
     size_key, unit, what = DISPERSION_KINDS[name]
+    size = (
+        number(f"1 sigma (normal) or the half-width (uniform), unit {unit}.", minimum=0.0)
+        if name in SCALAR_DISPERSIONS
+        else _per_axis(f"1 sigma (normal) or the half-width (uniform), unit {unit}; a number or [x, y, z].")
+    )
     return nullable(
         mapping(
             f"Disperses {what}.",
             {
                 "distribution": choice("normal (cut at 4 sigma) or uniform.", DISTRIBUTIONS, default="normal"),
-                size_key: _per_axis(
-                    f"1 sigma (normal) or the half-width (uniform), unit {unit}; a number or [x, y, z]."
-                ),
+                size_key: size,
             },
             required=[size_key],
         )

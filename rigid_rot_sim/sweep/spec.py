@@ -30,6 +30,8 @@ An example (SI units; body frame = the scene's body frame)::
       initial_attitude: {distribution: normal, sigma: 1.0e-3}     # rad per axis
       torque_scale: {distribution: normal, relative: 0.02}        # scheduled torque * (1 + relative z)
       torque_noise: {sigma: 1.0e-3, interval: 1.0}                # N*m per axis (body), held `interval` s
+      orbit_phase: {distribution: uniform, sigma: 3.14159}        # rad added to the true anomaly (orbit:)
+      epoch: {distribution: uniform, sigma: 86400.0}              # s added to the epoch (a field)
     nominal: {method: rk4, dt: 0.001}  # optional: the nominal run's integrator (default: the grid point's)
     checkpoints: 200                   # states sampled per run (max |omega|, events)
     energy_tolerance: 1.0e-3           # relative drift above which a torque-free run is "drifting"
@@ -59,7 +61,7 @@ from rigid_rot_sim.scene.features import MEASUREMENTS, PATHS, features_of, refus
 from rigid_rot_sim.scene.scene import Scene, SceneError, load_scene
 from rigid_rot_sim.scene.schema import validated
 from rigid_rot_sim.share import resolve_scene
-from rigid_rot_sim.sweep.schema import DISPERSION_KINDS, SWEEP_SCHEMA
+from rigid_rot_sim.sweep.schema import DISPERSION_KINDS, SCALAR_DISPERSIONS, SWEEP_SCHEMA
 
 __all__ = [
     "SweepSpecError",
@@ -92,6 +94,10 @@ METRICS = {
     "momentum_drift": "relative change of |L| (torque-free runs)",
     "first_flip": EVENTS["first_flip"],
     "nutation_range": EVENTS["nutation_range"],
+    **{
+        f"final_field_{axis}": f"T, the true field at the end, body frame, {axis} (NaN: a scene without a field)"
+        for axis in "xyz"
+    },
 }
 
 
@@ -122,11 +128,11 @@ class SweepSpecError(ValueError):
 class Dispersion:
     """A random perturbation: ``distribution`` normal (``size`` = 1 sigma) or uniform (half-width).
 
-    ``size`` has one value per axis; its unit depends on what is dispersed.
+    ``size`` has one value per axis (one value for ``SCALAR_DISPERSIONS``); its unit depends on what is dispersed.
     """
 
     distribution: str
-    size: tuple[float, float, float]
+    size: tuple[float, ...]
 
     def extreme(self) -> np.ndarray:
         """The largest |perturbation| per axis a draw can give."""
@@ -143,6 +149,8 @@ class Dispersions:
     initial_omega: Dispersion | None = None
     initial_attitude: Dispersion | None = None
     torque_scale: Dispersion | None = None
+    orbit_phase: Dispersion | None = None  # rad, the true anomaly at t = 0
+    epoch: Dispersion | None = None  # s, the epoch
     torque_noise_sigma: tuple[float, float, float] | None = None  # N*m per axis, normal
     torque_noise_interval: float = 1.0  # s the noise is held
 
@@ -263,6 +271,7 @@ def _sweep(spec: Mapping[str, Any], source: str, text: str) -> SweepSpec:
                     f"dispersions.{name}: maps onto no key of scene {scene.name}, which the sweep runs in the engine "
                     f"per sample ({', '.join(sorted(set(features_of(scene)) - BATCH_FEATURES))})"
                 )
+    _check_scene_dispersions(spec.get("dispersions") or {}, scene)
     nominal = spec.get("nominal")
     events = tuple(_known(e, f"events[{i}]", EVENTS, "event") for i, e in enumerate(spec.get("events") or ()))
     metric = _known(spec.get("metric", "final_attitude_error"), "metric", METRICS, "metric")
@@ -315,11 +324,23 @@ def _base_scene(name: str, source: str) -> Scene:
     return scene
 
 
+#: Dispersions of a scene section -> the feature (scene/features.py) the scene needs for them to map onto.
+_SCENE_DISPERSIONS = {"orbit_phase": "orbit", "epoch": "environment.magnetic_field"}
+
+
+def _check_scene_dispersions(spec: Mapping[str, object], scene: Scene) -> None:
+    """A dispersion of a scene section the scene lacks maps onto nothing: refused by name."""
+    for name, feature in _SCENE_DISPERSIONS.items():
+        if spec.get(name) is not None and feature not in features_of(scene):
+            raise ValueError(f"dispersions.{name}: maps onto {feature}, which scene {scene.name} has not")
+
+
 def _dispersions(spec: Mapping[str, Any], moments: np.ndarray) -> Dispersions:
     values: dict[str, Any] = {}
     for name, (size_key, _, _) in DISPERSION_KINDS.items():
         if spec.get(name) is not None:
-            values[name] = Dispersion(spec[name].get("distribution", "normal"), _per_axis(spec[name][size_key]))
+            size = (float(spec[name][size_key]),) if name in SCALAR_DISPERSIONS else _per_axis(spec[name][size_key])
+            values[name] = Dispersion(spec[name].get("distribution", "normal"), size)
     if "principal_moments" in values:
         _check_moment_dispersion(moments, values["principal_moments"])
     if "torque_scale" in values:

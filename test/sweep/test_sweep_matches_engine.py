@@ -169,6 +169,12 @@ def test_a_shipped_scenes_nominal_sweep_ends_where_the_engine_ends_or_is_refused
     assert np.array_equal(sweep.omega_body[0], engine.angular_velocity_body), scene
     q = sweep.q_body[0]
     assert np.array_equal(q, engine.orientation) or np.array_equal(-q, engine.orientation), scene
+    # the field at the end: the engine's true field (as ~/magnetic_field publishes it), or NaN without one
+    field = spec.scene.orbit_field()
+    if field is None:
+        assert np.isnan(sweep.field_body[0]).all(), scene
+    else:
+        assert np.array_equal(sweep.field_body[0], field.body(engine.t, engine.orientation)), scene
 
 
 def test_the_shipped_scenes_cover_both_paths_and_the_refusals():
@@ -233,3 +239,80 @@ def test_a_run_by_the_engine_per_sample_ends_on_the_duration_with_a_last_shorter
     assert sim.clock.t == pytest.approx(1.005, abs=1e-15)
     assert np.array_equal(sweep.omega_body[0], sim.snapshot().angular_velocity_body)
     assert not sweep.errors and np.isfinite(sweep.max_omega[0]) and sweep.max_omega[0] > 0.0
+
+
+ORBIT = """
+scene: cubesat_orbit
+seed: 7
+samples: 4
+duration: 3.005
+grid: {method: [gyrostat_rk4], dt: [0.01]}
+dispersions:
+  orbit_phase: {distribution: uniform, sigma: 3.0}
+  epoch: {sigma: 86400.0}
+  initial_omega: {sigma: 1.0e-3}
+checkpoints: 4
+"""
+
+
+def test_an_orbit_sweep_runs_each_sample_on_its_phase_and_epoch_and_reports_the_field_at_the_end():
+    """orbit_phase shifts the true anomaly at t = 0 (the gravity gradient's orbit with it), epoch the scene's epoch;
+    each row ends where the engine ends on the sample's scene, its field the engine's true field there."""
+    from rigid_rot_sim.core.orbit import mean_to_true_anomaly
+    from rigid_rot_sim.scene.orbit import epoch_datetime
+    from rigid_rot_sim.sweep.chunks import Chunk, _bodies, run_chunk
+    from rigid_rot_sim.sweep.engine_runs import dispersed_scene
+
+    spec = parse_sweep_text(ORBIT, "orbit.yaml")
+    rows = run_chunk(spec, Chunk(0, 0, spec.samples))
+    assert rows["error"] == [None] * spec.samples
+    phases, offsets = np.asarray(rows["orbit_phase"]), np.asarray(rows["epoch_offset"])
+    assert np.all(np.abs(phases) > 0.0) and np.all(np.abs(phases) <= 3.0)
+    assert np.all(offsets != 0.0) and np.array_equal(offsets, np.round(offsets, 6))
+    fields = np.column_stack([rows[f"final_field_{a}"] for a in "xyz"])
+    assert np.all(np.isfinite(fields)) and np.all(np.linalg.norm(fields, axis=1) > 1.5e-5)  # LEO: 20-60 uT
+    assert len({tuple(f) for f in fields.tolist()}) == spec.samples
+    bodies = _bodies(spec, None, range(0, spec.samples))
+    base = spec.scene.orbit
+    assert base is not None
+    for i in range(spec.samples):
+        scene = dispersed_scene(spec, bodies, i)
+        assert scene.orbit is not None and scene.spacecraft.gravity_gradient is not None
+        assert scene.spacecraft.gravity_gradient.kepler == scene.orbit
+        shift = mean_to_true_anomaly(scene.orbit.mean_anomaly, scene.orbit.e) - mean_to_true_anomaly(
+            base.mean_anomaly, base.e
+        )
+        assert np.angle(np.exp(1j * (shift - phases[i]))) == pytest.approx(0.0, abs=1e-12)
+        assert (scene.orbit.raan_dot, scene.orbit.a, scene.orbit.i) == (base.raan_dot, base.a, base.i)
+        delta = (epoch_datetime(scene.epoch) - epoch_datetime(spec.scene.epoch)).total_seconds()
+        assert delta == pytest.approx(offsets[i], abs=1e-9)
+        sim = Simulator(scene, method="gyrostat_rk4", dt=0.01)
+        sim.advance_to(300)
+        sim.set_integrator(dt=step_grid(3.005, 0.01)[1])
+        sim.advance(1)
+        end = sim.snapshot()
+        assert np.array_equal(end.angular_velocity_body, [rows[f"final_omega_{a}"][i] for a in "xyz"])
+        field = scene.orbit_field()
+        assert field is not None and np.array_equal(field.body(end.t, end.orientation), fields[i])
+    # the nominal body is the scene itself: its orbit and epoch, bits included
+    nominal = dispersed_scene(spec, _bodies(spec, None, None), 0)
+    assert nominal.orbit is spec.scene.orbit and nominal.epoch == spec.scene.epoch
+
+
+def test_a_phase_or_epoch_dispersion_on_a_scene_without_them_is_refused_in_one_line():
+    for key, feature in (("orbit_phase", "orbit"), ("epoch", "environment.magnetic_field")):
+        text = (
+            "scene: gravity_gradient_satellite\nseed: 1\nsamples: 2\nduration: 1.0\n"
+            f"grid: {{method: [gyrostat_rk4]}}\ndispersions: {{{key}: {{sigma: 1.0}}}}\n"
+        )
+        with pytest.raises(SweepSpecError, match=f"^g.yaml: dispersions.{key}: maps onto {feature}, which") as refused:
+            parse_sweep_text(text, "g.yaml")
+        assert "\n" not in str(refused.value)
+
+
+def test_a_sweep_without_a_field_reports_nan_for_the_field_at_the_end():
+    from rigid_rot_sim.sweep.chunks import Chunk, run_chunk
+
+    rows = run_chunk(parse_sweep_text(WHEELS, "wheels.yaml"), Chunk(0, 0, 2))
+    assert all(np.isnan(rows[f"final_field_{a}"]).all() for a in "xyz")
+    assert np.array_equal(rows["orbit_phase"], np.zeros(2)) and np.array_equal(rows["epoch_offset"], np.zeros(2))
