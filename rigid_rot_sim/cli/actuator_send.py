@@ -51,8 +51,8 @@ def send(args: argparse.Namespace, node_name: str, message_type: Any, message: A
     rclpy.init(args=rclpy_args(args))
     node = rclpy.create_node(node_name)
     try:
-        publisher = node.create_publisher(message_type, args.topic, COMMAND_QOS)
-        watch = RejectionWatch(node, publisher.topic_name)
+        topic = node.resolve_topic_name(args.topic)
+        watch = RejectionWatch(node, topic)
 
         def spin_until(condition: Callable[[], bool], until: float) -> bool:
             while not condition():
@@ -62,19 +62,22 @@ def send(args: argparse.Namespace, node_name: str, message_type: Any, message: A
                 rclpy.spin_once(node, timeout_sec=min(left, 0.05))
             return True
 
-        if not spin_until(lambda: publisher.get_subscription_count() > 0, time.monotonic() + args.wait):
+        def watching() -> bool:
+            watch.discover()
+            return bool(watch.watched) and watch.ready()
+
+        # ~/rejected matched before the command writer exists (rigid-rot torque says why)
+        deadline = time.monotonic() + args.wait
+        if spin_until(lambda: node.count_subscribers(topic) > 0, deadline):
+            spin_until(watching, time.monotonic() + REJECTED_DISCOVERY)
+        publisher = node.create_publisher(message_type, topic, COMMAND_QOS)
+        if not spin_until(lambda: publisher.get_subscription_count() > 0, max(deadline, time.monotonic() + 1.0)):
             print(
                 f"rigid-rot {args.command}: no subscriber on {publisher.topic_name} after {args.wait:g} s "
                 "(is the node running, with this actuator in its scene?)",
                 file=sys.stderr,
             )
             return 1
-
-        def watching() -> bool:
-            watch.discover()
-            return bool(watch.watched) and watch.ready()
-
-        spin_until(watching, time.monotonic() + REJECTED_DISCOVERY)
         publisher.publish(message)
         watch.sent("", (0.0, 0.0, 0.0))
         publisher.wait_for_all_acked(rclpy.duration.Duration(seconds=2.0))

@@ -94,8 +94,8 @@ def run(args: argparse.Namespace) -> int:
     rclpy.init(args=rclpy_args(args))
     node = rclpy.create_node("rigid_rot_torque")
     try:
-        publisher = node.create_publisher(WrenchStamped, args.topic, COMMAND_QOS)
-        watch = RejectionWatch(node, publisher.topic_name)
+        topic = node.resolve_topic_name(args.topic)
+        watch = RejectionWatch(node, topic)
 
         def spin_until(condition, until: float) -> bool:
             """Spin until ``condition()`` holds (True) or the monotonic time ``until`` (False)."""
@@ -110,19 +110,24 @@ def run(args: argparse.Namespace) -> int:
             publisher.publish(message(values))
             watch.sent(args.frame, values)
 
-        if not spin_until(lambda: publisher.get_subscription_count() > 0, time.monotonic() + args.wait):
+        def watching() -> bool:
+            watch.discover()
+            return bool(watch.watched) and watch.ready()
+
+        # The node's ~/rejected is matched with this CLI's reader before this CLI's command writer exists: the
+        # node then learns of the reader before it can take (and refuse) a command. ~/rejected keeps no history,
+        # so a refusal published before the node had the reader would reach nobody.
+        deadline = time.monotonic() + args.wait
+        if spin_until(lambda: node.count_subscribers(topic) > 0, deadline):
+            spin_until(watching, time.monotonic() + REJECTED_DISCOVERY)  # a subscriber without ~/rejected: unwatched
+        publisher = node.create_publisher(WrenchStamped, topic, COMMAND_QOS)
+        if not spin_until(lambda: publisher.get_subscription_count() > 0, max(deadline, time.monotonic() + 1.0)):
             print(
                 f"rigid-rot torque: no subscriber on {publisher.topic_name} after {args.wait:g} s "
                 "(is the node running?)",
                 file=sys.stderr,
             )
             return 1
-
-        def watching() -> bool:
-            watch.discover()
-            return bool(watch.watched) and watch.ready()
-
-        spin_until(watching, time.monotonic() + REJECTED_DISCOVERY)  # a subscriber without ~/rejected: unwatched
         sent = 0
         if args.duration is None:
             send(torque)
