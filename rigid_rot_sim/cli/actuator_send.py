@@ -14,7 +14,6 @@ from __future__ import annotations
 import argparse
 import sys
 import time
-from collections.abc import Callable
 from typing import Any
 
 from rigid_rot_sim.cli.argtypes import nonnegative_number, positive_number
@@ -22,8 +21,6 @@ from rigid_rot_sim.cli.ros_args import add_ros_args, rclpy_args
 
 #: Seconds to listen for a refusal after the node acknowledged the command.
 DEFAULT_CONFIRM = 1.0
-#: Most seconds to wait, once the node subscribes, for its ~/rejected to be on the graph and matched.
-REJECTED_DISCOVERY = 2.0
 
 
 def add_common_arguments(parser: argparse.ArgumentParser, topic: str) -> None:
@@ -45,7 +42,7 @@ def send(args: argparse.Namespace, node_name: str, message_type: Any, message: A
     """Publish ``message`` once on ``args.topic``; 0 when delivered and not refused, 1 when nobody subscribes."""
     import rclpy
 
-    from rigid_rot_sim.cli.rejections import RejectionWatch
+    from rigid_rot_sim.cli.rejections import RejectionWatch, command_publisher, spin_until
     from rigid_rot_sim.ros.qos import COMMAND_QOS
 
     rclpy.init(args=rclpy_args(args))
@@ -54,26 +51,10 @@ def send(args: argparse.Namespace, node_name: str, message_type: Any, message: A
         topic = node.resolve_topic_name(args.topic)
         watch = RejectionWatch(node, topic)
 
-        def spin_until(condition: Callable[[], bool], until: float) -> bool:
-            while not condition():
-                left = until - time.monotonic()
-                if left <= 0.0:
-                    return False
-                rclpy.spin_once(node, timeout_sec=min(left, 0.05))
-            return True
-
-        def watching() -> bool:
-            watch.discover()
-            return bool(watch.watched) and watch.ready()
-
-        # ~/rejected matched before the command writer exists (rigid-rot torque says why)
-        deadline = time.monotonic() + args.wait
-        if spin_until(lambda: node.count_subscribers(topic) > 0, deadline):
-            spin_until(watching, time.monotonic() + REJECTED_DISCOVERY)
-        publisher = node.create_publisher(message_type, topic, COMMAND_QOS)
-        if not spin_until(lambda: publisher.get_subscription_count() > 0, max(deadline, time.monotonic() + 1.0)):
+        publisher = command_publisher(node, watch, message_type, COMMAND_QOS, args.wait)
+        if publisher is None:
             print(
-                f"rigid-rot {args.command}: no subscriber on {publisher.topic_name} after {args.wait:g} s "
+                f"rigid-rot {args.command}: no subscriber on {topic} after {args.wait:g} s "
                 "(is the node running, with this actuator in its scene?)",
                 file=sys.stderr,
             )
@@ -82,7 +63,7 @@ def send(args: argparse.Namespace, node_name: str, message_type: Any, message: A
         watch.sent("", (0.0, 0.0, 0.0))
         publisher.wait_for_all_acked(rclpy.duration.Duration(seconds=2.0))
         if watch.watched:
-            spin_until(lambda: bool(watch.rejections), time.monotonic() + args.confirm)
+            spin_until(node, lambda: bool(watch.rejections), time.monotonic() + args.confirm)
         if watch.rejections:
             peer, reason = watch.rejections[0]
             raise ValueError(f"{peer} rejected the command on {publisher.topic_name}: {reason}")

@@ -20,17 +20,22 @@ for a fixed time.
 
 from __future__ import annotations
 
+import time
 from collections.abc import Callable, Iterable
 from typing import Any
 
 from rclpy.node import Node
+from rclpy.publisher import Publisher
+from rclpy.qos import QoSProfile
 
 from rigid_rot_sim.core import limits
 
-__all__ = ["REJECTED_TYPE", "RejectionWatch", "resolve_source"]
+__all__ = ["REJECTED_TYPE", "RejectionWatch", "resolve_source", "spin_until", "command_publisher"]
 
 REJECTED_TYPE = "rigid_rot_msgs/msg/RejectedCommand"
 EVENTS_TYPE = "diagnostic_msgs/msg/DiagnosticStatus"
+#: Most seconds to wait, once the node subscribes, for its ~/rejected to be on the graph and matched.
+REJECTED_DISCOVERY = 2.0
 
 
 def resolve_source(source: str, node_namespace: str, node_name: str) -> str:
@@ -136,3 +141,38 @@ class RejectionWatch:
         torque = (float(msg.torque.x), float(msg.torque.y), float(msg.torque.z))
         if (msg.header.frame_id, torque) in self._sent:
             self.rejections.append((peer, msg.reason))
+
+
+def spin_until(node: Node, condition: Callable[[], bool], until: float) -> bool:
+    """Spin ``node`` until ``condition()`` holds (True) or the monotonic time ``until`` (False)."""
+    import rclpy
+
+    while not condition():
+        left = until - time.monotonic()
+        if left <= 0.0:
+            return False
+        rclpy.spin_once(node, timeout_sec=min(left, 0.05))
+    return True
+
+
+def command_publisher(
+    node: Node, watch: RejectionWatch, message_type: type, qos: QoSProfile, wait: float
+) -> Publisher | None:
+    """The command writer on ``watch.topic``, created once the node's ~/rejected is watched; None when no
+    subscriber matched it within ``wait`` s.
+
+    The node's ~/rejected is matched with this CLI's reader before the command writer exists: the node then
+    learns of the reader a discovery round before it can take (and refuse) a command. ~/rejected keeps no
+    history, so a refusal published before the node had the reader would reach nobody.
+    """
+
+    def watching() -> bool:
+        watch.discover()
+        return bool(watch.watched) and watch.ready()
+
+    deadline = time.monotonic() + wait
+    if spin_until(node, lambda: node.count_subscribers(watch.topic) > 0, deadline):
+        spin_until(node, watching, time.monotonic() + REJECTED_DISCOVERY)  # a subscriber without ~/rejected: unwatched
+    publisher = node.create_publisher(message_type, watch.topic, qos)
+    matched = spin_until(node, lambda: publisher.get_subscription_count() > 0, max(deadline, time.monotonic() + 1.0))
+    return publisher if matched else None

@@ -23,7 +23,7 @@ from typing import Any
 
 from rigid_rot_sim.cli.argtypes import nonnegative_number
 from rigid_rot_sim.cli.ros_args import add_ros_args, rclpy_args
-from rigid_rot_sim.cli.torque import DEFAULT_CONFIRM, REJECTED_DISCOVERY
+from rigid_rot_sim.cli.torque import DEFAULT_CONFIRM
 from rigid_rot_sim.recording.replay import CLOCK_RATE
 
 #: A command as the node echoes it on ~/rejected: frame_id and torque (N*m).
@@ -93,7 +93,7 @@ def _commands(bag: str, topics: list[str] | None) -> dict[str, list[Command]]:
 def _watch(node: Any, commands: dict[str, list[Command]], remap: dict[str, str], wait: float) -> list[Any]:
     """A RejectionWatch per replayed topic, watching once its subscribers' ~/rejected are matched
     (at most ``wait`` s for subscribers, then ``REJECTED_DISCOVERY`` s for their ~/rejected)."""
-    from rigid_rot_sim.cli.rejections import RejectionWatch
+    from rigid_rot_sim.cli.rejections import REJECTED_DISCOVERY, RejectionWatch
 
     watches = []
     for topic, sent in commands.items():

@@ -36,8 +36,6 @@ from rigid_rot_sim.cli.ros_args import add_ros_args, rclpy_args
 DEFAULT_TOPIC = "/rigid_rot_sim/torque"
 #: Most seconds to wait for the node's answer to the commands (a fixed window without ~/sim_events).
 DEFAULT_CONFIRM = 1.0
-#: Most seconds to wait, once the node subscribes, for its ~/rejected to be on the graph and matched.
-REJECTED_DISCOVERY = 2.0
 
 
 def add_parser(subparsers) -> None:
@@ -89,7 +87,7 @@ def run(args: argparse.Namespace) -> int:
         msg.wrench.torque = array_to_vector3(values)
         return msg
 
-    from rigid_rot_sim.cli.rejections import RejectionWatch
+    from rigid_rot_sim.cli.rejections import RejectionWatch, command_publisher, spin_until
 
     rclpy.init(args=rclpy_args(args))
     node = rclpy.create_node("rigid_rot_torque")
@@ -97,37 +95,18 @@ def run(args: argparse.Namespace) -> int:
         topic = node.resolve_topic_name(args.topic)
         watch = RejectionWatch(node, topic)
 
-        def spin_until(condition, until: float) -> bool:
-            """Spin until ``condition()`` holds (True) or the monotonic time ``until`` (False)."""
-            while not condition():
-                left = until - time.monotonic()
-                if left <= 0.0:
-                    return False
-                rclpy.spin_once(node, timeout_sec=min(left, 0.05))
-            return True
+        publisher = command_publisher(node, watch, WrenchStamped, COMMAND_QOS, args.wait)
+        if publisher is None:
+            print(
+                f"rigid-rot torque: no subscriber on {topic} after {args.wait:g} s (is the node running?)",
+                file=sys.stderr,
+            )
+            return 1
 
         def send(values) -> None:
             publisher.publish(message(values))
             watch.sent(args.frame, values)
 
-        def watching() -> bool:
-            watch.discover()
-            return bool(watch.watched) and watch.ready()
-
-        # The node's ~/rejected is matched with this CLI's reader before this CLI's command writer exists: the
-        # node then learns of the reader before it can take (and refuse) a command. ~/rejected keeps no history,
-        # so a refusal published before the node had the reader would reach nobody.
-        deadline = time.monotonic() + args.wait
-        if spin_until(lambda: node.count_subscribers(topic) > 0, deadline):
-            spin_until(watching, time.monotonic() + REJECTED_DISCOVERY)  # a subscriber without ~/rejected: unwatched
-        publisher = node.create_publisher(WrenchStamped, topic, COMMAND_QOS)
-        if not spin_until(lambda: publisher.get_subscription_count() > 0, max(deadline, time.monotonic() + 1.0)):
-            print(
-                f"rigid-rot torque: no subscriber on {publisher.topic_name} after {args.wait:g} s "
-                "(is the node running?)",
-                file=sys.stderr,
-            )
-            return 1
         sent = 0
         if args.duration is None:
             send(torque)
@@ -138,14 +117,14 @@ def run(args: argparse.Namespace) -> int:
             while time.monotonic() - start < args.duration and not watch.rejections:
                 send(torque)
                 sent += 1
-                spin_until(lambda: bool(watch.rejections), start + min(sent * period, args.duration))
+                spin_until(node, lambda: bool(watch.rejections), start + min(sent * period, args.duration))
             send((0.0, 0.0, 0.0))
         if watch.events:  # the node's answer to every command: as soon as it is in
-            spin_until(watch.answered, time.monotonic() + args.confirm)
+            spin_until(node, watch.answered, time.monotonic() + args.confirm)
         else:  # reliable delivery: the node has every command, then a moment for its verdict
             publisher.wait_for_all_acked(rclpy.duration.Duration(seconds=2.0))
             if watch.watched:
-                spin_until(lambda: bool(watch.rejections), time.monotonic() + args.confirm)
+                spin_until(node, lambda: bool(watch.rejections), time.monotonic() + args.confirm)
         if watch.rejections:
             peer, reason = watch.rejections[0]
             raise ValueError(
